@@ -1,0 +1,174 @@
+#include "engine/memory.h"
+
+#include <algorithm>
+
+#include "engine/device.h"
+
+namespace canopy {
+namespace {
+
+Status findMemoryType(const Device& d, uint32_t typeBits, MemoryUsage usage, uint32_t* out) {
+  // Preference order per usage; the first memory type matching any entry wins.
+  std::vector<VkMemoryPropertyFlags> prefs;
+  const VkMemoryPropertyFlags HV = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, HC = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
+                              DL = VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT, CA = VK_MEMORY_PROPERTY_HOST_CACHED_BIT;
+  switch (usage) {
+    case MemoryUsage::DeviceLocal: prefs = {DL, 0}; break;
+    case MemoryUsage::Upload: prefs = {HV | HC | DL, HV | HC}; break;
+    case MemoryUsage::Readback: prefs = {HV | HC | CA, HV | HC}; break;
+  }
+  for (VkMemoryPropertyFlags want : prefs)
+    for (uint32_t i = 0; i < d.memoryProperties.memoryTypeCount; ++i)
+      if ((typeBits & (1u << i)) && (d.memoryProperties.memoryTypes[i].propertyFlags & want) == want) {
+        *out = i;
+        return Status();
+      }
+  return Status::error("no memory type fits (type bits 0x" + std::to_string(typeBits) + ")");
+}
+
+Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, bool linear, Allocation* out) {
+  Allocator& a = *d.allocator;
+  uint32_t type = 0;
+  CANOPY_TRY(findMemoryType(d, req.memoryTypeBits, usage, &type));
+  for (auto& b : a.blocks) {
+    if (b->typeIndex != type || b->linear != linear) continue;
+    uint64_t off = b->ranges.allocate(req.size, req.alignment);
+    if (off == RangeAllocator::kInvalid) continue;
+    *out = {b.get(), off, req.size, b->mapped ? static_cast<char*>(b->mapped) + off : nullptr};
+    a.allocationCount++;
+    return Status();
+  }
+  auto block = std::make_unique<MemoryBlock>();
+  VkDeviceSize size = std::max(a.blockSize, req.size);
+  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  ai.allocationSize = size;
+  ai.memoryTypeIndex = type;
+  VkResult r = vkAllocateMemory(d.device, &ai, nullptr, &block->memory);
+  if (r != VK_SUCCESS)
+    return vkError("vkAllocateMemory", r).context("allocating a " + std::to_string(size >> 20) + " MiB memory block");
+  block->typeIndex = type;
+  block->linear = linear;
+  block->ranges = RangeAllocator(size);
+  if (d.memoryProperties.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
+    CANOPY_VK(vkMapMemory(d.device, block->memory, 0, VK_WHOLE_SIZE, 0, &block->mapped));
+  uint64_t off = block->ranges.allocate(req.size, req.alignment);
+  *out = {block.get(), off, req.size, block->mapped ? static_cast<char*>(block->mapped) + off : nullptr};
+  a.blocks.push_back(std::move(block));
+  a.allocationCount++;
+  return Status();
+}
+
+void release(Device& d, Allocation& al) {
+  if (!al.block) return;
+  al.block->ranges.free(al.offset);
+  d.allocator->allocationCount--;
+  al = Allocation{};
+}
+
+}  // namespace
+
+Status initAllocator(Device&, Allocator*) { return Status(); }
+
+void destroyAllocator(Device& d, Allocator& a) {
+  for (auto& b : a.blocks) {
+    if (b->mapped) vkUnmapMemory(d.device, b->memory);
+    vkFreeMemory(d.device, b->memory, nullptr);
+  }
+  a.blocks.clear();
+}
+
+VkImageAspectFlags aspectOf(VkFormat f) {
+  switch (f) {
+    case VK_FORMAT_D16_UNORM:
+    case VK_FORMAT_D32_SFLOAT:
+    case VK_FORMAT_X8_D24_UNORM_PACK32: return VK_IMAGE_ASPECT_DEPTH_BIT;
+    case VK_FORMAT_D16_UNORM_S8_UINT:
+    case VK_FORMAT_D24_UNORM_S8_UINT:
+    case VK_FORMAT_D32_SFLOAT_S8_UINT: return VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT;
+    default: return VK_IMAGE_ASPECT_COLOR_BIT;
+  }
+}
+
+Status createBuffer(Device& d, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUsage memory, Buffer* out,
+                    const char* debugName) {
+  *out = Buffer{};
+  if (size == 0) return Status::error(std::string("buffer '") + (debugName ? debugName : "?") + "' has size 0");
+  VkBufferCreateInfo ci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  ci.size = size;
+  ci.usage = usage;
+  ci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
+  CANOPY_VK(vkCreateBuffer(d.device, &ci, nullptr, &out->buffer));
+  VkMemoryRequirements req;
+  vkGetBufferMemoryRequirements(d.device, out->buffer, &req);
+  Status s = allocate(d, req, memory, true, &out->allocation);
+  if (s.ok()) {
+    VkResult r = vkBindBufferMemory(d.device, out->buffer, out->allocation.block->memory, out->allocation.offset);
+    if (r != VK_SUCCESS) s = vkError("vkBindBufferMemory", r);
+  }
+  if (!s.ok()) {
+    destroyBuffer(d, *out);
+    return s.context(std::string("creating buffer '") + (debugName ? debugName : "?") + "'");
+  }
+  out->size = size;
+  setDebugName(d, VK_OBJECT_TYPE_BUFFER, uint64_t(out->buffer), debugName);
+  return Status();
+}
+
+void destroyBuffer(Device& d, Buffer& b) {
+  if (b.buffer) vkDestroyBuffer(d.device, b.buffer, nullptr);
+  release(d, b.allocation);
+  b = Buffer{};
+}
+
+Status createImage(Device& d, const ImageDesc& desc, Image* out, const char* debugName) {
+  *out = Image{};
+  const std::string name = debugName ? debugName : "?";
+  if (desc.width == 0 || desc.height == 0 || desc.layers == 0)
+    return Status::error("image '" + name + "' has a zero extent");
+  VkImageCreateInfo ci{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  ci.imageType = VK_IMAGE_TYPE_2D;
+  ci.format = desc.format;
+  ci.extent = {desc.width, desc.height, 1};
+  ci.mipLevels = 1;
+  ci.arrayLayers = desc.layers;
+  ci.samples = VK_SAMPLE_COUNT_1_BIT;
+  ci.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ci.usage = desc.usage;
+  ci.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  CANOPY_VK(vkCreateImage(d.device, &ci, nullptr, &out->image));
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(d.device, out->image, &req);
+  Status s = allocate(d, req, MemoryUsage::DeviceLocal, false, &out->allocation);
+  if (s.ok()) {
+    VkResult r = vkBindImageMemory(d.device, out->image, out->allocation.block->memory, out->allocation.offset);
+    if (r != VK_SUCCESS) s = vkError("vkBindImageMemory", r);
+  }
+  out->format = desc.format;
+  out->extent = ci.extent;
+  out->layers = desc.layers;
+  out->aspect = aspectOf(desc.format);
+  if (s.ok()) {
+    VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+    vi.image = out->image;
+    vi.viewType = (desc.layers > 1 || desc.arrayView) ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
+    vi.format = desc.format;
+    vi.subresourceRange = {out->aspect, 0, 1, 0, desc.layers};
+    VkResult r = vkCreateImageView(d.device, &vi, nullptr, &out->view);
+    if (r != VK_SUCCESS) s = vkError("vkCreateImageView", r);
+  }
+  if (!s.ok()) {
+    destroyImage(d, *out);
+    return s.context("creating image '" + name + "'");
+  }
+  setDebugName(d, VK_OBJECT_TYPE_IMAGE, uint64_t(out->image), debugName);
+  return Status();
+}
+
+void destroyImage(Device& d, Image& img) {
+  if (img.view) vkDestroyImageView(d.device, img.view, nullptr);
+  if (img.image) vkDestroyImage(d.device, img.image, nullptr);
+  release(d, img.allocation);
+  img = Image{};
+}
+
+}  // namespace canopy

@@ -1,0 +1,127 @@
+#include "engine/pipeline.h"
+
+#include "engine/device.h"
+#include "engine/shader_registry.h"
+
+namespace canopy {
+
+bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]) {
+  if (words < 5 || code[0] != 0x07230203u) return false;
+  for (size_t i = 5; i < words;) {
+    const uint32_t op = code[i] & 0xffffu, len = code[i] >> 16;
+    if (len == 0 || i + len > words) return false;
+    // OpExecutionMode (16) %entry LocalSize (17) x y z
+    if (op == 16 && len >= 6 && code[i + 2] == 17) {
+      out[0] = code[i + 3];
+      out[1] = code[i + 4];
+      out[2] = code[i + 5];
+      return true;
+    }
+    i += len;
+  }
+  return false;
+}
+
+Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, ComputePipeline* out) {
+  *out = ComputePipeline{};
+  const EmbeddedShader* sh = desc.shader ? findEmbeddedShader(desc.shader) : nullptr;
+  if (!sh) return Status::error(std::string("no embedded shader named '") + (desc.shader ? desc.shader : "") + "'");
+  const std::string what = std::string("compute pipeline '") + desc.shader + "'";
+  if (!spirvLocalSize(sh->code, sh->sizeBytes / 4, out->localSize))
+    return Status::error(what + ": no LocalSize execution mode in the SPIR-V");
+  if (desc.pushConstantSize > d.properties.limits.maxPushConstantsSize)
+    return Status::error(what + ": push constants of " + std::to_string(desc.pushConstantSize) +
+                         " bytes exceed the device limit " + std::to_string(d.properties.limits.maxPushConstantsSize));
+  out->name = desc.shader;
+  out->bindings = desc.bindings;
+  out->pushConstantSize = desc.pushConstantSize;
+
+  Status s = [&]() -> Status {
+    std::vector<VkDescriptorSetLayoutBinding> b(desc.bindings.size());
+    for (size_t i = 0; i < b.size(); ++i) b[i] = {uint32_t(i), desc.bindings[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
+    VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+    sl.bindingCount = uint32_t(b.size());
+    sl.pBindings = b.data();
+    CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, &out->setLayout));
+    VkPushConstantRange pr{VK_SHADER_STAGE_COMPUTE_BIT, 0, desc.pushConstantSize};
+    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pl.setLayoutCount = 1;
+    pl.pSetLayouts = &out->setLayout;
+    pl.pushConstantRangeCount = desc.pushConstantSize ? 1 : 0;
+    pl.pPushConstantRanges = &pr;
+    CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, &out->layout));
+    VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    mi.codeSize = sh->sizeBytes;
+    mi.pCode = sh->code;
+    VkShaderModule module;
+    CANOPY_VK(vkCreateShaderModule(d.device, &mi, nullptr, &module));
+    VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    ci.stage.module = module;
+    ci.stage.pName = "main";
+    ci.layout = out->layout;
+    VkResult r = vkCreateComputePipelines(d.device, VK_NULL_HANDLE, 1, &ci, nullptr, &out->pipeline);
+    vkDestroyShaderModule(d.device, module, nullptr);
+    if (r != VK_SUCCESS) return vkError("vkCreateComputePipelines", r);
+    setDebugName(d, VK_OBJECT_TYPE_PIPELINE, uint64_t(out->pipeline), desc.shader);
+    return Status();
+  }();
+  if (!s.ok()) {
+    destroyComputePipeline(d, *out);
+    return s.context(what);
+  }
+  return Status();
+}
+
+void destroyComputePipeline(Device& d, ComputePipeline& p) {
+  if (p.pipeline) vkDestroyPipeline(d.device, p.pipeline, nullptr);
+  if (p.layout) vkDestroyPipelineLayout(d.device, p.layout, nullptr);
+  if (p.setLayout) vkDestroyDescriptorSetLayout(d.device, p.setLayout, nullptr);
+  p = ComputePipeline{};
+}
+
+Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
+                std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
+  if (pushSize != p.pushConstantSize)
+    return Status::error("dispatch '" + p.name + "': push constants are " + std::to_string(pushSize) +
+                         " bytes, the pipeline declares " + std::to_string(p.pushConstantSize));
+  if (bindings.size() != p.bindings.size())
+    return Status::error("dispatch '" + p.name + "': " + std::to_string(bindings.size()) + " bindings given, " +
+                         std::to_string(p.bindings.size()) + " declared");
+  std::vector<VkWriteDescriptorSet> writes(bindings.size());
+  std::vector<VkDescriptorBufferInfo> bufs(bindings.size());
+  std::vector<VkDescriptorImageInfo> imgs(bindings.size());
+  size_t i = 0;
+  for (const Binding& b : bindings) {
+    VkWriteDescriptorSet& w = writes[i];
+    w = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstBinding = uint32_t(i);
+    w.descriptorCount = 1;
+    w.descriptorType = p.bindings[i];
+    switch (p.bindings[i]) {
+      case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER:
+      case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER:
+        if (!b.buffer) return Status::error("dispatch '" + p.name + "': binding " + std::to_string(i) + " needs a buffer");
+        bufs[i] = {b.buffer, b.offset, b.range};
+        w.pBufferInfo = &bufs[i];
+        break;
+      default:
+        if (!b.view) return Status::error("dispatch '" + p.name + "': binding " + std::to_string(i) + " needs an image view");
+        imgs[i] = {b.sampler, b.view, b.layout};
+        w.pImageInfo = &imgs[i];
+        break;
+    }
+    ++i;
+  }
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
+  if (!writes.empty())
+    d.cmdPushDescriptorSet(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, 0, uint32_t(writes.size()), writes.data());
+  if (pushSize) vkCmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
+  auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
+  vkCmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,74 @@
+#pragma once
+// Compute and graphics pipelines from the embedded SPIR-V. Descriptors are push descriptors
+// (VK_KHR_push_descriptor): one set, bindings declared per pipeline, no pools to manage.
+#include <cstring>
+#include <initializer_list>
+#include <string>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+#include "engine/status.h"
+
+namespace canopy {
+struct Device;
+
+struct ComputePipeline {
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
+  std::vector<VkDescriptorType> bindings;
+  uint32_t pushConstantSize = 0;
+  uint32_t localSize[3] = {1, 1, 1};  // read from the SPIR-V
+  std::string name;
+};
+
+struct ComputePipelineDesc {
+  const char* shader = nullptr;               // embedded shader name, e.g. "example_write.comp"
+  std::vector<VkDescriptorType> bindings;     // binding i of set 0
+  uint32_t pushConstantSize = 0;              // sizeof the shared push-constant struct
+};
+
+// One descriptor for a push: a buffer range, a storage/sampled image view, or both with a sampler.
+struct Binding {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceSize offset = 0;
+  VkDeviceSize range = VK_WHOLE_SIZE;
+  VkImageView view = VK_NULL_HANDLE;
+  VkImageLayout layout = VK_IMAGE_LAYOUT_GENERAL;
+  VkSampler sampler = VK_NULL_HANDLE;
+};
+inline Binding bindBuffer(VkBuffer b, VkDeviceSize offset = 0, VkDeviceSize range = VK_WHOLE_SIZE) {
+  Binding x;
+  x.buffer = b;
+  x.offset = offset;
+  x.range = range;
+  return x;
+}
+inline Binding bindImage(VkImageView v, VkImageLayout layout = VK_IMAGE_LAYOUT_GENERAL, VkSampler s = VK_NULL_HANDLE) {
+  Binding x;
+  x.view = v;
+  x.layout = layout;
+  x.sampler = s;
+  return x;
+}
+
+// Reads the workgroup size (OpExecutionMode LocalSize) from SPIR-V; false if absent/malformed.
+bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]);
+
+Status createComputePipeline(Device& device, const ComputePipelineDesc& desc, ComputePipeline* out);
+void destroyComputePipeline(Device& device, ComputePipeline& pipeline);
+
+// Binds, pushes descriptors and constants, and dispatches enough workgroups to cover `threads`
+// invocations per axis. Refuses (records nothing) when the push-constant size or the binding
+// count differs from the pipeline's declaration.
+Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, uint32_t threadsX,
+                uint32_t threadsY, uint32_t threadsZ, std::initializer_list<Binding> bindings, const void* push,
+                uint32_t pushSize);
+
+template <class Push>
+Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, uint32_t tx, uint32_t ty,
+                uint32_t tz, std::initializer_list<Binding> bindings, const Push& push) {
+  return dispatch(device, cmd, pipeline, tx, ty, tz, bindings, &push, uint32_t(sizeof(Push)));
+}
+
+}  // namespace canopy

@@ -1,0 +1,17 @@
+#pragma once
+// Lookup of the SPIR-V embedded at build time (cmake/CanopyShaders.cmake): binaries run from anywhere.
+#include <cstddef>
+#include <cstdint>
+
+namespace canopy {
+
+struct EmbeddedShader {
+  const char* name;      // source file name, e.g. "example_write.comp"
+  const uint32_t* code;  // SPIR-V words
+  size_t sizeBytes;
+};
+
+// Returns the embedded shader compiled from shaders/<name>, or nullptr when no such shader exists.
+const EmbeddedShader* findEmbeddedShader(const char* name);
+
+}  // namespace canopy

@@ -1,0 +1,103 @@
+#include "engine/transfer.h"
+
+#include <cstring>
+
+#include "engine/device.h"
+
+namespace canopy {
+namespace {
+
+const rg::State kHostWritten{VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_WRITE_BIT};
+const rg::State kHostRead{VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT};
+
+Status runGraph(Device& d, rg::RenderGraph& g) {
+  CANOPY_TRY(g.compile());
+  CANOPY_TRY(g.realize(d));
+  Status s = submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+  g.release(d);
+  return s;
+}
+
+}  // namespace
+
+Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
+                    VkDeviceSize offset) {
+  if (offset + size > dst.size || offset + size < offset)
+    return Status::error("uploadBuffer: " + std::to_string(size) + " bytes at " + std::to_string(offset) +
+                         " exceed the buffer's " + std::to_string(dst.size));
+  Buffer staging;
+  CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
+  std::memcpy(staging.allocation.mapped, data, size);
+  rg::RenderGraph g;
+  auto src = g.importBuffer("staging", size, kHostWritten, rg::stateOf(rg::Use::TransferSrc));
+  auto dstId = g.importBuffer("destination", dst.size, state, state);
+  g.addPass("upload", [&](rg::PassContext& c) {
+     VkBufferCopy region{0, offset, size};
+     vkCmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dstId), 1, &region);
+     return Status();
+   })
+      .read(src, rg::Use::TransferSrc)
+      .write(dstId, rg::Use::TransferDst);
+  Status s = g.bindBuffer(src, staging.buffer);
+  if (s.ok()) s = g.bindBuffer(dstId, dst.buffer);
+  if (s.ok()) s = runGraph(d, g);
+  destroyBuffer(d, staging);
+  return s.context("uploadBuffer");
+}
+
+Status readbackBuffer(Device& d, const Buffer& srcBuf, void* out, VkDeviceSize size, rg::State state,
+                      VkDeviceSize offset) {
+  if (offset + size > srcBuf.size || offset + size < offset)
+    return Status::error("readbackBuffer: " + std::to_string(size) + " bytes at " + std::to_string(offset) +
+                         " exceed the buffer's " + std::to_string(srcBuf.size));
+  Buffer staging;
+  CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback, &staging, "readback staging"));
+  rg::RenderGraph g;
+  auto src = g.importBuffer("source", srcBuf.size, state, state);
+  auto dst = g.importBuffer("staging", size, {}, kHostRead);
+  g.addPass("readback", [&](rg::PassContext& c) {
+     VkBufferCopy region{offset, 0, size};
+     vkCmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dst), 1, &region);
+     return Status();
+   })
+      .read(src, rg::Use::TransferSrc)
+      .write(dst, rg::Use::TransferDst);
+  Status s = g.bindBuffer(src, srcBuf.buffer);
+  if (s.ok()) s = g.bindBuffer(dst, staging.buffer);
+  if (s.ok()) s = runGraph(d, g);
+  if (s.ok()) std::memcpy(out, staging.allocation.mapped, size);
+  destroyBuffer(d, staging);
+  return s.context("readbackBuffer");
+}
+
+Status readbackImage(Device& d, const Image& img, uint32_t layer, uint32_t bytesPerTexel, void* out, rg::State state) {
+  if (layer >= img.layers) return Status::error("readbackImage: layer " + std::to_string(layer) + " out of range");
+  const VkDeviceSize size = VkDeviceSize(img.extent.width) * img.extent.height * bytesPerTexel;
+  Buffer staging;
+  CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback, &staging, "readback staging"));
+  rg::RenderGraph g;
+  ImageDesc desc;
+  desc.format = img.format;
+  desc.width = img.extent.width;
+  desc.height = img.extent.height;
+  desc.layers = img.layers;
+  auto src = g.importImage("source", desc, state, state);
+  auto dst = g.importBuffer("staging", size, {}, kHostRead);
+  g.addPass("readback image", [&](rg::PassContext& c) {
+     VkBufferImageCopy region{};
+     region.imageSubresource = {img.aspect, 0, layer, 1};
+     region.imageExtent = img.extent;
+     vkCmdCopyImageToBuffer(c.cmd, c.image(src).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, c.buffer(dst), 1, &region);
+     return Status();
+   })
+      .read(src, rg::Use::TransferSrc)
+      .write(dst, rg::Use::TransferDst);
+  Status s = g.bindImage(src, img);
+  if (s.ok()) s = g.bindBuffer(dst, staging.buffer);
+  if (s.ok()) s = runGraph(d, g);
+  if (s.ok()) std::memcpy(out, staging.allocation.mapped, size);
+  destroyBuffer(d, staging);
+  return s.context("readbackImage");
+}
+
+}  // namespace canopy

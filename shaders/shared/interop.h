@@ -8,12 +8,16 @@
 #define CANOPY_INTEROP_H
 
 #ifdef __cplusplus
+#include <cmath>
 #include <cstdint>
 #include <glm/glm.hpp>
+// Shared inline functions use GLSL built-ins; on the C++ side they resolve to std:: and glm::.
 #define CANOPY_NAMESPACE_BEGIN                                                          \
   namespace canopy::gpu {                                                              \
   using glm::vec2; using glm::vec3; using glm::vec4; using glm::ivec2; using glm::ivec4; \
-  using glm::uvec2; using glm::uvec4; using glm::mat4; using uint = uint32_t;
+  using glm::uvec2; using glm::uvec4; using glm::mat4; using uint = uint32_t;            \
+  using std::sin; using std::cos; using std::abs; using std::floor; using std::sqrt;    \
+  using glm::fract; using glm::mix; using glm::clamp; using glm::smoothstep; using glm::min; using glm::max;
 #define CANOPY_NAMESPACE_END }
 #define CANOPY_SIZE_CHECK(T, bytes) \
   static_assert(sizeof(T) == (bytes), #T ": size differs from its GLSL scalar-layout size");

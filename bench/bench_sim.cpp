@@ -1,0 +1,127 @@
+// canopy-bench sim: milliseconds per simulation step for N = 64, 128, 256 (or --sizes), the GPU
+// design (every pass a compute dispatch, per-pass GPU timestamps) next to the CPU reference of the
+// same step (the paper ran its 64x64 simulation on the CPU), and Stam's scheme beside Canopy's.
+// Wall clock of the submitted step is printed with the timestamps: CPU drivers' timestamps are
+// not trusted alone (design.md).
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "bench/bench.h"
+#include "compute/sim_reference.h"
+#include "compute/simulation.h"
+#include "engine/device.h"
+#include "engine/timing.h"
+
+namespace canopy::bench {
+namespace {
+
+double nowMs() {
+  using namespace std::chrono;
+  return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+struct Row {
+  std::string label;
+  double gpuTs = 0, wall = 0, cpu = 0;
+  std::vector<PassTiming> passes;
+  uint32_t dispatches = 0;
+};
+
+Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int frames, bool cpu, Row* row) {
+  Simulation sim;
+  SimulationDesc desc;
+  desc.gridSize = n;
+  CANOPY_TRY(createSimulation(dev, desc, &sim));
+  SimulationParams p;
+  p.wind.sides = kWindFromLeft;
+  p.fluid.scheme = scheme;
+  p.fluid.multigridCycles = cycles;
+  p.motors.push_back({0.5f, 0.5f, 0.1f, 0.5f});
+  const float dt = 1.0f / 30.0f;
+  GpuTimer timer;
+  CANOPY_TRY(timer.init(dev, 16));
+  std::vector<double> ts, wall;
+  std::vector<std::vector<double>> perPass;
+  Status s;
+  for (int f = 0; f < frames + 3 && s.ok(); ++f) {
+    double t0 = nowMs();
+    s = submitAndWait(dev, [&](VkCommandBuffer cmd) {
+      timer.reset(cmd);
+      CANOPY_TRY(prepareSimulationStep(sim, p, dt));
+      return sim.graph.record(cmd, &timer);
+    });
+    double t1 = nowMs();
+    std::vector<PassTiming> t;
+    if (s.ok()) s = timer.read(dev, &t);
+    if (f < 3) continue;
+    wall.push_back(t1 - t0);
+    double sum = 0;
+    perPass.resize(t.size());
+    for (size_t i = 0; i < t.size(); ++i) {
+      sum += t[i].milliseconds;
+      perPass[i].push_back(t[i].milliseconds);
+    }
+    ts.push_back(sum);
+    row->passes = t;
+  }
+  for (size_t i = 0; i < row->passes.size(); ++i) row->passes[i].milliseconds = median(perPass[i]);
+  row->gpuTs = median(ts);
+  row->wall = median(wall);
+  row->dispatches = sim.stats.dispatchesPerStep;
+  timer.destroy(dev);
+  destroySimulation(sim);
+  CANOPY_TRY(s);
+  if (cpu) {
+    ref::SimState st = ref::makeState(n, 8);
+    std::vector<double> c;
+    double t = 0;
+    const int cpuFrames = n >= 256 ? 5 : 15;
+    for (int f = 0; f < cpuFrames + 2; ++f) {
+      gpu::SimFrame fr;
+      CANOPY_TRY(makeSimFrame(p, n, float(t), dt, uint32_t(f % 8), 8, &fr));
+      double t0 = nowMs();
+      ref::step(fr, st);
+      double t1 = nowMs();
+      t += dt;
+      if (f >= 2) c.push_back(t1 - t0);
+    }
+    row->cpu = median(c);
+  }
+  return Status();
+}
+
+}  // namespace
+
+int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, bool detail) {
+  std::printf("\n== Simulation step (wind + fluid + wave + tile), dt = 1/30 s, wind from the left + 1 motor ==\n");
+  std::printf("GPU: per-pass timestamps summed, median of %d steps; wall: submit-to-fence of one step alone.\n", frames);
+  std::printf("CPU: the reference implementation of the same step, one core, median.\n\n");
+  std::printf("  %-5s %-26s %10s %10s %10s %11s %10s\n", "N", "scheme", "GPU ts ms", "wall ms", "CPU ms", "dispatches", "CPU/GPU");
+  for (uint32_t n : sizes) {
+    struct Variant { const char* name; FluidScheme scheme; uint32_t cycles; };
+    const Variant variants[] = {{"MAC + multigrid (2 V)", FluidScheme::MacMultigrid, 2},
+                                {"MAC + multigrid (1 V)", FluidScheme::MacMultigrid, 1},
+                                {"Stam collocated, 20 RB-GS", FluidScheme::Stam, 20}};
+    for (const Variant& v : variants) {
+      Row r;
+      Status s = measure(dev, n, v.scheme, v.cycles, frames, true, &r);
+      if (!s.ok()) {
+        std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+        return 1;
+      }
+      std::printf("  %-5u %-26s %10.3f %10.3f %10.3f %11u %9.1fx\n", n, v.name, r.gpuTs, r.wall, r.cpu, r.dispatches,
+                  r.cpu / std::max(r.wall, 1e-9));
+      if (detail)
+        for (const PassTiming& t : r.passes)
+          if (t.milliseconds > 0.0005) std::printf("        %-32s %8.3f ms\n", t.name.c_str(), t.milliseconds);
+    }
+  }
+  return 0;
+}
+
+}  // namespace canopy::bench

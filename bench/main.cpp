@@ -1,0 +1,75 @@
+// canopy-bench: Canopy's benchmark (speed is measured here, never asserted in tests).
+//   canopy-bench [sim] [--sizes 64,128,256] [--frames N] [--detail] [--device NAME]
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/bench.h"
+#include "engine/device.h"
+
+using namespace canopy;
+
+static int usage(const char* why) {
+  if (why) std::fprintf(stderr, "canopy-bench: %s\n", why);
+  std::fprintf(why ? stderr : stdout,
+               "usage: canopy-bench [sim] [--sizes N,N,...] [--frames N] [--detail] [--device NAME]\n"
+               "  sim            simulation step per grid size, GPU vs CPU reference (default section)\n"
+               "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
+               "  --frames N     steps measured per configuration, 3..100000 (default 60)\n"
+               "  --detail       per-pass GPU timestamps\n"
+               "  --device NAME  substring of the Vulkan device name\n");
+  return why ? 2 : 0;
+}
+
+int main(int argc, char** argv) {
+  std::vector<uint32_t> sizes = {64, 128, 256};
+  int frames = 60;
+  bool detail = false;
+  DeviceDesc desc;
+  desc.applicationName = "canopy-bench";
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+    if (a == "--help" || a == "-h") return usage(nullptr);
+    if (a == "sim") continue;
+    if (a == "--detail") detail = true;
+    else if (a == "--sizes") {
+      const char* v = next();
+      if (!v) return usage("--sizes needs a list");
+      sizes.clear();
+      std::stringstream ss(v);
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        char* end = nullptr;
+        long n = std::strtol(item.c_str(), &end, 10);
+        if (*end || n < 4 || n > 1024 || (n & (n - 1))) return usage("--sizes: each must be a power of two in [4, 1024]");
+        sizes.push_back(uint32_t(n));
+      }
+    } else if (a == "--frames") {
+      const char* v = next();
+      char* end = nullptr;
+      long n = v ? std::strtol(v, &end, 10) : 0;
+      if (!v || *end || n < 3 || n > 100000) return usage("--frames needs an integer in [3, 100000]");
+      frames = int(n);
+    } else if (a == "--device") {
+      const char* v = next();
+      if (!v) return usage("--device needs a name");
+      desc.preferredDevice = v;
+    } else {
+      return usage(("unknown argument '" + a + "'").c_str());
+    }
+  }
+  Device dev;
+  Status s = createDevice(desc, &dev);
+  if (!s.ok()) {
+    std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+    return 1;
+  }
+  std::printf("Device: %s\n", dev.properties.deviceName);
+  int rc = bench::runSimBench(dev, sizes, frames, detail);
+  destroyDevice(dev);
+  return rc;
+}

@@ -1,0 +1,436 @@
+#include "compute/simulation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include "engine/device.h"
+#include "engine/transfer.h"
+
+namespace canopy {
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+
+// "name = value: must be ... in [lo, hi] (unit)" when v is NaN/inf or outside [lo, hi].
+Status checkRange(const char* name, double v, double lo, double hi, const char* unit) {
+  if (std::isfinite(v) && v >= lo && v <= hi) return Status();
+  return Status::error(std::string(name) + " = " + fmt(v) + ": must be a finite number in [" + fmt(lo) + ", " + fmt(hi) +
+                       "]" + (unit[0] ? std::string(" (") + unit + ")" : std::string()));
+}
+Status checkPositive(const char* name, double v, double hi, const char* unit) {
+  if (std::isfinite(v) && v > 0 && v <= hi) return Status();
+  return Status::error(std::string(name) + " = " + fmt(v) + ": must be a finite number in (0, " + fmt(hi) + "] (" + unit + ")");
+}
+
+const rg::State kPersistent = rg::stateOf(rg::Use::ComputeStorageReadWrite);
+const rg::State kFrameRest = rg::stateOf(rg::Use::ComputeStorageRead);
+
+// Every simulation kernel sees the same seven buffers (shaders/sim_common.glsl); what each pass
+// really reads and writes is declared to the render graph where the pass is added.
+Status simDispatch(Simulation& s, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty,
+                   uint32_t phase) {
+  gpu::SimPush push{phase, 0, 0, 0};
+  return dispatch(*s.device, cmd, p, tx, ty, 1,
+                  {bindBuffer(s.frame.buffer), bindBuffer(s.velocity.buffer), bindBuffer(s.multigrid.buffer),
+                   bindBuffer(s.wave.buffer), bindBuffer(s.tiled.buffer), bindBuffer(s.ring.buffer),
+                   bindBuffer(s.ringTimes.buffer)},
+                  push);
+}
+
+}  // namespace
+
+Status validateSimulationDesc(const SimulationDesc& d) {
+  const uint32_t n = d.gridSize;
+  if (n < 4 || n > 1024 || (n & (n - 1)))
+    return Status::error("gridSize = " + std::to_string(n) +
+                         ": must be a power of two in [4, 1024] (the multigrid pyramid and the red-black kernels need it)");
+  CANOPY_TRY(checkPositive("historySeconds", d.historySeconds, 3600, "s"));
+  CANOPY_TRY(checkPositive("nominalDt", d.nominalDt, 10, "s"));
+  if (d.historySize > 4096) return Status::error("historySize = " + std::to_string(d.historySize) + ": must be in [0, 4096]");
+  return Status();
+}
+
+Status validateSimulationParams(const SimulationParams& p, float dt) {
+  CANOPY_TRY(checkPositive("dt", dt, 10, "s"));
+  const WindParams& w = p.wind;
+  if (w.sides > 15) return Status::error("wind.sides = " + std::to_string(w.sides) + ": must be a WindSide mask in [0, 15]");
+  CANOPY_TRY(checkRange("wind.strength", w.strength, 0, 1000, "domain units/s"));
+  CANOPY_TRY(checkRange("wind.frequency", w.frequency, 0, 1000, "Hz"));
+  CANOPY_TRY(checkRange("wind.baseline", w.baseline, -10, 10, ""));
+  CANOPY_TRY(checkRange("wind.modulation", w.modulation, -10, 10, ""));
+  CANOPY_TRY(checkRange("wind.gust", w.gust, 0, 1, ""));
+  CANOPY_TRY(checkPositive("wind.gustScale", w.gustScale, 100, "domain units"));
+  CANOPY_TRY(checkRange("wind.gustSpeed", w.gustSpeed, -1000, 1000, "domain units/s"));
+  const FluidParams& f = p.fluid;
+  if (f.scheme != FluidScheme::MacMultigrid && f.scheme != FluidScheme::Stam)
+    return Status::error("fluid.scheme = " + std::to_string(uint32_t(f.scheme)) + ": must be MacMultigrid (0) or Stam (1)");
+  if (f.boundary != FluidBoundary::WindTunnel && f.boundary != FluidBoundary::Walls)
+    return Status::error("fluid.boundary = " + std::to_string(uint32_t(f.boundary)) + ": must be WindTunnel (0) or Walls (1)");
+  CANOPY_TRY(checkRange("fluid.viscosity", f.viscosity, 0, 10, "domain units^2/s"));
+  if (f.iterations < 1 || f.iterations > 10000)
+    return Status::error("fluid.iterations = " + std::to_string(f.iterations) + ": must be in [1, 10000]");
+  if (f.multigridCycles < 1 || f.multigridCycles > 64)
+    return Status::error("fluid.multigridCycles = " + std::to_string(f.multigridCycles) + ": must be in [1, 64]");
+  const WaveParams& v = p.wave;
+  CANOPY_TRY(checkRange("wave.stiffness", v.stiffness, 0, 1e6, "1/s^2"));
+  CANOPY_TRY(checkRange("wave.speed", v.speed, 0, 100, "domain units/s"));
+  CANOPY_TRY(checkRange("wave.damping", v.damping, 0, 1000, "1/s"));
+  CANOPY_TRY(checkRange("wave.gain", v.gain, -100, 100, ""));
+  if (v.maxSubsteps < 1 || v.maxSubsteps > 4096)
+    return Status::error("wave.maxSubsteps = " + std::to_string(v.maxSubsteps) + ": must be in [1, 4096]");
+  if (p.motors.size() > SIM_MAX_MOTORS)
+    return Status::error("motors: " + std::to_string(p.motors.size()) + " given, at most " + std::to_string(SIM_MAX_MOTORS));
+  for (size_t i = 0; i < p.motors.size(); ++i) {
+    const std::string m = "motors[" + std::to_string(i) + "]";
+    CANOPY_TRY(checkRange((m + ".x").c_str(), p.motors[i].x, -100, 100, "domain units"));
+    CANOPY_TRY(checkRange((m + ".y").c_str(), p.motors[i].y, -100, 100, "domain units"));
+    CANOPY_TRY(checkPositive((m + ".radius").c_str(), p.motors[i].radius, 100, "domain units"));
+    CANOPY_TRY(checkRange((m + ".strength").c_str(), p.motors[i].strength, -1000, 1000, "domain units/s"));
+  }
+  return Status();
+}
+
+float maxStableWaveDt(const WaveParams& w, uint32_t n) {
+  // Damped position Verlet V+ = (2 - zeta dt) V - (1 - zeta dt) V- - dt^2 omega^2 V is stable for
+  // omega^2 dt^2 + 2 zeta dt <= 4; the stiffest mode has omega^2 = k + 8 c^2 / h^2 (2D Laplacian).
+  // With a 0.9 safety factor on dt: omega^2 dt^2 + 2 zeta dt <= 3.24.
+  const double om2 = double(w.stiffness) + 8.0 * double(w.speed) * w.speed * double(n) * n;
+  const double z = w.damping;
+  if (om2 <= 0.0) return z > 0 ? float(1.62 / z) : 1e9f;
+  return float((-z + std::sqrt(z * z + 3.24 * om2)) / om2);
+}
+
+double estimateLoopTrips(const gpu::SimFrame& f) {
+  // Upper bound of the loop iterations one invocation of each single-workgroup kernel runs (the
+  // serial multigrid tail runs in invocation 0). Mirrors the loops of shaders/sim_*.comp.
+  if (f.n < 4 || f.n > 1024 || f.mgLevels < 1 || f.mgLevels > 11) return 1e300;  // not a valid frame
+  const double G = SIM_GROUP_SIZE, n = f.n, hn = n / 2;
+  auto par = [G](double count) { return std::ceil(count / G); };
+  const double reduce = std::log2(G) + 2;
+  const double diffuse = par(4 * n) + par(gpu::macFloats(f.n)) + f.diffuseSweeps * 2.0 * (par(n * hn + (n - 1) * hn) + 1);
+  double cycle = 0;
+  uint32_t parLevels = 0;
+  while (parLevels + 1 < f.mgLevels && (f.n >> parLevels) > f.mgSerialSize) ++parLevels;
+  for (uint32_t l = 0; l + 1 < f.mgLevels; ++l) {
+    const double m = f.n >> l, mc = m / 2;
+    if (l < parLevels)
+      cycle += (SIM_MG_PRE_SWEEPS + SIM_MG_POST_SWEEPS) * 2.0 * (par(m * m / 2) + 1) + par(mc * mc) + par(m * m) +
+               2 * par(mc * mc) + reduce;
+    else
+      cycle += (SIM_MG_PRE_SWEEPS + SIM_MG_POST_SWEEPS) * 2.0 * (m * m + 1) + 3 * mc * mc + m * m + 4;
+  }
+  const double mL = f.n >> (f.mgLevels - 1);
+  cycle += SIM_MG_COARSE_SWEEPS * 2.0 * (mL * mL + 1) + f.mgLevels * 2;
+  const double project = par(4 * n) + 3 * par(n * n) + 2 * reduce + f.mgCycles * (cycle + 1) + 2 * par(n * n) + par(n);
+  const double solve = 2 * (par(n * hn) + 1) + 2 * par(n) + 2;
+  const double stam = par((n + 2) * (n + 2)) + 4 * f.iterations * solve + 2 * (par(n * n) + 2 * par(n) + 2) +
+                      2 * (3 * par(n * n) + reduce + 4 * par(n) + 2 * f.iterations * solve / 4);
+  const double wave = 2 * par(n * n) + f.waveSubsteps * (par(n * n) + 1);
+  const double fluid = f.scheme == SIM_SCHEME_STAM ? stam : std::max(diffuse, project);
+  return std::max(fluid, wave);
+}
+
+Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt, uint32_t ringSlot, uint32_t ringSize,
+                    gpu::SimFrame* out) {
+  CANOPY_TRY(validateSimulationParams(p, dt));
+  gpu::SimFrame f{};
+  f.n = n;
+  f.scheme = uint32_t(p.fluid.scheme);
+  f.boundary = uint32_t(p.fluid.boundary);
+  f.windSides = p.wind.sides;
+  f.dt = dt;
+  f.time = time;
+  f.viscosity = p.fluid.viscosity;
+  // Implicit diffusion: one Jacobi sweep (contraction rho = 4a/(1+4a)), then red-black
+  // Gauss-Seidel sweeps (rho^2 each) until the error is 1e-3 of the diffusion correction (itself
+  // O(a) of the field); capped by `iterations`.
+  const double a = double(dt) * p.fluid.viscosity * double(n) * n;
+  const double rho = 4 * a / (1 + 4 * a);
+  if (rho <= 1e-3) f.diffuseSweeps = 0;
+  else {
+    const double need = std::ceil(std::log(1e-3 / rho) / std::log(rho * rho));
+    f.diffuseSweeps = uint32_t(std::clamp(need, 0.0, double(p.fluid.iterations)));
+  }
+  f.iterations = p.fluid.iterations;
+  f.mgCycles = p.fluid.multigridCycles;
+  f.mgLevels = gpu::mgLevelCount(n);
+  f.mgSerialSize = 8;  // a GPU default; prepareSimulationStep uses the simulation's (per device)
+  f.motorCount = uint32_t(p.motors.size());
+  f.strength = p.wind.strength;
+  f.frequency = p.wind.frequency;
+  f.baseline = p.wind.baseline;
+  f.modulation = p.wind.modulation;
+  f.gust = p.wind.gust;
+  f.gustScale = p.wind.gustScale;
+  f.gustSpeed = p.wind.gustSpeed;
+  f.seed = p.wind.seed;
+  f.waveK = p.wave.stiffness;
+  f.waveC = p.wave.speed;
+  f.waveZeta = p.wave.damping;
+  f.waveGain = p.wave.gain;
+  const float maxDt = maxStableWaveDt(p.wave, n);
+  const double sub = std::ceil(double(dt) / maxDt);
+  if (sub > p.wave.maxSubsteps) {
+    f.waveSubsteps = p.wave.maxSubsteps;
+    f.waveDt = maxDt;  // clamped: the oscillator advances maxSubsteps * maxDt < dt (reported in stats)
+  } else {
+    f.waveSubsteps = uint32_t(std::max(1.0, sub));
+    f.waveDt = dt / float(f.waveSubsteps);
+  }
+  f.ringSlot = ringSlot;
+  f.ringSize = ringSize;
+  for (size_t i = 0; i < p.motors.size(); ++i)
+    f.motors[i] = {p.motors[i].x, p.motors[i].y, p.motors[i].radius, p.motors[i].strength};
+  CANOPY_TRY(checkLoopBudget(f));
+  *out = f;
+  return Status();
+}
+
+Status checkLoopBudget(const gpu::SimFrame& f) {
+  // lavapipe (llvmpipe) silently ends a shader loop after 65535 iterations per invocation, which
+  // would truncate a solve without any error; refuse configurations that could get near it.
+  const double trips = estimateLoopTrips(f);
+  if (trips <= kMaxLoopTrips) return Status();
+  std::ostringstream o;
+  o << "gridSize " << f.n << " with fluid.iterations = " << f.iterations << ", fluid.multigridCycles = " << f.mgCycles
+    << ", " << f.diffuseSweeps << " diffusion sweeps and " << f.waveSubsteps << " wave substeps needs ~" << uint64_t(trips)
+    << " loop iterations per shader invocation; at most " << uint64_t(kMaxLoopTrips)
+    << " are allowed (lavapipe silently stops longer loops): lower fluid.iterations, fluid.multigridCycles, "
+       "fluid.viscosity, wave.maxSubsteps or the grid size";
+  return Status::error(o.str());
+}
+
+Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) {
+  CANOPY_TRY(validateSimulationDesc(desc));
+  Simulation& s = *out;
+  s.device = &d;
+  s.n = desc.gridSize;
+  s.ringSize = desc.historySize ? desc.historySize
+                                : uint32_t(std::ceil(desc.historySeconds / desc.nominalDt)) + 2;
+  s.ringSize = std::max<uint32_t>(s.ringSize, 2);
+  // Multigrid levels this small run in one invocation without barriers. On a CPU device a
+  // workgroup runs on one core and each barrier costs ~15 us (lavapipe), so serial is cheaper up to
+  // 32x32; on GPUs barriers are cheap and serial work is slow, so only the tiny levels.
+  s.mgSerialSize = d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 32 : 8;
+  const uint32_t n = s.n;
+  const VkBufferUsageFlags use =
+      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  const VkDeviceSize F = sizeof(float);
+  CANOPY_TRY(createBuffer(d, sizeof(gpu::SimFrame), use, MemoryUsage::DeviceLocal, &s.frame, "sim frame"));
+  CANOPY_TRY(createBuffer(d, 2 * gpu::velocityFloats(n) * F, use, MemoryUsage::DeviceLocal, &s.velocity, "sim velocity"));
+  CANOPY_TRY(createBuffer(d, gpu::mgFloats(n, gpu::mgLevelCount(n)) * F, use, MemoryUsage::DeviceLocal, &s.multigrid, "sim multigrid"));
+  CANOPY_TRY(createBuffer(d, 6ull * n * n * F, use, MemoryUsage::DeviceLocal, &s.wave, "sim wave"));
+  CANOPY_TRY(createBuffer(d, 2ull * n * n * F, use, MemoryUsage::DeviceLocal, &s.tiled, "sim tiled"));
+  CANOPY_TRY(createBuffer(d, uint64_t(s.ringSize) * 2 * n * n * F, use, MemoryUsage::DeviceLocal, &s.ring, "sim history ring"));
+  CANOPY_TRY(createBuffer(d, s.ringSize * F, use, MemoryUsage::DeviceLocal, &s.ringTimes, "sim ring times"));
+
+  const VkDescriptorType SB = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  const std::vector<VkDescriptorType> b(7, SB);
+  const uint32_t push = sizeof(gpu::SimPush);
+  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_diffuse.comp", b, push}, &s.diffuse));
+  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_project.comp", b, push}, &s.project));
+  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_advect.comp", b, push}, &s.advect));
+  CANOPY_TRY(createComputePipeline(d, {"sim_stam_step.comp", b, push}, &s.stam));
+  CANOPY_TRY(createComputePipeline(d, {"sim_wave.comp", b, push}, &s.oscillator));
+  CANOPY_TRY(createComputePipeline(d, {"sim_tile.comp", b, push}, &s.tile));
+
+  // Zero all state once (a one-pass graph: the fills' barriers come from the graph too).
+  rg::RenderGraph g;
+  Buffer* bufs[] = {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes};
+  std::vector<rg::ResourceId> ids;
+  for (Buffer* x : bufs) ids.push_back(g.importBuffer("sim state", x->size, {}, x == &s.frame ? kFrameRest : kPersistent));
+  auto pass = g.addPass("sim: clear", [&](rg::PassContext& c) {
+    for (rg::ResourceId id : ids) vkCmdFillBuffer(c.cmd, c.buffer(id), 0, VK_WHOLE_SIZE, 0);
+    return Status();
+  });
+  for (size_t i = 0; i < ids.size(); ++i) {
+    pass.write(ids[i], rg::Use::TransferDst);
+    CANOPY_TRY(g.bindBuffer(ids[i], bufs[i]->buffer));
+  }
+  CANOPY_TRY(g.compile());
+  CANOPY_TRY(g.realize(d));
+  CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); }));
+
+  CANOPY_TRY(addSimulationPasses(s, s.graph, &s.graphIds));
+  CANOPY_TRY(s.graph.compile());
+  CANOPY_TRY(s.graph.realize(d));
+  s.graphReady = true;
+  return Status();
+}
+
+void destroySimulation(Simulation& s) {
+  if (!s.device) return;
+  Device& d = *s.device;
+  vkDeviceWaitIdle(d.device);
+  s.graph.release(d);
+  for (ComputePipeline* p : {&s.diffuse, &s.project, &s.advect, &s.stam, &s.oscillator, &s.tile}) destroyComputePipeline(d, *p);
+  for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes}) destroyBuffer(d, *b);
+  s.device = nullptr;
+}
+
+Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResources* out) {
+  SimulationResources r;
+  r.frame = g.importBuffer("sim frame", s.frame.size, kFrameRest, kFrameRest);
+  r.velocity = g.importBuffer("sim velocity", s.velocity.size, kPersistent, kPersistent);
+  r.multigrid = g.importBuffer("sim multigrid", s.multigrid.size, kPersistent, kPersistent);
+  r.wave = g.importBuffer("sim wave", s.wave.size, kPersistent, kPersistent);
+  r.tiled = g.importBuffer("sim tiled", s.tiled.size, kPersistent, kPersistent);
+  r.ring = g.importBuffer("sim history ring", s.ring.size, kPersistent, kPersistent);
+  r.ringTimes = g.importBuffer("sim ring times", s.ringTimes.size, kPersistent, kPersistent);
+  CANOPY_TRY(g.bindBuffer(r.frame, s.frame.buffer));
+  CANOPY_TRY(g.bindBuffer(r.velocity, s.velocity.buffer));
+  CANOPY_TRY(g.bindBuffer(r.multigrid, s.multigrid.buffer));
+  CANOPY_TRY(g.bindBuffer(r.wave, s.wave.buffer));
+  CANOPY_TRY(g.bindBuffer(r.tiled, s.tiled.buffer));
+  CANOPY_TRY(g.bindBuffer(r.ring, s.ring.buffer));
+  CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
+  Simulation* sp = &s;
+  auto run = [sp](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
+    return simDispatch(*sp, cmd, p, tx, ty, phase);
+  };
+  auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
+  const uint32_t one = SIM_GROUP_SIZE;  // single-workgroup kernels
+  g.addPass("sim: upload step parameters", [sp](rg::PassContext& c) {
+     vkCmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
+     return Status();
+   }).write(r.frame, rg::Use::TransferDst);
+  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->diffuse, one, 1, 0) : Status(); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->project, one, 1, 0) : Status(); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
+      .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: advect", [=](rg::PassContext& c) {
+     return mac() ? run(c.cmd, sp->advect, sp->n + 1, sp->n + 1, 0) : Status();
+   })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->project, one, 1, 1) : Status(); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
+      .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return mac() ? Status() : run(c.cmd, sp->stam, one, 1, 0); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) { return run(c.cmd, sp->oscillator, one, 1, 0); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .read(r.velocity, rg::Use::ComputeStorageRead)
+      .write(r.wave, rg::Use::ComputeStorageReadWrite);
+  g.addPass("sim: tile + history", [=](rg::PassContext& c) { return run(c.cmd, sp->tile, sp->n, sp->n, 0); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .read(r.wave, rg::Use::ComputeStorageRead)
+      .write(r.tiled, rg::Use::ComputeStorageWrite)
+      .write(r.ring, rg::Use::ComputeStorageWrite)
+      .write(r.ringTimes, rg::Use::ComputeStorageWrite);
+  *out = r;
+  return Status();
+}
+
+Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt) {
+  const uint32_t slot = uint32_t(s.stats.steps % s.ringSize);
+  gpu::SimFrame f;
+  CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, slot, s.ringSize, &f));
+  f.mgSerialSize = s.mgSerialSize;
+  CANOPY_TRY(checkLoopBudget(f));
+  s.next = f;
+  s.time += dt;
+  s.stats.steps++;
+  s.stats.lastWaveSubsteps = s.next.waveSubsteps;
+  s.stats.lastDiffuseSweeps = s.next.diffuseSweeps;
+  s.stats.dispatchesPerStep = s.next.scheme == SIM_SCHEME_STAM ? 3 : 6;
+  s.stats.clampedSeconds += std::max(0.0, double(dt) - double(s.next.waveSubsteps) * s.next.waveDt);
+  return Status();
+}
+
+Status runSimulationSteps(Simulation& s, const SimulationParams& p, float dt, uint32_t count) {
+  gpu::SimFrame probe;  // every check, before anything is recorded
+  CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, 0, s.ringSize, &probe));
+  probe.mgSerialSize = s.mgSerialSize;
+  CANOPY_TRY(checkLoopBudget(probe));
+  if (!s.graphReady) return Status::error("runSimulationSteps: simulation not created");
+  while (count > 0) {
+    const uint32_t batch = std::min<uint32_t>(count, 256);
+    CANOPY_TRY(submitAndWait(*s.device, [&](VkCommandBuffer cmd) {
+      for (uint32_t i = 0; i < batch; ++i) {
+        CANOPY_TRY(prepareSimulationStep(s, p, dt));
+        CANOPY_TRY(s.graph.record(cmd));
+      }
+      return Status();
+    }));
+    count -= batch;
+  }
+  return Status();
+}
+
+Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
+  gpu::SimFrame f;
+  CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), 1.0f / 30.0f, 0, s.ringSize, &f));
+  f.scheme = SIM_SCHEME_MAC_MULTIGRID;
+  rg::RenderGraph g;
+  auto frame = g.importBuffer("sim frame", s.frame.size, kFrameRest, kFrameRest);
+  auto vel = g.importBuffer("sim velocity", s.velocity.size, kPersistent, kPersistent);
+  auto mg = g.importBuffer("sim multigrid", s.multigrid.size, kPersistent, kPersistent);
+  Simulation* sp = &s;
+  g.addPass("sim: upload", [&](rg::PassContext& c) {
+     vkCmdUpdateBuffer(c.cmd, c.buffer(frame), 0, sizeof f, &f);
+     vkCmdFillBuffer(c.cmd, c.buffer(mg), 0, VK_WHOLE_SIZE, 0);
+     return Status();
+   })
+      .write(frame, rg::Use::TransferDst)
+      .write(mg, rg::Use::TransferDst);
+  g.addPass("sim: project", [sp](rg::PassContext& c) { return simDispatch(*sp, c.cmd, sp->project, SIM_GROUP_SIZE, 1, 0); })
+      .read(frame, rg::Use::ComputeStorageRead)
+      .write(vel, rg::Use::ComputeStorageReadWrite)
+      .write(mg, rg::Use::ComputeStorageReadWrite);
+  CANOPY_TRY(g.bindBuffer(frame, s.frame.buffer));
+  CANOPY_TRY(g.bindBuffer(vel, s.velocity.buffer));
+  CANOPY_TRY(g.bindBuffer(mg, s.multigrid.buffer));
+  CANOPY_TRY(g.compile());
+  CANOPY_TRY(g.realize(*s.device));
+  return submitAndWait(*s.device, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+}
+
+Status readSimulationFields(Simulation& s, SimulationFields* out) {
+  Device& d = *s.device;
+  const uint32_t n = s.n, nn = n * n;
+  out->n = n;
+  auto read = [&](const Buffer& b, std::vector<float>& v) {
+    v.resize(b.size / sizeof(float));
+    return readbackBuffer(d, b, v.data(), b.size, kPersistent);
+  };
+  CANOPY_TRY(read(s.velocity, out->velocity));
+  std::vector<float> wave;
+  CANOPY_TRY(read(s.wave, wave));
+  out->vs.assign(wave.begin(), wave.begin() + 2 * nn);
+  out->vsPrev.assign(wave.begin() + 2 * nn, wave.begin() + 4 * nn);
+  out->wind.assign(wave.begin() + 4 * nn, wave.end());
+  CANOPY_TRY(read(s.tiled, out->tiled));
+  CANOPY_TRY(read(s.ring, out->ring));
+  CANOPY_TRY(read(s.ringTimes, out->ringTimes));
+  CANOPY_TRY(read(s.multigrid, out->multigrid));
+  return Status();
+}
+
+Status writeSimulationState(Simulation& s, const std::vector<float>& velocity, const std::vector<float>& wave) {
+  Device& d = *s.device;
+  if (!velocity.empty()) {
+    if (velocity.size() * sizeof(float) != s.velocity.size)
+      return Status::error("writeSimulationState: velocity needs " + std::to_string(s.velocity.size / 4) + " floats");
+    CANOPY_TRY(uploadBuffer(d, s.velocity, velocity.data(), s.velocity.size, kPersistent));
+  }
+  if (!wave.empty()) {
+    if (wave.size() * sizeof(float) != s.wave.size)
+      return Status::error("writeSimulationState: wave needs " + std::to_string(s.wave.size / 4) + " floats");
+    CANOPY_TRY(uploadBuffer(d, s.wave, wave.data(), s.wave.size, kPersistent));
+  }
+  return Status();
+}
+
+}  // namespace canopy

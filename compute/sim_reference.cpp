@@ -23,6 +23,8 @@ SimState makeState(uint32_t n, uint32_t ringSize) {
 namespace {
 
 bool isSource(const SimFrame& f, uint side) { return (f.windSides & side) != 0; }
+// Inflow is prescribed only in the tunnel; a closed box gets the wind as a body force instead.
+bool isInflow(const SimFrame& f, uint side) { return f.boundary == SIM_BOUNDARY_TUNNEL && isSource(f, side); }
 // Whether a side is open outflow (pressure 0) in the MAC scheme.
 bool isOutflow(const SimFrame& f, uint side) { return f.boundary == SIM_BOUNDARY_TUNNEL && !isSource(f, side); }
 
@@ -32,16 +34,16 @@ void macBoundary(const SimFrame& f, std::vector<float>& w) {
   const uint n = f.n;
   for (uint j = 0; j < n; ++j) {
     const float s = (float(j) + 0.5f) / float(n);
-    w[macU(n, 0, j)] = isSource(f, SIM_SIDE_LEFT) ? inflowSpeed(f, SIM_SIDE_LEFT, s)
+    w[macU(n, 0, j)] = isInflow(f, SIM_SIDE_LEFT) ? inflowSpeed(f, SIM_SIDE_LEFT, s)
                        : isOutflow(f, SIM_SIDE_LEFT) ? w[macU(n, 1, j)] : 0.0f;
-    w[macU(n, n, j)] = isSource(f, SIM_SIDE_RIGHT) ? -inflowSpeed(f, SIM_SIDE_RIGHT, s)
+    w[macU(n, n, j)] = isInflow(f, SIM_SIDE_RIGHT) ? -inflowSpeed(f, SIM_SIDE_RIGHT, s)
                        : isOutflow(f, SIM_SIDE_RIGHT) ? w[macU(n, n - 1, j)] : 0.0f;
   }
   for (uint i = 0; i < n; ++i) {
     const float s = (float(i) + 0.5f) / float(n);
-    w[macV(n, i, 0)] = isSource(f, SIM_SIDE_BOTTOM) ? inflowSpeed(f, SIM_SIDE_BOTTOM, s)
+    w[macV(n, i, 0)] = isInflow(f, SIM_SIDE_BOTTOM) ? inflowSpeed(f, SIM_SIDE_BOTTOM, s)
                        : isOutflow(f, SIM_SIDE_BOTTOM) ? w[macV(n, i, 1)] : 0.0f;
-    w[macV(n, i, n)] = isSource(f, SIM_SIDE_TOP) ? -inflowSpeed(f, SIM_SIDE_TOP, s)
+    w[macV(n, i, n)] = isInflow(f, SIM_SIDE_TOP) ? -inflowSpeed(f, SIM_SIDE_TOP, s)
                        : isOutflow(f, SIM_SIDE_TOP) ? w[macV(n, i, n - 1)] : 0.0f;
   }
 }
@@ -195,7 +197,16 @@ void macFluidStep(const SimFrame& f, SimState& s) {
   const uint n = f.n;
   std::vector<float>& A = s.velA;
   std::vector<float>& B = s.velB;
-  // 1. Sources: the inflow boundaries (the motors are mass sources, added in the projection).
+  // 1. Sources: inflow boundaries (tunnel) or the wind as a force on the first interior faces
+  //    (walls); the motors are mass sources, added in the projection.
+  if (f.boundary == SIM_BOUNDARY_WALLS)
+    for (uint t = 0; t < n; ++t) {
+      const float s = (float(t) + 0.5f) / float(n);
+      if (isSource(f, SIM_SIDE_LEFT)) B[macU(n, 1, t)] += f.dt * inflowSpeed(f, SIM_SIDE_LEFT, s);
+      if (isSource(f, SIM_SIDE_RIGHT)) B[macU(n, n - 1, t)] -= f.dt * inflowSpeed(f, SIM_SIDE_RIGHT, s);
+      if (isSource(f, SIM_SIDE_BOTTOM)) B[macV(n, t, 1)] += f.dt * inflowSpeed(f, SIM_SIDE_BOTTOM, s);
+      if (isSource(f, SIM_SIDE_TOP)) B[macV(n, t, n - 1)] -= f.dt * inflowSpeed(f, SIM_SIDE_TOP, s);
+    }
   macBoundary(f, B);
   // 2. Implicit diffusion (I - dt nu lap) A = B: one Jacobi sweep from B, then red-black
   //    Gauss-Seidel; free-slip across the tangential boundaries (missing neighbours drop out).
@@ -366,6 +377,27 @@ void stamVelStep(const SimFrame& f, SimState& s, GsOrder order) {
   stamAdvect(n, 1, U, U0, U0, V0, f.dt);
   stamAdvect(n, 2, V, V0, U0, V0, f.dt);
   stamProject(f, U, V, U0, V0, order);
+}
+
+double stamLowestModeRemoval(uint32_t n, uint32_t iterations, GsOrder order) {
+  SimFrame f{};
+  f.n = n;
+  f.iterations = iterations;
+  const uint32_t sz = (n + 2) * (n + 2);
+  std::vector<float> u(sz, 0.0f), v(sz, 0.0f), p(sz), div(sz);
+  const double pi = 3.14159265358979323846;
+  for (uint32_t j = 1; j <= n; ++j)
+    for (uint32_t i = 1; i <= n; ++i) u[j * (n + 2) + i] = float(-pi * std::sin(pi * (i - 0.5) / n));
+  setBnd(n, 1, u.data());
+  auto energy = [&] {
+    double e = 0;
+    for (uint32_t j = 1; j <= n; ++j)
+      for (uint32_t i = 1; i <= n; ++i) e += double(u[j * (n + 2) + i]) * u[j * (n + 2) + i] + double(v[j * (n + 2) + i]) * v[j * (n + 2) + i];
+    return e;
+  };
+  const double before = energy();
+  stamProject(f, u.data(), v.data(), p.data(), div.data(), order);
+  return 1.0 - energy() / before;
 }
 
 // ---- wave oscillator and tiling ---------------------------------------------------------------

@@ -35,6 +35,10 @@ void stamVelStep(const gpu::SimFrame& f, SimState& s, GsOrder order);
 void waveStep(const gpu::SimFrame& f, SimState& s);
 void tile(const gpu::SimFrame& f, SimState& s);
 
+// Fraction of the energy of the lowest gradient mode (u = grad cos(pi x), walls) that one of Stam's
+// projections with `iterations` Gauss-Seidel sweeps removes (the 9 % for 20 sweeps on 64^2).
+double stamLowestModeRemoval(uint32_t n, uint32_t iterations, GsOrder order);
+
 // Cell-centred velocity (n*n vec2, row-major from the bottom) of the current fluid field.
 std::vector<float> cellVelocity(const gpu::SimFrame& f, const SimState& s);
 // Largest |central-difference-free| discrete divergence of a MAC field: sum of face fluxes per cell.

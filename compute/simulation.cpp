@@ -214,10 +214,11 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   s.ringSize = desc.historySize ? desc.historySize
                                 : uint32_t(std::ceil(desc.historySeconds / desc.nominalDt)) + 2;
   s.ringSize = std::max<uint32_t>(s.ringSize, 2);
-  // Multigrid levels this small run in one invocation without barriers. On a CPU device a
-  // workgroup runs on one core and each barrier costs ~15 us (lavapipe), so serial is cheaper up to
-  // 32x32; on GPUs barriers are cheap and serial work is slow, so only the tiny levels.
-  s.mgSerialSize = d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 32 : 8;
+  // Multigrid levels at most 8 cells a side run in one invocation without barriers: there a
+  // barrier costs more than the work. Larger serial levels were measured on lavapipe (4, 8, 32):
+  // no gain beyond noise, since one invocation uses one SIMD lane of eight; on GPUs serial work is
+  // slower still.
+  s.mgSerialSize = 8;
   const uint32_t n = s.n;
   const VkBufferUsageFlags use =
       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;

@@ -23,6 +23,9 @@ layout(push_constant, scalar) uniform Push { SimPush pc; };
 #define FOR_EACH(var, count) for (uint var = gl_LocalInvocationIndex; var < (count); var += SIM_GROUP_SIZE)
 
 bool isSource(uint side) { return (f.windSides & side) != 0u; }
+// Inflow is prescribed on source sides only in the wind tunnel; in a closed box (walls) no net
+// flow can enter, so there the wind pushes the first interior faces instead (as in Stam's scheme).
+bool isInflow(uint side) { return f.boundary == SIM_BOUNDARY_TUNNEL && isSource(side); }
 bool isOutflow(uint side) { return f.boundary == SIM_BOUNDARY_TUNNEL && !isSource(side); }
 
 // MAC boundary faces of the field at `o`: inflow on source sides, 0 on walls, zero-gradient on
@@ -33,16 +36,16 @@ void macBoundary(uint o) {
     uint side = k / n, t = k % n;
     float s = (float(t) + 0.5) / float(n);
     if (side == 0u)
-      vel[o + macU(n, 0u, t)] = isSource(SIM_SIDE_LEFT) ? inflowSpeed(f, SIM_SIDE_LEFT, s)
+      vel[o + macU(n, 0u, t)] = isInflow(SIM_SIDE_LEFT) ? inflowSpeed(f, SIM_SIDE_LEFT, s)
                               : isOutflow(SIM_SIDE_LEFT) ? vel[o + macU(n, 1u, t)] : 0.0;
     else if (side == 1u)
-      vel[o + macU(n, n, t)] = isSource(SIM_SIDE_RIGHT) ? -inflowSpeed(f, SIM_SIDE_RIGHT, s)
+      vel[o + macU(n, n, t)] = isInflow(SIM_SIDE_RIGHT) ? -inflowSpeed(f, SIM_SIDE_RIGHT, s)
                              : isOutflow(SIM_SIDE_RIGHT) ? vel[o + macU(n, n - 1u, t)] : 0.0;
     else if (side == 2u)
-      vel[o + macV(n, t, 0u)] = isSource(SIM_SIDE_BOTTOM) ? inflowSpeed(f, SIM_SIDE_BOTTOM, s)
+      vel[o + macV(n, t, 0u)] = isInflow(SIM_SIDE_BOTTOM) ? inflowSpeed(f, SIM_SIDE_BOTTOM, s)
                               : isOutflow(SIM_SIDE_BOTTOM) ? vel[o + macV(n, t, 1u)] : 0.0;
     else
-      vel[o + macV(n, t, n)] = isSource(SIM_SIDE_TOP) ? -inflowSpeed(f, SIM_SIDE_TOP, s)
+      vel[o + macV(n, t, n)] = isInflow(SIM_SIDE_TOP) ? -inflowSpeed(f, SIM_SIDE_TOP, s)
                              : isOutflow(SIM_SIDE_TOP) ? vel[o + macV(n, t, n - 1u)] : 0.0;
   }
 }
@@ -62,3 +65,18 @@ float groupSum(float x) {
   return total;
 }
 #endif
+
+// Walls mode: the wind of each source side as a body force on the first interior faces (dt * speed
+// per step, like Stam's add_source), added to the field at `o`.
+void wallWindForce(uint o) {
+  if (f.boundary != SIM_BOUNDARY_WALLS) return;
+  uint n = f.n;
+  FOR_EACH(k, 4u * n) {
+    uint side = k / n, t = k % n;
+    float s = (float(t) + 0.5) / float(n);
+    if (side == 0u && isSource(SIM_SIDE_LEFT)) vel[o + macU(n, 1u, t)] += f.dt * inflowSpeed(f, SIM_SIDE_LEFT, s);
+    if (side == 1u && isSource(SIM_SIDE_RIGHT)) vel[o + macU(n, n - 1u, t)] -= f.dt * inflowSpeed(f, SIM_SIDE_RIGHT, s);
+    if (side == 2u && isSource(SIM_SIDE_BOTTOM)) vel[o + macV(n, t, 1u)] += f.dt * inflowSpeed(f, SIM_SIDE_BOTTOM, s);
+    if (side == 3u && isSource(SIM_SIDE_TOP)) vel[o + macV(n, t, n - 1u)] -= f.dt * inflowSpeed(f, SIM_SIDE_TOP, s);
+  }
+}

@@ -28,7 +28,10 @@ void main() {
   uint n = f.n, hn = n >> 1u;
   uint B = velocityFloats(n);
   a = f.dt * f.viscosity * float(n) * float(n);
-  macBoundary(B);  // sources: the inflow boundaries (motors are mass sources in the projection)
+  // Sources: inflow boundaries (tunnel) or wind forces (walls); motors are mass sources in the projection.
+  wallWindForce(B);
+  SYNC();
+  macBoundary(B);
   SYNC();
   // Jacobi sweep B -> A on interior faces; boundary faces copied.
   FOR_EACH(k, macFloats(n)) {

@@ -118,6 +118,25 @@ TEST_P(SimAgreement, GpuMatchesCpuReference) {
   }
 }
 
+// The closed-box MAC mode (wind as a body force on the first interior faces), 10 steps.
+TEST_F(Sim, WallsModeGpuMatchesCpu_10steps_tol1e5) {
+  const uint32_t n = 64;
+  create(n);
+  SimulationParams p = windyParams();
+  p.wind.sides = kWindFromLeft | kWindFromBottom;
+  p.fluid.boundary = FluidBoundary::Walls;
+  ASSERT_TRUE(runSimulationSteps(sim, p, 1.0f / 30.0f, 10).ok());
+  SimulationFields g = fields();
+  ref::SimState c = cpuRun(p, n, sim.ringSize, 1.0f / 30.0f, 10);
+  const size_t vf = gpu::velocityFloats(n);
+  Err e = compare(std::vector<float>(g.velocity.begin() + vf, g.velocity.end()), c.velB, gpu::macFloats(n));
+  Err t = compare(g.tiled, c.tiled, 2 * n * n);
+  std::printf("  walls: velocity max abs %.3g of max %.3g; tiled %.3g of max %.3g\n", e.maxAbs, e.refMax, t.maxAbs, t.refMax);
+  EXPECT_GT(e.refMax, 0.0);
+  EXPECT_LE(e.relMax(), 1e-5);
+  EXPECT_LE(t.relMax(), 1e-5);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Steps, SimAgreement,
     ::testing::Combine(::testing::Values(FluidScheme::MacMultigrid, FluidScheme::Stam), ::testing::Values(1u, 10u, 500u)),

@@ -5,7 +5,7 @@
 set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
-  glslang-tools glslang-dev libglm-dev libglfw3-dev libtinygltf-dev libstb-dev
+  glslang-tools glslang-dev libglm-dev libglfw3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
   libgtest-dev "$@")
 missing=()
 for p in "${packages[@]}"; do

@@ -1,0 +1,625 @@
+#include "render/gltf_loader.h"
+
+#include <fcntl.h>
+#include <limits.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <limits>
+#include <memory>
+
+#include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <tiny_gltf.h>
+
+// Our own decoder, private to this file (the tinygltf library carries its own copy).
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_NO_STDIO
+#include <stb/stb_image.h>
+
+namespace canopy {
+namespace {
+
+// ---- files ---------------------------------------------------------------------------------------
+Status readFile(const std::string& path, uint64_t maxBytes, std::vector<unsigned char>* out) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::error("cannot open: " + std::string(std::strerror(errno)));
+  struct stat st;
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return Status::error("not a regular file");
+  }
+  if (uint64_t(st.st_size) > maxBytes) {
+    ::close(fd);
+    return Status::error("file of " + std::to_string(st.st_size) + " bytes exceeds the limit of " + std::to_string(maxBytes));
+  }
+  out->resize(size_t(st.st_size));
+  size_t got = 0;
+  while (got < out->size()) {
+    ssize_t r = ::read(fd, out->data() + got, out->size() - got);
+    if (r <= 0) {
+      ::close(fd);
+      return Status::error("read error");
+    }
+    got += size_t(r);
+  }
+  ::close(fd);
+  return Status();
+}
+
+// External URIs resolve only to regular files inside the model's folder: no absolute paths, no
+// ".." escapes (also through symbolic links), no directories (tinygltf 2.7.0 would try to read one
+// as a ~2^63-byte file).
+struct FsContext {
+  std::string baseDir;      // as passed to tinygltf ("" = current folder)
+  std::string realBase;     // realpath of it
+  uint64_t maxBytes = 0;
+  std::string lastError;    // why the last path was refused
+};
+
+bool checkPath(FsContext& c, const std::string& path) {
+  std::string rel = path;
+  if (!c.baseDir.empty()) {
+    const std::string prefix = c.baseDir.back() == '/' ? c.baseDir : c.baseDir + "/";
+    if (path.compare(0, prefix.size(), prefix) != 0) {
+      // tinygltf retries each URI relative to "." after the model's folder: refuse, but keep the
+      // reason given for the model-relative attempt.
+      if (c.lastError.empty()) c.lastError = "'" + path + "' is outside the model's folder";
+      return false;
+    }
+    rel = path.substr(prefix.size());
+  }
+  if (rel.empty() || rel[0] == '/' || rel[0] == '\\' || (rel.size() > 1 && rel[1] == ':')) {
+    c.lastError = "URI '" + rel + "' is an absolute path (only paths relative to the model are allowed)";
+    return false;
+  }
+  int depth = 0;
+  size_t start = 0;
+  while (start <= rel.size()) {
+    size_t end = rel.find_first_of("/\\", start);
+    if (end == std::string::npos) end = rel.size();
+    const std::string seg = rel.substr(start, end - start);
+    if (seg == "..") {
+      if (--depth < 0) {
+        c.lastError = "URI '" + rel + "' leaves the model's folder";
+        return false;
+      }
+    } else if (!seg.empty() && seg != ".") {
+      ++depth;
+    }
+    start = end + 1;
+  }
+  char resolved[PATH_MAX];
+  if (!realpath(path.c_str(), resolved)) {
+    c.lastError = "URI '" + rel + "': " + std::strerror(errno);
+    return false;
+  }
+  const std::string real = resolved;
+  if (real.compare(0, c.realBase.size() + 1, c.realBase + "/") != 0) {
+    c.lastError = "URI '" + rel + "' resolves outside the model's folder";
+    return false;
+  }
+  struct stat st;
+  if (stat(resolved, &st) != 0 || !S_ISREG(st.st_mode)) {
+    c.lastError = "URI '" + rel + "' is not a regular file";
+    return false;
+  }
+  return true;
+}
+
+bool fsFileExists(const std::string& path, void* user) { return checkPath(*static_cast<FsContext*>(user), path); }
+std::string fsExpand(const std::string& path, void*) { return path; }  // no ~ or $VAR expansion
+bool fsRead(std::vector<unsigned char>* out, std::string* err, const std::string& path, void* user) {
+  FsContext& c = *static_cast<FsContext*>(user);
+  if (!checkPath(c, path)) {
+    if (err) *err += c.lastError + "\n";
+    return false;
+  }
+  Status s = readFile(path, c.maxBytes, out);
+  if (!s.ok()) {
+    c.lastError = "'" + path + "': " + s.message();
+    if (err) *err += c.lastError + "\n";
+    return false;
+  }
+  return true;
+}
+bool fsWrite(std::string*, const std::string&, const std::vector<unsigned char>&, void*) { return false; }
+
+// Image bytes are kept encoded and decoded after validation: for bufferView images tinygltf
+// passes a pointer into the buffer without checking the range, so the callback never touches it.
+struct ImageContext {
+  std::vector<std::vector<unsigned char>> encoded;  // by image index; empty for bufferView images
+  std::vector<bool> fromBufferView;
+};
+bool imageCallback(tinygltf::Image* image, const int index, std::string*, std::string*, int, int,
+                   const unsigned char* bytes, int size, void* user) {
+  ImageContext& c = *static_cast<ImageContext*>(user);
+  if (index < 0) return false;
+  if (size_t(index) >= c.encoded.size()) {
+    c.encoded.resize(size_t(index) + 1);
+    c.fromBufferView.resize(size_t(index) + 1, false);
+  }
+  if (image->bufferView >= 0) {
+    c.fromBufferView[size_t(index)] = true;
+  } else if (bytes && size > 0) {
+    c.encoded[size_t(index)].assign(bytes, bytes + size);
+  }
+  return true;
+}
+
+// GLB framing checked before tinygltf sees it: header, chunk lengths inside the file.
+Status checkGlb(const std::vector<unsigned char>& d) {
+  auto u32 = [&](size_t o) { uint32_t v; std::memcpy(&v, d.data() + o, 4); return v; };
+  if (d.size() < 20) return Status::error("GLB: " + std::to_string(d.size()) + " bytes, shorter than a header and one chunk");
+  if (u32(4) != 2) return Status::error("GLB: version " + std::to_string(u32(4)) + " (only 2 is supported)");
+  if (u32(8) > d.size()) return Status::error("GLB: header length " + std::to_string(u32(8)) + " exceeds the file's " + std::to_string(d.size()) + " bytes (truncated)");
+  if (u32(8) < 20) return Status::error("GLB: header length " + std::to_string(u32(8)) + " is too small");
+  const uint64_t total = u32(8);
+  uint64_t off = 12;
+  int chunk = 0, binChunks = 0;
+  while (off < total) {
+    if (off + 8 > total) return Status::error("GLB: chunk " + std::to_string(chunk) + " header is truncated");
+    const uint64_t len = u32(size_t(off)), type = u32(size_t(off + 4));
+    if (off + 8 + len > total)
+      return Status::error("GLB: chunk " + std::to_string(chunk) + " of " + std::to_string(len) + " bytes runs past the end of the file (truncated)");
+    if (len % 4 != 0) return Status::error("GLB: chunk " + std::to_string(chunk) + " length " + std::to_string(len) + " is not a multiple of 4");
+    if (chunk == 0 && type != 0x4E4F534Au) return Status::error("GLB: the first chunk is not JSON");
+    if (chunk > 0 && type == 0x4E4F534Au) return Status::error("GLB: chunk " + std::to_string(chunk) + " is a second JSON chunk");
+    if (type == 0x004E4942u && ++binChunks > 1) return Status::error("GLB: chunk " + std::to_string(chunk) + " is a second BIN chunk");
+    off += 8 + len;
+    ++chunk;
+  }
+  return Status();
+}
+
+// ---- accessors -------------------------------------------------------------------------------------
+uint32_t componentSize(int type) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_BYTE:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_SHORT:
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
+    default: return 0;
+  }
+}
+uint32_t componentCount(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT2: return 4;
+    case TINYGLTF_TYPE_MAT3: return 9;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
+double readComponent(const unsigned char* p, int type, bool normalized) {
+  switch (type) {
+    case TINYGLTF_COMPONENT_TYPE_FLOAT: { float v; std::memcpy(&v, p, 4); return v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? p[0] / 255.0 : p[0];
+    case TINYGLTF_COMPONENT_TYPE_BYTE: { int8_t v; std::memcpy(&v, p, 1); return normalized ? std::max(v / 127.0, -1.0) : v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: { uint16_t v; std::memcpy(&v, p, 2); return normalized ? v / 65535.0 : v; }
+    case TINYGLTF_COMPONENT_TYPE_SHORT: { int16_t v; std::memcpy(&v, p, 2); return normalized ? std::max(v / 32767.0, -1.0) : v; }
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: { uint32_t v; std::memcpy(&v, p, 4); return v; }
+  }
+  return 0;
+}
+
+class Reader {
+ public:
+  explicit Reader(const tinygltf::Model& m) : m_(m) {}
+
+  // The byte range [offset, offset+size) of a buffer view, checked against its buffer.
+  Status view(int index, const unsigned char** data, uint64_t* size, uint32_t* stride) const {
+    const std::string what = "bufferViews[" + std::to_string(index) + "]";
+    if (index < 0 || size_t(index) >= m_.bufferViews.size()) return Status::error(what + " does not exist");
+    const tinygltf::BufferView& v = m_.bufferViews[size_t(index)];
+    if (v.buffer < 0 || size_t(v.buffer) >= m_.buffers.size())
+      return Status::error(what + ": buffer " + std::to_string(v.buffer) + " does not exist");
+    const tinygltf::Buffer& b = m_.buffers[size_t(v.buffer)];
+    const uint64_t off = v.byteOffset, len = v.byteLength;
+    if (len == 0 || off > b.data.size() || len > b.data.size() - off)
+      return Status::error(what + ": bytes [" + std::to_string(off) + ", " + std::to_string(off + len) + ") do not fit buffers[" +
+                           std::to_string(v.buffer) + "] (" + std::to_string(b.data.size()) + " bytes loaded)");
+    if (v.byteStride != 0 && (v.byteStride < 4 || v.byteStride > 252 || v.byteStride % 4 != 0))
+      return Status::error(what + ": byteStride " + std::to_string(v.byteStride) + " is not a multiple of 4 in [4, 252]");
+    *data = b.data.data() + off;
+    *size = len;
+    *stride = uint32_t(v.byteStride);
+    return Status();
+  }
+
+  // Reads accessor `index` as doubles (count x components), with every byte range checked,
+  // sparse substitution applied, and the allowed component types enforced.
+  Status read(int index, const std::vector<int>& types, std::vector<uint32_t> componentTypes, std::vector<double>* out,
+              uint32_t* outComponents, uint64_t* outCount) const {
+    const std::string what = "accessors[" + std::to_string(index) + "]";
+    if (index < 0 || size_t(index) >= m_.accessors.size()) return Status::error(what + " does not exist");
+    const tinygltf::Accessor& a = m_.accessors[size_t(index)];
+    if (std::find(types.begin(), types.end(), a.type) == types.end())
+      return Status::error(what + ": type " + std::to_string(a.type) + " is not allowed here");
+    if (std::find(componentTypes.begin(), componentTypes.end(), uint32_t(a.componentType)) == componentTypes.end())
+      return Status::error(what + ": componentType " + std::to_string(a.componentType) + " is not allowed here");
+    const uint32_t cs = componentSize(a.componentType), nc = componentCount(a.type), elem = cs * nc;
+    if (a.count == 0 || a.count > (1ull << 32)) return Status::error(what + ": count " + std::to_string(a.count) + " is out of range");
+    out->assign(size_t(a.count) * nc, 0.0);
+    if (a.bufferView >= 0) {
+      const unsigned char* data;
+      uint64_t size;
+      uint32_t stride;
+      CANOPY_TRY(view(a.bufferView, &data, &size, &stride).context(what));
+      if (stride == 0) stride = elem;
+      if (stride < elem) return Status::error(what + ": byteStride " + std::to_string(stride) + " is smaller than an element (" + std::to_string(elem) + ")");
+      if (a.byteOffset % cs != 0) return Status::error(what + ": byteOffset " + std::to_string(a.byteOffset) + " is not a multiple of the component size");
+      const uint64_t need = uint64_t(a.byteOffset) + uint64_t(stride) * (a.count - 1) + elem;
+      if (need > size)
+        return Status::error(what + ": needs " + std::to_string(need) + " bytes of bufferViews[" + std::to_string(a.bufferView) +
+                             "], which has " + std::to_string(size));
+      for (uint64_t i = 0; i < a.count; ++i)
+        for (uint32_t c = 0; c < nc; ++c)
+          (*out)[i * nc + c] = readComponent(data + a.byteOffset + stride * i + cs * c, a.componentType, a.normalized);
+    } else if (a.byteOffset != 0) {
+      return Status::error(what + ": byteOffset without a bufferView");
+    }
+    if (a.sparse.isSparse) {
+      const uint64_t n = uint64_t(a.sparse.count);
+      if (n == 0 || n > a.count) return Status::error(what + ": sparse count " + std::to_string(a.sparse.count) + " is out of range");
+      const uint32_t ics = componentSize(a.sparse.indices.componentType);
+      if (ics == 0 || a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
+          a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT || a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
+        return Status::error(what + ": sparse indices componentType " + std::to_string(a.sparse.indices.componentType) + " is invalid");
+      const unsigned char *idata, *vdata;
+      uint64_t isize, vsize;
+      uint32_t istride, vstride;
+      CANOPY_TRY(view(a.sparse.indices.bufferView, &idata, &isize, &istride).context(what + ".sparse.indices"));
+      CANOPY_TRY(view(a.sparse.values.bufferView, &vdata, &vsize, &vstride).context(what + ".sparse.values"));
+      if (uint64_t(a.sparse.indices.byteOffset) + n * ics > isize) return Status::error(what + ".sparse.indices: do not fit their bufferView");
+      if (uint64_t(a.sparse.values.byteOffset) + n * elem > vsize) return Status::error(what + ".sparse.values: do not fit their bufferView");
+      for (uint64_t k = 0; k < n; ++k) {
+        const uint64_t target = uint64_t(readComponent(idata + a.sparse.indices.byteOffset + k * ics, a.sparse.indices.componentType, false));
+        if (target >= a.count) return Status::error(what + ".sparse.indices[" + std::to_string(k) + "] = " + std::to_string(target) + " is past count " + std::to_string(a.count));
+        for (uint32_t c = 0; c < nc; ++c)
+          (*out)[target * nc + c] = readComponent(vdata + a.sparse.values.byteOffset + k * elem + cs * c, a.componentType, a.normalized);
+      }
+    }
+    for (double v : *out)
+      if (!std::isfinite(v)) return Status::error(what + ": contains NaN or infinity");
+    *outComponents = nc;
+    *outCount = a.count;
+    return Status();
+  }
+
+ private:
+  const tinygltf::Model& m_;
+};
+
+glm::mat4 nodeMatrix(const tinygltf::Node& n) {
+  if (n.matrix.size() == 16) {
+    glm::mat4 m;
+    for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = float(n.matrix[size_t(i)]);
+    return m;
+  }
+  glm::mat4 t(1.0f), r(1.0f), s(1.0f);
+  if (n.translation.size() == 3) t = glm::translate(glm::mat4(1.0f), glm::vec3(n.translation[0], n.translation[1], n.translation[2]));
+  if (n.rotation.size() == 4)
+    r = glm::mat4_cast(glm::normalize(glm::quat(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2]))));
+  if (n.scale.size() == 3) s = glm::scale(glm::mat4(1.0f), glm::vec3(n.scale[0], n.scale[1], n.scale[2]));
+  return t * r * s;
+}
+
+}  // namespace
+
+Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationModel* out) {
+  *out = VegetationModel{};
+  const std::string file = "'" + path + "'";
+  auto fail = [&](const std::string& what) {
+    *out = VegetationModel{};
+    return Status::error(file + ": " + what);
+  };
+
+  std::vector<unsigned char> bytes;
+  Status s = readFile(path, opt.maxFileBytes, &bytes);
+  if (!s.ok()) return fail(s.message());
+  const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (glb && !(s = checkGlb(bytes)).ok()) return fail(s.message());
+  {
+    // glTF JSON is UTF-8 without a byte-order mark (tinygltf would accept one).
+    const size_t json = glb ? 20 : 0;
+    if (bytes.size() >= json + 3 && bytes[json] == 0xEF && bytes[json + 1] == 0xBB && bytes[json + 2] == 0xBF)
+      return fail("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
+  }
+
+  FsContext fs;
+  const size_t slash = path.find_last_of('/');
+  fs.baseDir = slash == std::string::npos ? "" : path.substr(0, slash);
+  fs.maxBytes = opt.maxFileBytes;
+  {
+    char resolved[PATH_MAX];
+    if (!realpath(fs.baseDir.empty() ? "." : fs.baseDir.c_str(), resolved)) return fail("cannot resolve its folder");
+    fs.realBase = resolved;
+  }
+  ImageContext images;
+  tinygltf::TinyGLTF loader;
+  loader.SetFsCallbacks({&fsFileExists, &fsExpand, &fsRead, &fsWrite, &fs});
+  loader.SetImageLoader(&imageCallback, &images);
+  tinygltf::Model m;
+  std::string err, warn;
+  bool parsed = false;
+  try {
+    parsed = glb ? loader.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), unsigned(bytes.size()), fs.baseDir)
+                 : loader.LoadASCIIFromString(&m, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                              unsigned(bytes.size()), fs.baseDir);
+  } catch (const std::exception& e) {
+    return fail(std::string("the glTF parser failed: ") + e.what());
+  }
+  auto trim = [](std::string t) {
+    while (!t.empty() && (t.back() == '\n' || t.back() == ' ')) t.pop_back();
+    for (char& c : t) if (c == '\n') c = ';';
+    return t;
+  };
+  if (!parsed)
+    return fail(trim(err.empty() ? "not valid glTF" : err) + (fs.lastError.empty() ? "" : " (" + fs.lastError + ")"));
+  if (!warn.empty()) out->warnings.push_back(trim(warn));
+
+  // asset.version (and minVersion) must be 2.x.
+  {
+    auto major = [](const std::string& v, int* mj, int* mn) {
+      return std::sscanf(v.c_str(), "%d.%d", mj, mn) == 2 && v.find_first_not_of("0123456789.") == std::string::npos &&
+             std::count(v.begin(), v.end(), '.') == 1;
+    };
+    int mj = 0, mn = 0, mmj = 0, mmn = 0;
+    if (!major(m.asset.version, &mj, &mn)) return fail("asset.version '" + m.asset.version + "' is not MAJOR.MINOR");
+    if (mj != 2) return fail("asset.version " + m.asset.version + ": only glTF 2.x is supported");
+    if (!m.asset.minVersion.empty()) {
+      if (!major(m.asset.minVersion, &mmj, &mmn)) return fail("asset.minVersion '" + m.asset.minVersion + "' is not MAJOR.MINOR");
+      if (mmj != 2 || mmn > mn) return fail("asset.minVersion " + m.asset.minVersion + " is not satisfiable by version " + m.asset.version);
+    }
+  }
+  // The node graph must be a forest (no loops, no node with two parents), scene or not.
+  {
+    std::vector<int> parent(m.nodes.size(), -1);
+    for (size_t i = 0; i < m.nodes.size(); ++i)
+      for (int c : m.nodes[i].children) {
+        if (c < 0 || size_t(c) >= m.nodes.size())
+          return fail("nodes[" + std::to_string(i) + "]: child " + std::to_string(c) + " does not exist");
+        if (parent[size_t(c)] >= 0 || size_t(c) == i)
+          return fail("nodes[" + std::to_string(c) + "] has two parents or is its own child (node hierarchy is not a tree)");
+        parent[size_t(c)] = int(i);
+      }
+    for (size_t i = 0; i < m.nodes.size(); ++i) {
+      size_t steps = 0;
+      for (int p = parent[i]; p >= 0; p = parent[size_t(p)])
+        if (++steps > m.nodes.size()) return fail("nodes[" + std::to_string(i) + "] is part of a loop in the node hierarchy");
+    }
+  }
+  if (m.defaultScene >= 0 && size_t(m.defaultScene) >= m.scenes.size())
+    return fail("scene " + std::to_string(m.defaultScene) + " (the default scene) does not exist");
+
+  // Buffers must hold what they declare (external files may be short).
+  for (size_t i = 0; i < m.buffers.size(); ++i)
+    if (m.buffers[i].data.empty() && !m.buffers[i].uri.empty())
+      return fail("buffers[" + std::to_string(i) + "] ('" + m.buffers[i].uri + "') could not be loaded" +
+                  (fs.lastError.empty() ? "" : ": " + fs.lastError));
+
+  // Scene traversal: the default scene (or scene 0, or every root node when there is none). Meshes
+  // no node instantiates are not displayed (glTF), so they are not loaded and not checked.
+  std::vector<int> roots;
+  if (m.nodes.empty() && !m.meshes.empty())
+    out->warnings.push_back("no nodes: the file's " + std::to_string(m.meshes.size()) + " mesh(es) are not part of any scene");
+  if (!m.scenes.empty()) {
+    const int sc = m.defaultScene >= 0 ? m.defaultScene : 0;
+    if (size_t(sc) >= m.scenes.size()) return fail("scene " + std::to_string(sc) + " does not exist");
+    roots = m.scenes[size_t(sc)].nodes;
+  } else {
+    std::vector<bool> isChild(m.nodes.size(), false);
+    for (const auto& n : m.nodes)
+      for (int c : n.children)
+        if (c >= 0 && size_t(c) < m.nodes.size()) isChild[size_t(c)] = true;
+    for (size_t i = 0; i < m.nodes.size(); ++i)
+      if (!isChild[i]) roots.push_back(int(i));
+  }
+
+  Reader reader(m);
+  std::vector<int> materialUsed;
+  const uint32_t defaultMaterial = uint32_t(m.materials.size());
+  std::vector<uint8_t> visiting(m.nodes.size(), 0);
+  std::function<Status(int, const glm::mat4&)> visit = [&](int ni, const glm::mat4& parent) -> Status {
+    const std::string what = "nodes[" + std::to_string(ni) + "]";
+    if (ni < 0 || size_t(ni) >= m.nodes.size()) return Status::error(what + " does not exist");
+    if (visiting[size_t(ni)]) return Status::error(what + " appears twice in the scene's hierarchy (cycle or shared child)");
+    visiting[size_t(ni)] = 1;
+    const tinygltf::Node& node = m.nodes[size_t(ni)];
+    if (!node.matrix.empty() && node.matrix.size() != 16) return Status::error(what + ": matrix must have 16 numbers");
+    const glm::mat4 world = parent * nodeMatrix(node);
+    for (int k = 0; k < 16; ++k)
+      if (!std::isfinite(glm::value_ptr(world)[k])) return Status::error(what + ": transform is not finite");
+    if (node.mesh >= 0) {
+      if (size_t(node.mesh) >= m.meshes.size()) return Status::error(what + ": mesh " + std::to_string(node.mesh) + " does not exist");
+      const tinygltf::Mesh& mesh = m.meshes[size_t(node.mesh)];
+      const glm::mat3 normalMatrix = glm::inverseTranspose(glm::mat3(world));
+      for (size_t pi = 0; pi < mesh.primitives.size(); ++pi) {
+        const tinygltf::Primitive& pr = mesh.primitives[pi];
+        const std::string pw = "meshes[" + std::to_string(node.mesh) + "].primitives[" + std::to_string(pi) + "]";
+        if (pr.mode != TINYGLTF_MODE_TRIANGLES && pr.mode != TINYGLTF_MODE_TRIANGLE_STRIP && pr.mode != TINYGLTF_MODE_TRIANGLE_FAN && pr.mode != -1)
+          return Status::error(pw + ": mode " + std::to_string(pr.mode) + " is not a triangle primitive");
+        auto pos = pr.attributes.find("POSITION");
+        if (pos == pr.attributes.end()) {
+          out->warnings.push_back(pw + ": no POSITION attribute, nothing to draw (skipped)");
+          continue;
+        }
+        std::vector<double> P, N, T, I;
+        uint32_t nc;
+        uint64_t vcount, count;
+        CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, &P, &nc, &vcount).context(pw + ".POSITION"));
+        if (auto it = pr.attributes.find("NORMAL"); it != pr.attributes.end()) {
+          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, &N, &nc, &count).context(pw + ".NORMAL"));
+          if (count != vcount) return Status::error(pw + ".NORMAL: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
+        }
+        if (auto it = pr.attributes.find("TEXCOORD_0"); it != pr.attributes.end()) {
+          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2},
+                                 {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                                 &T, &nc, &count).context(pw + ".TEXCOORD_0"));
+          if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
+        }
+        std::vector<uint32_t> idx;
+        if (pr.indices >= 0) {
+          CANOPY_TRY(reader.read(pr.indices, {TINYGLTF_TYPE_SCALAR},
+                                 {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                                 &I, &nc, &count).context(pw + ".indices"));
+          idx.resize(I.size());
+          for (size_t k = 0; k < I.size(); ++k) {
+            if (I[k] >= double(vcount))
+              return Status::error(pw + ".indices[" + std::to_string(k) + "] = " + std::to_string(uint64_t(I[k])) +
+                                   " is past the vertex count " + std::to_string(vcount));
+            idx[k] = uint32_t(I[k]);
+          }
+        } else {
+          idx.resize(size_t(vcount));
+          for (uint32_t k = 0; k < vcount; ++k) idx[k] = k;
+        }
+        // Strips and fans become lists; a trailing partial triangle is dropped.
+        std::vector<uint32_t> tri;
+        if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+          for (size_t k = 2; k < idx.size(); ++k)
+            if (k % 2 == 0) tri.insert(tri.end(), {idx[k - 2], idx[k - 1], idx[k]});
+            else tri.insert(tri.end(), {idx[k - 1], idx[k - 2], idx[k]});
+        } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+          for (size_t k = 2; k < idx.size(); ++k) tri.insert(tri.end(), {idx[0], idx[k - 1], idx[k]});
+        } else {
+          if (idx.size() % 3 != 0) out->warnings.push_back(pw + ": " + std::to_string(idx.size() % 3) + " trailing indices ignored");
+          tri.assign(idx.begin(), idx.end() - long(idx.size() % 3));
+        }
+        uint32_t mat = defaultMaterial;
+        if (pr.material >= 0) {
+          if (size_t(pr.material) >= m.materials.size()) return Status::error(pw + ": material " + std::to_string(pr.material) + " does not exist");
+          mat = uint32_t(pr.material);
+        }
+        if (out->positions.size() + vcount > std::numeric_limits<uint32_t>::max())
+          return Status::error(pw + ": the model exceeds 2^32 vertices");
+        if (out->triangleCount() + tri.size() / 3 > opt.maxTriangles)
+          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxTriangles) + " triangles");
+        const uint32_t base = uint32_t(out->positions.size());
+        for (uint64_t v = 0; v < vcount; ++v) {
+          glm::vec4 p = world * glm::vec4(float(P[v * 3]), float(P[v * 3 + 1]), float(P[v * 3 + 2]), 1.0f);
+          out->positions.push_back(glm::vec3(p));
+          glm::vec3 nrm(0.0f);
+          if (!N.empty()) {
+            nrm = normalMatrix * glm::vec3(float(N[v * 3]), float(N[v * 3 + 1]), float(N[v * 3 + 2]));
+            const float len = glm::length(nrm);
+            nrm = len > 0 ? nrm / len : glm::vec3(0.0f);
+          }
+          out->normals.push_back(nrm);
+          out->uvs.push_back(T.empty() ? glm::vec2(0.0f) : glm::vec2(float(T[v * 2]), float(T[v * 2 + 1])));
+        }
+        const bool computeNormals = N.empty();
+        for (size_t k = 0; k < tri.size(); k += 3) {
+          out->indices.insert(out->indices.end(), {base + tri[k], base + tri[k + 1], base + tri[k + 2]});
+          out->triangleMaterial.push_back(mat);
+          if (computeNormals) {
+            const glm::vec3 &a = out->positions[base + tri[k]], &b = out->positions[base + tri[k + 1]], &c = out->positions[base + tri[k + 2]];
+            const glm::vec3 fn = glm::cross(b - a, c - a);
+            for (int q = 0; q < 3; ++q) out->normals[base + tri[k + size_t(q)]] += fn;
+          }
+        }
+        if (computeNormals)
+          for (uint64_t v = 0; v < vcount; ++v) {
+            glm::vec3& n2 = out->normals[base + v];
+            const float len = glm::length(n2);
+            n2 = len > 0 ? n2 / len : glm::vec3(0.0f, 1.0f, 0.0f);
+          }
+      }
+    }
+    for (int c : node.children) CANOPY_TRY(visit(c, world));
+    return Status();
+  };
+  for (int r : roots) {
+    s = visit(r, glm::mat4(1.0f));
+    if (!s.ok()) return fail(s.message());
+  }
+
+  // Materials (all of them keep their index; a default one is appended) and the images they use.
+  std::vector<int32_t> imageSlot(m.images.size(), -1);
+  for (size_t i = 0; i <= m.materials.size(); ++i) {
+    ModelMaterial mm;
+    if (i == m.materials.size()) {
+      mm.name = "(default)";
+      out->materials.push_back(mm);
+      break;
+    }
+    const tinygltf::Material& src = m.materials[i];
+    const std::string what = "materials[" + std::to_string(i) + "]";
+    mm.name = src.name;
+    const auto& f = src.pbrMetallicRoughness.baseColorFactor;
+    if (f.size() == 4) mm.baseColorFactor = glm::vec4(float(f[0]), float(f[1]), float(f[2]), float(f[3]));
+    mm.alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
+    mm.alphaCutoff = float(src.alphaCutoff);
+    mm.doubleSided = src.doubleSided;
+    const bool used = std::find(out->triangleMaterial.begin(), out->triangleMaterial.end(), uint32_t(i)) != out->triangleMaterial.end();
+    const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
+    if (tex >= 0 && used) {
+      if (size_t(tex) >= m.textures.size()) return fail(what + ": texture " + std::to_string(tex) + " does not exist");
+      const int img = m.textures[size_t(tex)].source;
+      if (img < 0 || size_t(img) >= m.images.size())
+        return fail(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
+      if (src.pbrMetallicRoughness.baseColorTexture.texCoord != 0)
+        out->warnings.push_back(what + ": base colour uses TEXCOORD_" + std::to_string(src.pbrMetallicRoughness.baseColorTexture.texCoord) + "; TEXCOORD_0 is used");
+      if (opt.decodeImages) {
+        if (imageSlot[size_t(img)] < 0) {
+          const std::string iw = "images[" + std::to_string(img) + "]";
+          const tinygltf::Image& im = m.images[size_t(img)];
+          const unsigned char* data = nullptr;
+          uint64_t size = 0;
+          if (im.bufferView >= 0) {
+            uint32_t stride;
+            s = reader.view(im.bufferView, &data, &size, &stride);
+            if (!s.ok()) return fail(iw + ": " + s.message());
+          } else if (size_t(img) < images.encoded.size() && !images.encoded[size_t(img)].empty()) {
+            data = images.encoded[size_t(img)].data();
+            size = images.encoded[size_t(img)].size();
+          } else {
+            return fail(iw + " ('" + im.uri + "') could not be loaded" + (fs.lastError.empty() ? "" : ": " + fs.lastError));
+          }
+          int w = 0, h = 0, comp = 0;
+          if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
+            return fail(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+          if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
+            return fail(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
+          unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
+          if (!px) return fail(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+          ModelImage mi;
+          mi.name = im.name.empty() ? im.uri : im.name;
+          mi.width = uint32_t(w);
+          mi.height = uint32_t(h);
+          mi.rgba.assign(px, px + size_t(w) * h * 4);
+          stbi_image_free(px);
+          imageSlot[size_t(img)] = int32_t(out->images.size());
+          out->images.push_back(std::move(mi));
+        }
+        mm.baseColorImage = imageSlot[size_t(img)];
+      }
+    }
+    out->materials.push_back(mm);
+  }
+
+  if (!out->positions.empty()) {
+    out->boundsMin = out->boundsMax = out->positions[0];
+    for (const glm::vec3& p : out->positions) {
+      out->boundsMin = glm::min(out->boundsMin, p);
+      out->boundsMax = glm::max(out->boundsMax, p);
+    }
+  }
+  out->path = path;
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,63 @@
+#pragma once
+// Vegetation input: glTF 2.0 (.gltf with external or embedded buffers, and .glb) flattened into
+// one triangle list in world space (node transforms applied) with positions, normals, texcoord 0,
+// per-triangle materials, base-colour textures and factors, alphaMode and alphaCutoff.
+//
+// Every file is treated as hostile: tinygltf 2.7.0 parses the JSON, but success is decided by
+// Canopy's own checks (buffer views inside their buffers, accessors inside their views, index
+// values inside the vertex range, node hierarchy acyclic, textures decodable, external paths
+// relative and inside the model's folder). A refusal is a Status naming the file and the glTF
+// element; nothing is read out of bounds.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/status.h"
+
+namespace canopy {
+
+enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
+
+struct ModelMaterial {
+  std::string name;
+  glm::vec4 baseColorFactor{1.0f};
+  int32_t baseColorImage = -1;  // index into VegetationModel::images, -1: none
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;
+  bool doubleSided = false;
+};
+
+struct ModelImage {
+  std::string name;
+  uint32_t width = 0, height = 0;
+  std::vector<uint8_t> rgba;  // 8-bit RGBA, rows top to bottom
+};
+
+struct VegetationModel {
+  std::string path;
+  std::vector<glm::vec3> positions;  // world space (node transforms applied)
+  std::vector<glm::vec3> normals;    // world space, unit length (computed when the file has none)
+  std::vector<glm::vec2> uvs;        // texcoord 0 ((0,0) when absent)
+  std::vector<uint32_t> indices;     // triangle list
+  std::vector<uint32_t> triangleMaterial;  // per triangle: index into materials
+  std::vector<ModelMaterial> materials;    // the file's materials, then one default material last
+  std::vector<ModelImage> images;          // decoded base-colour images (only those used)
+  glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};
+  std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
+  size_t triangleCount() const { return indices.size() / 3; }
+};
+
+struct GltfLoadOptions {
+  uint64_t maxFileBytes = 2ull << 30;      // any single file (the model, a buffer, an image)
+  uint32_t maxImageDimension = 16384;      // per side
+  uint64_t maxTriangles = 200'000'000;
+  bool decodeImages = true;
+};
+
+// Loads `path` (.gltf or .glb, decided by the file's first bytes). On failure `out` is empty and
+// the Status names the file and the element ("meshes[2].primitives[0]: accessor 7 ...").
+Status loadGltf(const std::string& path, const GltfLoadOptions& options, VegetationModel* out);
+
+}  // namespace canopy

@@ -9,6 +9,7 @@
 
 #include "bench/bench.h"
 #include "engine/device.h"
+#include "demo/cli.h"
 
 using namespace canopy;
 
@@ -43,16 +44,13 @@ int main(int argc, char** argv) {
       std::stringstream ss(v);
       std::string item;
       while (std::getline(ss, item, ',')) {
-        char* end = nullptr;
-        long n = std::strtol(item.c_str(), &end, 10);
-        if (*end || n < 4 || n > 1024 || (n & (n - 1))) return usage("--sizes: each must be a power of two in [4, 1024]");
-        sizes.push_back(uint32_t(n));
+        uint32_t n;
+        if (!cli::parseUint(item.c_str(), 4, 1024, &n) || (n & (n - 1))) return usage("--sizes: each must be a power of two in [4, 1024]");
+        sizes.push_back(n);
       }
     } else if (a == "--frames") {
-      const char* v = next();
-      char* end = nullptr;
-      long n = v ? std::strtol(v, &end, 10) : 0;
-      if (!v || *end || n < 3 || n > 100000) return usage("--frames needs an integer in [3, 100000]");
+      uint32_t n;
+      if (!cli::parseUint(next(), 3, 100000, &n)) return usage("--frames needs an integer in [3, 100000]");
       frames = int(n);
     } else if (a == "--device") {
       const char* v = next();

@@ -13,8 +13,11 @@
 #include "compute/simulation.h"
 #include "engine/device.h"
 #include "engine/image_io.h"
+#include "demo/cli.h"
 
 using namespace canopy;
+using cli::parseFloat;
+using cli::parseUint;
 
 namespace {
 
@@ -46,23 +49,6 @@ int usage(const std::string& why) {
       "  --zoom Z               PNG pixels per cell, 1..64 (default 4)\n"
       "  --device NAME          substring of the Vulkan device name\n");
   return 0;
-}
-
-bool parseFloat(const char* s, float* out) {
-  if (!s) return false;
-  char* end = nullptr;
-  double v = std::strtod(s, &end);
-  if (end == s || *end) return false;
-  *out = float(v);
-  return true;
-}
-bool parseUint(const char* s, uint32_t lo, uint32_t hi, uint32_t* out) {
-  if (!s) return false;
-  char* end = nullptr;
-  long long v = std::strtoll(s, &end, 10);
-  if (end == s || *end || v < lo || v > hi) return false;
-  *out = uint32_t(v);
-  return true;
 }
 
 }  // namespace

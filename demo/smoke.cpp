@@ -12,6 +12,7 @@
 #include "compute/example_passes.h"
 #include "engine/device.h"
 #include "engine/timing.h"
+#include "demo/cli.h"
 
 using namespace canopy;
 
@@ -62,10 +63,8 @@ int main(int argc, char** argv) {
       prm.width = w;
       prm.height = h;
     } else if (a == "--frames") {
-      const char* v = next();
-      char* end = nullptr;
-      long n = v ? std::strtol(v, &end, 10) : 0;
-      if (!v || *end || n < 3 || n > 10000) return usage("--frames needs an integer in [3, 10000]");
+      uint32_t n;
+      if (!cli::parseUint(next(), 3, 10000, &n)) return usage("--frames needs an integer in [3, 10000]");
       frames = int(n);
     } else if (a == "--device") {
       const char* v = next();

@@ -160,7 +160,7 @@ Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt,
   f.iterations = p.fluid.iterations;
   f.mgCycles = p.fluid.multigridCycles;
   f.mgLevels = gpu::mgLevelCount(n);
-  f.mgSerialSize = 8;  // a GPU default; prepareSimulationStep uses the simulation's (per device)
+  f.mgSerialSize = 8;  // prepareSimulationStep applies the simulation's own setting (createSimulation)
   f.motorCount = uint32_t(p.motors.size());
   f.strength = p.wind.strength;
   f.frequency = p.wind.frequency;

@@ -88,31 +88,6 @@ std::string unsuitableReason(VkPhysicalDevice pd, uint32_t* family) {
 
 }  // namespace
 
-std::vector<std::string> listPhysicalDevices(std::string* error) {
-  std::vector<std::string> names;
-  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.apiVersion = VK_API_VERSION_1_2;
-  VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-  ci.pApplicationInfo = &app;
-  VkInstance inst;
-  VkResult r = vkCreateInstance(&ci, nullptr, &inst);
-  if (r != VK_SUCCESS) {
-    if (error) *error = vkError("vkCreateInstance", r).message();
-    return names;
-  }
-  uint32_t n = 0;
-  vkEnumeratePhysicalDevices(inst, &n, nullptr);
-  std::vector<VkPhysicalDevice> pds(n);
-  vkEnumeratePhysicalDevices(inst, &n, pds.data());
-  for (auto pd : pds) {
-    VkPhysicalDeviceProperties p;
-    vkGetPhysicalDeviceProperties(pd, &p);
-    names.push_back(p.deviceName);
-  }
-  vkDestroyInstance(inst, nullptr);
-  return names;
-}
-
 Status createDevice(const DeviceDesc& desc, Device* out) {
   *out = Device{};
   Device& d = *out;

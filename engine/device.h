@@ -61,9 +61,6 @@ struct Device {
 Status createDevice(const DeviceDesc& desc, Device* out);
 void destroyDevice(Device& device);
 
-// Names of all Vulkan physical devices visible to the loader (for error messages and --help).
-std::vector<std::string> listPhysicalDevices(std::string* error = nullptr);
-
 // Records with `record` into a fresh command buffer, submits it and waits for completion.
 Status submitAndWait(Device& device, const std::function<Status(VkCommandBuffer)>& record);
 

@@ -161,7 +161,6 @@ std::string toString(const Barrier& b) {
 
 // ---- PassContext ----------------------------------------------------------------------------
 VkBuffer PassContext::buffer(ResourceId id) const { return graph->buffer(id); }
-VkDeviceSize PassContext::bufferSize(ResourceId id) const { return graph->resources_.at(id).bufferInfo.size; }
 const Image& PassContext::image(ResourceId id) const { return graph->image(id); }
 
 // ---- declaration ------------------------------------------------------------------------------

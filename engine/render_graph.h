@@ -87,7 +87,6 @@ struct PassContext {
   Device* device = nullptr;
   const RenderGraph* graph = nullptr;
   VkBuffer buffer(ResourceId id) const;
-  VkDeviceSize bufferSize(ResourceId id) const;
   const Image& image(ResourceId id) const;
 };
 using PassFn = std::function<Status(PassContext&)>;
@@ -148,7 +147,6 @@ class RenderGraph {
   Status record(VkCommandBuffer cmd, GpuTimer* timer = nullptr);
 
  private:
-  friend struct PassContext;
   struct AccessDecl {
     ResourceId id;
     State state;

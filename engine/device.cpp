@@ -63,13 +63,18 @@ std::string unsuitableReason(VkPhysicalDevice pd, uint32_t* family) {
   if (!hasDeviceExtension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) return "VK_KHR_push_descriptor is missing";
   if (props.apiVersion < VK_API_VERSION_1_3 && !hasDeviceExtension(pd, VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME))
     return "synchronization2 is missing";
+  if (props.apiVersion < VK_API_VERSION_1_3 && !hasDeviceExtension(pd, VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME))
+    return "dynamic rendering is missing";
   VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
   VkPhysicalDeviceSynchronization2Features fs2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
+  VkPhysicalDeviceDynamicRenderingFeatures fdr{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+  fs2.pNext = &fdr;
   f12.pNext = &fs2;
   VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
   vkGetPhysicalDeviceFeatures2(pd, &f2);
   if (!f12.scalarBlockLayout) return "scalarBlockLayout is not supported";
   if (!fs2.synchronization2) return "synchronization2 feature is not supported";
+  if (!fdr.dynamicRendering) return "dynamicRendering feature is not supported";
   if (!f12.hostQueryReset) return "hostQueryReset is not supported";
   if (!props.limits.timestampComputeAndGraphics) return "timestamps on compute/graphics queues are not supported";
   uint32_t n = 0;
@@ -201,14 +206,17 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   VkPhysicalDeviceVulkan12Features have12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
   VkPhysicalDeviceFeatures2 have2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &have12};
   vkGetPhysicalDeviceFeatures2(d.physical, &have2);
-  d.shaderOutputLayer = have12.shaderOutputLayer;
+  d.shaderOutputLayer = have12.shaderOutputLayer && !desc.disableShaderOutputLayer;
 
-  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
+  // Layers and the background are drawn with dynamic rendering (core 1.3, KHR extension on 1.2).
+  VkPhysicalDeviceDynamicRenderingFeatures dynRender{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+  dynRender.dynamicRendering = VK_TRUE;
+  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dynRender};
   sync2.synchronization2 = VK_TRUE;
   VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &sync2};
   f12.scalarBlockLayout = VK_TRUE;
   f12.hostQueryReset = VK_TRUE;
-  f12.shaderOutputLayer = have12.shaderOutputLayer;
+  f12.shaderOutputLayer = d.shaderOutputLayer;
   f12.shaderFloat16 = have12.shaderFloat16;
   f12.storageBuffer8BitAccess = have12.storageBuffer8BitAccess;
   VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES, &f12};
@@ -217,10 +225,17 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   f2.features.fragmentStoresAndAtomics = have.features.fragmentStoresAndAtomics;
   f2.features.shaderInt16 = have.features.shaderInt16;
   f2.features.samplerAnisotropy = have.features.samplerAnisotropy;
+  // The per-layer fallback clips leaves with gl_ClipDistance (near/far planes on the leaf root).
+  f2.features.shaderClipDistance = have.features.shaderClipDistance;
+  d.shaderClipDistance = have.features.shaderClipDistance;
+  // gl_PrimitiveID in a fragment shader needs the Geometry capability (the layer-id debug output).
+  f2.features.geometryShader = have.features.geometryShader;
+  d.fragmentPrimitiveId = have.features.geometryShader;
 
   std::vector<const char*> devExts = desc.deviceExtensions;
   devExts.push_back(VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
   if (!core13) devExts.push_back(VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME);
+  if (!core13) devExts.push_back(VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME);
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -238,8 +253,12 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   d.cmdPipelineBarrier2 = (PFN_vkCmdPipelineBarrier2)vkGetDeviceProcAddr(
       d.device, core13 ? "vkCmdPipelineBarrier2" : "vkCmdPipelineBarrier2KHR");
   d.cmdPushDescriptorSet = (PFN_vkCmdPushDescriptorSetKHR)vkGetDeviceProcAddr(d.device, "vkCmdPushDescriptorSetKHR");
-  if (!d.cmdPipelineBarrier2 || !d.cmdPushDescriptorSet)
-    return Status::error("device did not return vkCmdPipelineBarrier2 / vkCmdPushDescriptorSetKHR");
+  d.cmdBeginRendering = (PFN_vkCmdBeginRendering)vkGetDeviceProcAddr(
+      d.device, core13 ? "vkCmdBeginRendering" : "vkCmdBeginRenderingKHR");
+  d.cmdEndRendering = (PFN_vkCmdEndRendering)vkGetDeviceProcAddr(
+      d.device, core13 ? "vkCmdEndRendering" : "vkCmdEndRenderingKHR");
+  if (!d.cmdPipelineBarrier2 || !d.cmdPushDescriptorSet || !d.cmdBeginRendering || !d.cmdEndRendering)
+    return Status::error("device did not return vkCmdPipelineBarrier2 / vkCmdPushDescriptorSetKHR / vkCmdBeginRendering");
 
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;

@@ -31,6 +31,8 @@ struct DeviceDesc {
   // Instance extensions the host needs in addition (e.g. from glfwGetRequiredInstanceExtensions).
   std::vector<const char*> instanceExtensions;
   std::vector<const char*> deviceExtensions;
+  // Behave as a device without shaderOutputLayer (tests and benchmarks of the per-layer fallback).
+  bool disableShaderOutputLayer = false;
 };
 
 struct Device {
@@ -44,6 +46,8 @@ struct Device {
   VkPhysicalDeviceMemoryProperties memoryProperties{};
   bool validationEnabled = false;
   bool shaderOutputLayer = false;  // gl_Layer from the vertex shader (single-pass layered draw)
+  bool shaderClipDistance = false; // gl_ClipDistance (the per-layer-draw fallback)
+  bool fragmentPrimitiveId = false; // gl_PrimitiveID in fragment shaders (geometryShader feature)
   uint32_t timestampValidBits = 0;
   Allocator* allocator = nullptr;
   VkCommandPool oneShotPool = VK_NULL_HANDLE;  // for submitAndWait()
@@ -51,13 +55,16 @@ struct Device {
   // Entry points resolved at creation (sync2 may be core 1.3 or the KHR extension on 1.2).
   PFN_vkCmdPipelineBarrier2 cmdPipelineBarrier2 = nullptr;
   PFN_vkCmdPushDescriptorSetKHR cmdPushDescriptorSet = nullptr;
+  PFN_vkCmdBeginRendering cmdBeginRendering = nullptr;  // dynamic rendering (core 1.3 or KHR on 1.2)
+  PFN_vkCmdEndRendering cmdEndRendering = nullptr;
   PFN_vkSetDebugUtilsObjectNameEXT setObjectName = nullptr;
 
   ValidationSink* sink = nullptr;  // owned; the messenger's user data
 };
 
 // Creates instance, picks the physical device, creates the logical device with one queue.
-// Requires Vulkan 1.2, synchronization2, push descriptors, scalar block layout, timestamps.
+// Requires Vulkan 1.2, synchronization2, dynamic rendering, push descriptors, scalar block layout,
+// timestamps.
 Status createDevice(const DeviceDesc& desc, Device* out);
 void destroyDevice(Device& device);
 

@@ -82,14 +82,12 @@ void destroyComputePipeline(Device& d, ComputePipeline& p) {
   p = ComputePipeline{};
 }
 
-Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
-                std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
-  if (pushSize != p.pushConstantSize)
-    return Status::error("dispatch '" + p.name + "': push constants are " + std::to_string(pushSize) +
-                         " bytes, the pipeline declares " + std::to_string(p.pushConstantSize));
-  if (bindings.size() != p.bindings.size())
-    return Status::error("dispatch '" + p.name + "': " + std::to_string(bindings.size()) + " bindings given, " +
-                         std::to_string(p.bindings.size()) + " declared");
+Status pushDescriptors(Device& d, VkCommandBuffer cmd, VkPipelineBindPoint bindPoint, VkPipelineLayout layout,
+                       const std::vector<VkDescriptorType>& types, std::initializer_list<Binding> bindings,
+                       const std::string& what) {
+  if (bindings.size() != types.size())
+    return Status::error(what + ": " + std::to_string(bindings.size()) + " bindings given, " +
+                         std::to_string(types.size()) + " declared");
   std::vector<VkWriteDescriptorSet> writes(bindings.size());
   std::vector<VkDescriptorBufferInfo> bufs(bindings.size());
   std::vector<VkDescriptorImageInfo> imgs(bindings.size());
@@ -99,25 +97,39 @@ Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32
     w = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstBinding = uint32_t(i);
     w.descriptorCount = 1;
-    w.descriptorType = p.bindings[i];
-    switch (p.bindings[i]) {
+    w.descriptorType = types[i];
+    switch (types[i]) {
       case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER:
       case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER:
-        if (!b.buffer) return Status::error("dispatch '" + p.name + "': binding " + std::to_string(i) + " needs a buffer");
+        if (!b.buffer) return Status::error(what + ": binding " + std::to_string(i) + " needs a buffer");
         bufs[i] = {b.buffer, b.offset, b.range};
         w.pBufferInfo = &bufs[i];
         break;
       default:
-        if (!b.view) return Status::error("dispatch '" + p.name + "': binding " + std::to_string(i) + " needs an image view");
+        if (!b.view) return Status::error(what + ": binding " + std::to_string(i) + " needs an image view");
+        if (types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && !b.sampler)
+          return Status::error(what + ": binding " + std::to_string(i) + " needs a sampler");
         imgs[i] = {b.sampler, b.view, b.layout};
         w.pImageInfo = &imgs[i];
         break;
     }
     ++i;
   }
+  if (!writes.empty()) d.cmdPushDescriptorSet(cmd, bindPoint, layout, 0, uint32_t(writes.size()), writes.data());
+  return Status();
+}
+
+Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
+                std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
+  if (pushSize != p.pushConstantSize)
+    return Status::error("dispatch '" + p.name + "': push constants are " + std::to_string(pushSize) +
+                         " bytes, the pipeline declares " + std::to_string(p.pushConstantSize));
+  if (bindings.size() != p.bindings.size())
+    return Status::error("dispatch '" + p.name + "': " + std::to_string(bindings.size()) + " bindings given, " +
+                         std::to_string(p.bindings.size()) + " declared");
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
-  if (!writes.empty())
-    d.cmdPushDescriptorSet(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, 0, uint32_t(writes.size()), writes.data());
+  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, p.bindings, bindings,
+                             "dispatch '" + p.name + "'"));
   if (pushSize) vkCmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
   auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
   vkCmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));

@@ -1,6 +1,7 @@
 #pragma once
-// Compute and graphics pipelines from the embedded SPIR-V. Descriptors are push descriptors
-// (VK_KHR_push_descriptor): one set, bindings declared per pipeline, no pools to manage.
+// Compute pipelines from the embedded SPIR-V (graphics pipelines: engine/graphics_pipeline.h).
+// Descriptors are push descriptors (VK_KHR_push_descriptor): one set, bindings declared per
+// pipeline, no pools to manage.
 #include <cstring>
 #include <initializer_list>
 #include <string>
@@ -57,6 +58,12 @@ bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]);
 
 Status createComputePipeline(Device& device, const ComputePipelineDesc& desc, ComputePipeline* out);
 void destroyComputePipeline(Device& device, ComputePipeline& pipeline);
+
+// Writes `bindings` (binding i of set 0, typed by `types`) as push descriptors; refuses a count
+// mismatch or a binding without the buffer/view/sampler its type needs. `what` prefixes errors.
+Status pushDescriptors(Device& device, VkCommandBuffer cmd, VkPipelineBindPoint bindPoint, VkPipelineLayout layout,
+                       const std::vector<VkDescriptorType>& types, std::initializer_list<Binding> bindings,
+                       const std::string& what);
 
 // Binds, pushes descriptors and constants, and dispatches enough workgroups to cover `threads`
 // invocations per axis. Refuses (records nothing) when the push-constant size or the binding

@@ -45,6 +45,38 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
   return s.context("uploadBuffer");
 }
 
+Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize size, rg::State final) {
+  const VkDeviceSize want = VkDeviceSize(img.extent.width) * img.extent.height * 4;
+  if (size != want || img.format == VK_FORMAT_UNDEFINED)
+    return Status::error("uploadImage: " + std::to_string(size) + " bytes given for a " + std::to_string(img.extent.width) +
+                         "x" + std::to_string(img.extent.height) + " image of 4-byte texels");
+  Buffer staging;
+  CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
+  std::memcpy(staging.allocation.mapped, texels, size);
+  rg::RenderGraph g;
+  ImageDesc desc;
+  desc.format = img.format;
+  desc.width = img.extent.width;
+  desc.height = img.extent.height;
+  desc.layers = img.layers;
+  auto src = g.importBuffer("staging", size, kHostWritten, rg::stateOf(rg::Use::TransferSrc));
+  auto dst = g.importImage("destination", desc, {}, final);
+  g.addPass("upload image", [&](rg::PassContext& c) {
+     VkBufferImageCopy region{};
+     region.imageSubresource = {img.aspect, 0, 0, 1};
+     region.imageExtent = img.extent;
+     vkCmdCopyBufferToImage(c.cmd, c.buffer(src), c.image(dst).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+     return Status();
+   })
+      .read(src, rg::Use::TransferSrc)
+      .write(dst, rg::Use::TransferDst);
+  Status s = g.bindBuffer(src, staging.buffer);
+  if (s.ok()) s = g.bindImage(dst, img);
+  if (s.ok()) s = runGraph(d, g);
+  destroyBuffer(d, staging);
+  return s.context("uploadImage");
+}
+
 Status readbackBuffer(Device& d, const Buffer& srcBuf, void* out, VkDeviceSize size, rg::State state,
                       VkDeviceSize offset) {
   if (offset + size > srcBuf.size || offset + size < offset)

@@ -1,0 +1,165 @@
+#include "engine/graphics_pipeline.h"
+
+#include "engine/device.h"
+#include "engine/shader_registry.h"
+
+namespace canopy {
+namespace {
+constexpr VkShaderStageFlags kStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
+
+Status makeModule(Device& d, const char* name, VkShaderModule* out) {
+  const EmbeddedShader* sh = name ? findEmbeddedShader(name) : nullptr;
+  if (!sh) return Status::error(std::string("no embedded shader named '") + (name ? name : "") + "'");
+  VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+  mi.codeSize = sh->sizeBytes;
+  mi.pCode = sh->code;
+  CANOPY_VK(vkCreateShaderModule(d.device, &mi, nullptr, out));
+  return Status();
+}
+}  // namespace
+
+Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, GraphicsPipeline* out) {
+  *out = GraphicsPipeline{};
+  const std::string what = std::string("graphics pipeline '") + (desc.vertexShader ? desc.vertexShader : "?") + "+" +
+                           (desc.fragmentShader ? desc.fragmentShader : "?") + "'";
+  if (desc.pushConstantSize > d.properties.limits.maxPushConstantsSize)
+    return Status::error(what + ": push constants of " + std::to_string(desc.pushConstantSize) +
+                         " bytes exceed the device limit " + std::to_string(d.properties.limits.maxPushConstantsSize));
+  out->name = what;
+  out->bindings = desc.bindings;
+  out->pushConstantSize = desc.pushConstantSize;
+  VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE;
+  Status s = [&]() -> Status {
+    CANOPY_TRY(makeModule(d, desc.vertexShader, &vs));
+    CANOPY_TRY(makeModule(d, desc.fragmentShader, &fs));
+    std::vector<VkDescriptorSetLayoutBinding> b(desc.bindings.size());
+    for (size_t i = 0; i < b.size(); ++i) b[i] = {uint32_t(i), desc.bindings[i], 1, kStages, nullptr};
+    VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+    sl.bindingCount = uint32_t(b.size());
+    sl.pBindings = b.data();
+    CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, &out->setLayout));
+    VkPushConstantRange pr{kStages, 0, desc.pushConstantSize};
+    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pl.setLayoutCount = 1;
+    pl.pSetLayouts = &out->setLayout;
+    pl.pushConstantRangeCount = desc.pushConstantSize ? 1 : 0;
+    pl.pPushConstantRanges = &pr;
+    CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, &out->layout));
+
+    VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
+                                                 {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
+    stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+    stages[0].module = vs;
+    stages[0].pName = "main";
+    stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+    stages[1].module = fs;
+    stages[1].pName = "main";
+
+    VkVertexInputBindingDescription vb{0, desc.vertexStride, VK_VERTEX_INPUT_RATE_VERTEX};
+    std::vector<VkVertexInputAttributeDescription> va;
+    for (const VertexAttribute& a : desc.attributes) va.push_back({a.location, 0, a.format, a.offset});
+    VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+    vi.vertexBindingDescriptionCount = desc.vertexStride ? 1 : 0;
+    vi.pVertexBindingDescriptions = &vb;
+    vi.vertexAttributeDescriptionCount = uint32_t(va.size());
+    vi.pVertexAttributeDescriptions = va.data();
+    VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+    ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+    VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+    vp.viewportCount = 1;
+    vp.scissorCount = 1;
+    VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+    rs.polygonMode = VK_POLYGON_MODE_FILL;
+    rs.cullMode = desc.cullMode;
+    rs.frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE;
+    rs.lineWidth = 1.0f;
+    VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+    ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+    VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+    ds.depthTestEnable = desc.depthTest;
+    ds.depthWriteEnable = desc.depthWrite;
+    ds.depthCompareOp = desc.depthCompare;
+    std::vector<VkPipelineColorBlendAttachmentState> att(desc.colorFormats.size());
+    for (size_t i = 0; i < att.size(); ++i) {
+      att[i] = {};
+      att[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                              VK_COLOR_COMPONENT_A_BIT;
+      if (i == 0 && desc.blend == BlendMode::PremultipliedOver) {
+        att[i].blendEnable = VK_TRUE;
+        att[i].srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
+        att[i].dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+        att[i].colorBlendOp = VK_BLEND_OP_ADD;
+        att[i].srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+        att[i].dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+        att[i].alphaBlendOp = VK_BLEND_OP_ADD;
+      }
+    }
+    VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+    cb.attachmentCount = uint32_t(att.size());
+    cb.pAttachments = att.data();
+    const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+    dy.dynamicStateCount = 2;
+    dy.pDynamicStates = dyn;
+    VkPipelineRenderingCreateInfo ri{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+    ri.colorAttachmentCount = uint32_t(desc.colorFormats.size());
+    ri.pColorAttachmentFormats = desc.colorFormats.data();
+    ri.depthAttachmentFormat = desc.depthFormat;
+
+    VkGraphicsPipelineCreateInfo ci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &ri};
+    ci.stageCount = 2;
+    ci.pStages = stages;
+    ci.pVertexInputState = &vi;
+    ci.pInputAssemblyState = &ia;
+    ci.pViewportState = &vp;
+    ci.pRasterizationState = &rs;
+    ci.pMultisampleState = &ms;
+    ci.pDepthStencilState = &ds;
+    ci.pColorBlendState = &cb;
+    ci.pDynamicState = &dy;
+    ci.layout = out->layout;
+    CANOPY_VK(vkCreateGraphicsPipelines(d.device, VK_NULL_HANDLE, 1, &ci, nullptr, &out->pipeline));
+    setDebugName(d, VK_OBJECT_TYPE_PIPELINE, uint64_t(out->pipeline), what.c_str());
+    return Status();
+  }();
+  if (vs) vkDestroyShaderModule(d.device, vs, nullptr);
+  if (fs) vkDestroyShaderModule(d.device, fs, nullptr);
+  if (!s.ok()) {
+    destroyGraphicsPipeline(d, *out);
+    return s.context(what);
+  }
+  return Status();
+}
+
+void destroyGraphicsPipeline(Device& d, GraphicsPipeline& p) {
+  if (p.pipeline) vkDestroyPipeline(d.device, p.pipeline, nullptr);
+  if (p.layout) vkDestroyPipelineLayout(d.device, p.layout, nullptr);
+  if (p.setLayout) vkDestroyDescriptorSetLayout(d.device, p.setLayout, nullptr);
+  p = GraphicsPipeline{};
+}
+
+Status pushGraphicsConstants(VkCommandBuffer cmd, const GraphicsPipeline& p, const void* push, uint32_t pushSize) {
+  if (pushSize != p.pushConstantSize)
+    return Status::error(p.name + ": push constants are " + std::to_string(pushSize) + " bytes, the pipeline declares " +
+                         std::to_string(p.pushConstantSize));
+  if (pushSize) vkCmdPushConstants(cmd, p.layout, kStages, 0, pushSize, push);
+  return Status();
+}
+
+Status bindGraphics(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, std::initializer_list<Binding> bindings,
+                    const void* push, uint32_t pushSize) {
+  if (pushSize != p.pushConstantSize) return pushGraphicsConstants(cmd, p, push, pushSize);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.pipeline);
+  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.layout, p.bindings, bindings, p.name));
+  return pushGraphicsConstants(cmd, p, push, pushSize);
+}
+
+void setViewportScissor(VkCommandBuffer cmd, uint32_t width, uint32_t height) {
+  VkViewport v{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
+  VkRect2D r{{0, 0}, {width, height}};
+  vkCmdSetViewport(cmd, 0, 1, &v);
+  vkCmdSetScissor(cmd, 0, 1, &r);
+}
+
+}  // namespace canopy

@@ -1,0 +1,65 @@
+#pragma once
+// Graphics pipelines for dynamic rendering (no render-pass objects): vertex + fragment shader from
+// the embedded SPIR-V, push descriptors (one set) and push constants visible to both stages,
+// dynamic viewport and scissor.
+#include <initializer_list>
+#include <string>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+#include "engine/pipeline.h"
+#include "engine/status.h"
+
+namespace canopy {
+struct Device;
+
+struct VertexAttribute {
+  uint32_t location = 0;
+  VkFormat format = VK_FORMAT_UNDEFINED;
+  uint32_t offset = 0;  // bytes into the (single, interleaved) vertex stream
+};
+
+enum class BlendMode { None, PremultipliedOver };
+
+struct GraphicsPipelineDesc {
+  const char* vertexShader = nullptr;    // embedded shader names, e.g. "layers.vert"
+  const char* fragmentShader = nullptr;
+  std::vector<VkDescriptorType> bindings;  // binding i of set 0, visible to both stages
+  uint32_t pushConstantSize = 0;
+  uint32_t vertexStride = 0;
+  std::vector<VertexAttribute> attributes;
+  std::vector<VkFormat> colorFormats;    // one per colour attachment
+  VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+  BlendMode blend = BlendMode::None;     // applied to colour attachment 0 only
+  bool depthTest = true, depthWrite = true;
+  VkCompareOp depthCompare = VK_COMPARE_OP_LESS;
+  VkCullModeFlags cullMode = VK_CULL_MODE_NONE;
+};
+
+struct GraphicsPipeline {
+  VkPipeline pipeline = VK_NULL_HANDLE;
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
+  std::vector<VkDescriptorType> bindings;
+  uint32_t pushConstantSize = 0;
+  std::string name;
+};
+
+Status createGraphicsPipeline(Device& device, const GraphicsPipelineDesc& desc, GraphicsPipeline* out);
+void destroyGraphicsPipeline(Device& device, GraphicsPipeline& pipeline);
+
+// Binds the pipeline and pushes its descriptors and constants (refusing a size or count mismatch).
+Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline& pipeline,
+                    std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize);
+template <class Push>
+Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline& pipeline,
+                    std::initializer_list<Binding> bindings, const Push& push) {
+  return bindGraphics(device, cmd, pipeline, bindings, &push, uint32_t(sizeof(Push)));
+}
+// Pushes constants only (same pipeline, next draw); refuses a size mismatch.
+Status pushGraphicsConstants(VkCommandBuffer cmd, const GraphicsPipeline& pipeline, const void* push, uint32_t pushSize);
+
+// Sets a full-target viewport (y down, depth 0..1) and scissor.
+void setViewportScissor(VkCommandBuffer cmd, uint32_t width, uint32_t height);
+
+}  // namespace canopy

@@ -1,0 +1,49 @@
+#pragma once
+// Layer placement (paper 3.2, design.md "Layers"): the foliage's view-space depth range is split
+// into near, mid and far regions at user-given distances, each with its own layer count (written
+// like the paper: "5(3-1-1)"); inside a region the layers are equally spaced.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/status.h"
+#include "shared/layers.h"
+
+namespace canopy {
+
+inline constexpr uint32_t kMaxLayers = CANOPY_MAX_LAYERS;
+
+struct LayerLayout {
+  uint32_t region[3] = {3, 1, 1};  // layers in the near, mid and far regions
+  uint32_t count() const { return region[0] + region[1] + region[2]; }
+};
+
+// Parses "N(a-b-c)" (N must equal a+b+c) or a plain "N" (= N(N-0-0): N equal layers over the
+// whole range). 1 <= N <= kMaxLayers. Errors quote the text and say what is expected.
+Status parseLayerLayout(std::string_view text, LayerLayout* out);
+std::string toString(const LayerLayout& layout);  // "5(3-1-1)"
+
+struct RegionSplit {
+  // Where the near region ends and the far region begins. By default fractions of the foliage's
+  // depth range (0 <= nearEnd <= farStart <= 1); with `absolute`, view-space distances from the
+  // camera in world units (clamped into the foliage's range).
+  float nearEnd = 1.0f / 3.0f;
+  float farStart = 2.0f / 3.0f;
+  bool absolute = false;
+};
+Status validateRegionSplit(const RegionSplit& split);
+
+struct LayerSlab {
+  float zNear = 0, zFar = 0;  // view depths bounding the layer's leaf roots
+  float depth = 0;            // representative depth (slab centre)
+  float distance = 0;         // L_i: depth - depth of layer 0 (eq. 4 and eq. 6)
+};
+
+// Splits [zMin, zMax] (view depths of the leaf roots). An empty region hands its interval to its
+// non-empty neighbours (split at its middle when both exist), so the layers always cover the whole
+// range. `boundaries` gets count()+1 increasing depths (the LayerFrame convention).
+Status placeLayers(const LayerLayout& layout, const RegionSplit& split, float zMin, float zMax,
+                   std::vector<LayerSlab>* slabs, std::vector<float>* boundaries);
+
+}  // namespace canopy

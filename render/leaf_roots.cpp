@@ -1,0 +1,222 @@
+#include "render/leaf_roots.h"
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace canopy {
+namespace {
+
+uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
+  while (parent[x] != x) {
+    parent[x] = parent[parent[x]];  // path halving
+    x = parent[x];
+  }
+  return x;
+}
+
+void unite(std::vector<uint32_t>& parent, std::vector<uint32_t>& size, uint32_t a, uint32_t b) {
+  a = findRoot(parent, a);
+  b = findRoot(parent, b);
+  if (a == b) return;
+  if (size[a] < size[b]) std::swap(a, b);
+  parent[b] = a;
+  size[a] += size[b];
+}
+
+uint32_t floatKey(float f) {
+  if (f == 0.0f) f = 0.0f;  // -0 and +0 weld
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return u;
+}
+
+uint64_t mix64(uint64_t h) {
+  h ^= h >> 33;
+  h *= 0xff51afd7ed558ccdull;
+  h ^= h >> 33;
+  h *= 0xc4ceb9fe1a85ec53ull;
+  h ^= h >> 33;
+  return h;
+}
+
+uint64_t hashPosition(const glm::vec3& p) {
+  return mix64((uint64_t(floatKey(p.x)) << 32 | floatKey(p.y)) ^ mix64(floatKey(p.z) + 0x9e3779b97f4a7c15ull));
+}
+
+// Word-wise hash of a byte range (order-dependent), fast enough for hundreds of MB.
+uint64_t hashBytes(uint64_t h, const void* data, size_t bytes) {
+  const uint8_t* p = static_cast<const uint8_t*>(data);
+  size_t i = 0;
+  for (; i + 8 <= bytes; i += 8) {
+    uint64_t w;
+    std::memcpy(&w, p + i, 8);
+    h = (h ^ w) * 0x100000001b3ull + (h >> 29);
+  }
+  uint64_t tail = 0;
+  std::memcpy(&tail, p + i, bytes - i);
+  h = (h ^ tail ^ bytes) * 0x100000001b3ull;
+  return mix64(h);
+}
+
+constexpr char kMagic[8] = {'C', 'N', 'P', 'Y', 'L', 'R', 'T', '1'};
+
+}  // namespace
+
+void indexLeaves(LeafRoots* r) {
+  const size_t n = r->rootOfVertex.size();
+  r->leafOfVertex.assign(n, kNoLeaf);
+  r->leafRoot.clear();
+  for (size_t v = 0; v < n; ++v)
+    if (r->rootOfVertex[v] == v) {
+      r->leafOfVertex[v] = uint32_t(r->leafRoot.size());
+      r->leafRoot.push_back(uint32_t(v));
+    }
+  for (size_t v = 0; v < n; ++v) {
+    const uint32_t root = r->rootOfVertex[v];
+    if (root != kNoLeaf) r->leafOfVertex[v] = r->leafOfVertex[root];
+  }
+}
+
+Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRootOptions& o,
+                        LeafRoots* out) {
+  *out = LeafRoots{};
+  const size_t nv = m.positions.size(), nt = m.indices.size() / 3;
+  if (m.indices.size() % 3) return Status::error("leaf roots: index count " + std::to_string(m.indices.size()) + " is not a multiple of 3");
+  if (foliage.size() != nt)
+    return Status::error("leaf roots: foliage mask has " + std::to_string(foliage.size()) + " entries for " +
+                         std::to_string(nt) + " triangles");
+  if (m.uvs.size() != nv) return Status::error("leaf roots: " + std::to_string(m.uvs.size()) + " uvs for " + std::to_string(nv) + " vertices");
+  if (nv >= kNoLeaf) return Status::error("leaf roots: too many vertices");
+  std::vector<uint32_t> parent(nv), size(nv, 1);
+  for (size_t v = 0; v < nv; ++v) parent[v] = uint32_t(v);
+  std::vector<uint8_t> used(nv, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    if (!foliage[t]) continue;
+    const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+    if (a >= nv || b >= nv || c >= nv)
+      return Status::error("leaf roots: triangle " + std::to_string(t) + " indexes past the " + std::to_string(nv) + " vertices");
+    used[a] = used[b] = used[c] = 1;
+    unite(parent, size, a, b);
+    unite(parent, size, b, c);
+  }
+  if (o.weldPositions) {
+    size_t usedCount = 0;
+    for (uint8_t u : used) usedCount += u;
+    size_t cap = 16;
+    while (cap < usedCount * 2) cap <<= 1;
+    std::vector<uint32_t> table(cap, kNoLeaf);  // open addressing, linear probing: vertex index
+    for (size_t v = 0; v < nv; ++v) {
+      if (!used[v]) continue;
+      size_t slot = hashPosition(m.positions[v]) & (cap - 1);
+      for (;; slot = (slot + 1) & (cap - 1)) {
+        const uint32_t other = table[slot];
+        if (other == kNoLeaf) {
+          table[slot] = uint32_t(v);
+          break;
+        }
+        const glm::vec3 &p = m.positions[v], &q = m.positions[other];
+        if (floatKey(p.x) == floatKey(q.x) && floatKey(p.y) == floatKey(q.y) && floatKey(p.z) == floatKey(q.z)) {
+          unite(parent, size, uint32_t(v), other);
+          break;
+        }
+      }
+    }
+  }
+  // Root: smallest (u, v) in each component (u first, then v, then the lower index).
+  std::vector<uint32_t> best(nv, kNoLeaf);
+  for (size_t v = 0; v < nv; ++v) {
+    if (!used[v]) continue;
+    const uint32_t c = findRoot(parent, uint32_t(v));
+    const uint32_t b = best[c];
+    if (b == kNoLeaf) {
+      best[c] = uint32_t(v);
+      continue;
+    }
+    const glm::vec2 uv = m.uvs[v], ub = m.uvs[b];
+    if (uv.x < ub.x || (uv.x == ub.x && uv.y < ub.y)) best[c] = uint32_t(v);
+  }
+  out->rootOfVertex.assign(nv, kNoLeaf);
+  for (size_t v = 0; v < nv; ++v)
+    if (used[v]) out->rootOfVertex[v] = best[findRoot(parent, uint32_t(v))];
+  indexLeaves(out);
+  return Status();
+}
+
+uint64_t leafRootKey(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRootOptions& o) {
+  uint64_t h = 0x6a09e667f3bcc909ull ^ (o.weldPositions ? 1 : 2);
+  h = hashBytes(h, m.positions.data(), m.positions.size() * sizeof(glm::vec3));
+  h = hashBytes(h, m.uvs.data(), m.uvs.size() * sizeof(glm::vec2));
+  h = hashBytes(h, m.indices.data(), m.indices.size() * sizeof(uint32_t));
+  h = hashBytes(h, foliage.data(), foliage.size());
+  return h;
+}
+
+std::string leafRootCachePath(const std::string& modelPath) { return modelPath + ".leafroots"; }
+
+bool readLeafRootCache(const std::string& path, uint64_t key, size_t nv, LeafRoots* out, std::string* why) {
+  *out = LeafRoots{};
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    *why = "no cache file";
+    return false;
+  }
+  char magic[8];
+  uint64_t fileKey = 0, count = 0;
+  f.read(magic, 8);
+  f.read(reinterpret_cast<char*>(&fileKey), 8);
+  f.read(reinterpret_cast<char*>(&count), 8);
+  if (!f || std::memcmp(magic, kMagic, 8) != 0) {
+    *why = "not a leaf-root cache";
+    return false;
+  }
+  if (fileKey != key || count != nv) {
+    *why = "made for other data (model or options changed)";
+    return false;
+  }
+  out->rootOfVertex.resize(nv);
+  f.read(reinterpret_cast<char*>(out->rootOfVertex.data()), std::streamsize(nv * 4));
+  if (!f || f.peek() != std::char_traits<char>::eof()) {
+    *why = "truncated or oversized";
+    out->rootOfVertex.clear();
+    return false;
+  }
+  // A root must be in range and be its own root; anything else is a damaged file.
+  for (size_t v = 0; v < nv; ++v) {
+    const uint32_t r = out->rootOfVertex[v];
+    if (r != kNoLeaf && (r >= nv || out->rootOfVertex[r] != r)) {
+      *why = "inconsistent contents";
+      out->rootOfVertex.clear();
+      return false;
+    }
+  }
+  indexLeaves(out);
+  return true;
+}
+
+Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& r) {
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) return Status::error("cannot write leaf-root cache " + tmp);
+    const uint64_t count = r.rootOfVertex.size();
+    f.write(kMagic, 8);
+    f.write(reinterpret_cast<const char*>(&key), 8);
+    f.write(reinterpret_cast<const char*>(&count), 8);
+    f.write(reinterpret_cast<const char*>(r.rootOfVertex.data()), std::streamsize(count * 4));
+    if (!f) {
+      std::remove(tmp.c_str());
+      return Status::error("cannot write leaf-root cache " + tmp);
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::remove(tmp.c_str());
+    return Status::error("cannot write leaf-root cache " + path + ": " + ec.message());
+  }
+  return Status();
+}
+
+}  // namespace canopy

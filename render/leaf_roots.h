@@ -1,0 +1,53 @@
+#pragma once
+// Leaf-root preprocessing (paper 3.2, done once per model): the foliage mesh is split into leaves
+// (connected components through shared indices and, optionally, through vertices at equal
+// positions, since exporters split vertices along UV seams and some models share none), and each
+// leaf gets a root vertex: the one with the smallest (u, v), compared u first then v, ties by
+// index. The vertex shader reads the root of each vertex's leaf and puts the whole leaf into the
+// layer of the root's depth, so no leaf is ever cut.
+//
+// Cost: linear time and memory (union-find with path halving and union by size over the index
+// buffer; welding through an open-addressing hash of positions). The result can be cached in a
+// file next to the model, keyed by a hash of everything it depends on.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/status.h"
+#include "render/gltf_loader.h"
+
+namespace canopy {
+
+inline constexpr uint32_t kNoLeaf = 0xffffffffu;
+
+struct LeafRootOptions {
+  bool weldPositions = true;  // also join vertices with bit-identical positions (-0 == +0)
+};
+
+struct LeafRoots {
+  std::vector<uint32_t> rootOfVertex;  // per vertex: its leaf's root vertex; kNoLeaf if no foliage triangle uses it
+  std::vector<uint32_t> leafOfVertex;  // per vertex: compact leaf index 0..leafCount-1, or kNoLeaf
+  std::vector<uint32_t> leafRoot;      // per leaf: its root vertex (leaves numbered by first root index)
+  uint32_t leafCount() const { return uint32_t(leafRoot.size()); }
+};
+
+// Components of the triangles with triangleIsFoliage[t] != 0. Errors on inconsistent sizes or
+// indices past the vertex count (a model from loadGltf has neither).
+Status computeLeafRoots(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,
+                        const LeafRootOptions& options, LeafRoots* out);
+
+// Fills leafOfVertex and leafRoot from rootOfVertex (used after loading a cache).
+void indexLeaves(LeafRoots* roots);
+
+// A hash of everything the roots depend on (positions, uvs, indices, the foliage mask, options).
+uint64_t leafRootKey(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,
+                     const LeafRootOptions& options);
+
+// The cache file beside a model: "<model path>.leafroots".
+std::string leafRootCachePath(const std::string& modelPath);
+// Reads a cache; false (with `why`) when it is absent, truncated, for another key, or inconsistent.
+bool readLeafRootCache(const std::string& path, uint64_t key, size_t vertexCount, LeafRoots* out, std::string* why);
+// Writes atomically (temporary file + rename).
+Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& roots);
+
+}  // namespace canopy

@@ -231,6 +231,9 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   // gl_PrimitiveID in a fragment shader needs the Geometry capability (the layer-id debug output).
   f2.features.geometryShader = have.features.geometryShader;
   d.fragmentPrimitiveId = have.features.geometryShader;
+  // The layer-id debug output is an integer attachment beside a blended colour attachment.
+  f2.features.independentBlend = have.features.independentBlend;
+  d.independentBlend = have.features.independentBlend;
 
   std::vector<const char*> devExts = desc.deviceExtensions;
   devExts.push_back(VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);

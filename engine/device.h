@@ -48,6 +48,7 @@ struct Device {
   bool shaderOutputLayer = false;  // gl_Layer from the vertex shader (single-pass layered draw)
   bool shaderClipDistance = false; // gl_ClipDistance (the per-layer-draw fallback)
   bool fragmentPrimitiveId = false; // gl_PrimitiveID in fragment shaders (geometryShader feature)
+  bool independentBlend = false;
   uint32_t timestampValidBits = 0;
   Allocator* allocator = nullptr;
   VkCommandPool oneShotPool = VK_NULL_HANDLE;  // for submitAndWait()

@@ -491,8 +491,8 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
                          " is outside 1..16384 per side");
   if (desc.colorFormat != VK_FORMAT_R16G16B16A16_SFLOAT && desc.colorFormat != VK_FORMAT_R8G8B8A8_UNORM)
     return Status::error("layers: colour format must be R16G16B16A16_SFLOAT or R8G8B8A8_UNORM");
-  if (desc.writeIds && !d.fragmentPrimitiveId)
-    return Status::error("layers: the id output needs gl_PrimitiveID in fragment shaders (geometryShader feature)");
+  if (desc.writeIds && (!d.fragmentPrimitiveId || !d.independentBlend))
+    return Status::error("layers: the id output needs gl_PrimitiveID in fragment shaders (geometryShader) and independentBlend");
   CANOPY_TRY(validateLayerSettings(desc.settings));
   if (m.uvs.size() != m.positions.size() || m.indices.size() % 3 || m.triangleMaterial.size() != m.triangleCount())
     return Status::error("layers: inconsistent model arrays in " + m.path);

@@ -14,6 +14,7 @@ void GpuTest::SetUp() {
     std::lock_guard<std::mutex> lock(mutex_);
     messages_.push_back({id, msg, sev >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT});
   };
+  configure(desc);
   Status s = createDevice(desc, &dev);
   ASSERT_TRUE(s.ok()) << s.message();
   ASSERT_TRUE(dev.validationEnabled);

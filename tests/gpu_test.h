@@ -23,6 +23,8 @@ struct ValidationMessage {
 class GpuTest : public ::testing::Test {
  protected:
   void SetUp() override;
+  // Lets a fixture change the device description (e.g. hide a feature) before creation.
+  virtual void configure(DeviceDesc&) {}
   void TearDown() override;
   // Removes and returns the messages captured so far.
   std::vector<ValidationMessage> takeMessages();

@@ -1,0 +1,235 @@
+// Rigid/foliage material split and leaf-root preprocessing (paper 3.2): components through shared
+// indices and welded positions, root = smallest (u, v), the cache beside the model.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "render/leaf_roots.h"
+#include "render/material_split.h"
+
+using namespace canopy;
+
+namespace {
+
+const std::string kAssets = CANOPY_SHARED_ASSETS;
+#define REQUIRE_ASSETS()                  \
+  if (!std::filesystem::exists(kAssets)) \
+  GTEST_SKIP() << "shared assets folder absent (" << kAssets << "): skipped"
+
+// Appends a quad (two triangles over 4 shared vertices) with the given corner and uv offset.
+void addQuad(VegetationModel& m, glm::vec3 o, glm::vec2 uv0, uint32_t material) {
+  const uint32_t b = uint32_t(m.positions.size());
+  const glm::vec3 p[4] = {o, o + glm::vec3(1, 0, 0), o + glm::vec3(1, 1, 0), o + glm::vec3(0, 1, 0)};
+  const glm::vec2 t[4] = {uv0, uv0 + glm::vec2(1, 0), uv0 + glm::vec2(1, 1), uv0 + glm::vec2(0, 1)};
+  for (int i = 0; i < 4; ++i) {
+    m.positions.push_back(p[i]);
+    m.normals.push_back({0, 0, 1});
+    m.uvs.push_back(t[i]);
+  }
+  for (uint32_t i : {0u, 1u, 2u, 2u, 3u, 0u}) m.indices.push_back(b + i);
+  m.triangleMaterial.push_back(material);
+  m.triangleMaterial.push_back(material);
+}
+
+VegetationModel twoMaterialModel() {
+  VegetationModel m;
+  m.path = "hand-made";
+  m.materials.resize(3);
+  m.materials[0].name = "Leaf_Mat";
+  m.materials[0].alphaMode = AlphaMode::Mask;
+  m.materials[1].name = "TreeBark";
+  m.materials[2].name = "default";
+  return m;
+}
+
+std::vector<uint8_t> allFoliage(const VegetationModel& m) { return std::vector<uint8_t>(m.triangleCount(), 1); }
+
+}  // namespace
+
+TEST(MaterialSplit, DefaultRuleReadsNamesAndAlphaModes) {
+  VegetationModel m = twoMaterialModel();
+  m.materials.push_back({"Material.001"});  // opaque, no telling name, beside a MASK material
+  MaterialSplit s;
+  ASSERT_TRUE(splitMaterials(m, {}, &s).ok());
+  EXPECT_EQ(s.role[0], MaterialRole::Foliage);
+  EXPECT_EQ(s.role[1], MaterialRole::Rigid);
+  EXPECT_EQ(s.role[3], MaterialRole::Rigid) << s.reason[3];
+  // All-opaque model: unnamed opaque parts are soft foliage, wood stays rigid.
+  VegetationModel t;
+  t.materials = {{"Wood"}, {"Green"}};
+  ASSERT_TRUE(splitMaterials(t, {}, &s).ok());
+  EXPECT_EQ(s.role[0], MaterialRole::Rigid);
+  EXPECT_EQ(s.role[1], MaterialRole::Foliage);
+}
+
+TEST(MaterialSplit, UserOverridesWinAndBadOnesAreNamed) {
+  VegetationModel m = twoMaterialModel();
+  addQuad(m, {0, 0, 0}, {0, 0}, 0);
+  addQuad(m, {2, 0, 0}, {0, 0}, 1);
+  MaterialSplitOptions o;
+  o.foliage = {"treebark"};  // case-insensitive name
+  o.rigid = {"#0"};
+  MaterialSplit s;
+  ASSERT_TRUE(splitMaterials(m, o, &s).ok());
+  EXPECT_EQ(s.role[0], MaterialRole::Rigid);
+  EXPECT_EQ(s.role[1], MaterialRole::Foliage);
+  EXPECT_EQ(s.reason[0], "user override");
+  EXPECT_EQ(s.rigidTriangles, 2u);
+  EXPECT_EQ(s.foliageTriangles, 2u);
+  o = {};
+  o.rigid = {"Trunk"};
+  Status st = splitMaterials(m, o, &s);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("'Trunk' names no material"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("'TreeBark'"), std::string::npos) << st.message();
+  o = {};
+  o.rigid = {"#7"};
+  st = splitMaterials(m, o, &s);
+  EXPECT_NE(st.message().find("index out of range"), std::string::npos) << st.message();
+  o = {};
+  o.rigid = {"#1"};
+  o.foliage = {"TreeBark"};
+  st = splitMaterials(m, o, &s);
+  EXPECT_NE(st.message().find("both rigid and foliage"), std::string::npos) << st.message();
+  o = {};
+  o.rigid = {"#x1"};
+  EXPECT_FALSE(splitMaterials(m, o, &s).ok());
+}
+
+TEST(LeafRoots, ComponentsThroughIndicesAndWeldedPositions) {
+  VegetationModel m = twoMaterialModel();
+  addQuad(m, {0, 0, 0}, {0.5f, 0.5f}, 0);  // leaf A: shared indices
+  addQuad(m, {5, 0, 0}, {0.2f, 0.7f}, 0);  // leaf B, first half
+  addQuad(m, {6, 0, 0}, {0.1f, 0.9f}, 0);  // leaf B, second half: touches B only by position (UV seam)
+  LeafRoots r;
+  ASSERT_TRUE(computeLeafRoots(m, allFoliage(m), {}, &r).ok());
+  EXPECT_EQ(r.leafCount(), 2u);
+  for (uint32_t v = 0; v < 4; ++v) EXPECT_EQ(r.rootOfVertex[v], 0u);  // smallest (u, v) of A: vertex 0
+  // Leaf B's smallest u is 0.1 (vertex 8, the second quad's first corner).
+  for (uint32_t v = 4; v < 12; ++v) EXPECT_EQ(r.rootOfVertex[v], 8u) << v;
+  EXPECT_EQ(r.leafOfVertex[0], 0u);
+  EXPECT_EQ(r.leafOfVertex[11], 1u);
+  EXPECT_EQ(r.leafRoot[1], 8u);
+  LeafRootOptions noWeld;
+  noWeld.weldPositions = false;
+  ASSERT_TRUE(computeLeafRoots(m, allFoliage(m), noWeld, &r).ok());
+  EXPECT_EQ(r.leafCount(), 3u);
+}
+
+TEST(LeafRoots, RigidTrianglesAreNotLeavesAndTiesAreStable) {
+  VegetationModel m = twoMaterialModel();
+  addQuad(m, {0, 0, 0}, {0, 0}, 0);
+  addQuad(m, {1, 0, 0}, {0, 0}, 1);  // rigid, touching leaf A by position
+  std::vector<uint8_t> mask = {1, 1, 0, 0};
+  LeafRoots r;
+  ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+  EXPECT_EQ(r.leafCount(), 1u);
+  for (uint32_t v = 4; v < 8; ++v) EXPECT_EQ(r.rootOfVertex[v], kNoLeaf);
+  // Vertex 0 has uv (0,0), the smallest; no other vertex of the leaf ties.
+  EXPECT_EQ(r.rootOfVertex[3], 0u);
+  // Equal uvs everywhere: the lowest index wins.
+  for (auto& uv : m.uvs) uv = glm::vec2(0.25f);
+  ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+  EXPECT_EQ(r.rootOfVertex[2], 0u);
+}
+
+TEST(LeafRoots, RefusesInconsistentInput) {
+  VegetationModel m = twoMaterialModel();
+  addQuad(m, {0, 0, 0}, {0, 0}, 0);
+  LeafRoots r;
+  EXPECT_FALSE(computeLeafRoots(m, {1}, {}, &r).ok());
+  m.indices[4] = 99;
+  Status s = computeLeafRoots(m, allFoliage(m), {}, &r);
+  EXPECT_NE(s.message().find("indexes past"), std::string::npos) << s.message();
+}
+
+TEST(LeafRoots, CacheRoundTripAndRejection) {
+  VegetationModel m = twoMaterialModel();
+  for (int i = 0; i < 10; ++i) addQuad(m, {2.0f * i, 0, 0}, {0.1f * i, 0}, 0);
+  const auto mask = allFoliage(m);
+  LeafRoots r;
+  ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+  const std::string path = (std::filesystem::temp_directory_path() / "canopy_leafroots_test.leafroots").string();
+  const uint64_t key = leafRootKey(m, mask, {});
+  ASSERT_TRUE(writeLeafRootCache(path, key, r).ok());
+  LeafRoots back;
+  std::string why;
+  ASSERT_TRUE(readLeafRootCache(path, key, m.positions.size(), &back, &why)) << why;
+  EXPECT_EQ(back.rootOfVertex, r.rootOfVertex);
+  EXPECT_EQ(back.leafOfVertex, r.leafOfVertex);
+  EXPECT_EQ(back.leafRoot, r.leafRoot);
+  // Other options or data: another key.
+  LeafRootOptions noWeld;
+  noWeld.weldPositions = false;
+  EXPECT_NE(leafRootKey(m, mask, noWeld), key);
+  VegetationModel moved = m;
+  moved.positions[3].x += 1e-3f;
+  EXPECT_NE(leafRootKey(moved, mask, {}), key);
+  EXPECT_FALSE(readLeafRootCache(path, key + 1, m.positions.size(), &back, &why));
+  EXPECT_NE(why.find("other data"), std::string::npos);
+  // Truncated and corrupted files are rejected, never trusted.
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) - 3);
+  EXPECT_FALSE(readLeafRootCache(path, key, m.positions.size(), &back, &why));
+  ASSERT_TRUE(writeLeafRootCache(path, key, r).ok());
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(24 + 4 * 5);
+    const uint32_t bad = 7;  // vertex 5's root becomes 7, which is not a root
+    f.write(reinterpret_cast<const char*>(&bad), 4);
+  }
+  EXPECT_FALSE(readLeafRootCache(path, key, m.positions.size(), &back, &why));
+  EXPECT_EQ(why, "inconsistent contents");
+  EXPECT_FALSE(readLeafRootCache(path + ".absent", key, m.positions.size(), &back, &why));
+  std::filesystem::remove(path);
+}
+
+TEST(LeafRoots, RealModelsSplitAndWeld) {
+  REQUIRE_ASSETS();
+  struct Case {
+    const char* file;
+    std::set<std::string> rigid;
+    uint32_t leavesWelded;
+  };
+  // Leaf counts measured with canopy-layers; the Quaternius models share no vertices, so without
+  // welding every foliage triangle would be its own leaf.
+  const Case cases[] = {{"quaternius_CommonTree_1/CommonTree_1.glb", {"Wood"}, 2},
+                        {"quaternius_PineTree_1/PineTree_1.glb", {"Wood"}, 0},
+                        {"DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf", {"base"}, 36},
+                        {"fern_02/fern_02.glb", {}, 53}};
+  for (const Case& c : cases) {
+    VegetationModel m;
+    ASSERT_TRUE(loadGltf(kAssets + "/" + c.file, {}, &m).ok()) << c.file;
+    MaterialSplit s;
+    ASSERT_TRUE(splitMaterials(m, {}, &s).ok());
+    std::set<std::string> rigid;
+    std::vector<uint64_t> used(m.materials.size());
+    for (uint32_t t : m.triangleMaterial) used[t]++;
+    for (size_t i = 0; i < m.materials.size(); ++i)
+      if (used[i] && s.role[i] == MaterialRole::Rigid) rigid.insert(m.materials[i].name);
+    EXPECT_EQ(rigid, c.rigid) << c.file;
+    std::vector<uint8_t> mask(m.triangleCount());
+    uint64_t foliage = 0;
+    for (size_t t = 0; t < mask.size(); ++t) foliage += mask[t] = s.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
+    LeafRoots r;
+    ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+    if (c.leavesWelded) EXPECT_EQ(r.leafCount(), c.leavesWelded) << c.file;
+    // Every vertex of a foliage triangle has a root in its own leaf.
+    for (size_t t = 0; t < mask.size(); ++t) {
+      if (!mask[t]) continue;
+      const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], cc = m.indices[3 * t + 2];
+      ASSERT_NE(r.rootOfVertex[a], kNoLeaf);
+      ASSERT_EQ(r.rootOfVertex[a], r.rootOfVertex[b]);
+      ASSERT_EQ(r.rootOfVertex[a], r.rootOfVertex[cc]);
+    }
+    if (std::string(c.file).find("quaternius") != std::string::npos) {
+      const uint32_t welded = r.leafCount();
+      LeafRootOptions noWeld;
+      noWeld.weldPositions = false;
+      ASSERT_TRUE(computeLeafRoots(m, mask, noWeld, &r).ok());
+      EXPECT_GT(r.leafCount(), 4 * welded) << c.file << ": unwelded, the split vertices fall apart";
+      EXPECT_LE(r.leafCount(), foliage);
+    }
+  }
+}

@@ -1,10 +1,17 @@
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
+
+#include "render/gltf_loader.h"
 
 namespace canopy {
 struct Device;
 namespace bench {
 int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, bool detail);
+// Leaf-root preprocessing and layer rebuilds for synthetic leaf clouds of the given face counts.
+int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layout,
+                   uint32_t width, uint32_t height);
+VegetationModel makeLeafCloud(uint64_t faces, uint32_t seed);
 }
 }  // namespace canopy

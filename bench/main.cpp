@@ -1,5 +1,6 @@
 // canopy-bench: Canopy's benchmark (speed is measured here, never asserted in tests).
-//   canopy-bench [sim] [--sizes 64,128,256] [--frames N] [--detail] [--device NAME]
+//   canopy-bench [sim] [layers] [--sizes 64,128,256] [--frames N] [--detail]
+//                [--faces 80000,10000000] [--rebuilds N] [--layers 5(3-1-1)] [--device NAME]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -16,8 +17,12 @@ using namespace canopy;
 static int usage(const char* why) {
   if (why) std::fprintf(stderr, "canopy-bench: %s\n", why);
   std::fprintf(why ? stderr : stdout,
-               "usage: canopy-bench [sim] [--sizes N,N,...] [--frames N] [--detail] [--device NAME]\n"
+               "usage: canopy-bench [sim] [layers] [options]\n"
                "  sim            simulation step per grid size, GPU vs CPU reference (default section)\n"
+               "  layers         leaf-root preprocessing and layer rebuilds, one draw vs n draws\n"
+               "  --faces        layers: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
+               "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
+               "  --layers L     layers: layout (default 5(3-1-1))\n"
                "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
                "  --frames N     steps measured per configuration, 3..100000 (default 60)\n"
                "  --detail       per-pass GPU timestamps\n"
@@ -29,14 +34,37 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 60;
   bool detail = false;
+  bool runSim = false, runLayers = false;
+  std::vector<uint64_t> faces = {80000, 10000000};
+  uint32_t rebuilds = 5;
+  std::string layout = "5(3-1-1)";
   DeviceDesc desc;
   desc.applicationName = "canopy-bench";
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
     if (a == "--help" || a == "-h") return usage(nullptr);
-    if (a == "sim") continue;
-    if (a == "--detail") detail = true;
+    if (a == "sim") runSim = true;
+    else if (a == "layers") runLayers = true;
+    else if (a == "--detail") detail = true;
+    else if (a == "--faces") {
+      const char* v = next();
+      if (!v) return usage("--faces needs a list");
+      faces.clear();
+      std::stringstream ss(v);
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        uint32_t n;
+        if (!cli::parseUint(item.c_str(), 2, 100000000, &n)) return usage("--faces: each must be an integer in [2, 100000000]");
+        faces.push_back(n);
+      }
+    } else if (a == "--rebuilds") {
+      if (!cli::parseUint(next(), 1, 1000, &rebuilds)) return usage("--rebuilds needs an integer in [1, 1000]");
+    } else if (a == "--layers") {
+      const char* v = next();
+      if (!v) return usage("--layers needs a layout");
+      layout = v;
+    }
     else if (a == "--sizes") {
       const char* v = next();
       if (!v) return usage("--sizes needs a list");
@@ -67,7 +95,10 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  int rc = bench::runSimBench(dev, sizes, frames, detail);
+  if (!runSim && !runLayers) runSim = true;
+  int rc = 0;
+  if (runSim) rc = bench::runSimBench(dev, sizes, frames, detail);
+  if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
   destroyDevice(dev);
   return rc;
 }

@@ -43,6 +43,7 @@ int usage(const std::string& why) {
       "  --per-layer            draw one pass per layer even when gl_Layer is available\n"
       "  --no-weld              leaves only through shared indices, not equal positions\n"
       "  --no-cache             neither read nor write the leaf-root cache (MODEL.leafroots)\n"
+      "  --cache-dir DIR        keep the leaf-root cache in DIR instead of beside the model\n"
       "  --device NAME          substring of the Vulkan device name\n");
   return 0;
 }
@@ -134,6 +135,9 @@ int main(int argc, char** argv) {
       desc.roots.weldPositions = false;
     } else if (a == "--no-cache") {
       desc.useRootCache = false;
+    } else if (a == "--cache-dir") {
+      if (!(v = next())) return usage("--cache-dir needs a folder");
+      desc.rootCacheDir = v;
     } else if (a == "--device") {
       if (!(v = next())) return usage("--device needs a name");
       dd.preferredDevice = v;
@@ -151,6 +155,10 @@ int main(int argc, char** argv) {
     return 1;
   };
 
+  if (!desc.rootCacheDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(desc.rootCacheDir, ec);
+  }
   VegetationModel m;
   const auto t0 = std::chrono::steady_clock::now();
   Status s = loadGltf(model, GltfLoadOptions{}, &m);

@@ -506,7 +506,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     LeafRoots roots;
     bool cached = false;
     const bool cacheOn = desc.useRootCache && !m.path.empty();
-    const std::string cachePath = cacheOn ? leafRootCachePath(m.path) : std::string();
+    const std::string cachePath = cacheOn ? leafRootCachePath(m.path, desc.rootCacheDir) : std::string();
     uint64_t key = 0;
     if (cacheOn) {
       key = leafRootKey(m, foliage, desc.roots);

@@ -56,7 +56,8 @@ struct LayeredVegetationDesc {
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // or VK_FORMAT_R8G8B8A8_UNORM
   MaterialSplitOptions split;
   LeafRootOptions roots;
-  bool useRootCache = true;   // read/write leafRootCachePath(model.path) (skipped for an empty path)
+  bool useRootCache = true;   // read/write leafRootCachePath(model.path, rootCacheDir) (skipped for an empty path)
+  std::string rootCacheDir;   // empty: beside the model
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;

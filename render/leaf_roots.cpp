@@ -153,7 +153,10 @@ uint64_t leafRootKey(const VegetationModel& m, const std::vector<uint8_t>& folia
   return h;
 }
 
-std::string leafRootCachePath(const std::string& modelPath) { return modelPath + ".leafroots"; }
+std::string leafRootCachePath(const std::string& modelPath, const std::string& cacheDir) {
+  if (cacheDir.empty()) return modelPath + ".leafroots";
+  return (std::filesystem::path(cacheDir) / (std::filesystem::path(modelPath).filename().string() + ".leafroots")).string();
+}
 
 bool readLeafRootCache(const std::string& path, uint64_t key, size_t nv, LeafRoots* out, std::string* why) {
   *out = LeafRoots{};

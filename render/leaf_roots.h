@@ -43,8 +43,9 @@ void indexLeaves(LeafRoots* roots);
 uint64_t leafRootKey(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,
                      const LeafRootOptions& options);
 
-// The cache file beside a model: "<model path>.leafroots".
-std::string leafRootCachePath(const std::string& modelPath);
+// The cache file of a model: "<model path>.leafroots" beside it, or "<dir>/<model file name>.leafroots"
+// when a cache directory is given (e.g. when the model's folder is shared or read-only).
+std::string leafRootCachePath(const std::string& modelPath, const std::string& cacheDir = "");
 // Reads a cache; false (with `why`) when it is absent, truncated, for another key, or inconsistent.
 bool readLeafRootCache(const std::string& path, uint64_t key, size_t vertexCount, LeafRoots* out, std::string* why);
 // Writes atomically (temporary file + rename).

@@ -1,0 +1,170 @@
+// Layer benchmark (issue 4): leaf-root preprocessing throughput and layered rasterization time
+// for synthetic leaf clouds, one gl_Layer draw against one draw per layer, side by side.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "bench/bench.h"
+#include "engine/device.h"
+#include "engine/timing.h"
+#include "render/layers.h"
+
+namespace canopy::bench {
+namespace {
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+// A crown of `faces / 2` quad leaves (two triangles over four shared vertices each), randomly
+// placed in a unit sphere and oriented at random; leaf size shrinks with the count so that the
+// leaves' total area stays 8x the crown's cross-section (depth complexity ~8, like a dense shrub).
+// Deterministic for a seed.
+VegetationModel makeLeafCloud(uint64_t faces, uint32_t seed) {
+  VegetationModel m;
+  const uint64_t leaves = std::max<uint64_t>(1, faces / 2);
+  m.path = "";
+  m.materials.resize(2);
+  m.materials[0].name = "leaf";
+  m.materials[0].baseColorFactor = glm::vec4(0.25f, 0.6f, 0.2f, 1.0f);
+  m.materials[0].alphaMode = AlphaMode::Mask;
+  m.materials[1].name = "default";
+  m.positions.reserve(leaves * 4);
+  m.normals.reserve(leaves * 4);
+  m.uvs.reserve(leaves * 4);
+  m.indices.reserve(leaves * 6);
+  m.triangleMaterial.assign(leaves * 2, 0);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const float side = std::sqrt(8.0f * 3.14159265f / float(leaves));
+  for (uint64_t l = 0; l < leaves; ++l) {
+    glm::vec3 c;
+    do c = {u(rng), u(rng), u(rng)};
+    while (glm::dot(c, c) > 1.0f);
+    glm::vec3 a = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(0, 0, 1e-3f));
+    glm::vec3 b = glm::normalize(glm::cross(a, glm::vec3(u(rng), u(rng), u(rng) + 2.0f)));
+    const glm::vec3 n = glm::normalize(glm::cross(a, b));
+    a *= side;
+    b *= side;
+    const uint32_t base = uint32_t(m.positions.size());
+    const glm::vec3 p[4] = {c, c + a, c + a + b, c + b};
+    const glm::vec2 t[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    for (int i = 0; i < 4; ++i) {
+      m.positions.push_back(p[i]);
+      m.normals.push_back(n);
+      m.uvs.push_back(t[i]);
+    }
+    for (uint32_t i : {0u, 1u, 2u, 2u, 3u, 0u}) m.indices.push_back(base + i);
+  }
+  m.boundsMin = glm::vec3(-1.0f - side * 2);
+  m.boundsMax = glm::vec3(1.0f + side * 2);
+  return m;
+}
+
+int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layoutText,
+                   uint32_t width, uint32_t height) {
+  LayerLayout layout;
+  Status s = parseLayerLayout(layoutText, &layout);
+  if (!s.ok()) {
+    std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+    return 2;
+  }
+  std::printf("\nLayers %s at %ux%u: preprocessing (leaf roots, CPU, one core) and layer rebuilds\n",
+              toString(layout).c_str(), width, height);
+  std::printf("Rebuild: GPU = timestamps around the foliage pass; wall = submit-to-fence of the rebuild alone;\n"
+              "placement = CPU depth range + per-layer bounds; medians of %d rebuilds.\n\n", rebuilds);
+  std::printf("  %-11s %11s %9s %12s | %-22s %10s %10s %12s %10s\n", "faces", "roots ms", "M tris/s", "cache read ms",
+              "draw", "GPU ms", "wall ms", "M tris/s", "place ms");
+  for (uint64_t faces : faceCounts) {
+    double t0 = nowMs();
+    VegetationModel m = makeLeafCloud(faces, 7);
+    const double genMs = nowMs() - t0;
+    // Preprocessing alone (the figure the issue asks for), then through the cache.
+    std::vector<uint8_t> foliage(m.triangleCount(), 1);
+    LeafRoots roots;
+    t0 = nowMs();
+    s = computeLeafRoots(m, foliage, {}, &roots);
+    const double rootsMs = nowMs() - t0;
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+      return 1;
+    }
+    const std::string cache = "/tmp/canopy_bench.leafroots";
+    const uint64_t key = leafRootKey(m, foliage, {});
+    (void)writeLeafRootCache(cache, key, roots);
+    t0 = nowMs();
+    LeafRoots back;
+    std::string why;
+    const bool hit = readLeafRootCache(cache, key, m.positions.size(), &back, &why);
+    const double cacheMs = nowMs() - t0;
+    std::remove(cache.c_str());
+    const double mtris = double(m.triangleCount()) / rootsMs / 1e3;
+    bool first = true;
+    for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+      if (mode == LayerDrawMode::SinglePass && !dev.shaderOutputLayer) continue;
+      LayeredVegetationDesc d;
+      d.width = width;
+      d.height = height;
+      d.useRootCache = false;
+      d.settings.layout = layout;
+      d.settings.draw = mode;
+      d.settings.policy = ReslicePolicy::EveryFrame;
+      LayeredVegetation lv;
+      s = createLayeredVegetation(dev, m, d, &lv);
+      if (!s.ok()) {
+        std::fprintf(stderr, "canopy-bench: %llu faces: %s\n", (unsigned long long)faces, s.message().c_str());
+        return 1;
+      }
+      rg::RenderGraph g;
+      GpuTimer timer;
+      s = addLayerPasses(lv, g, nullptr);
+      if (s.ok()) s = g.compile();
+      if (s.ok()) s = g.realize(dev);
+      if (s.ok()) s = timer.init(dev, 8);
+      std::vector<double> gpu, wall, place;
+      const LayerView view = orbitView(m.boundsMin, m.boundsMax, 20, 10, 40, float(width) / float(height), 0.8f);
+      for (int i = 0; i < rebuilds + 1 && s.ok(); ++i) {
+        bool rebuild = false;
+        s = updateLayerView(lv, view, &rebuild);
+        place.push_back(lv.stats.lastPlacementMs);
+        const double w0 = nowMs();
+        if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) {
+                   timer.reset(cmd);
+                   return g.record(cmd, &timer);
+                 });
+        const double w1 = nowMs();
+        std::vector<PassTiming> t;
+        if (s.ok()) s = timer.read(dev, &t);
+        if (i == 0) continue;  // warm-up
+        wall.push_back(w1 - w0);
+        for (const PassTiming& p : t)
+          if (p.name == "layers: foliage") gpu.push_back(p.milliseconds);
+      }
+      timer.destroy(dev);
+      g.release(dev);
+      destroyLayeredVegetation(lv);
+      if (!s.ok()) {
+        std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+        return 1;
+      }
+      const double g50 = median(gpu), w50 = median(wall);
+      char drawName[64];
+      std::snprintf(drawName, sizeof drawName, "%s", mode == LayerDrawMode::SinglePass ? "one draw (gl_Layer)" : "");
+      if (mode == LayerDrawMode::PerLayer) std::snprintf(drawName, sizeof drawName, "%u draws (clip dist.)", layout.count());
+      if (first)
+        std::printf("  %-11llu %11.1f %9.2f %12.1f | ", (unsigned long long)faces, rootsMs, mtris, hit ? cacheMs : -1.0);
+      else
+        std::printf("  %-11s %11s %9s %12s | ", "", "", "", "");
+      std::printf("%-22s %10.2f %10.2f %12.2f %10.2f\n", drawName, g50, w50, double(faces) / w50 / 1e3, median(place));
+      first = false;
+    }
+    std::printf("  (%llu faces: %u leaves, generated in %.0f ms)\n", (unsigned long long)faces, roots.leafCount(), genMs);
+  }
+  return 0;
+}
+
+}  // namespace canopy::bench

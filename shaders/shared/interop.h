@@ -16,7 +16,7 @@
   namespace canopy::gpu {                                                              \
   using glm::vec2; using glm::vec3; using glm::vec4; using glm::ivec2; using glm::ivec4; \
   using glm::uvec2; using glm::uvec4; using glm::mat4; using uint = uint32_t;            \
-  using std::sin; using std::cos; using std::abs; using std::floor; using std::sqrt;    \
+  using std::sin; using std::cos; using std::abs; using std::floor; using std::sqrt; using std::pow; \
   using glm::fract; using glm::mix; using glm::clamp; using glm::smoothstep; using glm::min; using glm::max;
 #define CANOPY_NAMESPACE_END }
 #define CANOPY_SIZE_CHECK(T, bytes) \

@@ -1,0 +1,167 @@
+#include "compute/dynamics.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "engine/device.h"
+
+namespace canopy {
+namespace {
+const rg::State kComputeRead = rg::stateOf(rg::Use::ComputeStorageRead);
+
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+}  // namespace
+
+SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth) {
+  SimulationPlane p;
+  const glm::mat4 inv = glm::inverse(view.view);
+  p.right = glm::normalize(glm::vec3(inv[0]));
+  p.up = glm::normalize(glm::vec3(inv[1]));
+  const glm::vec3 eye = glm::vec3(inv[3]), forward = -glm::normalize(glm::vec3(inv[2]));
+  // Half extents of the visible region at that depth, from the projection's scale terms.
+  const float halfW = centreDepth / std::max(std::abs(view.proj[0][0]), 1e-6f);
+  const float halfH = centreDepth / std::max(std::abs(view.proj[1][1]), 1e-6f);
+  p.tileSize = 2.0f * std::max(halfW, halfH);
+  p.origin = eye + forward * centreDepth - p.right * (0.5f * p.tileSize) - p.up * (0.5f * p.tileSize);
+  return p;
+}
+
+Status validateDynamicsParams(const DynamicsParams& p) {
+  auto range = [](const char* name, float v, float lo, float hi) -> Status {
+    if (!(v >= lo && v <= hi))
+      return Status::error(std::string("dynamics: ") + name + " = " + std::to_string(v) + " is outside [" +
+                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return Status();
+  };
+  CANOPY_TRY(range("vd (V_D)", p.vd, -1000, 1000));
+  CANOPY_TRY(range("propagationSpeed (s)", p.propagationSpeed, 0, 1000));
+  CANOPY_TRY(range("lambda.x", p.lambda.x, 0, 1e6f));
+  CANOPY_TRY(range("lambda.y", p.lambda.y, 0, 1e6f));
+  CANOPY_TRY(range("lambda.z", p.lambda.z, 0, 1e6f));
+  CANOPY_TRY(range("rigidity (r)", p.rigidity, 0, 10));
+  CANOPY_TRY(range("depthAttenuation (m)", p.depthAttenuation, 0, 1));
+  if (!(p.dt > 0 && p.dt <= 10)) return Status::error("dynamics: dt = " + std::to_string(p.dt) + " is outside (0, 10]");
+  if (!(p.maxDelay > 0 && p.maxDelay <= 3600))
+    return Status::error("dynamics: maxDelay = " + std::to_string(p.maxDelay) + " is outside (0, 3600]");
+  if (p.cellSize < 2 || p.cellSize > 256)
+    return Status::error("dynamics: cellSize = " + std::to_string(p.cellSize) + " is outside [2, 256] pixels");
+  return Status();
+}
+
+uint32_t gridCorners(uint32_t pixels, uint32_t cellSize) { return (pixels + cellSize - 1) / cellSize + 1; }
+
+Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::AnimFrame* out) {
+  CANOPY_TRY(validateDynamicsParams(p));
+  const uint32_t n = uint32_t(d.layers.size());
+  if (n < 1 || n > CANOPY_MAX_LAYERS)
+    return Status::error("dynamics: " + std::to_string(n) + " layers, expected 1.." + std::to_string(CANOPY_MAX_LAYERS));
+  if (d.width < 1 || d.height < 1) return Status::error("dynamics: empty image");
+  if (d.simSize < 4 || d.ringSize < 1) return Status::error("dynamics: no simulation field (N < 4 or no history)");
+  const SimulationPlane& s = d.plane;
+  if (!finite3(s.origin) || !(s.tileSize > 0 && std::isfinite(s.tileSize)) ||
+      std::abs(glm::length(s.right) - 1.0f) > 1e-3f || std::abs(glm::length(s.up) - 1.0f) > 1e-3f ||
+      std::abs(glm::dot(s.right, s.up)) > 1e-3f)
+    return Status::error("dynamics: the simulation plane needs unit, orthogonal right/up axes and tileSize > 0");
+  gpu::AnimFrame f{};
+  f.invViewProj = glm::inverse(d.view.proj * d.view.view);
+  f.viewRotation = glm::mat4(glm::mat3(d.view.view));
+  f.depthRow = -glm::vec4(d.view.view[0][2], d.view.view[1][2], d.view.view[2][2], d.view.view[3][2]);
+  f.simOrigin = glm::vec4(s.origin, s.tileSize);
+  f.simRight = glm::vec4(s.right, 0.0f);
+  f.simUp = glm::vec4(s.up, 0.0f);
+  f.lambda = glm::vec4(p.lambda, p.dt);
+  f.time = d.time;
+  f.vd = p.vd;
+  f.propagation = p.propagationSpeed;
+  f.rigidity = p.rigidity;
+  f.everyPartMoves = p.everyPartMoves ? 1u : 0u;
+  f.delayMode = p.delay == DelayMode::Exact ? ANIM_DELAY_EXACT : ANIM_DELAY_APPROXIMATE;
+  f.n = d.simSize;
+  f.ringSize = d.ringSize;
+  f.layerCount = n;
+  f.gridX = gridCorners(d.width, p.cellSize);
+  f.gridY = gridCorners(d.height, p.cellSize);
+  f.cellSize = float(p.cellSize);
+  f.width = float(d.width);
+  f.height = float(d.height);
+  f.maxDelay = p.maxDelay;
+  const float last = d.layers.back().distance;
+  for (uint32_t i = 0; i < n; ++i) {
+    gpu::AnimLayer& l = f.layers[i];
+    l.depth = d.layers[i].depth;
+    l.distance = d.layers[i].distance;
+    // design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer.
+    const float ratio = (n > 1 && last > 0) ? d.layers[i].distance / last : 0.0f;
+    l.attenuation = 1.0f - p.depthAttenuation * ratio * ratio;
+    l.rootLineY = d.layers[i].rootLineY;
+    l.height = std::max(d.layers[i].height, 1.0f);
+  }
+  *out = f;
+  return Status();
+}
+
+Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t minCell, uint32_t maxLayers,
+                           LayerDynamics* out) {
+  *out = LayerDynamics{};
+  out->device = &d;
+  if (minCell < 2 || maxLayers < 1 || maxLayers > CANOPY_MAX_LAYERS || width < 1 || height < 1)
+    return Status::error("createLayerDynamics: bad size, cell or layer count");
+  out->maxCorners = gridCorners(width, minCell) * gridCorners(height, minCell);
+  out->maxLayers = maxLayers;
+  Status s = [&]() -> Status {
+    ComputePipelineDesc pd;
+    pd.shader = "anim_displace.comp";
+    pd.bindings.assign(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(glm::vec2),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::DeviceLocal,
+                            &out->displacement, "dynamics: displacement"));
+    return Status();
+  }();
+  if (!s.ok()) destroyLayerDynamics(*out);
+  return s;
+}
+
+void destroyLayerDynamics(LayerDynamics& x) {
+  if (!x.device) return;
+  destroyComputePipeline(*x.device, x.pipeline);
+  destroyBuffer(*x.device, x.frame);
+  destroyBuffer(*x.device, x.displacement);
+  x = LayerDynamics{};
+}
+
+Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId tiled, rg::ResourceId ring,
+                         rg::ResourceId ringTimes, rg::ResourceId* displacement) {
+  if (!x.device) return Status::error("addDynamicsPasses: dynamics not created");
+  const auto frame = g.importBuffer("dynamics: frame", x.frame.size, kComputeRead, kComputeRead);
+  const auto disp = g.importBuffer("dynamics: displacement", x.displacement.size, kComputeRead, kComputeRead);
+  LayerDynamics* p = &x;
+  g.addPass("dynamics: frame", [p](rg::PassContext& c) {
+     vkCmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
+     return Status();
+   }).write(frame, rg::Use::TransferDst);
+  g.addPass("dynamics: displacement", [p, tiled, ring, ringTimes](rg::PassContext& c) {
+     const gpu::AnimFrame& f = p->current;
+     const uint32_t corners = f.gridX * f.gridY;
+     if (corners > p->maxCorners || f.layerCount > p->maxLayers)
+       return Status::error("dynamics: the warp grid (" + std::to_string(f.gridX) + "x" + std::to_string(f.gridY) +
+                            ", " + std::to_string(f.layerCount) + " layers) exceeds what the dynamics were created for");
+     return dispatch(*c.device, c.cmd, p->pipeline, corners, f.layerCount, 1,
+                     {bindBuffer(p->frame.buffer), bindBuffer(c.buffer(tiled)), bindBuffer(c.buffer(ring)),
+                      bindBuffer(c.buffer(ringTimes)), bindBuffer(p->displacement.buffer)},
+                     nullptr, 0);
+   })
+      .read(frame, rg::Use::ComputeStorageRead)
+      .read(tiled, rg::Use::ComputeStorageRead)
+      .read(ring, rg::Use::ComputeStorageRead)
+      .read(ringTimes, rg::Use::ComputeStorageRead)
+      .write(disp, rg::Use::ComputeStorageWrite);
+  CANOPY_TRY(g.bindBuffer(frame, x.frame.buffer));
+  CANOPY_TRY(g.bindBuffer(disp, x.displacement.buffer));
+  if (displacement) *displacement = disp;
+  return Status();
+}
+
+}  // namespace canopy

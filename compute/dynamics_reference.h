@@ -1,0 +1,22 @@
+#pragma once
+// CPU reference of the layer dynamics (tests and benchmark only): the same corner loop as
+// shaders/anim_displace.comp in plain C++, with the shared eq. 1-7 functions of shared/anim.h.
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shared/anim.h"
+
+namespace canopy {
+
+// tiled: n*n vec2; ring: H*n*n vec2; ringTimes: H. Returns layers x gridY x gridX displacements.
+std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std::vector<glm::vec2>& tiled,
+                                             const std::vector<glm::vec2>& ring, const std::vector<float>& ringTimes);
+
+// The simulation-plane coordinate (tile units) of warp-grid corner (gx, gy) of a layer.
+glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy);
+
+// Bilinear periodic sample of an n*n field at tile coordinates a (cell centres at (i + 0.5) / n).
+glm::vec2 sampleTiledReference(const glm::vec2* field, uint32_t n, glm::vec2 a);
+
+}  // namespace canopy

@@ -1,0 +1,89 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Displacement of every warp-grid corner of every layer (paper 3.4-3.6): the corner's pixel is
+// unprojected at the layer's depth, mapped to the tiled simulation field (orthogonal projection on
+// the simulation plane, fract(coord / tile)), its velocity projected to the view (eq. 1-2), delayed
+// for the layer (eq. 3-4 exact: the history ring at t - gamma, linear in time; eq. 5 approximate:
+// one lookup at B = A + gamma s V_s), and turned into d_i (eq. 6-7).
+#include "shared/anim.h"
+
+layout(local_size_x = ANIM_GROUP_SIZE) in;
+layout(binding = 0, scalar) readonly buffer FrameBuf { AnimFrame f; };
+layout(binding = 1, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
+layout(binding = 2, scalar) readonly buffer RingBuf { vec2 ring[]; };
+layout(binding = 3, scalar) readonly buffer RingTimesBuf { float ringTimes[]; };
+layout(binding = 4, scalar) writeonly buffer DispBuf { vec2 disp[]; };
+
+// Bilinear, periodic sample of an n*n field (cell centres at (i + 0.5) / n, row 0 at the bottom)
+// at tile coordinates a (any real; the field repeats with period 1). base: offset of the field.
+vec2 sampleTiled(bool fromRing, uint base, vec2 a) {
+  uint n = f.n;
+  vec2 x = fract(a) * float(n) - 0.5;
+  vec2 fl = floor(x);
+  vec2 t = x - fl;
+  int i0 = int(fl.x), j0 = int(fl.y);
+  uint ia = uint((i0 + int(n)) % int(n)), ib = uint((i0 + 1 + int(n)) % int(n));
+  uint ja = uint((j0 + int(n)) % int(n)), jb = uint((j0 + 1 + int(n)) % int(n));
+  vec2 v00, v10, v01, v11;
+  if (fromRing) {
+    v00 = ring[base + ja * n + ia]; v10 = ring[base + ja * n + ib];
+    v01 = ring[base + jb * n + ia]; v11 = ring[base + jb * n + ib];
+  } else {
+    v00 = tiled[ja * n + ia]; v10 = tiled[ja * n + ib];
+    v01 = tiled[jb * n + ia]; v11 = tiled[jb * n + ib];
+  }
+  return mix(mix(v00, v10, t.x), mix(v01, v11, t.x), t.y);
+}
+
+// The simulation-plane velocity at time tau from the ring: the two slots bracketing tau, linear in
+// time; tau is clamped to the history that exists.
+vec2 sampleHistory(vec2 a, float tau) {
+  uint newest = 0u, oldest = 0u;
+  for (uint s = 1u; s < f.ringSize; ++s) {
+    if (ringTimes[s] > ringTimes[newest]) newest = s;
+    if (ringTimes[s] < ringTimes[oldest]) oldest = s;
+  }
+  tau = clamp(tau, ringTimes[oldest], ringTimes[newest]);
+  uint lo = oldest, hi = newest;
+  for (uint s = 0u; s < f.ringSize; ++s) {
+    float ts = ringTimes[s];
+    if (ts <= tau && ts >= ringTimes[lo]) lo = s;
+    if (ts >= tau && ts <= ringTimes[hi]) hi = s;
+  }
+  float span = ringTimes[hi] - ringTimes[lo];
+  float w = span > 0.0 ? (tau - ringTimes[lo]) / span : 0.0;
+  uint nn = f.n * f.n;
+  return mix(sampleTiled(true, lo * nn, a), sampleTiled(true, hi * nn, a), w);
+}
+
+void main() {
+  uint corners = f.gridX * f.gridY;
+  uint id = gl_GlobalInvocationID.x;
+  uint layer = gl_GlobalInvocationID.y;
+  if (id >= corners || layer >= f.layerCount) return;
+  uint gx = id % f.gridX, gy = id / f.gridX;
+  vec2 pixel = min(vec2(gx, gy) * f.cellSize, vec2(f.width, f.height));
+  // Unproject: the point on the pixel's ray at the layer's view depth (depth is affine along the ray).
+  vec2 ndc = pixel / vec2(f.width, f.height) * 2.0 - 1.0;
+  vec4 h0 = f.invViewProj * vec4(ndc, 0.0, 1.0);
+  vec4 h1 = f.invViewProj * vec4(ndc, 1.0, 1.0);
+  vec3 p0 = h0.xyz / h0.w, p1 = h1.xyz / h1.w;
+  float d0 = dot(f.depthRow, vec4(p0, 1.0)), d1 = dot(f.depthRow, vec4(p1, 1.0));
+  vec3 world = p0 + (p1 - p0) * ((f.layers[layer].depth - d0) / (d1 - d0));
+  // Simulation-plane coordinates in tile units (the tiled field repeats with period 1).
+  vec3 rel = world - f.simOrigin.xyz;
+  vec2 a = vec2(dot(rel, f.simRight.xyz), dot(rel, f.simUp.xyz)) / f.simOrigin.w;
+  vec2 vs = sampleTiled(false, 0u, a);
+  vec3 v0 = simToView(f, vs);
+  vec3 vi = v0;
+  if (layer > 0u) {
+    float gamma = layerDelay(f, f.layers[layer].distance, v0.z);
+    if (f.delayMode == ANIM_DELAY_EXACT) {
+      vi = simToView(f, sampleHistory(a, f.time - gamma));
+    } else {
+      // Simulation coordinates are domain units = tile units, so B moves gamma s V_s tiles.
+      vi = simToView(f, sampleTiled(false, 0u, a + gamma * f.propagation * vs));
+    }
+  }
+  disp[layer * corners + id] = displacementPixels(f, layer, pixel.y, vi);
+}

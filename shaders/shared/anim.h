@@ -1,0 +1,86 @@
+// Layer dynamics (paper 3.4-3.6, design.md): the simulation-plane velocity projected to the view
+// (eq. 1-2 as the general rotation), the layer delay (eq. 3-5) and the displacement of the warp
+// grid's corners (eq. 6-7). The formulas are shared inline functions, compiled into the compute
+// shader and into the C++ reference, so the two cannot drift.
+#ifndef CANOPY_SHARED_ANIM_H
+#define CANOPY_SHARED_ANIM_H
+#include "interop.h"
+#include "layers.h"
+
+#define ANIM_DELAY_EXACT 0u        // sample the history ring at t - gamma_i (eq. 3)
+#define ANIM_DELAY_APPROXIMATE 1u  // one lookup at B = A + gamma_i s V (eq. 5)
+#define ANIM_GROUP_SIZE 64u
+
+CANOPY_NAMESPACE_BEGIN
+
+struct AnimLayer {
+  float depth;        // representative view depth, world units
+  float distance;     // L_i: depth - depth of layer 0
+  float attenuation;  // A_i = 1 - m (L_i / L_{n-1})^2 (design.md's reading of eq. 6)
+  float rootLineY;    // pixel row of the root line (y down)
+  float height;       // h of eq. 7, pixels
+  float pad0;
+  float pad1;
+  float pad2;
+};
+CANOPY_SIZE_CHECK(AnimLayer, 32)
+
+struct AnimFrame {
+  mat4 invViewProj;   // Vulkan clip -> world (unprojects grid corners)
+  mat4 viewRotation;  // world -> view rotation (R_view), translation zero
+  vec4 depthRow;      // view depth of world p: dot(depthRow, vec4(p, 1))
+  vec4 simOrigin;     // xyz: world point at simulation coordinate (0, 0); w: tile size, world units
+  vec4 simRight;      // xyz: the simulation plane's x axis (unit, world)
+  vec4 simUp;         // xyz: its y axis (unit, world)
+  vec4 lambda;        // xyz: lambda_x, lambda_y, lambda_z, pixels per domain unit; w: dt of eq. 6, s
+  float time;         // time of the newest simulation field, s
+  float vd;           // V_D of eq. 4, domain units/s
+  float propagation;  // s of eq. 5, dimensionless (B moves gamma s |V| domain units)
+  float rigidity;     // r of eq. 7, [0, 10]
+  uint everyPartMoves;  // 1: R = 1 (eq. 7)
+  uint delayMode;     // ANIM_DELAY_*
+  uint n;             // simulation grid, cells per side
+  uint ringSize;      // H
+  uint layerCount;
+  uint gridX;         // warp-grid corners per row
+  uint gridY;         // corners per column
+  float cellSize;     // pixels
+  float width;        // image, pixels
+  float height;
+  float maxDelay;     // |gamma| clamp for a vanishing denominator, s
+  float pad0;
+  AnimLayer layers[CANOPY_MAX_LAYERS];
+};
+CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 5 + 4 * 16 + 32 * CANOPY_MAX_LAYERS)
+
+// Eq. 1-2 in general: simulation-plane velocity -> world -> view.
+CANOPY_INLINE vec3 simToView(AnimFrame f, vec2 vs) {
+  vec3 w = vs.x * vec3(f.simRight) + vs.y * vec3(f.simUp);
+  return vec3(f.viewRotation * vec4(w, 0.0f));
+}
+
+// Eq. 4: gamma_i = L_i / (-V_0z + V_D), bounded by maxDelay when the denominator vanishes.
+CANOPY_INLINE float layerDelay(AnimFrame f, float distance, float v0z) {
+  float denom = -v0z + f.vd;
+  float g = distance / (abs(denom) > 1e-6f ? denom : (denom < 0.0f ? -1e-6f : 1e-6f));
+  return clamp(g, -f.maxDelay, f.maxDelay);
+}
+
+// Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1].
+CANOPY_INLINE float rigidityFactor(AnimFrame f, uint layer, float pixelY) {
+  if (f.everyPartMoves != 0u) return 1.0f;
+  float l = f.layers[layer].rootLineY - pixelY;
+  float x = clamp(l / max(f.layers[layer].height, 1.0f), 0.0f, 1.0f);
+  return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
+}
+
+// Eq. 6 (design.md's reading) in pixels, y pointing down the image (view y points up).
+CANOPY_INLINE vec2 displacementPixels(AnimFrame f, uint layer, float pixelY, vec3 vi) {
+  float k = rigidityFactor(f, layer, pixelY) * f.layers[layer].attenuation * f.lambda.w;
+  float dx = k * f.lambda.x * vi.x;
+  float dyUp = k * (f.lambda.y * vi.y - f.lambda.z * abs(vi.z));
+  return vec2(dx, -dyUp);
+}
+
+CANOPY_NAMESPACE_END
+#endif

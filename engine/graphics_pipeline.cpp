@@ -32,20 +32,8 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
   Status s = [&]() -> Status {
     CANOPY_TRY(makeModule(d, desc.vertexShader, &vs));
     CANOPY_TRY(makeModule(d, desc.fragmentShader, &fs));
-    std::vector<VkDescriptorSetLayoutBinding> b(desc.bindings.size());
-    for (size_t i = 0; i < b.size(); ++i) b[i] = {uint32_t(i), desc.bindings[i], 1, kStages, nullptr};
-    VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
-    sl.bindingCount = uint32_t(b.size());
-    sl.pBindings = b.data();
-    CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, &out->setLayout));
-    VkPushConstantRange pr{kStages, 0, desc.pushConstantSize};
-    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    pl.setLayoutCount = 1;
-    pl.pSetLayouts = &out->setLayout;
-    pl.pushConstantRangeCount = desc.pushConstantSize ? 1 : 0;
-    pl.pPushConstantRanges = &pr;
-    CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, &out->layout));
+    CANOPY_TRY(createPushDescriptorLayouts(d, desc.bindings, kStages, desc.pushConstantSize, &out->setLayout,
+                                           &out->layout));
 
     VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
                                                  {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};

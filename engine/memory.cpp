@@ -120,6 +120,15 @@ void destroyBuffer(Device& d, Buffer& b) {
   b = Buffer{};
 }
 
+ImageDesc descOf(const Image& img) {
+  ImageDesc d;
+  d.format = img.format;
+  d.width = img.extent.width;
+  d.height = img.extent.height;
+  d.layers = img.layers;
+  return d;
+}
+
 Status createImage(Device& d, const ImageDesc& desc, Image* out, const char* debugName) {
   *out = Image{};
   const std::string name = debugName ? debugName : "?";

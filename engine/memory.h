@@ -73,6 +73,10 @@ void destroyBuffer(Device& device, Buffer& buffer);
 Status createImage(Device& device, const ImageDesc& desc, Image* out, const char* debugName = nullptr);
 void destroyImage(Device& device, Image& image);
 
+// The description an existing image would be created from (format, extent, layers), e.g. to import
+// it into a render graph.
+ImageDesc descOf(const Image& image);
+
 // Aspect flags implied by a format (depth/stencil formats vs colour).
 VkImageAspectFlags aspectOf(VkFormat format);
 

@@ -22,6 +22,25 @@ bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]) {
   return false;
 }
 
+Status createPushDescriptorLayouts(Device& d, const std::vector<VkDescriptorType>& bindings, VkShaderStageFlags stages,
+                                   uint32_t pushConstantSize, VkDescriptorSetLayout* setLayout, VkPipelineLayout* layout) {
+  std::vector<VkDescriptorSetLayoutBinding> b(bindings.size());
+  for (size_t i = 0; i < b.size(); ++i) b[i] = {uint32_t(i), bindings[i], 1, stages, nullptr};
+  VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
+  sl.bindingCount = uint32_t(b.size());
+  sl.pBindings = b.data();
+  CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, setLayout));
+  VkPushConstantRange pr{stages, 0, pushConstantSize};
+  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pl.setLayoutCount = 1;
+  pl.pSetLayouts = setLayout;
+  pl.pushConstantRangeCount = pushConstantSize ? 1 : 0;
+  pl.pPushConstantRanges = &pr;
+  CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, layout));
+  return Status();
+}
+
 Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, ComputePipeline* out) {
   *out = ComputePipeline{};
   const EmbeddedShader* sh = desc.shader ? findEmbeddedShader(desc.shader) : nullptr;
@@ -37,20 +56,8 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
   out->pushConstantSize = desc.pushConstantSize;
 
   Status s = [&]() -> Status {
-    std::vector<VkDescriptorSetLayoutBinding> b(desc.bindings.size());
-    for (size_t i = 0; i < b.size(); ++i) b[i] = {uint32_t(i), desc.bindings[i], 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr};
-    VkDescriptorSetLayoutCreateInfo sl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-    sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
-    sl.bindingCount = uint32_t(b.size());
-    sl.pBindings = b.data();
-    CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, &out->setLayout));
-    VkPushConstantRange pr{VK_SHADER_STAGE_COMPUTE_BIT, 0, desc.pushConstantSize};
-    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-    pl.setLayoutCount = 1;
-    pl.pSetLayouts = &out->setLayout;
-    pl.pushConstantRangeCount = desc.pushConstantSize ? 1 : 0;
-    pl.pPushConstantRanges = &pr;
-    CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, &out->layout));
+    CANOPY_TRY(createPushDescriptorLayouts(d, desc.bindings, VK_SHADER_STAGE_COMPUTE_BIT, desc.pushConstantSize,
+                                           &out->setLayout, &out->layout));
     VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     mi.codeSize = sh->sizeBytes;
     mi.pCode = sh->code;

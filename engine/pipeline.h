@@ -53,6 +53,13 @@ inline Binding bindImage(VkImageView v, VkImageLayout layout = VK_IMAGE_LAYOUT_G
   return x;
 }
 
+// The set layout (push descriptors, binding i typed by bindings[i]) and pipeline layout (one push
+// constant range of pushConstantSize bytes) shared by compute and graphics pipelines. On failure
+// whatever was created is left in the outputs for the caller's destroy function.
+Status createPushDescriptorLayouts(Device& device, const std::vector<VkDescriptorType>& bindings,
+                                   VkShaderStageFlags stages, uint32_t pushConstantSize,
+                                   VkDescriptorSetLayout* setLayout, VkPipelineLayout* layout);
+
 // Reads the workgroup size (OpExecutionMode LocalSize) from SPIR-V; false if absent/malformed.
 bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]);
 

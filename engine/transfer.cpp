@@ -54,11 +54,7 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
   CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
   std::memcpy(staging.allocation.mapped, texels, size);
   rg::RenderGraph g;
-  ImageDesc desc;
-  desc.format = img.format;
-  desc.width = img.extent.width;
-  desc.height = img.extent.height;
-  desc.layers = img.layers;
+  const ImageDesc desc = descOf(img);
   auto src = g.importBuffer("staging", size, kHostWritten, rg::stateOf(rg::Use::TransferSrc));
   auto dst = g.importImage("destination", desc, {}, final);
   g.addPass("upload image", [&](rg::PassContext& c) {
@@ -108,11 +104,7 @@ Status readbackImage(Device& d, const Image& img, uint32_t layer, uint32_t bytes
   Buffer staging;
   CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback, &staging, "readback staging"));
   rg::RenderGraph g;
-  ImageDesc desc;
-  desc.format = img.format;
-  desc.width = img.extent.width;
-  desc.height = img.extent.height;
-  desc.layers = img.layers;
+  const ImageDesc desc = descOf(img);
   auto src = g.importImage("source", desc, state, state);
   auto dst = g.importBuffer("staging", size, {}, kHostRead);
   g.addPass("readback image", [&](rg::PassContext& c) {

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <glm/gtc/packing.hpp>
 
 #include "engine/device.h"
@@ -100,12 +101,7 @@ Status createTargets(LayeredVegetation& lv) {
   std::vector<std::pair<rg::ResourceId, const Image*>> imgs;
   for (const Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) {
     if (!img->image) continue;
-    ImageDesc desc;
-    desc.format = img->format;
-    desc.width = img->extent.width;
-    desc.height = img->extent.height;
-    desc.layers = img->layers;
-    imgs.push_back({g.importImage("layer target", desc, {}, rest), img});
+    imgs.push_back({g.importImage("layer target", descOf(*img), {}, rest), img});
   }
   auto pass = g.addPass("layers: initial clear", [imgs](rg::PassContext& ctx) {
     for (auto& [id, img] : imgs) {
@@ -347,116 +343,81 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   return Status();
 }
 
-Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd) {
-  Device& d = *lv.device;
-  const uint32_t n = lv.settings.layout.count();
-  const VkExtent2D extent{lv.desc.width, lv.desc.height};
-  const VkDeviceSize zero = 0;
-  auto drawAll = [&](const GraphicsPipeline& pipe, uint32_t passKind, uint32_t target) -> Status {
-    vkCmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
-    vkCmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT32);
-    setViewportScissor(cmd, extent.width, extent.height);
-    for (const LayerDraw& dr : lv.foliageDraws) {
-      const ModelMaterial& mat = lv.materials[dr.material];
-      const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
-      gpu::LayerDrawPush push{};
-      push.baseColor = mat.baseColorFactor;
-      push.alphaCutoff = mat.alphaCutoff;
-      push.alphaMode = uint32_t(mat.alphaMode);
-      push.targetLayer = target;
-      push.passKind = passKind;
-      push.triangleBase = dr.firstIndex / 3;
-      CANOPY_TRY(bindGraphics(d, cmd, pipe,
-                              {bindBuffer(lv.frameBuffer.buffer), bindBuffer(lv.leafRoots.buffer),
-                               bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
-                              push));
-      vkCmdDrawIndexed(cmd, dr.indexCount, 1, dr.firstIndex, 0, 0);
-    }
-    return Status();
-  };
-  auto attachment = [](VkImageView view, VkImageLayout layout, VkClearValue clear) {
-    VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    a.imageView = view;
-    a.imageLayout = layout;
-    a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    a.clearValue = clear;
-    return a;
-  };
-  VkClearValue clearColor{}, clearDepth{};
-  clearDepth.depthStencil = {1.0f, 0};
-  const uint32_t passes = lv.singlePass ? 1 : n;
-  for (uint32_t i = 0; i < passes; ++i) {
-    VkRenderingAttachmentInfo colors[2] = {
-        attachment(lv.singlePass ? lv.color.view : lv.colorLayerViews[i], VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, clearColor),
-        attachment(lv.desc.writeIds ? (lv.singlePass ? lv.ids.view : lv.idsLayerViews[i]) : VK_NULL_HANDLE,
-                   VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, clearColor)};
-    VkRenderingAttachmentInfo depth = attachment(lv.singlePass ? lv.depth.view : lv.depthLayerViews[i],
-                                                 VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, clearDepth);
-    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    ri.renderArea = {{0, 0}, extent};
-    ri.layerCount = lv.singlePass ? n : 1;
-    ri.colorAttachmentCount = lv.desc.writeIds ? 2 : 1;
-    ri.pColorAttachments = colors;
-    ri.pDepthAttachment = &depth;
-    d.cmdBeginRendering(cmd, &ri);
-    Status s = lv.singlePass ? drawAll(lv.layered, LAYER_PASS_LAYERED, 0) : drawAll(lv.perLayer, LAYER_PASS_ONE_LAYER, i);
-    d.cmdEndRendering(cmd);
-    CANOPY_TRY(s);
-  }
-  return Status();
-}
-
-Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
-  Device& d = *lv.device;
-  VkRenderingAttachmentInfo color{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  color.imageView = lv.backgroundColor.view;
-  color.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  color.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-  color.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  VkRenderingAttachmentInfo depth = color;
-  depth.imageView = lv.backgroundDepth.view;
-  depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  depth.clearValue.depthStencil = {1.0f, 0};
-  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, {lv.desc.width, lv.desc.height}};
-  ri.layerCount = 1;
-  ri.colorAttachmentCount = 1;
-  ri.pColorAttachments = &color;
-  ri.pDepthAttachment = &depth;
-  d.cmdBeginRendering(cmd, &ri);
-  Status s;
+// Binds the mesh and draws `draws` (one per material) with `pipe`; the push constants say how the
+// vertex shader routes triangles (passKind, targetLayer).
+Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+                     const std::vector<LayerDraw>& draws, uint32_t passKind, uint32_t target) {
   const VkDeviceSize zero = 0;
   vkCmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
   vkCmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT32);
   setViewportScissor(cmd, lv.desc.width, lv.desc.height);
-  for (const LayerDraw& dr : lv.rigidDraws) {
+  for (const LayerDraw& dr : draws) {
     const ModelMaterial& mat = lv.materials[dr.material];
     const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
     gpu::LayerDrawPush push{};
     push.baseColor = mat.baseColorFactor;
     push.alphaCutoff = mat.alphaCutoff;
     push.alphaMode = uint32_t(mat.alphaMode);
-    push.passKind = LAYER_PASS_BACKGROUND;
+    push.targetLayer = target;
+    push.passKind = passKind;
     push.triangleBase = dr.firstIndex / 3;
-    s = bindGraphics(d, cmd, lv.background,
-                     {bindBuffer(lv.frameBuffer.buffer), bindBuffer(lv.leafRoots.buffer),
-                      bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
-                     push);
-    if (!s.ok()) break;
+    CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
+                            {bindBuffer(lv.frameBuffer.buffer), bindBuffer(lv.leafRoots.buffer),
+                             bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
+                            push));
     vkCmdDrawIndexed(cmd, dr.indexCount, 1, dr.firstIndex, 0, 0);
   }
+  return Status();
+}
+
+VkRenderingAttachmentInfo clearedAttachment(VkImageView view, bool depth) {
+  VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  a.imageView = view;
+  a.imageLayout = depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  if (depth) a.clearValue.depthStencil = {1.0f, 0};
+  return a;
+}
+
+// Begins dynamic rendering into the attachments, records `draw`, ends rendering.
+Status renderInto(Device& d, VkCommandBuffer cmd, const LayeredVegetation& lv, uint32_t layerCount,
+                  const VkRenderingAttachmentInfo* colors, uint32_t colorCount, const VkRenderingAttachmentInfo& depth,
+                  const std::function<Status()>& draw) {
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {lv.desc.width, lv.desc.height}};
+  ri.layerCount = layerCount;
+  ri.colorAttachmentCount = colorCount;
+  ri.pColorAttachments = colors;
+  ri.pDepthAttachment = &depth;
+  d.cmdBeginRendering(cmd, &ri);
+  Status s = draw();
   d.cmdEndRendering(cmd);
   return s;
 }
 
-ImageDesc descOf(const Image& img) {
-  ImageDesc d;
-  d.format = img.format;
-  d.width = img.extent.width;
-  d.height = img.extent.height;
-  d.layers = img.layers;
-  return d;
+Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  const uint32_t n = lv.settings.layout.count();
+  const uint32_t passes = lv.singlePass ? 1 : n;
+  for (uint32_t i = 0; i < passes; ++i) {
+    const VkRenderingAttachmentInfo colors[2] = {
+        clearedAttachment(lv.singlePass ? lv.color.view : lv.colorLayerViews[i], false),
+        clearedAttachment(lv.desc.writeIds ? (lv.singlePass ? lv.ids.view : lv.idsLayerViews[i]) : VK_NULL_HANDLE, false)};
+    const VkRenderingAttachmentInfo depth = clearedAttachment(lv.singlePass ? lv.depth.view : lv.depthLayerViews[i], true);
+    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, lv.desc.writeIds ? 2 : 1, depth, [&] {
+      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, lv.foliageDraws, LAYER_PASS_LAYERED, 0)
+                           : drawMaterials(lv, cmd, lv.perLayer, lv.foliageDraws, LAYER_PASS_ONE_LAYER, i);
+    }));
+  }
+  return Status();
+}
+
+Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  const VkRenderingAttachmentInfo color = clearedAttachment(lv.backgroundColor.view, false);
+  const VkRenderingAttachmentInfo depth = clearedAttachment(lv.backgroundDepth.view, true);
+  return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
+    return drawMaterials(lv, cmd, lv.background, lv.rigidDraws, LAYER_PASS_BACKGROUND, 0);
+  });
 }
 
 }  // namespace

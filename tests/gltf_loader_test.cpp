@@ -2,7 +2,6 @@
 // oracle), tinygltf's regression files, and hand-made hostile files. Built with AddressSanitizer
 // in the test configuration: no crash and no out-of-bounds read anywhere.
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 
 #include <cmath>
 #include <cstdio>
@@ -14,18 +13,13 @@
 
 #include "render/gltf_loader.h"
 
+#include "tests/assets.h"
+
 using namespace canopy;
+using canopy::test::kAssets;
 
 namespace {
 
-const std::string kAssets = CANOPY_SHARED_ASSETS;
-
-bool exists(const std::string& p) {
-  struct stat st;
-  return stat(p.c_str(), &st) == 0;
-}
-#define REQUIRE_ASSETS()                                                                            \
-  if (!exists(kAssets)) GTEST_SKIP() << "shared assets folder absent (" << kAssets << "): skipped"
 
 // A loaded model must be internally consistent: no garbage reaches the renderer.
 void expectConsistent(const VegetationModel& m, const std::string& name) {

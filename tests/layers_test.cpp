@@ -16,12 +16,14 @@
 #include "render/layers.h"
 #include "tests/gpu_test.h"
 
+#include "tests/assets.h"
+
 using namespace canopy;
+using canopy::test::kAssets;
 using canopy::test::GpuTest;
 
 namespace {
 
-const std::string kAssets = CANOPY_SHARED_ASSETS;
 constexpr uint32_t kW = 320, kH = 240;
 
 // Leaves in a screen grid (disjoint on screen), each a quad of two triangles tilted about the

@@ -9,14 +9,12 @@
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
 
+#include "tests/assets.h"
+
 using namespace canopy;
+using canopy::test::kAssets;
 
 namespace {
-
-const std::string kAssets = CANOPY_SHARED_ASSETS;
-#define REQUIRE_ASSETS()                  \
-  if (!std::filesystem::exists(kAssets)) \
-  GTEST_SKIP() << "shared assets folder absent (" << kAssets << "): skipped"
 
 // Appends a quad (two triangles over 4 shared vertices) with the given corner and uv offset.
 void addQuad(VegetationModel& m, glm::vec3 o, glm::vec2 uv0, uint32_t material) {

@@ -12,6 +12,5 @@ int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, boo
 // Leaf-root preprocessing and layer rebuilds for synthetic leaf clouds of the given face counts.
 int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layout,
                    uint32_t width, uint32_t height);
-VegetationModel makeLeafCloud(uint64_t faces, uint32_t seed);
 }
 }  // namespace canopy

@@ -10,6 +10,7 @@
 #include "engine/device.h"
 #include "engine/timing.h"
 #include "render/layers.h"
+#include "render/leaf_cloud.h"
 
 namespace canopy::bench {
 namespace {
@@ -19,51 +20,6 @@ double nowMs() {
 }
 
 }  // namespace
-
-// A crown of `faces / 2` quad leaves (two triangles over four shared vertices each), randomly
-// placed in a unit sphere and oriented at random; leaf size shrinks with the count so that the
-// leaves' total area stays 8x the crown's cross-section (depth complexity ~8, like a dense shrub).
-// Deterministic for a seed.
-VegetationModel makeLeafCloud(uint64_t faces, uint32_t seed) {
-  VegetationModel m;
-  const uint64_t leaves = std::max<uint64_t>(1, faces / 2);
-  m.path = "";
-  m.materials.resize(2);
-  m.materials[0].name = "leaf";
-  m.materials[0].baseColorFactor = glm::vec4(0.25f, 0.6f, 0.2f, 1.0f);
-  m.materials[0].alphaMode = AlphaMode::Mask;
-  m.materials[1].name = "default";
-  m.positions.reserve(leaves * 4);
-  m.normals.reserve(leaves * 4);
-  m.uvs.reserve(leaves * 4);
-  m.indices.reserve(leaves * 6);
-  m.triangleMaterial.assign(leaves * 2, 0);
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  const float side = std::sqrt(8.0f * 3.14159265f / float(leaves));
-  for (uint64_t l = 0; l < leaves; ++l) {
-    glm::vec3 c;
-    do c = {u(rng), u(rng), u(rng)};
-    while (glm::dot(c, c) > 1.0f);
-    glm::vec3 a = glm::normalize(glm::vec3(u(rng), u(rng), u(rng)) + glm::vec3(0, 0, 1e-3f));
-    glm::vec3 b = glm::normalize(glm::cross(a, glm::vec3(u(rng), u(rng), u(rng) + 2.0f)));
-    const glm::vec3 n = glm::normalize(glm::cross(a, b));
-    a *= side;
-    b *= side;
-    const uint32_t base = uint32_t(m.positions.size());
-    const glm::vec3 p[4] = {c, c + a, c + a + b, c + b};
-    const glm::vec2 t[4] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-    for (int i = 0; i < 4; ++i) {
-      m.positions.push_back(p[i]);
-      m.normals.push_back(n);
-      m.uvs.push_back(t[i]);
-    }
-    for (uint32_t i : {0u, 1u, 2u, 2u, 3u, 0u}) m.indices.push_back(base + i);
-  }
-  m.boundsMin = glm::vec3(-1.0f - side * 2);
-  m.boundsMax = glm::vec3(1.0f + side * 2);
-  return m;
-}
 
 int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layoutText,
                    uint32_t width, uint32_t height) {

@@ -111,13 +111,15 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
   Status s = [&]() -> Status {
     ComputePipelineDesc pd;
     pd.shader = "anim_displace.comp";
-    pd.bindings.assign(5, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
+    pd.bindings.assign(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));
     CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(glm::vec2),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::DeviceLocal,
                             &out->displacement, "dynamics: displacement"));
+    CANOPY_TRY(createBuffer(d, out->displacement.size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                            MemoryUsage::DeviceLocal, &out->previous, "dynamics: previous displacement"));
     return Status();
   }();
   if (!s.ok()) destroyLayerDynamics(*out);
@@ -129,14 +131,16 @@ void destroyLayerDynamics(LayerDynamics& x) {
   destroyComputePipeline(*x.device, x.pipeline);
   destroyBuffer(*x.device, x.frame);
   destroyBuffer(*x.device, x.displacement);
+  destroyBuffer(*x.device, x.previous);
   x = LayerDynamics{};
 }
 
 Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId tiled, rg::ResourceId ring,
-                         rg::ResourceId ringTimes, rg::ResourceId* displacement) {
+                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous) {
   if (!x.device) return Status::error("addDynamicsPasses: dynamics not created");
   const auto frame = g.importBuffer("dynamics: frame", x.frame.size, kComputeRead, kComputeRead);
   const auto disp = g.importBuffer("dynamics: displacement", x.displacement.size, kComputeRead, kComputeRead);
+  const auto prev = g.importBuffer("dynamics: previous displacement", x.previous.size, kComputeRead, kComputeRead);
   LayerDynamics* p = &x;
   g.addPass("dynamics: frame", [p](rg::PassContext& c) {
      vkCmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
@@ -150,17 +154,20 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
                             ", " + std::to_string(f.layerCount) + " layers) exceeds what the dynamics were created for");
      return dispatch(*c.device, c.cmd, p->pipeline, corners, f.layerCount, 1,
                      {bindBuffer(p->frame.buffer), bindBuffer(c.buffer(tiled)), bindBuffer(c.buffer(ring)),
-                      bindBuffer(c.buffer(ringTimes)), bindBuffer(p->displacement.buffer)},
+                      bindBuffer(c.buffer(ringTimes)), bindBuffer(p->displacement.buffer), bindBuffer(p->previous.buffer)},
                      nullptr, 0);
    })
       .read(frame, rg::Use::ComputeStorageRead)
       .read(tiled, rg::Use::ComputeStorageRead)
       .read(ring, rg::Use::ComputeStorageRead)
       .read(ringTimes, rg::Use::ComputeStorageRead)
-      .write(disp, rg::Use::ComputeStorageWrite);
+      .write(disp, rg::Use::ComputeStorageReadWrite)
+      .write(prev, rg::Use::ComputeStorageWrite);
   CANOPY_TRY(g.bindBuffer(frame, x.frame.buffer));
   CANOPY_TRY(g.bindBuffer(disp, x.displacement.buffer));
+  CANOPY_TRY(g.bindBuffer(prev, x.previous.buffer));
   if (displacement) *displacement = disp;
+  if (previous) *previous = prev;
   return Status();
 }
 

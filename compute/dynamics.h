@@ -69,6 +69,7 @@ struct LayerDynamics {
   ComputePipeline pipeline;
   Buffer frame;         // AnimFrame
   Buffer displacement;  // layers x gridY x gridX vec2, pixels (y down)
+  Buffer previous;      // the displacement of the frame before (motion vectors)
   gpu::AnimFrame current{};
   uint32_t maxCorners = 0, maxLayers = 0;
 };
@@ -79,8 +80,8 @@ void destroyLayerDynamics(LayerDynamics& dynamics);
 
 // Adds "dynamics: frame" and "dynamics: displacement". `tiled`, `ring` and `ringTimes` are the
 // simulation's buffers (SimulationResources); the frame used is dynamics.current at record time.
-// Returns the displacement buffer's id (imported, left for compute reads).
+// Returns the ids of the displacement buffer and of the previous frame's (`previous` may be null).
 Status addDynamicsPasses(LayerDynamics& dynamics, rg::RenderGraph& graph, rg::ResourceId tiled, rg::ResourceId ring,
-                         rg::ResourceId ringTimes, rg::ResourceId* displacement);
+                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous = nullptr);
 
 }  // namespace canopy

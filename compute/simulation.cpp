@@ -293,12 +293,12 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
   Simulation* sp = &s;
   auto run = [sp](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
-    return simDispatch(*sp, cmd, p, tx, ty, phase);
+    return sp->paused ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
   };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
   const uint32_t one = SIM_GROUP_SIZE;  // single-workgroup kernels
   g.addPass("sim: upload step parameters", [sp](rg::PassContext& c) {
-     vkCmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
+     if (!sp->paused) vkCmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
    }).write(r.frame, rg::Use::TransferDst);
   g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->diffuse, one, 1, 0) : Status(); })

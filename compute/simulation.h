@@ -112,6 +112,7 @@ struct Simulation {
   gpu::SimFrame next{};  // the block the next recorded step uploads (prepareSimulationStep)
   double time = 0.0;     // simulation clock, s
   SimulationStats stats;
+  bool paused = false;   // the graph's step passes record nothing (a host frame with dt = 0)
   rg::RenderGraph graph;  // standalone graph (runSimulationSteps)
   SimulationResources graphIds{};
   bool graphReady = false;

@@ -73,7 +73,7 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
       att[i] = {};
       att[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
                               VK_COLOR_COMPONENT_A_BIT;
-      if (i == 0 && desc.blend == BlendMode::PremultipliedOver) {
+      if (i < desc.blendedAttachments && desc.blend == BlendMode::PremultipliedOver) {
         att[i].blendEnable = VK_TRUE;
         att[i].srcColorBlendFactor = VK_BLEND_FACTOR_ONE;
         att[i].dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;

@@ -30,7 +30,8 @@ struct GraphicsPipelineDesc {
   std::vector<VertexAttribute> attributes;
   std::vector<VkFormat> colorFormats;    // one per colour attachment
   VkFormat depthFormat = VK_FORMAT_UNDEFINED;
-  BlendMode blend = BlendMode::None;     // applied to colour attachment 0 only
+  BlendMode blend = BlendMode::None;
+  uint32_t blendedAttachments = 1;       // blend applies to colour attachments [0, this)
   bool depthTest = true, depthWrite = true;
   VkCompareOp depthCompare = VK_COMPARE_OP_LESS;
   VkCullModeFlags cullMode = VK_CULL_MODE_NONE;

@@ -8,6 +8,11 @@
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #include <stb/stb_image_write.h>
+// A private PNG-only decoder (render/gltf_loader.cpp has its own, also private).
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
 
 namespace canopy {
 
@@ -17,6 +22,17 @@ Status writePng(const std::string& path, uint32_t w, uint32_t h, const std::vect
                          std::to_string(h) + " RGBA");
   if (!stbi_write_png(path.c_str(), int(w), int(h), 4, rgba.data(), int(w * 4)))
     return Status::error("cannot write PNG '" + path + "'");
+  return Status();
+}
+
+Status readPng(const std::string& path, uint32_t* width, uint32_t* height, std::vector<uint8_t>* rgba) {
+  int w = 0, h = 0, comp = 0;
+  stbi_uc* px = stbi_load(path.c_str(), &w, &h, &comp, 4);
+  if (!px) return Status::error(path + ": cannot read PNG (" + std::string(stbi_failure_reason()) + ")");
+  *width = uint32_t(w);
+  *height = uint32_t(h);
+  rgba->assign(px, px + size_t(w) * size_t(h) * 4);
+  stbi_image_free(px);
   return Status();
 }
 

@@ -180,4 +180,17 @@ void destroyImage(Device& d, Image& img) {
   img = Image{};
 }
 
+uint32_t texelBytes(VkFormat f) {
+  switch (f) {
+    case VK_FORMAT_R8_UNORM: return 1;
+    case VK_FORMAT_D16_UNORM: return 2;
+    case VK_FORMAT_R8G8B8A8_UNORM: case VK_FORMAT_R8G8B8A8_SRGB: case VK_FORMAT_B8G8R8A8_UNORM:
+    case VK_FORMAT_B8G8R8A8_SRGB: case VK_FORMAT_R16G16_SFLOAT: case VK_FORMAT_R32_SFLOAT:
+    case VK_FORMAT_R32_UINT: case VK_FORMAT_D32_SFLOAT: return 4;
+    case VK_FORMAT_R16G16B16A16_SFLOAT: case VK_FORMAT_R32G32_SFLOAT: case VK_FORMAT_R32G32_UINT: return 8;
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return 16;
+    default: return 0;
+  }
+}
+
 }  // namespace canopy

@@ -77,6 +77,9 @@ void destroyImage(Device& device, Image& image);
 // it into a render graph.
 ImageDesc descOf(const Image& image);
 
+// Bytes per texel of the uncompressed formats Canopy uses (0 for any other format).
+uint32_t texelBytes(VkFormat format);
+
 // Aspect flags implied by a format (depth/stencil formats vs colour).
 VkImageAspectFlags aspectOf(VkFormat format);
 

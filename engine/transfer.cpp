@@ -46,10 +46,12 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
 }
 
 Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize size, rg::State final) {
-  const VkDeviceSize want = VkDeviceSize(img.extent.width) * img.extent.height * 4;
-  if (size != want || img.format == VK_FORMAT_UNDEFINED)
+  const uint32_t texel = texelBytes(img.format);
+  const VkDeviceSize want = VkDeviceSize(img.extent.width) * img.extent.height * img.layers * texel;
+  if (texel == 0 || size != want)
     return Status::error("uploadImage: " + std::to_string(size) + " bytes given for a " + std::to_string(img.extent.width) +
-                         "x" + std::to_string(img.extent.height) + " image of 4-byte texels");
+                         "x" + std::to_string(img.extent.height) + "x" + std::to_string(img.layers) + " image of " +
+                         std::to_string(texel) + "-byte texels (format " + std::to_string(int(img.format)) + ")");
   Buffer staging;
   CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
   std::memcpy(staging.allocation.mapped, texels, size);
@@ -59,7 +61,7 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
   auto dst = g.importImage("destination", desc, {}, final);
   g.addPass("upload image", [&](rg::PassContext& c) {
      VkBufferImageCopy region{};
-     region.imageSubresource = {img.aspect, 0, 0, 1};
+     region.imageSubresource = {img.aspect, 0, 0, img.layers};
      region.imageExtent = img.extent;
      vkCmdCopyBufferToImage(c.cmd, c.buffer(src), c.image(dst).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
      return Status();

@@ -14,8 +14,8 @@ struct Device;
 // (the graph makes the copy visible to that use). Waits for completion.
 Status uploadBuffer(Device& device, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
                     VkDeviceSize offset = 0);
-// Fills mip 0, layer 0 of a freshly created colour image with tightly packed texels (previous
-// contents discarded) and leaves it in `final`. Waits for completion.
+// Fills mip 0 of every layer of a freshly created image (colour or depth) with tightly packed
+// texels, layer after layer (previous contents discarded), and leaves it in `final`. Waits.
 Status uploadImage(Device& device, const Image& dst, const void* texels, VkDeviceSize size, rg::State final);
 // Copies `size` bytes from `src` at `offset` into `out`. Waits for completion.
 Status readbackBuffer(Device& device, const Buffer& src, void* out, VkDeviceSize size, rg::State state,

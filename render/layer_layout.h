@@ -17,6 +17,7 @@ inline constexpr uint32_t kMaxLayers = CANOPY_MAX_LAYERS;
 struct LayerLayout {
   uint32_t region[3] = {3, 1, 1};  // layers in the near, mid and far regions
   uint32_t count() const { return region[0] + region[1] + region[2]; }
+  bool operator==(const LayerLayout&) const = default;
 };
 
 // Parses "N(a-b-c)" (N must equal a+b+c) or a plain "N" (= N(N-0-0): N equal layers over the
@@ -31,6 +32,7 @@ struct RegionSplit {
   float nearEnd = 1.0f / 3.0f;
   float farStart = 2.0f / 3.0f;
   bool absolute = false;
+  bool operator==(const RegionSplit&) const = default;
 };
 Status validateRegionSplit(const RegionSplit& split);
 

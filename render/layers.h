@@ -48,6 +48,7 @@ struct LayerSettings {
   glm::vec3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space (normalised here)
   glm::vec3 lightColor{1.0f};            // linear RGB, each >= 0
   float ambient = 0.35f;                 // [0, 1]
+  bool operator==(const LayerSettings&) const = default;
 };
 Status validateLayerSettings(const LayerSettings& settings);
 

@@ -12,7 +12,9 @@ layout(binding = 0, scalar) readonly buffer FrameBuf { AnimFrame f; };
 layout(binding = 1, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
 layout(binding = 2, scalar) readonly buffer RingBuf { vec2 ring[]; };
 layout(binding = 3, scalar) readonly buffer RingTimesBuf { float ringTimes[]; };
-layout(binding = 4, scalar) writeonly buffer DispBuf { vec2 disp[]; };
+layout(binding = 4, scalar) buffer DispBuf { vec2 disp[]; };
+// Last frame's displacement, kept for motion vectors (each invocation moves its own corner).
+layout(binding = 5, scalar) writeonly buffer PrevBuf { vec2 prevDisp[]; };
 
 // Bilinear, periodic sample of an n*n field (cell centres at (i + 0.5) / n, row 0 at the bottom)
 // at tile coordinates a (any real; the field repeats with period 1). base: offset of the field.
@@ -85,5 +87,7 @@ void main() {
       vi = simToView(f, sampleTiled(false, 0u, a + gamma * f.propagation * vs));
     }
   }
-  disp[layer * corners + id] = displacementPixels(f, layer, pixel.y, vi);
+  uint at = layer * corners + id;
+  prevDisp[at] = disp[at];
+  disp[at] = displacementPixels(f, layer, pixel.y, vi);
 }

@@ -1,0 +1,248 @@
+#include "render/composite.h"
+
+#include <cmath>
+#include <string>
+
+#include "compute/dynamics.h"
+#include "engine/device.h"
+
+namespace canopy {
+namespace {
+
+uint32_t tilesFor(uint32_t pixels) { return (pixels + COMPOSITE_TILE - 1) / COMPOSITE_TILE; }
+
+bool isMotionFormat(VkFormat f) { return f == VK_FORMAT_R16G16_SFLOAT || f == VK_FORMAT_R32G32_SFLOAT; }
+
+Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* out) {
+  VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  si.magFilter = si.minFilter = filter;
+  si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  // Outside a layer there is nothing: transparent colour, far depth.
+  si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
+  si.borderColor = border;
+  si.maxLod = 0.0f;
+  CANOPY_VK(vkCreateSampler(d.device, &si, nullptr, out));
+  return Status();
+}
+
+}  // namespace
+
+Status validateCompositeParams(const CompositeParams& p) {
+  if (!(p.depthAlpha > 0.0f && p.depthAlpha <= 1.0f))
+    return Status::error("CompositeParams.depthAlpha = " + std::to_string(p.depthAlpha) + " is outside (0, 1]");
+  return Status();
+}
+
+Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
+  if (desc.width < 1 || desc.height < 1 || desc.width > 16384 || desc.height > 16384)
+    return Status::error("compositor: size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
+                         " is outside 1..16384 per side");
+  if (desc.maxLayers < 1 || desc.maxLayers > CANOPY_MAX_LAYERS)
+    return Status::error("compositor: maxLayers = " + std::to_string(desc.maxLayers) + " is outside 1.." +
+                         std::to_string(CANOPY_MAX_LAYERS));
+  VkFormatProperties fp{};
+  vkGetPhysicalDeviceFormatProperties(d.physical, desc.colorFormat, &fp);
+  const VkFormatFeatureFlags blendable = VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT;
+  if ((fp.optimalTilingFeatures & blendable) != blendable)
+    return Status::error("compositor: colour format " + std::to_string(int(desc.colorFormat)) +
+                         " is not a blendable colour attachment on this device");
+  if (desc.depthFormat != VK_FORMAT_D32_SFLOAT && desc.depthFormat != VK_FORMAT_D16_UNORM)
+    return Status::error("compositor: depth format " + std::to_string(int(desc.depthFormat)) +
+                         " is not supported (D32_SFLOAT or D16_UNORM, with sampled usage)");
+  vkGetPhysicalDeviceFormatProperties(d.physical, desc.depthFormat, &fp);
+  const VkFormatFeatureFlags depthNeeds = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
+  if ((fp.optimalTilingFeatures & depthNeeds) != depthNeeds)
+    return Status::error("compositor: depth format " + std::to_string(int(desc.depthFormat)) +
+                         " cannot be both sampled and a depth attachment on this device");
+  if (desc.motionFormat != VK_FORMAT_UNDEFINED && !isMotionFormat(desc.motionFormat))
+    return Status::error("compositor: motion format " + std::to_string(int(desc.motionFormat)) +
+                         " is not supported (R16G16_SFLOAT or R32G32_SFLOAT, or UNDEFINED for none)");
+  return Status();
+}
+
+Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) {
+  *out = Compositor{};
+  CANOPY_TRY(validateCompositorDesc(d, desc));
+  out->device = &d;
+  out->desc = desc;
+  Status s = [&]() -> Status {
+    GraphicsPipelineDesc gp;
+    gp.vertexShader = "composite.vert";
+    gp.fragmentShader = "composite.frag";
+    const VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    gp.bindings = {sampled, sampled, sampled, sampled, storage, storage, storage, storage};
+    gp.pushConstantSize = sizeof(gpu::CompositePush);
+    gp.colorFormats = {desc.colorFormat};
+    if (desc.motionFormat != VK_FORMAT_UNDEFINED) gp.colorFormats.push_back(desc.motionFormat);
+    gp.depthFormat = desc.depthFormat;
+    // Premultiplied "over" on both attachments: the motion output carries a = 1 where the
+    // vegetation is frontmost (replace) and a = 0 elsewhere (keep the host's).
+    gp.blend = BlendMode::PremultipliedOver;
+    gp.blendedAttachments = uint32_t(gp.colorFormats.size());
+    gp.depthTest = true;  // the test is ALWAYS: the shader already ordered everything by depth
+    gp.depthCompare = VK_COMPARE_OP_ALWAYS;
+    gp.depthWrite = true;
+    CANOPY_TRY(createGraphicsPipeline(d, gp, &out->composite));
+    ComputePipelineDesc cp;
+    cp.shader = "composite_occupancy.comp";
+    cp.bindings = {sampled, storage};
+    cp.pushConstantSize = sizeof(gpu::CompositePush);
+    CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
+    cp.shader = "composite_scene_depth.comp";
+    CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
+    const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
+    CANOPY_TRY(createBuffer(d, tiles * desc.maxLayers * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
+                            &out->occupancy, "composite: occupancy"));
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(desc.width) * desc.height * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                            MemoryUsage::DeviceLocal, &out->sceneDepth, "composite: scene depth"));
+    CANOPY_TRY(makeSampler(d, VK_FILTER_LINEAR, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->linear));
+    CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->nearest));
+    CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE, &out->depthSampler));
+    return Status();
+  }();
+  if (!s.ok()) destroyCompositor(*out);
+  return s;
+}
+
+void destroyCompositor(Compositor& c) {
+  if (!c.device) return;
+  Device& d = *c.device;
+  destroyGraphicsPipeline(d, c.composite);
+  destroyComputePipeline(d, c.occupancyPipeline);
+  destroyComputePipeline(d, c.sceneDepthPipeline);
+  destroyBuffer(d, c.occupancy);
+  destroyBuffer(d, c.sceneDepth);
+  for (VkSampler s : {c.linear, c.nearest, c.depthSampler})
+    if (s) vkDestroySampler(d.device, s, nullptr);
+  c = Compositor{};
+}
+
+Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu::AnimFrame& anim, bool hasBackground,
+                        bool layersRebuilt, bool motionValid) {
+  if (!c.device) return Status::error("prepareComposite: the compositor was not created");
+  CANOPY_TRY(validateCompositeParams(params));
+  if (anim.layerCount < 1 || anim.layerCount > c.desc.maxLayers)
+    return Status::error("prepareComposite: " + std::to_string(anim.layerCount) + " layers, the compositor holds 1.." +
+                         std::to_string(c.desc.maxLayers));
+  if (uint32_t(anim.width) != c.desc.width || uint32_t(anim.height) != c.desc.height)
+    return Status::error("prepareComposite: the dynamics frame is " + std::to_string(uint32_t(anim.width)) + "x" +
+                         std::to_string(uint32_t(anim.height)) + ", the compositor " + std::to_string(c.desc.width) + "x" +
+                         std::to_string(c.desc.height));
+  gpu::CompositePush& p = c.push;
+  p = gpu::CompositePush{};
+  p.layerCount = anim.layerCount;
+  p.gridX = anim.gridX;
+  p.gridY = anim.gridY;
+  p.cellSize = anim.cellSize;
+  p.width = float(c.desc.width);
+  p.height = float(c.desc.height);
+  p.depthAlpha = params.depthAlpha;
+  p.tilesX = tilesFor(c.desc.width);
+  p.tilesY = tilesFor(c.desc.height);
+  p.flags = COMPOSITE_SCENE_DEPTH;
+  if (params.earlyExit) p.flags |= COMPOSITE_EARLY_EXIT;
+  if (params.skipEmptyTiles) p.flags |= COMPOSITE_SKIP_EMPTY;
+  if (params.bilinear) p.flags |= COMPOSITE_BILINEAR;
+  if (c.desc.motionFormat != VK_FORMAT_UNDEFINED) p.flags |= COMPOSITE_MOTION;
+  if (motionValid) p.flags |= COMPOSITE_MOTION_VALID;
+  if (hasBackground) p.flags |= COMPOSITE_BACKGROUND;
+  c.params = params;
+  c.occupancyPending = c.occupancyPending || layersRebuilt;
+  return Status();
+}
+
+Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResources& layers, rg::ResourceId displacement,
+                          rg::ResourceId previous, const CompositeTargets& t) {
+  if (!c.device) return Status::error("addCompositePasses: the compositor was not created");
+  if (t.color == rg::kInvalidResource || t.depth == rg::kInvalidResource)
+    return Status::error("addCompositePasses: the host's colour and depth targets are required");
+  const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
+  if (motion != (t.motion != rg::kInvalidResource))
+    return Status::error(motion ? "addCompositePasses: the compositor was created with a motion format but no motion target was given"
+                                : "addCompositePasses: a motion target was given but the compositor has no motion format");
+  const rg::State storageRead = rg::stateOf(rg::Use::ComputeStorageRead);
+  const auto occupancy = g.importBuffer("composite: occupancy", c.occupancy.size, storageRead, storageRead);
+  const auto scene = g.importBuffer("composite: scene depth", c.sceneDepth.size, storageRead, storageRead);
+  CANOPY_TRY(g.bindBuffer(occupancy, c.occupancy.buffer));
+  CANOPY_TRY(g.bindBuffer(scene, c.sceneDepth.buffer));
+  Compositor* cp = &c;
+  const LayerResources l = layers;
+  g.addPass("composite: occupancy", [cp, l](rg::PassContext& x) {
+     if (!cp->occupancyPending) return Status();
+     cp->occupancyPending = false;
+     const gpu::CompositePush& p = cp->push;
+     return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount, 1,
+                     {bindImage(x.image(l.color).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
+                      bindBuffer(cp->occupancy.buffer)},
+                     p);
+   })
+      .read(l.color, rg::Use::ComputeSampled)
+      .write(occupancy, rg::Use::ComputeStorageWrite);
+  g.addPass("composite: scene depth", [cp, t](rg::PassContext& x) {
+     const gpu::CompositePush& p = cp->push;
+     return dispatch(*x.device, x.cmd, cp->sceneDepthPipeline, cp->desc.width * cp->desc.height, 1, 1,
+                     {bindImage(x.image(t.depth).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->depthSampler),
+                      bindBuffer(cp->sceneDepth.buffer)},
+                     p);
+   })
+      .read(t.depth, rg::Use::ComputeSampled)
+      .write(scene, rg::Use::ComputeStorageWrite);
+  auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion](rg::PassContext& x) {
+    const gpu::CompositePush& p = cp->push;
+    const Image& color = x.graph->image(t.color);
+    const Image& depth = x.graph->image(t.depth);
+    if (color.extent.width != cp->desc.width || color.extent.height != cp->desc.height ||
+        depth.extent.width != cp->desc.width || depth.extent.height != cp->desc.height)
+      return Status::error("composite: the host targets are not " + std::to_string(cp->desc.width) + "x" +
+                           std::to_string(cp->desc.height));
+    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+    colors[0].imageView = color.view;
+    colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    if (motion) {
+      colors[1] = colors[0];
+      colors[1].imageView = x.graph->image(t.motion).view;
+    }
+    VkRenderingAttachmentInfo depthAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depthAtt.imageView = depth.view;
+    depthAtt.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    depthAtt.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    depthAtt.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {cp->desc.width, cp->desc.height}};
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = motion ? 2 : 1;
+    ri.pColorAttachments = colors;
+    ri.pDepthAttachment = &depthAtt;
+    x.device->cmdBeginRendering(x.cmd, &ri);
+    setViewportScissor(x.cmd, cp->desc.width, cp->desc.height);
+    const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    Status s = bindGraphics(
+        *x.device, x.cmd, cp->composite,
+        {bindImage(x.image(l.color).view, ro, cp->params.bilinear ? cp->linear : cp->nearest),
+         bindImage(x.image(l.depth).view, ro, cp->depthSampler),
+         bindImage(x.image(l.backgroundColor).view, ro, cp->nearest),
+         bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler), bindBuffer(x.buffer(displacement)),
+         bindBuffer(x.buffer(previous)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->sceneDepth.buffer)},
+        p);
+    if (s.ok()) vkCmdDraw(x.cmd, 3, 1, 0, 0);
+    x.device->cmdEndRendering(x.cmd);
+    return s;
+  });
+  pass.read(l.color, rg::Use::FragmentSampled)
+      .read(l.depth, rg::Use::FragmentSampled)
+      .read(l.backgroundColor, rg::Use::FragmentSampled)
+      .read(l.backgroundDepth, rg::Use::FragmentSampled)
+      .read(displacement, rg::Use::FragmentStorageRead)
+      .read(previous, rg::Use::FragmentStorageRead)
+      .read(occupancy, rg::Use::FragmentStorageRead)
+      .read(scene, rg::Use::FragmentStorageRead)
+      .write(t.color, rg::Use::ColorAttachmentReadWrite)
+      .write(t.depth, rg::Use::DepthAttachmentWrite);
+  if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,81 @@
+#pragma once
+// Inverse warp + compositing into the host's targets (paper 3.2, 3.6; design.md "Compositing"):
+// one fused full-screen pass samples every layer at p - d_i(p), composites the layers front to
+// back with the rigid background and the host's scene inserted by depth, blends the premultiplied
+// result over the host's colour, writes the depth of the nearest layer where its alpha >= 0.5 (else
+// the trunk's, else leaves the scene's) and, optionally, motion vectors.
+//
+// Host targets: colour in any blendable colour-attachment format; depth D32_SFLOAT or D16_UNORM
+// with SAMPLED usage (a small compute pass copies it first, so layers behind the host's geometry
+// are hidden per layer); motion, when wanted, an R16G16_SFLOAT or R32G32_SFLOAT attachment that is
+// written only where the vegetation is frontmost (current minus previous displacement, pixels,
+// y down) and left alone elsewhere.
+#include <cstdint>
+#include <vulkan/vulkan.h>
+
+#include "engine/graphics_pipeline.h"
+#include "engine/memory.h"
+#include "engine/pipeline.h"
+#include "engine/render_graph.h"
+#include "engine/status.h"
+#include "render/layers.h"
+#include "shared/anim.h"
+#include "shared/composite.h"
+
+namespace canopy {
+struct Device;
+struct LayerDynamics;
+
+// The levers of the composite (defaults: all on). They never change the image beyond 1/1024 of
+// alpha (early exit) or at all (empty-tile skip); nearest sampling does change it.
+struct CompositeParams {
+  bool earlyExit = true;       // front to back, stop at accumulated alpha >= 1 - 1/1024
+  bool skipEmptyTiles = true;  // skip a layer whose occupancy tile under p - d_i(p) is empty
+  bool bilinear = true;        // bilinear layer colour (false: nearest texel; cheaper, blockier motion)
+  float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
+};
+Status validateCompositeParams(const CompositeParams& params);
+
+struct CompositorDesc {
+  uint32_t width = 0, height = 0;                  // = the layer images' size
+  VkFormat colorFormat = VK_FORMAT_R8G8B8A8_UNORM; // host colour target
+  VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;     // host depth target (sampled usage required)
+  VkFormat motionFormat = VK_FORMAT_UNDEFINED;     // UNDEFINED: no motion output
+  uint32_t maxLayers = CANOPY_MAX_LAYERS;
+};
+// Checks formats against the device (blendable colour attachment, sampleable depth attachment).
+Status validateCompositorDesc(Device& device, const CompositorDesc& desc);
+
+struct Compositor {
+  Device* device = nullptr;
+  CompositorDesc desc;
+  GraphicsPipeline composite;
+  ComputePipeline occupancyPipeline, sceneDepthPipeline;
+  Buffer occupancy;   // maxLayers x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage
+  Buffer sceneDepth;  // width x height float: the host's depth before the composite
+  VkSampler linear = VK_NULL_HANDLE, nearest = VK_NULL_HANDLE, depthSampler = VK_NULL_HANDLE;
+  CompositeParams params;
+  gpu::CompositePush push{};     // the next recorded frame's constants (prepareComposite)
+  bool occupancyPending = true;  // recompute occupancy (after a layer rebuild)
+};
+Status createCompositor(Device& device, const CompositorDesc& desc, Compositor* out);
+void destroyCompositor(Compositor& compositor);
+
+// Fixes the next recorded composite: layer count and warp grid from the dynamics frame, the levers
+// from `params`, whether the layers were rebuilt (occupancy) and whether the previous displacement
+// is last frame's (motion vectors).
+Status prepareComposite(Compositor& compositor, const CompositeParams& params, const gpu::AnimFrame& anim,
+                        bool hasBackground, bool layersRebuilt, bool motionValid);
+
+struct CompositeTargets {
+  rg::ResourceId color = rg::kInvalidResource;   // host colour (blended over)
+  rg::ResourceId depth = rg::kInvalidResource;   // host depth (read, then written)
+  rg::ResourceId motion = rg::kInvalidResource;  // optional
+};
+// Adds "composite: occupancy", "composite: scene depth" and "composite: warp + composite".
+// `layers` are the layer images (addLayerPasses), `displacement` and `previous` the dynamics'
+// buffers (addDynamicsPasses).
+Status addCompositePasses(Compositor& compositor, rg::RenderGraph& graph, const LayerResources& layers,
+                          rg::ResourceId displacement, rg::ResourceId previous, const CompositeTargets& targets);
+
+}  // namespace canopy

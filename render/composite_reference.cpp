@@ -1,0 +1,95 @@
+#include "render/composite_reference.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace canopy {
+namespace {
+
+struct Texels {
+  const CompositeReferenceInputs& in;
+  glm::vec4 color(uint32_t layer, int x, int y) const {
+    if (x < 0 || y < 0 || x >= int(in.width) || y >= int(in.height)) return glm::vec4(0.0f);
+    return in.layerColor[(size_t(layer) * in.height + y) * in.width + x];
+  }
+  float depth(uint32_t layer, int x, int y) const {
+    if (x < 0 || y < 0 || x >= int(in.width) || y >= int(in.height)) return 1.0f;
+    return in.layerDepth[(size_t(layer) * in.height + y) * in.width + x];
+  }
+};
+
+glm::vec2 displacementAt(const std::vector<glm::vec2>& d, uint32_t base, const gpu::GridSample& g) {
+  return gpu::blendCorners(g, d[base + g.i00], d[base + g.i10], d[base + g.i01], d[base + g.i11]);
+}
+
+}  // namespace
+
+void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceInputs& in, CompositeReferenceOutputs* out) {
+  const uint32_t w = in.width, h = in.height, n = in.layers;
+  const Texels tex{in};
+  const bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0;
+  const uint32_t corners = pc.gridX * pc.gridY;
+  out->color.assign(size_t(w) * h, glm::vec4(0.0f));
+  out->depth.assign(size_t(w) * h, 1.0f);
+  out->motion.assign(size_t(w) * h, glm::vec2(0.0f));
+  out->vegetationFront.assign(size_t(w) * h, 0);
+  for (uint32_t y = 0; y < h; ++y)
+    for (uint32_t x = 0; x < w; ++x) {
+      const size_t pix = size_t(y) * w + x;
+      const glm::vec2 p(float(x) + 0.5f, float(y) + 0.5f);
+      const float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) ? in.sceneDepth[pix] : 1.0f;
+      glm::vec4 bg(0.0f);
+      float bgZ = 1.0f;
+      if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
+        bg = in.backgroundColor[pix];
+        bgZ = bg.a > 0.0f ? in.backgroundDepth[pix] : 1.0f;
+      }
+      if (bgZ >= sceneZ) {
+        bg = glm::vec4(0.0f);
+        bgZ = 1.0f;
+      }
+      const float opaqueZ = std::min(sceneZ, bgZ);
+      const gpu::GridSample g = gpu::gridSample(pc, p);
+      glm::vec4 acc(0.0f);
+      float frontZ = 1.0f;
+      bool front = false;
+      glm::vec2 motion(0.0f);
+      for (uint32_t i = 0; i < n; ++i) {
+        const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
+        const glm::vec2 q = p - d;
+        // Texel space: centres at integer + 0.5.
+        const glm::vec2 t = q - 0.5f;
+        const int x0 = int(std::floor(t.x)), y0 = int(std::floor(t.y));
+        const float fx = t.x - float(x0), fy = t.y - float(y0);
+        glm::vec4 c;
+        float z;
+        if (bilinear) {
+          c = (tex.color(i, x0, y0) * (1 - fx) + tex.color(i, x0 + 1, y0) * fx) * (1 - fy) +
+              (tex.color(i, x0, y0 + 1) * (1 - fx) + tex.color(i, x0 + 1, y0 + 1) * fx) * fy;
+          z = std::min(std::min(tex.depth(i, x0, y0), tex.depth(i, x0 + 1, y0)),
+                       std::min(tex.depth(i, x0, y0 + 1), tex.depth(i, x0 + 1, y0 + 1)));
+        } else {
+          const int xn = int(std::floor(q.x)), yn = int(std::floor(q.y));
+          c = tex.color(i, xn, yn);
+          z = tex.depth(i, xn, yn);
+        }
+        if (c.a < COMPOSITE_MIN_ALPHA || z >= opaqueZ) continue;
+        acc = gpu::underPremultiplied(acc, c);
+        if (!front && c.a >= pc.depthAlpha) {
+          front = true;
+          frontZ = z;
+          if (pc.flags & COMPOSITE_MOTION_VALID) motion = d - displacementAt(in.previous, i * corners, g);
+        }
+        if ((pc.flags & COMPOSITE_EARLY_EXIT) && acc.a >= COMPOSITE_OPAQUE) break;
+      }
+      acc = gpu::underPremultiplied(acc, bg);
+      const glm::vec4 scene = in.sceneColor.empty() ? glm::vec4(0.0f) : in.sceneColor[pix];
+      out->color[pix] = acc + (1.0f - acc.a) * scene;  // the pipeline's premultiplied blend
+      out->depth[pix] = std::min(std::min(frontZ, bgZ), sceneZ);
+      const bool vegFront = front && frontZ < bgZ;
+      out->vegetationFront[pix] = vegFront;
+      if (vegFront) out->motion[pix] = motion;
+    }
+}
+
+}  // namespace canopy

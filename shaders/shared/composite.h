@@ -1,0 +1,82 @@
+// Inverse warp + alpha compositing (paper 3.2 and 3.6, design.md "Compositing"): every output
+// pixel p samples layer i at p - d_i(p), d_i bilinear between the warp-grid corners written by the
+// dynamics pass, and composites the layers with the rigid background and the host's scene by
+// depth. The grid lookup and the "over" step are shared inline functions, compiled into the
+// fragment shader and into the C++ reference, so the two cannot drift.
+#ifndef CANOPY_SHARED_COMPOSITE_H
+#define CANOPY_SHARED_COMPOSITE_H
+#include "interop.h"
+
+#define COMPOSITE_TILE 8u                // occupancy tile, pixels per side
+#define COMPOSITE_OCCUPANCY_GROUP 64u    // occupancy kernel workgroup (one tile per invocation)
+#define COMPOSITE_SCENE_GROUP 64u        // scene-depth copy workgroup (one pixel per invocation)
+
+// CompositePush.flags
+#define COMPOSITE_EARLY_EXIT 1u     // front to back, stop once the pixel is opaque
+#define COMPOSITE_SKIP_EMPTY 2u     // skip a layer where the occupancy tile under p - d_i is empty
+#define COMPOSITE_BILINEAR 4u       // bilinear colour + footprint-min depth (else nearest texel)
+#define COMPOSITE_MOTION 8u         // write motion vectors (attachment 1)
+#define COMPOSITE_MOTION_VALID 16u  // the previous displacement is last frame's (else motion 0)
+#define COMPOSITE_BACKGROUND 32u    // a rigid background was drawn
+#define COMPOSITE_SCENE_DEPTH 64u   // the host's depth was copied (else everything is in front)
+
+// A layer pixel with alpha below this is treated as empty (RGBA16F keeps far smaller values; this
+// only avoids blending exact zeros).
+#define COMPOSITE_MIN_ALPHA (1.0f / 4096.0f)
+// Accumulated alpha at which front-to-back compositing stops: what is behind adds < 1/1024.
+#define COMPOSITE_OPAQUE (1.0f - 1.0f / 1024.0f)
+
+CANOPY_NAMESPACE_BEGIN
+
+struct CompositePush {
+  uint layerCount;     // 1..CANOPY_MAX_LAYERS
+  uint gridX;          // warp-grid corners per row (gridCorners(width, cellSize))
+  uint gridY;
+  uint flags;          // COMPOSITE_*
+  float cellSize;      // warp-grid cell, pixels
+  float width;         // output = layer size, pixels
+  float height;
+  float depthAlpha;    // a layer writes the depth output where its alpha >= this (0.5)
+  uint tilesX;         // occupancy tiles per row: ceil(width / COMPOSITE_TILE)
+  uint tilesY;
+  uint pad0;
+  uint pad1;
+};
+CANOPY_SIZE_CHECK(CompositePush, 48)
+
+// Bilinear position of pixel point p (pixel centres at +0.5, y down) in the warp grid: the four
+// corner indices (row-major, gridX per row) and the weights. Corner (gx, gy) sits at pixel
+// (min(gx cell, width), min(gy cell, height)), as the dynamics pass places it.
+struct GridSample {
+  uint i00;
+  uint i10;
+  uint i01;
+  uint i11;
+  vec2 t;
+};
+
+CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
+  GridSample s;
+  float cx = clamp(floor(p.x / c.cellSize), 0.0f, float(c.gridX - 2u));
+  float cy = clamp(floor(p.y / c.cellSize), 0.0f, float(c.gridY - 2u));
+  float x0 = cx * c.cellSize, y0 = cy * c.cellSize;
+  float x1 = min(x0 + c.cellSize, c.width), y1 = min(y0 + c.cellSize, c.height);
+  s.t = vec2(clamp((p.x - x0) / max(x1 - x0, 1e-6f), 0.0f, 1.0f), clamp((p.y - y0) / max(y1 - y0, 1e-6f), 0.0f, 1.0f));
+  uint gx = uint(cx), gy = uint(cy);
+  s.i00 = gy * c.gridX + gx;
+  s.i10 = s.i00 + 1u;
+  s.i01 = s.i00 + c.gridX;
+  s.i11 = s.i01 + 1u;
+  return s;
+}
+
+CANOPY_INLINE vec2 blendCorners(GridSample s, vec2 d00, vec2 d10, vec2 d01, vec2 d11) {
+  return mix(mix(d00, d10, s.t.x), mix(d01, d11, s.t.x), s.t.y);
+}
+
+// Front-to-back "over" of premultiplied colour c under the accumulated colour acc (the same sum as
+// far-to-near compositing, since "over" is associative).
+CANOPY_INLINE vec4 underPremultiplied(vec4 acc, vec4 c) { return acc + (1.0f - acc.w) * c; }
+
+CANOPY_NAMESPACE_END
+#endif

@@ -1,0 +1,367 @@
+// The public facade (render/canopy.h) end to end through recordCanopy() into a host's own colour
+// and depth images: zero wind gives the static composite of the layers; with wind the output is
+// the CPU reference's warp of the same layers; parameter changes rebuild only what depends on
+// them; golden images of fixed scenes at a fixed time, compared by a tolerance metric with a diff
+// image written on failure.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+
+#include <glm/gtc/packing.hpp>
+
+#include "engine/image_io.h"
+#include "engine/transfer.h"
+#include "render/canopy.h"
+#include "render/composite_reference.h"
+#include "render/leaf_cloud.h"
+#include "tests/gpu_test.h"
+
+using namespace canopy;
+using canopy::test::GpuTest;
+
+namespace {
+
+const glm::vec4 kSky(0.45f, 0.6f, 0.8f, 1.0f);
+
+// A minimal host: its own colour + depth images, cleared by its own pass every frame, then Canopy
+// recorded into the same command buffer, the images left for a transfer read.
+struct Host {
+  Device* dev = nullptr;
+  uint32_t w = 0, h = 0;
+  VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+  Image color, depth;
+
+  Status create(Device& d, uint32_t width, uint32_t height, VkFormat format) {
+    dev = &d;
+    w = width;
+    h = height;
+    colorFormat = format;
+    ImageDesc c;
+    c.format = format;
+    c.width = w;
+    c.height = h;
+    c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    CANOPY_TRY(createImage(d, c, &color, "host colour"));
+    c.format = VK_FORMAT_D32_SFLOAT;
+    c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+              VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    return createImage(d, c, &depth, "host depth");
+  }
+  void destroy() {
+    destroyImage(*dev, color);
+    destroyImage(*dev, depth);
+  }
+  Status frame(CanopyContext* ctx, const CanopyFrame& f) {
+    const rg::State colorRW = rg::stateOf(rg::Use::ColorAttachmentReadWrite),
+                    depthW = rg::stateOf(rg::Use::DepthAttachmentWrite), src = rg::stateOf(rg::Use::TransferSrc);
+    rg::RenderGraph g;
+    const auto c = g.importImage("host colour", descOf(color), {}, colorRW);
+    const auto d = g.importImage("host depth", descOf(depth), {}, depthW);
+    g.addPass("host clear", [&](rg::PassContext& x) {
+       VkClearColorValue cv{};
+       std::memcpy(cv.float32, &kSky, sizeof kSky);
+       const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+       vkCmdClearColorImage(x.cmd, x.image(c).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+       VkClearDepthStencilValue dv{1.0f, 0};
+       vkCmdClearDepthStencilImage(x.cmd, x.image(d).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+       return Status();
+     })
+        .write(c, rg::Use::TransferDst)
+        .write(d, rg::Use::TransferDst);
+    CANOPY_TRY(g.bindImage(c, color));
+    CANOPY_TRY(g.bindImage(d, depth));
+    CANOPY_TRY(g.compile());
+    CANOPY_TRY(g.realize(*dev));
+    CanopyFrameInputs in;
+    in.frame = f;
+    in.color = {color.image, color.view, colorRW, src};
+    in.depth = {depth.image, depth.view, depthW, src};
+    Status s = submitAndWait(*dev, [&](VkCommandBuffer cmd) -> Status {
+      CANOPY_TRY(g.record(cmd));
+      return recordCanopy(ctx, cmd, in);
+    });
+    g.release(*dev);
+    return s;
+  }
+  // Colour as linear float (RGBA16F) and depth.
+  Status read(std::vector<glm::vec4>* rgba, std::vector<float>* z) {
+    const rg::State src = rg::stateOf(rg::Use::TransferSrc);
+    std::vector<uint64_t> half(size_t(w) * h);
+    CANOPY_TRY(readbackImage(*dev, color, 0, 8, half.data(), src));
+    rgba->clear();
+    for (uint64_t v : half) rgba->push_back(glm::unpackHalf4x16(v));
+    z->resize(size_t(w) * h);
+    return readbackImage(*dev, depth, 0, 4, z->data(), src);
+  }
+};
+
+CanopyDesc smallDesc(uint32_t w, uint32_t h, VkFormat color) {
+  CanopyDesc d;
+  d.width = w;
+  d.height = h;
+  d.colorFormat = color;
+  d.useRootCache = false;
+  return d;
+}
+
+LayerView cameraFor(const VegetationModel& m, uint32_t w, uint32_t h, float yaw) {
+  return orbitView(m.boundsMin, m.boundsMax, yaw, 10.0f, 40.0f, float(w) / float(h), 1.05f);
+}
+
+// The CPU reference of the frame just recorded, from the layer images and displacements on the device.
+Status referenceFrame(Device& dev, CanopyContext* ctx, uint32_t w, uint32_t h, CompositeReferenceOutputs* out,
+                      float* maxDisplacement) {
+  LayeredVegetation& lv = canopyLayers(ctx);
+  LayerDynamics& dyn = canopyDynamics(ctx);
+  const gpu::CompositePush push = canopyCompositor(ctx).push;
+  CompositeReferenceInputs in;
+  in.width = w;
+  in.height = h;
+  in.layers = push.layerCount;
+  for (uint32_t l = 0; l < in.layers; ++l) {
+    std::vector<glm::vec4> c;
+    std::vector<float> z;
+    CANOPY_TRY(readLayerColor(lv, l, &c));
+    CANOPY_TRY(readLayerDepth(lv, l, &z));
+    in.layerColor.insert(in.layerColor.end(), c.begin(), c.end());
+    in.layerDepth.insert(in.layerDepth.end(), z.begin(), z.end());
+  }
+  CANOPY_TRY(readBackground(lv, &in.backgroundColor, &in.backgroundDepth));
+  in.sceneColor.assign(size_t(w) * h, kSky);
+  in.sceneDepth.assign(size_t(w) * h, 1.0f);
+  const size_t count = size_t(push.gridX) * push.gridY * push.layerCount;
+  in.displacement.resize(count);
+  in.previous.resize(count);
+  const rg::State read = rg::stateOf(rg::Use::ComputeStorageRead);
+  CANOPY_TRY(readbackBuffer(dev, dyn.displacement, in.displacement.data(), count * 8, read));
+  CANOPY_TRY(readbackBuffer(dev, dyn.previous, in.previous.data(), count * 8, read));
+  *maxDisplacement = 0.0f;
+  for (const glm::vec2& d : in.displacement) *maxDisplacement = std::max(*maxDisplacement, glm::length(d));
+  compositeReference(push, in, out);
+  return Status();
+}
+
+float maxDiff(const glm::vec4& a, const glm::vec4& b) {
+  const glm::vec4 d = glm::abs(a - b);
+  return std::max(std::max(d.x, d.y), std::max(d.z, d.w));
+}
+
+class CanopyTest : public GpuTest {};
+
+TEST_F(CanopyTest, ZeroWindGivesTheStaticCompositeOfTheLayers) {
+  const uint32_t w = 128, h = 96;
+  const VegetationModel model = makeLeafCloud(4000, 3, true);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 0.0f;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = cameraFor(model, w, h, 20.0f);
+  for (int i = 0; i < 3 && s.ok(); ++i) s = host.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  std::vector<glm::vec4> color;
+  std::vector<float> depth;
+  ASSERT_TRUE(host.read(&color, &depth).ok());
+  CompositeReferenceOutputs ref;
+  float maxD = -1.0f;
+  ASSERT_TRUE(referenceFrame(dev, ctx, w, h, &ref, &maxD).ok());
+  EXPECT_EQ(maxD, 0.0f) << "no wind, no motion";
+  float worst = 0.0f;
+  size_t leaves = 0, depthOff = 0;
+  for (size_t i = 0; i < color.size(); ++i) {
+    worst = std::max(worst, maxDiff(color[i], ref.color[i]));
+    leaves += depth[i] < 1.0f;
+    depthOff += depth[i] != ref.depth[i];
+  }
+  EXPECT_LE(worst, 1.0f / 255.0f) << "zero wind must give the static composite of the layers";
+  EXPECT_EQ(depthOff, 0u);
+  EXPECT_GT(leaves, color.size() / 20) << "the vegetation covers part of the image";
+  EXPECT_EQ(canopyStats(ctx).internalGraphBuilds, 1u) << "the record() graph is built once for unchanged images";
+  host.destroy();
+  destroyCanopy(ctx);
+}
+
+TEST_F(CanopyTest, WindWarpsTheLayersAsTheCpuReferenceDoes) {
+  const uint32_t w = 128, h = 96;
+  const VegetationModel model = makeLeafCloud(4000, 3, true);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 2.0f;
+  p.dynamics.cellSize = 8;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = cameraFor(model, w, h, 20.0f);
+  for (int i = 0; i < 15 && s.ok(); ++i) s = host.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  std::vector<glm::vec4> color;
+  std::vector<float> depth;
+  ASSERT_TRUE(host.read(&color, &depth).ok());
+  CompositeReferenceOutputs ref;
+  float maxD = 0.0f;
+  ASSERT_TRUE(referenceFrame(dev, ctx, w, h, &ref, &maxD).ok());
+  EXPECT_GT(maxD, 0.5f) << "the wind moves the layers by more than half a pixel somewhere";
+  size_t off = 0, depthOff = 0;
+  for (size_t i = 0; i < color.size(); ++i) {
+    off += maxDiff(color[i], ref.color[i]) > 3.0f / 255.0f;
+    depthOff += std::abs(depth[i] - ref.depth[i]) > 1e-6f;
+  }
+  EXPECT_LE(off, color.size() / 200) << "pixels more than 3/255 off the CPU reference";
+  EXPECT_LE(depthOff, color.size() / 100);
+  host.destroy();
+  destroyCanopy(ctx);
+}
+
+TEST_F(CanopyTest, ParameterChangesRebuildOnlyWhatDependsOnThem) {
+  const uint32_t w = 96, h = 64;
+  const VegetationModel model = makeLeafCloud(2000, 4, false);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  Host host;
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = cameraFor(model, w, h, 0.0f);
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  CanopyStats st = canopyStats(ctx);
+  EXPECT_FALSE(st.layersRebuilt) << "a still camera does not re-slice";
+  const uint64_t gen = st.resourceGeneration, builds = st.internalGraphBuilds, rebuilds = st.layers.rebuilds;
+  // A new warp-grid cell and wind: constants only.
+  CanopyParams p = canopyParams(ctx);
+  p.dynamics.cellSize = 8;
+  p.dynamics.delay = DelayMode::Approximate;
+  p.simulation.wind.sides = kWindFromRight | kWindFromTop;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  st = canopyStats(ctx);
+  EXPECT_EQ(st.resourceGeneration, gen);
+  EXPECT_EQ(st.internalGraphBuilds, builds);
+  EXPECT_EQ(st.layers.rebuilds, rebuilds);
+  // A new layer count: new layer images, a rebuilt graph, re-sliced layers.
+  ASSERT_TRUE(parseLayerLayout("3(1-1-1)", &p.layers.layout).ok());
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  s = host.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  st = canopyStats(ctx);
+  EXPECT_EQ(st.resourceGeneration, gen + 1);
+  EXPECT_EQ(st.internalGraphBuilds, builds + 1);
+  EXPECT_TRUE(st.layersRebuilt);
+  EXPECT_EQ(canopyCompositor(ctx).push.layerCount, 3u);
+  // Refusals name the parameter and leave the context as it was.
+  p.dynamics.cellSize = 2;
+  s = setCanopyParams(ctx, p);
+  EXPECT_NE(s.message().find("cellSize"), std::string::npos) << s.message();
+  p.dynamics.cellSize = 8;
+  ASSERT_TRUE(parseLayerLayout("12(4-4-4)", &p.layers.layout).ok());
+  s = setCanopyParams(ctx, p);
+  EXPECT_NE(s.message().find("maxLayers"), std::string::npos) << s.message();
+  f.dt = -1.0f;
+  s = host.frame(ctx, f);
+  EXPECT_NE(s.message().find("dt"), std::string::npos) << s.message();
+  f.dt = 0.0f;  // pause: the simulation holds, the frame still composites
+  const uint64_t steps = canopyStats(ctx).simulation.steps;
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  EXPECT_EQ(canopyStats(ctx).simulation.steps, steps);
+  host.destroy();
+  destroyCanopy(ctx);
+}
+
+// ---- golden images ------------------------------------------------------------------------------
+
+struct GoldenScene {
+  const char* name;
+  const char* layout;
+  DelayMode delay;
+  float yaw;
+  int frames;
+};
+
+std::string outputDir() {
+  const std::string dir = std::string(CANOPY_TEST_OUTPUT) + "/golden";
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+class GoldenTest : public GpuTest, public ::testing::WithParamInterface<GoldenScene> {};
+
+TEST_P(GoldenTest, MatchesTheCheckedInImage) {
+  const GoldenScene sc = GetParam();
+  const uint32_t w = 256, h = 192;
+  const VegetationModel model = makeLeafCloud(6000, 21, true);
+  CanopyDesc desc = smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, desc, &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  ASSERT_TRUE(parseLayerLayout(sc.layout, &p.layers.layout).ok());
+  p.dynamics.delay = sc.delay;
+  p.simulation.wind.strength = 1.5f;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
+  CanopyFrame f;
+  f.camera = cameraFor(model, w, h, sc.yaw);
+  for (int i = 0; i < sc.frames && s.ok(); ++i) s = host.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  std::vector<uint8_t> got(size_t(w) * h * 4);
+  ASSERT_TRUE(readbackImage(dev, host.color, 0, 4, got.data(), rg::stateOf(rg::Use::TransferSrc)).ok());
+  host.destroy();
+  destroyCanopy(ctx);
+  for (size_t i = 3; i < got.size(); i += 4) got[i] = 255;
+
+  const std::string golden = std::string(CANOPY_GOLDEN_DIR) + "/" + sc.name + ".png";
+  if (std::getenv("CANOPY_UPDATE_GOLDEN")) {
+    ASSERT_TRUE(writePng(golden, w, h, got).ok());
+    GTEST_SKIP() << "wrote " << golden << " (CANOPY_UPDATE_GOLDEN is set)";
+  }
+  uint32_t gw = 0, gh = 0;
+  std::vector<uint8_t> want;
+  s = readPng(golden, &gw, &gh, &want);
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_EQ(gw, w);
+  ASSERT_EQ(gh, h);
+  // Metric: mean absolute error per channel, and the share of pixels off by more than 16/255 in
+  // any channel (rasterization and filtering may differ slightly between driver versions).
+  std::vector<uint8_t> diff(got.size(), 255);
+  double sum = 0;
+  size_t bad = 0;
+  for (size_t px = 0; px < size_t(w) * h; ++px) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int e = std::abs(int(got[px * 4 + c]) - int(want[px * 4 + c]));
+      sum += e;
+      worst = std::max(worst, e);
+      diff[px * 4 + c] = uint8_t(std::min(255, e * 8));
+    }
+    bad += worst > 16;
+  }
+  const double mean = sum / (3.0 * w * h);
+  const double badShare = double(bad) / double(w * h);
+  if (mean > 1.0 || badShare > 0.005) {
+    const std::string dir = outputDir();
+    writePng(dir + "/" + sc.name + "_actual.png", w, h, got);
+    writePng(dir + "/" + sc.name + "_diff.png", w, h, diff);
+    ADD_FAILURE() << sc.name << ": mean abs error " << mean << "/255 (limit 1.0), " << badShare * 100
+                  << "% of pixels off by > 16/255 (limit 0.5%); wrote " << dir << "/" << sc.name
+                  << "_actual.png and _diff.png (x8)";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, GoldenTest,
+                         ::testing::Values(GoldenScene{"crown_exact_5layers", "5(3-1-1)", DelayMode::Exact, 20.0f, 24},
+                                           GoldenScene{"crown_approx_3layers", "3(1-1-1)", DelayMode::Approximate,
+                                                       65.0f, 30}),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+}  // namespace

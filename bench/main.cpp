@@ -1,5 +1,5 @@
 // canopy-bench: Canopy's benchmark (speed is measured here, never asserted in tests).
-//   canopy-bench [sim] [layers] [--sizes 64,128,256] [--frames N] [--detail]
+//   canopy-bench [sim] [layers] [anim] [--sizes 64,128,256] [--frames N] [--detail]
 //                [--faces 80000,10000000] [--rebuilds N] [--layers 5(3-1-1)] [--device NAME]
 #include <cstdio>
 #include <cstdlib>
@@ -20,11 +20,12 @@ static int usage(const char* why) {
                "usage: canopy-bench [sim] [layers] [options]\n"
                "  sim            simulation step per grid size, GPU vs CPU reference (default section)\n"
                "  layers         leaf-root preprocessing and layer rebuilds, one draw vs n draws\n"
-               "  --faces        layers: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
+               "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
+               "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
                "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
                "  --layers L     layers: layout (default 5(3-1-1))\n"
                "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
-               "  --frames N     steps measured per configuration, 3..100000 (default 60)\n"
+               "  --frames N     sim: steps, anim: frames measured per configuration, 3..100000 (default 60; anim 30)\n"
                "  --detail       per-pass GPU timestamps\n"
                "  --device NAME  substring of the Vulkan device name\n");
   return why ? 2 : 0;
@@ -32,9 +33,9 @@ static int usage(const char* why) {
 
 int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
-  int frames = 60;
+  int frames = 0;  // 0: the section's default
   bool detail = false;
-  bool runSim = false, runLayers = false;
+  bool runSim = false, runLayers = false, runAnim = false;
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") return usage(nullptr);
     if (a == "sim") runSim = true;
     else if (a == "layers") runLayers = true;
+    else if (a == "anim") runAnim = true;
     else if (a == "--detail") detail = true;
     else if (a == "--faces") {
       const char* v = next();
@@ -95,10 +97,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers) runSim = true;
+  if (!runSim && !runLayers && !runAnim) runSim = true;
   int rc = 0;
-  if (runSim) rc = bench::runSimBench(dev, sizes, frames, detail);
+  if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
+  if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768);
   destroyDevice(dev);
   return rc;
 }

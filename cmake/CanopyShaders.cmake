@@ -1,15 +1,21 @@
-# canopy_embed_shaders(<target> <sources...>)
+# canopy_embed_shaders(<target> [NAMESPACE <ns>] <sources...>)
 # Compiles each GLSL source with glslangValidator (Vulkan 1.2 target) into a C header holding the
 # SPIR-V words, with a depfile so editing an included header (e.g. shaders/shared/*.h) rebuilds
 # the shaders that include it. A compile error fails the build with glslang's message. The headers
-# are gathered into one static library with a name -> SPIR-V lookup (engine/shader_registry.h).
+# are gathered into one static library with a name -> SPIR-V lookup (engine/shader_registry.h),
+# <ns>::findEmbeddedShader (default namespace canopy; a host embeds its own shaders in its own).
 function(canopy_embed_shaders target)
-  set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spirv)
+  cmake_parse_arguments(ARG "" "NAMESPACE" "" ${ARGN})
+  set(ns canopy)
+  if(ARG_NAMESPACE)
+    set(ns ${ARG_NAMESPACE})
+  endif()
+  set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spirv/${target})
   file(MAKE_DIRECTORY ${out_dir})
   set(headers)
   set(includes "")
   set(entries "")
-  foreach(src ${ARGN})
+  foreach(src ${ARG_UNPARSED_ARGUMENTS})
     get_filename_component(name ${src} NAME)
     string(MAKE_C_IDENTIFIER "canopy_spv_${name}" var)
     set(hdr ${out_dir}/${name}.h)
@@ -33,7 +39,8 @@ function(canopy_embed_shaders target)
 #include <cstring>
 #include \"engine/shader_registry.h\"
 @includes@
-namespace canopy {
+namespace @ns@ {
+using canopy::EmbeddedShader;
 static const EmbeddedShader kShaders[] = {
 @entries@};
 const EmbeddedShader* findEmbeddedShader(const char* name) {
@@ -41,7 +48,7 @@ const EmbeddedShader* findEmbeddedShader(const char* name) {
     if (std::strcmp(s.name, name) == 0) return &s;
   return nullptr;
 }
-}  // namespace canopy
+}  // namespace @ns@
 " @ONLY)
   add_library(${target} STATIC ${registry} ${headers})
   target_include_directories(${target} PRIVATE ${out_dir} ${CMAKE_CURRENT_SOURCE_DIR})

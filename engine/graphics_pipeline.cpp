@@ -7,8 +7,8 @@ namespace canopy {
 namespace {
 constexpr VkShaderStageFlags kStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
 
-Status makeModule(Device& d, const char* name, VkShaderModule* out) {
-  const EmbeddedShader* sh = name ? findEmbeddedShader(name) : nullptr;
+Status makeModule(Device& d, ShaderLookup lookup, const char* name, VkShaderModule* out) {
+  const EmbeddedShader* sh = name ? (lookup ? lookup : &findEmbeddedShader)(name) : nullptr;
   if (!sh) return Status::error(std::string("no embedded shader named '") + (name ? name : "") + "'");
   VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   mi.codeSize = sh->sizeBytes;
@@ -30,8 +30,8 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
   out->pushConstantSize = desc.pushConstantSize;
   VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE;
   Status s = [&]() -> Status {
-    CANOPY_TRY(makeModule(d, desc.vertexShader, &vs));
-    CANOPY_TRY(makeModule(d, desc.fragmentShader, &fs));
+    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.vertexShader, &vs));
+    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.fragmentShader, &fs));
     CANOPY_TRY(createPushDescriptorLayouts(d, desc.bindings, kStages, desc.pushConstantSize, &out->setLayout,
                                            &out->layout));
 

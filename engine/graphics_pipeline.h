@@ -21,9 +21,13 @@ struct VertexAttribute {
 
 enum class BlendMode { None, PremultipliedOver };
 
+struct EmbeddedShader;
+using ShaderLookup = const EmbeddedShader* (*)(const char* name);
+
 struct GraphicsPipelineDesc {
   const char* vertexShader = nullptr;    // embedded shader names, e.g. "layers.vert"
   const char* fragmentShader = nullptr;
+  ShaderLookup shaderLookup = nullptr;   // where the names are looked up; null: Canopy's shaders
   std::vector<VkDescriptorType> bindings;  // binding i of set 0, visible to both stages
   uint32_t pushConstantSize = 0;
   uint32_t vertexStride = 0;

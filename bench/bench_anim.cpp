@@ -1,0 +1,208 @@
+// Animation benchmark (issue 5): per-frame cost of delay + warp + composite, and of the whole
+// still-camera frame (simulation + delay + warp + composite), at a fixed resolution for leaf
+// clouds of different face counts and for different layer counts, through Canopy's public API
+// embedded in a host graph (path 1). Then the compositing levers side by side in the same run.
+//
+// Wall = submit-to-fence of one frame alone (median); GPU = timestamps around each pass (median).
+// On lavapipe timestamps around compute work read near zero once anything was drawn (design.md),
+// so the compute passes' timestamps are printed for reference only and wall clock is the figure.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <map>
+
+#include "bench/bench.h"
+#include "engine/device.h"
+#include "engine/timing.h"
+#include "render/canopy.h"
+#include "render/leaf_cloud.h"
+
+namespace canopy::bench {
+namespace {
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct HostTargets {
+  Image color, depth;
+};
+
+Status createHostTargets(Device& d, uint32_t w, uint32_t h, HostTargets* t) {
+  ImageDesc c;
+  c.format = VK_FORMAT_R8G8B8A8_UNORM;
+  c.width = w;
+  c.height = h;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, c, &t->color, "bench host colour"));
+  c.format = VK_FORMAT_D32_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  return createImage(d, c, &t->depth, "bench host depth");
+}
+
+// The host's frame: clear its targets, then Canopy's passes (or only the clear).
+Status buildHostGraph(Device& d, CanopyContext* ctx, HostTargets& t, bool withCanopy, rg::RenderGraph* g) {
+  const rg::State colorRW = rg::stateOf(rg::Use::ColorAttachmentReadWrite), depthW = rg::stateOf(rg::Use::DepthAttachmentWrite);
+  CompositeTargets ct;
+  ct.color = g->importImage("host colour", descOf(t.color), {}, colorRW);
+  ct.depth = g->importImage("host depth", descOf(t.depth), {}, depthW);
+  g->addPass("host clear", [ct](rg::PassContext& x) {
+     const VkClearColorValue cv{{0.45f, 0.6f, 0.8f, 1.0f}};
+     const VkClearDepthStencilValue dv{1.0f, 0};
+     const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+     vkCmdClearColorImage(x.cmd, x.image(ct.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+     vkCmdClearDepthStencilImage(x.cmd, x.image(ct.depth).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+     return Status();
+   })
+      .write(ct.color, rg::Use::TransferDst)
+      .write(ct.depth, rg::Use::TransferDst)
+      .sideEffect();
+  CANOPY_TRY(g->bindImage(ct.color, t.color));
+  CANOPY_TRY(g->bindImage(ct.depth, t.depth));
+  if (withCanopy) CANOPY_TRY(addCanopyPasses(ctx, *g, ct));
+  CANOPY_TRY(g->compile());
+  return g->realize(d);
+}
+
+struct FrameStats {
+  double wallMs = 0;
+  std::map<std::string, double> passMs;  // medians
+};
+
+// `frames` frames after one warm-up; dt = 0 holds the simulation (animation only).
+Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& timer, const LayerView& view, float dt,
+               int frames, bool canopy, FrameStats* out) {
+  std::vector<double> wall;
+  std::map<std::string, std::vector<double>> passes;
+  for (int i = 0; i < frames + 1; ++i) {
+    if (canopy) {
+      CanopyFrame f;
+      f.camera = view;
+      f.dt = dt;
+      CANOPY_TRY(beginCanopyFrame(ctx, f));
+    }
+    const double w0 = nowMs();
+    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) {
+      timer.reset(cmd);
+      return g.record(cmd, &timer);
+    }));
+    const double w1 = nowMs();
+    std::vector<PassTiming> t;
+    CANOPY_TRY(timer.read(d, &t));
+    if (i == 0) continue;
+    wall.push_back(w1 - w0);
+    for (const PassTiming& p : t) passes[p.name].push_back(p.milliseconds);
+  }
+  out->wallMs = median(wall);
+  for (auto& [name, v] : passes) out->passMs[name] = median(v);
+  return Status();
+}
+
+}  // namespace
+
+int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::vector<std::string>& layouts,
+                 int frames, uint32_t width, uint32_t height) {
+  std::printf("\nAnimation at %ux%u, still camera (layers sliced once, not per frame); medians of %d frames.\n", width,
+              height, frames);
+  std::printf("anim = delay + warp + composite (simulation held, dt = 0); frame = simulation step (N = 64, dt = 1/30 s)\n"
+              "+ delay + warp + composite. Wall = submit-to-fence of one frame, minus the host's own clear.\n\n");
+  std::printf("  %-10s %-9s %10s %8s %10s %8s %13s %13s\n", "faces", "layers", "anim ms", "FPS", "frame ms", "FPS",
+              "composite ts", "dynamics ts");
+  struct LeverRow {
+    std::string label;
+    std::vector<double> ms;
+  };
+  std::vector<std::string> leverHeads;
+  std::vector<LeverRow> leverRows;
+  for (uint64_t faces : faceCounts) {
+    const double g0 = nowMs();
+    const VegetationModel model = makeLeafCloud(faces, 7, true);
+    const double genMs = nowMs() - g0;
+    CanopyDesc desc;
+    desc.width = width;
+    desc.height = height;
+    desc.useRootCache = false;
+    CanopyContext* ctx = nullptr;
+    Status s = createCanopy(dev, model, desc, &ctx);
+    HostTargets host;
+    if (s.ok()) s = createHostTargets(dev, width, height, &host);
+    const LayerView view = orbitView(model.boundsMin, model.boundsMax, 20, 10, 40, float(width) / float(height), 0.8f);
+    GpuTimer timer;
+    if (s.ok()) s = timer.init(dev, 64);
+    // The host's clear alone, subtracted from every wall figure.
+    FrameStats clearOnly;
+    rg::RenderGraph clearGraph;
+    if (s.ok()) s = buildHostGraph(dev, ctx, host, false, &clearGraph);
+    if (s.ok()) s = measure(dev, ctx, clearGraph, timer, view, 0.0f, frames, false, &clearOnly);
+    clearGraph.release(dev);
+    for (const std::string& text : layouts) {
+      if (!s.ok()) break;
+      CanopyParams p = canopyParams(ctx);
+      s = parseLayerLayout(text, &p.layers.layout);
+      if (s.ok()) s = setCanopyParams(ctx, p);
+      rg::RenderGraph g;
+      if (s.ok()) s = buildHostGraph(dev, ctx, host, true, &g);
+      // The first frame slices the layers (not measured: a still camera never re-slices).
+      FrameStats warm, anim, whole;
+      if (s.ok()) s = measure(dev, ctx, g, timer, view, 0.0f, 1, true, &warm);
+      if (s.ok()) s = measure(dev, ctx, g, timer, view, 0.0f, frames, true, &anim);
+      if (s.ok()) s = measure(dev, ctx, g, timer, view, 1.0f / 30.0f, frames, true, &whole);
+      if (s.ok()) {
+        const double a = anim.wallMs - clearOnly.wallMs, f = whole.wallMs - clearOnly.wallMs;
+        std::printf("  %-10llu %-9s %10.2f %8.1f %10.2f %8.1f %13.2f %13.2f\n", (unsigned long long)faces,
+                    toString(p.layers.layout).c_str(), a, 1000.0 / a, f, 1000.0 / f,
+                    anim.passMs["composite: warp + composite"], anim.passMs["dynamics: displacement"]);
+      }
+      // The levers, side by side (animation only).
+      struct Lever {
+        const char* name;
+        bool early, skip, bilinear;
+      };
+      const Lever levers[] = {{"none", false, false, true},
+                              {"early exit", true, false, true},
+                              {"skip empty", false, true, true},
+                              {"both", true, true, true},
+                              {"both+nearest", true, true, false}};
+      LeverRow row{std::to_string(faces) + " " + toString(p.layers.layout), {}};
+      for (const Lever& l : levers) {
+        if (!s.ok()) break;
+        if (leverHeads.size() < std::size(levers)) leverHeads.push_back(l.name);
+        CanopyParams q = p;
+        q.composite.earlyExit = l.early;
+        q.composite.skipEmptyTiles = l.skip;
+        q.composite.bilinear = l.bilinear;
+        s = setCanopyParams(ctx, q);
+        FrameStats st;
+        if (s.ok()) s = measure(dev, ctx, g, timer, view, 0.0f, frames, true, &st);
+        row.ms.push_back(st.wallMs - clearOnly.wallMs);
+      }
+      if (s.ok()) s = setCanopyParams(ctx, p);
+      leverRows.push_back(row);
+      g.release(dev);
+    }
+    timer.destroy(dev);
+    destroyImage(dev, host.color);
+    destroyImage(dev, host.depth);
+    destroyCanopy(ctx);
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+      return 1;
+    }
+    std::printf("  (%llu faces generated in %.0f ms; host clear %.2f ms wall, subtracted)\n", (unsigned long long)faces,
+                genMs, clearOnly.wallMs);
+  }
+  std::printf("\nCompositing levers, anim ms (wall, minus the clear): early exit = front to back, stop when opaque;\n"
+              "skip empty = skip a layer whose 8x8 occupancy tile under p - d_i(p) is empty; nearest = no bilinear.\n\n");
+  std::printf("  %-20s", "faces layers");
+  for (const std::string& h : leverHeads) std::printf(" %13s", h.c_str());
+  std::printf("\n");
+  for (const LeverRow& r : leverRows) {
+    std::printf("  %-20s", r.label.c_str());
+    for (double v : r.ms) std::printf(" %13.2f", v);
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace canopy::bench

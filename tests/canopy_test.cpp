@@ -287,6 +287,8 @@ struct GoldenScene {
   int frames;
 };
 
+void PrintTo(const GoldenScene& s, std::ostream* os) { *os << s.name; }
+
 std::string outputDir() {
   const std::string dir = std::string(CANOPY_TEST_OUTPUT) + "/golden";
   std::filesystem::create_directories(dir);
@@ -350,8 +352,9 @@ TEST_P(GoldenTest, MatchesTheCheckedInImage) {
   const double badShare = double(bad) / double(w * h);
   if (mean > 1.0 || badShare > 0.005) {
     const std::string dir = outputDir();
-    writePng(dir + "/" + sc.name + "_actual.png", w, h, got);
-    writePng(dir + "/" + sc.name + "_diff.png", w, h, diff);
+    const Status wa = writePng(dir + "/" + sc.name + "_actual.png", w, h, got);
+    const Status wd = writePng(dir + "/" + sc.name + "_diff.png", w, h, diff);
+    EXPECT_TRUE(wa.ok() && wd.ok()) << wa.message() << wd.message();
     ADD_FAILURE() << sc.name << ": mean abs error " << mean << "/255 (limit 1.0), " << badShare * 100
                   << "% of pixels off by > 16/255 (limit 0.5%); wrote " << dir << "/" << sc.name
                   << "_actual.png and _diff.png (x8)";

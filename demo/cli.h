@@ -15,6 +15,21 @@ inline bool parseUint(const char* s, uint64_t lo, uint64_t hi, uint32_t* out) {
   return true;
 }
 
+// A count with an optional K (1e3) or M (1e6) suffix: "80000", "80K", "50M".
+inline bool parseCount(const char* s, uint64_t lo, uint64_t hi, uint64_t* out) {
+  if (!s || !*s) return false;
+  char* end = nullptr;
+  const double v = std::strtod(s, &end);
+  double scale = 1;
+  if (*end == 'K' || *end == 'k') scale = 1e3, ++end;
+  else if (*end == 'M' || *end == 'm') scale = 1e6, ++end;
+  if (*end || !(v >= 0)) return false;
+  const double r = v * scale;
+  if (r < double(lo) || r > double(hi) || r != double(uint64_t(r))) return false;
+  *out = uint64_t(r);
+  return true;
+}
+
 inline bool parseFloat(const char* s, float* out) {
   if (!s || !*s) return false;
   char* end = nullptr;

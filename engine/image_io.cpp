@@ -25,6 +25,20 @@ Status writePng(const std::string& path, uint32_t w, uint32_t h, const std::vect
   return Status();
 }
 
+Status encodePng(uint32_t w, uint32_t h, const std::vector<uint8_t>& rgba, std::vector<uint8_t>* png) {
+  png->clear();
+  if (w == 0 || h == 0 || rgba.size() != size_t(w) * h * 4)
+    return Status::error("encodePng: " + std::to_string(rgba.size()) + " bytes for " + std::to_string(w) + "x" +
+                         std::to_string(h) + " RGBA");
+  auto append = [](void* ctx, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(ctx);
+    out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
+  };
+  if (!stbi_write_png_to_func(append, png, int(w), int(h), 4, rgba.data(), int(w * 4)))
+    return Status::error("encodePng: the encoder failed");
+  return Status();
+}
+
 Status readPng(const std::string& path, uint32_t* width, uint32_t* height, std::vector<uint8_t>* rgba) {
   int w = 0, h = 0, comp = 0;
   stbi_uc* px = stbi_load(path.c_str(), &w, &h, &comp, 4);

@@ -10,6 +10,8 @@ namespace canopy {
 
 // 8-bit RGBA, rows top to bottom.
 Status writePng(const std::string& path, uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba);
+// The same PNG in memory (e.g. to embed it in a .glb).
+Status encodePng(uint32_t width, uint32_t height, const std::vector<uint8_t>& rgba, std::vector<uint8_t>* png);
 // Reads any PNG as 8-bit RGBA, rows top to bottom; the error names the file.
 Status readPng(const std::string& path, uint32_t* width, uint32_t* height, std::vector<uint8_t>* rgba);
 // float32 array of the given shape, C order (e.g. {N, N, 2}).

@@ -1,5 +1,7 @@
 #include "render/leaf_roots.h"
 
+#include "engine/hash.h"
+
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -32,32 +34,8 @@ uint32_t floatKey(float f) {
   return u;
 }
 
-uint64_t mix64(uint64_t h) {
-  h ^= h >> 33;
-  h *= 0xff51afd7ed558ccdull;
-  h ^= h >> 33;
-  h *= 0xc4ceb9fe1a85ec53ull;
-  h ^= h >> 33;
-  return h;
-}
-
 uint64_t hashPosition(const glm::vec3& p) {
   return mix64((uint64_t(floatKey(p.x)) << 32 | floatKey(p.y)) ^ mix64(floatKey(p.z) + 0x9e3779b97f4a7c15ull));
-}
-
-// Word-wise hash of a byte range (order-dependent), fast enough for hundreds of MB.
-uint64_t hashBytes(uint64_t h, const void* data, size_t bytes) {
-  const uint8_t* p = static_cast<const uint8_t*>(data);
-  size_t i = 0;
-  for (; i + 8 <= bytes; i += 8) {
-    uint64_t w;
-    std::memcpy(&w, p + i, 8);
-    h = (h ^ w) * 0x100000001b3ull + (h >> 29);
-  }
-  uint64_t tail = 0;
-  std::memcpy(&tail, p + i, bytes - i);
-  h = (h ^ tail ^ bytes) * 0x100000001b3ull;
-  return mix64(h);
 }
 
 constexpr char kMagic[8] = {'C', 'N', 'P', 'Y', 'L', 'R', 'T', '1'};

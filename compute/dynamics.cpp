@@ -136,7 +136,8 @@ void destroyLayerDynamics(LayerDynamics& x) {
 }
 
 Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId tiled, rg::ResourceId ring,
-                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous) {
+                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous,
+                         rg::ResourceId* frameOut) {
   if (!x.device) return Status::error("addDynamicsPasses: dynamics not created");
   const auto frame = g.importBuffer("dynamics: frame", x.frame.size, kComputeRead, kComputeRead);
   const auto disp = g.importBuffer("dynamics: displacement", x.displacement.size, kComputeRead, kComputeRead);
@@ -168,6 +169,7 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   CANOPY_TRY(g.bindBuffer(prev, x.previous.buffer));
   if (displacement) *displacement = disp;
   if (previous) *previous = prev;
+  if (frameOut) *frameOut = frame;
   return Status();
 }
 

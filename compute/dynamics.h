@@ -80,8 +80,10 @@ void destroyLayerDynamics(LayerDynamics& dynamics);
 
 // Adds "dynamics: frame" and "dynamics: displacement". `tiled`, `ring` and `ringTimes` are the
 // simulation's buffers (SimulationResources); the frame used is dynamics.current at record time.
-// Returns the ids of the displacement buffer and of the previous frame's (`previous` may be null).
+// Returns the ids of the displacement buffer, of the previous frame's and of the AnimFrame block
+// (`previous` and `frame` may be null).
 Status addDynamicsPasses(LayerDynamics& dynamics, rg::RenderGraph& graph, rg::ResourceId tiled, rg::ResourceId ring,
-                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous = nullptr);
+                         rg::ResourceId ringTimes, rg::ResourceId* displacement, rg::ResourceId* previous = nullptr,
+                         rg::ResourceId* frame = nullptr);
 
 }  // namespace canopy

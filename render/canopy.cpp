@@ -239,8 +239,9 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
   LayerResources lr;
   CANOPY_TRY(addLayerPasses(c->layers, g, &lr));
   rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
-  CANOPY_TRY(addDynamicsPasses(c->dynamics, g, sr.tiled, sr.ring, sr.ringTimes, &disp, &prev));
-  return addCompositePasses(c->compositor, g, lr, disp, prev, targets);
+  rg::ResourceId animFrame = rg::kInvalidResource;
+  CANOPY_TRY(addDynamicsPasses(c->dynamics, g, sr.tiled, sr.ring, sr.ringTimes, &disp, &prev, &animFrame));
+  return addCompositePasses(c->compositor, g, lr, disp, prev, targets, {animFrame, sr.tiled});
 }
 
 uint64_t canopyResourceGeneration(const CanopyContext* c) { return c ? c->generation : 0; }

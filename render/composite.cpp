@@ -30,6 +30,10 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
 Status validateCompositeParams(const CompositeParams& p) {
   if (!(p.depthAlpha > 0.0f && p.depthAlpha <= 1.0f))
     return Status::error("CompositeParams.depthAlpha = " + std::to_string(p.depthAlpha) + " is outside (0, 1]");
+  if (uint32_t(p.debugView) > COMPOSITE_DEBUG_GRID)
+    return Status::error("CompositeParams.debugView = " + std::to_string(uint32_t(p.debugView)) + " is outside 0..3");
+  if (!(p.debugVelocityScale > 0.0f && p.debugVelocityScale < 1e30f))
+    return Status::error("CompositeParams.debugVelocityScale = " + std::to_string(p.debugVelocityScale) + " must be > 0");
   return Status();
 }
 
@@ -70,7 +74,7 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     gp.vertexShader = "composite.vert";
     gp.fragmentShader = "composite.frag";
     const VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    gp.bindings = {sampled, sampled, sampled, sampled, storage, storage, storage, storage};
+    gp.bindings = {sampled, sampled, sampled, sampled, storage, storage, storage, storage, storage, storage};
     gp.pushConstantSize = sizeof(gpu::CompositePush);
     gp.colorFormats = {desc.colorFormat};
     if (desc.motionFormat != VK_FORMAT_UNDEFINED) gp.colorFormats.push_back(desc.motionFormat);
@@ -95,6 +99,8 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
                             &out->occupancy, "composite: occupancy"));
     CANOPY_TRY(createBuffer(d, VkDeviceSize(desc.width) * desc.height * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                             MemoryUsage::DeviceLocal, &out->sceneDepth, "composite: scene depth"));
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
+                            &out->debugStandIn, "composite: debug stand-in"));
     CANOPY_TRY(makeSampler(d, VK_FILTER_LINEAR, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->linear));
     CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->nearest));
     CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE, &out->depthSampler));
@@ -112,6 +118,7 @@ void destroyCompositor(Compositor& c) {
   destroyComputePipeline(d, c.sceneDepthPipeline);
   destroyBuffer(d, c.occupancy);
   destroyBuffer(d, c.sceneDepth);
+  destroyBuffer(d, c.debugStandIn);
   for (VkSampler s : {c.linear, c.nearest, c.depthSampler})
     if (s) vkDestroySampler(d.device, s, nullptr);
   c = Compositor{};
@@ -139,6 +146,8 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.depthAlpha = params.depthAlpha;
   p.tilesX = tilesFor(c.desc.width);
   p.tilesY = tilesFor(c.desc.height);
+  p.debugView = uint32_t(params.debugView);
+  p.debugScale = params.debugVelocityScale;
   p.flags = COMPOSITE_SCENE_DEPTH;
   if (params.earlyExit) p.flags |= COMPOSITE_EARLY_EXIT;
   if (params.skipEmptyTiles) p.flags |= COMPOSITE_SKIP_EMPTY;
@@ -152,7 +161,7 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
 }
 
 Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResources& layers, rg::ResourceId displacement,
-                          rg::ResourceId previous, const CompositeTargets& t) {
+                          rg::ResourceId previous, const CompositeTargets& t, const CompositeDebugSources& debug) {
   if (!c.device) return Status::error("addCompositePasses: the compositor was not created");
   if (t.color == rg::kInvalidResource || t.depth == rg::kInvalidResource)
     return Status::error("addCompositePasses: the host's colour and depth targets are required");
@@ -187,8 +196,13 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
    })
       .read(t.depth, rg::Use::ComputeSampled)
       .write(scene, rg::Use::ComputeStorageWrite);
-  auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion](rg::PassContext& x) {
+  const bool debugSources = debug.animFrame != rg::kInvalidResource && debug.tiled != rg::kInvalidResource;
+  c.hasDebugSources = debugSources;
+  auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion, debug,
+                                                        debugSources](rg::PassContext& x) {
     const gpu::CompositePush& p = cp->push;
+    if (p.debugView == COMPOSITE_DEBUG_VELOCITY && !debugSources)
+      return Status::error("composite: the velocity debug view needs the simulation's field (CompositeDebugSources)");
     const Image& color = x.graph->image(t.color);
     const Image& depth = x.graph->image(t.depth);
     if (color.extent.width != cp->desc.width || color.extent.height != cp->desc.height ||
@@ -225,7 +239,9 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
          bindImage(x.image(l.depth).view, ro, cp->depthSampler),
          bindImage(x.image(l.backgroundColor).view, ro, cp->nearest),
          bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler), bindBuffer(x.buffer(displacement)),
-         bindBuffer(x.buffer(previous)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->sceneDepth.buffer)},
+         bindBuffer(x.buffer(previous)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->sceneDepth.buffer),
+         bindBuffer(debugSources ? x.buffer(debug.animFrame) : cp->debugStandIn.buffer),
+         bindBuffer(debugSources ? x.buffer(debug.tiled) : cp->debugStandIn.buffer)},
         p);
     if (s.ok()) vkCmdDraw(x.cmd, 3, 1, 0, 0);
     x.device->cmdEndRendering(x.cmd);
@@ -242,6 +258,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
       .write(t.color, rg::Use::ColorAttachmentReadWrite)
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
+  if (debugSources) pass.read(debug.animFrame, rg::Use::FragmentStorageRead).read(debug.tiled, rg::Use::FragmentStorageRead);
   return Status();
 }
 

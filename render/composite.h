@@ -26,6 +26,14 @@ namespace canopy {
 struct Device;
 struct LayerDynamics;
 
+// Debug overlays (the demo's debug views; a host may show them too).
+enum class CompositeDebugView : uint32_t {
+  None = COMPOSITE_DEBUG_NONE,
+  Layers = COMPOSITE_DEBUG_LAYERS,      // each layer in its own false colour (paper Figure 3c)
+  Velocity = COMPOSITE_DEBUG_VELOCITY,  // the tiled simulation field over the simulation plane
+  Grid = COMPOSITE_DEBUG_GRID,          // the nearest layer's warp grid, displaced
+};
+
 // The levers of the composite (defaults: all on). They never change the image beyond 1/1024 of
 // alpha (early exit) or at all (empty-tile skip); nearest sampling does change it.
 struct CompositeParams {
@@ -33,6 +41,8 @@ struct CompositeParams {
   bool skipEmptyTiles = true;  // skip a layer whose occupancy tile under p - d_i(p) is empty
   bool bilinear = true;        // bilinear layer colour (false: nearest texel; cheaper, blockier motion)
   float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
+  CompositeDebugView debugView = CompositeDebugView::None;
+  float debugVelocityScale = 1.0f;  // velocity view: speed at full brightness, domain units/s, > 0
 };
 Status validateCompositeParams(const CompositeParams& params);
 
@@ -53,6 +63,8 @@ struct Compositor {
   ComputePipeline occupancyPipeline, sceneDepthPipeline;
   Buffer occupancy;   // maxLayers x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage
   Buffer sceneDepth;  // width x height float: the host's depth before the composite
+  Buffer debugStandIn;  // bound for the debug views' inputs when the graph has none
+  bool hasDebugSources = false;
   VkSampler linear = VK_NULL_HANDLE, nearest = VK_NULL_HANDLE, depthSampler = VK_NULL_HANDLE;
   CompositeParams params;
   gpu::CompositePush push{};     // the next recorded frame's constants (prepareComposite)
@@ -72,10 +84,16 @@ struct CompositeTargets {
   rg::ResourceId depth = rg::kInvalidResource;   // host depth (read, then written)
   rg::ResourceId motion = rg::kInvalidResource;  // optional
 };
+// What the velocity debug view reads: the dynamics frame and the simulation's tiled field.
+struct CompositeDebugSources {
+  rg::ResourceId animFrame = rg::kInvalidResource;
+  rg::ResourceId tiled = rg::kInvalidResource;
+};
 // Adds "composite: occupancy", "composite: scene depth" and "composite: warp + composite".
 // `layers` are the layer images (addLayerPasses), `displacement` and `previous` the dynamics'
-// buffers (addDynamicsPasses).
+// buffers (addDynamicsPasses); `debug` is needed only for CompositeDebugView::Velocity.
 Status addCompositePasses(Compositor& compositor, rg::RenderGraph& graph, const LayerResources& layers,
-                          rg::ResourceId displacement, rg::ResourceId previous, const CompositeTargets& targets);
+                          rg::ResourceId displacement, rg::ResourceId previous, const CompositeTargets& targets,
+                          const CompositeDebugSources& debug = {});
 
 }  // namespace canopy

@@ -6,6 +6,7 @@
 // the leaves). Layers are composited in layer order with the rigid background and the host's scene
 // inserted by depth: a layer sample behind the nearer of the two is hidden. The loop runs front to
 // back (the same sum as far to near, "over" being associative) so it can stop once opaque.
+#include "shared/anim.h"
 #include "shared/composite.h"
 #include "shared/layers.h"
 
@@ -17,6 +18,9 @@ layout(binding = 4, scalar) readonly buffer DispBuf { vec2 disp[]; };
 layout(binding = 5, scalar) readonly buffer PrevBuf { vec2 prevDisp[]; };
 layout(binding = 6, scalar) readonly buffer OccBuf { uint occupancy[]; };
 layout(binding = 7, scalar) readonly buffer SceneBuf { float sceneDepth[]; };
+// Debug views only (a stand-in buffer otherwise): the dynamics frame and the tiled field.
+layout(binding = 8, scalar) readonly buffer AnimBuf { AnimFrame anim; };
+layout(binding = 9, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 layout(location = 0) out vec4 outColor;   // premultiplied, blended over the host's colour
@@ -26,6 +30,32 @@ vec2 displacementAt(uint base, GridSample g, bool previous) {
   if (previous)
     return blendCorners(g, prevDisp[base + g.i00], prevDisp[base + g.i10], prevDisp[base + g.i01], prevDisp[base + g.i11]);
   return blendCorners(g, disp[base + g.i00], disp[base + g.i10], disp[base + g.i01], disp[base + g.i11]);
+}
+
+// The tiled simulation field where the view ray through pixel p meets the simulation plane
+// (design.md: the plane is tiled with the one simulated tile). w = 0 where the ray misses it.
+vec4 velocityOnPlane(vec2 p) {
+  vec2 ndc = p / vec2(pc.width, pc.height) * 2.0 - 1.0;
+  vec4 a = anim.invViewProj * vec4(ndc, 0.0, 1.0), b = anim.invViewProj * vec4(ndc, 1.0, 1.0);
+  vec3 o = a.xyz / a.w, dir = b.xyz / b.w - o;
+  vec3 normal = cross(anim.simRight.xyz, anim.simUp.xyz);
+  float den = dot(dir, normal);
+  if (abs(den) < 1e-8) return vec4(0.0);
+  float t = dot(anim.simOrigin.xyz - o, normal) / den;
+  if (t <= 0.0) return vec4(0.0);
+  vec3 x = o + t * dir - anim.simOrigin.xyz;
+  vec2 s = vec2(dot(x, anim.simRight.xyz), dot(x, anim.simUp.xyz)) / anim.simOrigin.w;  // domain units
+  uint n = anim.n;
+  vec2 c = fract(s) * float(n) - 0.5;  // cell centres at (i + 0.5) / n, periodic
+  ivec2 i0 = ivec2(floor(c));
+  vec2 f = c - vec2(i0);
+  ivec2 i1 = (i0 + 1 + int(n)) % int(n);
+  i0 = (i0 + int(n)) % int(n);
+  vec2 v = mix(mix(tiled[i0.y * n + i0.x], tiled[i0.y * n + i1.x], f.x),
+               mix(tiled[i1.y * n + i0.x], tiled[i1.y * n + i1.x], f.x), f.y);
+  // Tile borders (within ~1.5 px) drawn as thin lines so the tiling shows.
+  vec2 edge = min(fract(s), 1.0 - fract(s)) / max(fwidth(s), vec2(1e-6));
+  return vec4(v, min(edge.x, edge.y) < 1.5 ? 2.0 : 1.0, 0.0);
 }
 
 void main() {
@@ -71,6 +101,10 @@ void main() {
       z = texture(layerDepth, uvw).r;
     }
     if (z >= opaqueZ) continue;
+    if (pc.debugView == COMPOSITE_DEBUG_LAYERS) {
+      float shade = 0.55 + 0.45 * dot(c.rgb / c.a, vec3(0.3, 0.59, 0.11));
+      c.rgb = debugLayerColor(i) * shade * c.a;
+    }
     acc = underPremultiplied(acc, c);
     if (!front && c.a >= pc.depthAlpha) {
       front = true;
@@ -80,6 +114,20 @@ void main() {
     if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
   }
   acc = underPremultiplied(acc, bg);
+  if (pc.debugView == COMPOSITE_DEBUG_VELOCITY) {
+    // Hue = direction, brightness = speed / debugScale, over 40 % of the composite.
+    vec4 v = velocityOnPlane(p);
+    if (v.z > 0.0) {
+      vec3 col = debugHue(fract(atan(v.y, v.x) / 6.2831853 + 1.0)) * min(length(v.xy) / max(pc.debugScale, 1e-6), 1.0);
+      if (v.z > 1.5) col = vec3(1.0);
+      acc = vec4(col * 0.6 + acc.rgb * 0.4, 0.6 + acc.a * 0.4);
+    }
+  } else if (pc.debugView == COMPOSITE_DEBUG_GRID) {
+    // p is on a displaced grid line where p - d_0(p) is on an undisplaced one.
+    vec2 q = (p - displacementAt(0u, g, false)) / pc.cellSize;
+    vec2 dist = min(fract(q), 1.0 - fract(q)) * pc.cellSize;
+    if (min(dist.x, dist.y) < 0.75) acc = vec4(1.0, 0.85, 0.1, 1.0);
+  }
   outColor = acc;
   // Depth output: the nearest layer where its alpha >= depthAlpha, else the trunk, else the scene.
   gl_FragDepth = min(min(frontZ, bgZ), sceneZ);

@@ -20,6 +20,12 @@
 #define COMPOSITE_BACKGROUND 32u    // a rigid background was drawn
 #define COMPOSITE_SCENE_DEPTH 64u   // the host's depth was copied (else everything is in front)
 
+// CompositePush.debugView: what the demo's and a host's debug overlays show.
+#define COMPOSITE_DEBUG_NONE 0u
+#define COMPOSITE_DEBUG_LAYERS 1u        // every layer in its own false colour (paper Figure 3c)
+#define COMPOSITE_DEBUG_VELOCITY 2u      // the tiled simulation field on the simulation plane
+#define COMPOSITE_DEBUG_GRID 3u          // the nearest layer's warp grid, displaced
+
 // A layer pixel with alpha below this is treated as empty (RGBA16F keeps far smaller values; this
 // only avoids blending exact zeros).
 #define COMPOSITE_MIN_ALPHA (1.0f / 4096.0f)
@@ -39,8 +45,8 @@ struct CompositePush {
   float depthAlpha;    // a layer writes the depth output where its alpha >= this (0.5)
   uint tilesX;         // occupancy tiles per row: ceil(width / COMPOSITE_TILE)
   uint tilesY;
-  uint pad0;
-  uint pad1;
+  uint debugView;      // COMPOSITE_DEBUG_*
+  float debugScale;    // velocity view: speed shown at full brightness, domain units/s
 };
 CANOPY_SIZE_CHECK(CompositePush, 48)
 
@@ -77,6 +83,13 @@ CANOPY_INLINE vec2 blendCorners(GridSample s, vec2 d00, vec2 d10, vec2 d01, vec2
 // Front-to-back "over" of premultiplied colour c under the accumulated colour acc (the same sum as
 // far-to-near compositing, since "over" is associative).
 CANOPY_INLINE vec4 underPremultiplied(vec4 acc, vec4 c) { return acc + (1.0f - acc.w) * c; }
+
+// Debug colours: a hue in [0, 1) at full saturation and value.
+CANOPY_INLINE vec3 debugHue(float h) {
+  return clamp(abs(fract(vec3(h) + vec3(1.0f, 2.0f / 3.0f, 1.0f / 3.0f)) * 6.0f - vec3(3.0f)) - vec3(1.0f), vec3(0.0f), vec3(1.0f));
+}
+// Layer i's false colour: hues spread by the golden ratio, so neighbouring layers differ most.
+CANOPY_INLINE vec3 debugLayerColor(uint layer) { return debugHue(fract(float(layer) * 0.618034f)); }
 
 CANOPY_NAMESPACE_END
 #endif

@@ -1,0 +1,420 @@
+#include "demo/demo_app.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "demo/cli.h"
+#include "demo/progress.h"
+
+namespace canopy::demo {
+
+// ---- options ------------------------------------------------------------------------------------
+
+void printHelp() {
+  const Options d;
+  std::printf(
+      "usage: canopy-demo [options]\n"
+      "Animates vegetation in wind with Canopy and writes the frames (PNG), a contact sheet and a per-pass\n"
+      "timing summary to the output folder (plus an MP4 when ffmpeg is installed). --window shows it live.\n\n"
+      "Scene:\n"
+      "  --scene NAME        generated scene: shrub, tree, grass, kelp, field (default %s)\n"
+      "  --faces N           generated scene's triangles, %llu..%llu, K/M suffixes (default %lluK)\n"
+      "  --seed S            generated scene's seed, 0..4294967295 (default %u)\n"
+      "  --gltf FILE         load a .gltf/.glb instead of generating a scene\n"
+      "Method:\n"
+      "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
+      "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
+      "  --strength V        wind strength, domain units/s, [0, 1000] (default %g)\n"
+      "  --frequency F       wind modulation frequency, Hz, [0, 1000] (default %g)\n"
+      "  --delay MODE        layer delay: exact or approx (default exact)\n"
+      "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
+      "                      (default none)\n"
+      "Output:\n"
+      "  --size WxH          frame size, 16..8192 each (default %ux%u)\n"
+      "  --frames N          frames to render, 1..100000 (default %u)\n"
+      "  --fps F             animation frames per second, dt = 1/F, [1, 1000] (default %g)\n"
+      "  --camera PATH       still or orbit (default still)\n"
+      "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
+      "  --out DIR           output folder, created if missing (default %s)\n"
+      "  --no-mp4            do not encode demo.mp4 even when ffmpeg is installed\n"
+      "Window (needs a display; falls back to headless without one):\n"
+      "  --window            open a window: left drag orbits, wheel zooms, right drag pushes the foliage;\n"
+      "                      keys: arrows wind direction/strength, F/G frequency, L layout, D delay mode,\n"
+      "                      V debug view, space pause, O auto-orbit, P screenshot, Esc quit\n"
+      "  --vsync on|off      present with vsync (default on)\n"
+      "  --screenshot FILE   window: write the last frame read back from the swapchain (fails if blank)\n"
+      "  --resize-at N       window: resize the window after N frames (tests; default 0 = never)\n"
+      "  (with --window, --frames N closes the window after N frames; without it the window stays open)\n"
+      "Both:\n"
+      "  --validate          Vulkan validation + synchronization validation; any message fails the run\n"
+      "  --device NAME       substring of the Vulkan device name (default: best device, or $CANOPY_DEVICE)\n"
+      "  --help              this text\n",
+      sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
+      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.width, d.height,
+      d.frames, d.fps, d.orbitDegrees, d.outDir.c_str());
+}
+
+int parseOptions(int argc, char** argv, Options* o, std::string* err) {
+  bool framesGiven = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    const char* v = i + 1 < argc ? argv[i + 1] : nullptr;
+    auto takes = [&]() { return v ? (++i, true) : false; };
+    auto bad = [&](const std::string& why) {
+      *err = a + " " + why;
+      return 2;
+    };
+    float f = 0;
+    if (a == "--help" || a == "-h") {
+      printHelp();
+      return 1;
+    } else if (a == "--scene") {
+      if (!takes()) return bad("needs a name: shrub, tree, grass, kelp, field");
+      const Status s = parseSceneKind(v, &o->scene);
+      if (!s.ok()) return bad("'" + std::string(v) + "' is not one of shrub, tree, grass, kelp, field");
+    } else if (a == "--faces") {
+      if (!takes() || !cli::parseCount(v, kMinSceneFaces, kMaxSceneFaces, &o->faces))
+        return bad("needs a count in [" + std::to_string(kMinSceneFaces) + ", " + std::to_string(kMaxSceneFaces) + "]");
+    } else if (a == "--seed") {
+      if (!takes() || !cli::parseUint(v, 0, 0xffffffffull, &o->seed)) return bad("needs an integer in [0, 4294967295]");
+    } else if (a == "--gltf") {
+      if (!takes()) return bad("needs a file");
+      o->gltf = v;
+    } else if (a == "--layers") {
+      LayerLayout l;
+      if (!takes()) return bad("needs a layout such as 5(3-1-1) or 3");
+      const Status s = parseLayerLayout(v, &l);
+      if (!s.ok()) return bad("'" + std::string(v) + "': " + s.message());
+      o->layout = v;
+    } else if (a == "--wind") {
+      if (!takes()) return bad("needs sides: left,right,top,bottom or none");
+      uint32_t sides = 0;
+      std::string list = v;
+      if (list != "none") {
+        size_t start = 0;
+        while (start <= list.size()) {
+          const size_t comma = std::min(list.find(',', start), list.size());
+          const std::string side = list.substr(start, comma - start);
+          if (side == "left") sides |= kWindFromLeft;
+          else if (side == "right") sides |= kWindFromRight;
+          else if (side == "top") sides |= kWindFromTop;
+          else if (side == "bottom") sides |= kWindFromBottom;
+          else return bad("side '" + side + "' is not left, right, top or bottom");
+          start = comma + 1;
+        }
+      }
+      o->windSides = sides;
+    } else if (a == "--strength") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
+      o->windStrength = f;
+    } else if (a == "--frequency") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
+      o->windFrequency = f;
+    } else if (a == "--delay") {
+      if (!takes()) return bad("needs exact or approx");
+      if (std::string(v) == "exact") o->delay = DelayMode::Exact;
+      else if (std::string(v) == "approx" || std::string(v) == "approximate") o->delay = DelayMode::Approximate;
+      else return bad("'" + std::string(v) + "' is not exact or approx");
+    } else if (a == "--debug") {
+      if (!takes()) return bad("needs none, layers, velocity or grid");
+      const std::string d = v;
+      if (d == "none") o->debug = CompositeDebugView::None;
+      else if (d == "layers") o->debug = CompositeDebugView::Layers;
+      else if (d == "velocity") o->debug = CompositeDebugView::Velocity;
+      else if (d == "grid") o->debug = CompositeDebugView::Grid;
+      else return bad("'" + d + "' is not none, layers, velocity or grid");
+    } else if (a == "--size") {
+      unsigned w = 0, h = 0;
+      char tail = 0;
+      if (!takes() || std::sscanf(v, "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+        return bad("needs WxH with each side in [16, 8192]");
+      o->width = w;
+      o->height = h;
+    } else if (a == "--frames") {
+      if (!takes() || !cli::parseUint(v, 1, 100000, &o->frames)) return bad("needs an integer in [1, 100000]");
+      framesGiven = true;
+    } else if (a == "--fps") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 1 && f <= 1000)) return bad("needs a number in [1, 1000]");
+      o->fps = f;
+    } else if (a == "--camera") {
+      if (!takes()) return bad("needs still or orbit");
+      if (std::string(v) == "still") o->camera = CameraPath::Still;
+      else if (std::string(v) == "orbit") o->camera = CameraPath::Orbit;
+      else return bad("'" + std::string(v) + "' is not still or orbit");
+    } else if (a == "--orbit-degrees") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= -3600 && f <= 3600)) return bad("needs a number in [-3600, 3600]");
+      o->orbitDegrees = f;
+    } else if (a == "--out") {
+      if (!takes() || !*v) return bad("needs a folder");
+      o->outDir = v;
+    } else if (a == "--no-mp4") {
+      o->mp4 = false;
+    } else if (a == "--window") {
+      o->window = true;
+    } else if (a == "--vsync") {
+      if (!takes() || (std::string(v) != "on" && std::string(v) != "off")) return bad("needs on or off");
+      o->vsync = std::string(v) == "on";
+    } else if (a == "--screenshot") {
+      if (!takes() || !*v) return bad("needs a file");
+      o->screenshot = v;
+    } else if (a == "--resize-at") {
+      if (!takes() || !cli::parseUint(v, 0, 100000, &o->resizeAt)) return bad("needs an integer in [0, 100000]");
+    } else if (a == "--validate") {
+      o->validate = true;
+    } else if (a == "--device") {
+      if (!takes()) return bad("needs a device name");
+      o->device = v;
+    } else {
+      *err = "unknown option '" + a + "' (see --help)";
+      return 2;
+    }
+  }
+  if (o->window && !framesGiven) o->frames = 0;  // window: until closed
+  return 0;
+}
+
+// ---- scene and camera -------------------------------------------------------------------------
+
+Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto seconds = [&]() { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+  if (!o.gltf.empty()) {
+    std::fprintf(stderr, "loading %s ...\n", o.gltf.c_str());
+    CANOPY_TRY(loadGltf(o.gltf, {}, model));
+    const double s = seconds();
+    std::fprintf(stderr, "loaded %s: %zu triangles, %zu materials in %.2f s (%.2fM triangles/s)\n", o.gltf.c_str(),
+                 model->triangleCount(), model->materials.size(), s, double(model->triangleCount()) / std::max(s, 1e-6) / 1e6);
+    for (const std::string& w : model->warnings) std::fprintf(stderr, "  warning: %s\n", w.c_str());
+    *label = o.gltf;
+    return Status();
+  }
+  SceneDesc d;
+  d.kind = o.scene;
+  d.faces = o.faces;
+  d.seed = o.seed;
+  SceneStats st;
+  cli::ProgressLine progress(std::string("generating ") + sceneName(o.scene));
+  CANOPY_TRY(generateScene(d, model, &st, o.faces >= 1'000'000 ? SceneProgress(std::ref(progress)) : SceneProgress()));
+  std::fprintf(stderr, "generated %s: %llu faces (%llu rigid, %llu leaves) in %.2f s\n", sceneName(o.scene),
+               (unsigned long long)st.faces, (unsigned long long)st.rigidFaces, (unsigned long long)st.leaves, seconds());
+  *label = std::string(sceneName(o.scene)) + " " + std::to_string(st.faces) + " faces";
+  return Status();
+}
+
+CameraRig defaultRig(const Options& o) {
+  CameraRig r;
+  if (o.gltf.empty()) {
+    switch (o.scene) {
+      case SceneKind::GrassField: r.pitch = 28.0f; r.distance = 0.75f; break;
+      case SceneKind::Field: r.pitch = 22.0f; r.distance = 0.8f; break;
+      case SceneKind::Kelp: r.pitch = 8.0f; r.distance = 0.8f; break;
+      default: r.distance = 0.7f; break;
+    }
+  }
+  return r;
+}
+
+LayerView cameraView(const CameraRig& rig, const VegetationModel& m, uint32_t w, uint32_t h) {
+  return orbitView(m.boundsMin, m.boundsMax, rig.yaw, rig.pitch, rig.fov, float(w) / float(h), rig.distance);
+}
+
+CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
+  CanopyParams p = base;
+  if (!parseLayerLayout(o.layout, &p.layers.layout).ok()) p.layers.layout = base.layers.layout;  // checked by parseOptions
+  p.simulation.wind.sides = o.windSides;
+  p.simulation.wind.strength = o.windStrength;
+  p.simulation.wind.frequency = o.windFrequency;
+  p.dynamics.delay = o.delay;
+  p.composite.debugView = o.debug;
+  p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
+  return p;
+}
+
+// ---- host ---------------------------------------------------------------------------------------
+
+namespace {
+
+Status buildGraph(Host& h) {
+  h.graph.release(*h.device);
+  h.graph = rg::RenderGraph();
+  rg::RenderGraph& g = h.graph;
+  h.presentTarget = rg::kInvalidResource;
+  const rg::State colorAfter = h.wantsReadback || h.presentFormat != VK_FORMAT_UNDEFINED
+                                   ? rg::stateOf(rg::Use::TransferSrc)
+                                   : rg::stateOf(rg::Use::ColorAttachmentReadWrite);
+  CompositeTargets t;
+  t.color = g.importImage("demo colour", descOf(h.color), {}, colorAfter);
+  t.depth = g.importImage("demo depth", descOf(h.depth), {}, rg::stateOf(rg::Use::DepthAttachmentWrite));
+  const glm::vec4 clear = h.clear;
+  g.addPass("demo: clear", [t, clear](rg::PassContext& x) {
+     const VkClearColorValue cv{{clear.r, clear.g, clear.b, clear.a}};
+     const VkClearDepthStencilValue dv{1.0f, 0};
+     const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+     vkCmdClearColorImage(x.cmd, x.image(t.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+     vkCmdClearDepthStencilImage(x.cmd, x.image(t.depth).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+     return Status();
+   })
+      .write(t.color, rg::Use::TransferDst)
+      .write(t.depth, rg::Use::TransferDst)
+      .sideEffect();
+  CANOPY_TRY(g.bindImage(t.color, h.color));
+  CANOPY_TRY(g.bindImage(t.depth, h.depth));
+  CANOPY_TRY(addCanopyPasses(h.canopy, g, t));
+  if (h.presentFormat != VK_FORMAT_UNDEFINED) {
+    // The swapchain image arrives undefined (its old contents are not needed) and leaves ready to present.
+    const rg::State present{VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR};
+    ImageDesc pd;
+    pd.format = h.presentFormat;
+    pd.width = h.width;
+    pd.height = h.height;
+    pd.usage = VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    h.presentTarget = g.importImage("swapchain image", pd, {}, present);
+    const uint32_t w = h.width, ht = h.height;
+    const rg::ResourceId dst = h.presentTarget;
+    g.addPass("demo: blit to swapchain", [t, dst, w, ht](rg::PassContext& x) {
+       VkImageBlit b{};
+       b.srcSubresource = b.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+       b.srcOffsets[1] = b.dstOffsets[1] = {int32_t(w), int32_t(ht), 1};
+       vkCmdBlitImage(x.cmd, x.image(t.color).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, x.image(dst).image,
+                      VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &b, VK_FILTER_NEAREST);
+       return Status();
+     })
+        .read(t.color, rg::Use::TransferSrc)
+        .write(dst, rg::Use::TransferDst)
+        .sideEffect();
+  }
+  if (h.wantsReadback) {
+    const rg::State hostRead = rg::stateOf(rg::Use::HostRead);
+    const auto rb = g.importBuffer("demo readback", h.readback.size, hostRead, hostRead);
+    CANOPY_TRY(g.bindBuffer(rb, h.readback.buffer));
+    const uint32_t w = h.width, ht = h.height;
+    // From the swapchain image when there is one (the window's screenshot is what was presented).
+    const rg::ResourceId src = h.presentTarget != rg::kInvalidResource ? h.presentTarget : t.color;
+    g.addPass("demo: copy to host", [src, rb, w, ht](rg::PassContext& x) {
+       VkBufferImageCopy r{};
+       r.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+       r.imageExtent = {w, ht, 1};
+       vkCmdCopyImageToBuffer(x.cmd, x.image(src).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, x.buffer(rb), 1, &r);
+       return Status();
+     })
+        .read(src, rg::Use::TransferSrc)
+        .write(rb, rg::Use::TransferDst)
+        .sideEffect();
+  }
+  CANOPY_TRY(g.compile());
+  CANOPY_TRY(g.realize(*h.device));
+  h.graphGeneration = canopyResourceGeneration(h.canopy);
+  return Status();
+}
+
+}  // namespace
+
+Status createHost(Device& d, const VegetationModel& model, const Options& o, uint32_t w, uint32_t h, bool readback,
+                  VkFormat presentFormat, Host* out) {
+  Host& host = *out;
+  host.device = &d;
+  host.width = w;
+  host.height = h;
+  host.wantsReadback = readback;
+  host.presentFormat = presentFormat;
+  // The layers hold linear colour (sRGB textures are decoded when sampled): an sRGB target encodes
+  // it again, so the PNG bytes and the swapchain show the colours the textures were painted with.
+  auto linear = [](float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); };
+  const glm::vec3 sky = o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
+                                                                     : glm::vec3(0.62f, 0.75f, 0.88f);
+  host.clear = glm::vec4(linear(sky.r), linear(sky.g), linear(sky.b), 1.0f);
+  ImageDesc c;
+  c.format = VK_FORMAT_R8G8B8A8_SRGB;
+  c.width = w;
+  c.height = h;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, c, &host.color, "demo colour"));
+  c.format = VK_FORMAT_D32_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, c, &host.depth, "demo depth"));
+  if (readback)
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback,
+                            &host.readback, "demo readback"));
+  CANOPY_TRY(host.timer.init(d, 64));
+  CanopyDesc desc;
+  desc.width = w;
+  desc.height = h;
+  desc.colorFormat = VK_FORMAT_R8G8B8A8_SRGB;
+  desc.useRootCache = !o.gltf.empty();  // a generated scene has no file to keep a cache beside
+  const auto t0 = std::chrono::steady_clock::now();
+  CANOPY_TRY(createCanopy(d, model, desc, &host.canopy));
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (model.triangleCount() >= 1'000'000)
+    std::fprintf(stderr, "prepared %zu triangles (material split, leaf roots, GPU upload) in %.2f s (%.2fM/s)\n",
+                 model.triangleCount(), s, double(model.triangleCount()) / std::max(s, 1e-6) / 1e6);
+  CANOPY_TRY(setCanopyParams(host.canopy, paramsFrom(o, canopyParams(host.canopy))));
+  return Status();
+}
+
+void destroyHost(Host& h) {
+  if (!h.device) return;
+  Device& d = *h.device;
+  vkDeviceWaitIdle(d.device);
+  h.graph.release(d);
+  h.timer.destroy(d);
+  destroyCanopy(h.canopy);
+  h.canopy = nullptr;
+  destroyImage(d, h.color);
+  destroyImage(d, h.depth);
+  destroyBuffer(d, h.readback);
+  h.device = nullptr;
+}
+
+Status recordHostFrame(Host& h, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present) {
+  CANOPY_TRY(beginCanopyFrame(h.canopy, frame));
+  if (h.graphGeneration != canopyResourceGeneration(h.canopy)) CANOPY_TRY(buildGraph(h));
+  if (h.presentTarget != rg::kInvalidResource) {
+    if (!present) return Status::error("demo: no swapchain image for this frame");
+    CANOPY_TRY(h.graph.bindImage(h.presentTarget, *present));
+  }
+  h.timer.reset(cmd);
+  return h.graph.record(cmd, &h.timer);
+}
+
+void readPixels(const Host& h, std::vector<uint8_t>* rgba) {
+  rgba->resize(size_t(h.width) * h.height * 4);
+  std::memcpy(rgba->data(), h.readback.allocation.mapped, rgba->size());
+  const bool bgra = h.presentFormat == VK_FORMAT_B8G8R8A8_UNORM || h.presentFormat == VK_FORMAT_B8G8R8A8_SRGB;
+  for (size_t i = 0; i < rgba->size(); i += 4) {
+    if (bgra) std::swap((*rgba)[i], (*rgba)[i + 2]);
+    (*rgba)[i + 3] = 255;
+  }
+}
+
+// ---- timing -------------------------------------------------------------------------------------
+
+void TimingLog::add(const std::vector<PassTiming>& passes, double wall) {
+  for (const PassTiming& p : passes) {
+    if (!passMs.count(p.name)) order.push_back(p.name);
+    passMs[p.name].push_back(p.milliseconds);
+  }
+  wallMs.push_back(wall);
+}
+
+std::string TimingLog::summary(const std::string& title) const {
+  std::string s = title + "\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-40s %10s %10s\n", "pass (GPU timestamps)", "median ms", "max ms");
+  s += line;
+  for (const std::string& name : order) {
+    const std::vector<double>& v = passMs.at(name);
+    std::snprintf(line, sizeof line, "  %-40s %10.3f %10.3f\n", name.c_str(), median(v), *std::max_element(v.begin(), v.end()));
+    s += line;
+  }
+  if (!wallMs.empty()) {
+    std::snprintf(line, sizeof line, "  %-40s %10.3f %10.3f   (%.1f FPS)\n", "whole frame, wall clock (submit to fence)",
+                  median(wallMs), *std::max_element(wallMs.begin(), wallMs.end()), 1000.0 / std::max(median(wallMs), 1e-6));
+    s += line;
+  }
+  return s;
+}
+
+}  // namespace canopy::demo

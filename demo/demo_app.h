@@ -1,0 +1,106 @@
+#pragma once
+// canopy-demo's pieces shared by the headless and the window mode: the options, the scene, and a
+// small "host engine" that embeds Canopy through Canopy's render graph (path 1): its own clear,
+// Canopy's passes, then a copy of the frame for the PNG files or a blit to the swapchain image,
+// all ordered by one rg::RenderGraph (no hand-placed barriers).
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "engine/device.h"
+#include "engine/memory.h"
+#include "engine/render_graph.h"
+#include "engine/timing.h"
+#include "render/canopy.h"
+#include "render/scene_generator.h"
+
+namespace canopy::demo {
+
+enum class CameraPath { Still, Orbit };
+
+struct Options {
+  // Scene
+  std::string gltf;                    // a glTF/GLB file instead of a generated scene
+  SceneKind scene = SceneKind::Shrub;
+  uint64_t faces = 80000;
+  uint32_t seed = 1;
+  // Method
+  std::string layout = "5(3-1-1)";
+  uint32_t windSides = kWindFromLeft;
+  float windStrength = 1.5f;           // domain units/s
+  float windFrequency = 0.25f;         // Hz
+  DelayMode delay = DelayMode::Exact;
+  CompositeDebugView debug = CompositeDebugView::None;
+  // Output
+  uint32_t width = 640, height = 480;
+  uint32_t frames = 48;
+  float fps = 30.0f;                   // simulation steps per second of animation (dt = 1 / fps)
+  CameraPath camera = CameraPath::Still;
+  float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence
+  std::string outDir = "demo_out";
+  bool mp4 = true;
+  // Window mode
+  bool window = false;
+  bool vsync = true;
+  uint32_t resizeAt = 0;               // window: resize the window after this many frames (tests)
+  std::string screenshot;              // window: write the last presented frame here (read back from the swapchain)
+  // Both
+  bool validate = false;
+  std::string device;
+};
+
+// Parses the command line. Returns 0 to run, 1 when --help was printed, 2 on an error (the
+// one-line reason is in *error).
+int parseOptions(int argc, char** argv, Options* out, std::string* error);
+void printHelp();
+
+// The scene the options name (generated or loaded), with a progress line for big ones.
+Status loadScene(const Options& o, VegetationModel* model, std::string* label);
+
+// Camera: orbit around the model's bounds.
+struct CameraRig {
+  float yaw = 20.0f, pitch = 12.0f, distance = 1.0f, fov = 40.0f;
+};
+CameraRig defaultRig(const Options& o);
+LayerView cameraView(const CameraRig& rig, const VegetationModel& model, uint32_t width, uint32_t height);
+
+CanopyParams paramsFrom(const Options& o, const CanopyParams& base);
+
+// The host: targets, Canopy context, the frame graph and a GPU timer.
+struct Host {
+  Device* device = nullptr;
+  CanopyContext* canopy = nullptr;
+  uint32_t width = 0, height = 0;
+  Image color, depth;
+  Buffer readback;                         // width x height RGBA8, host-visible
+  rg::RenderGraph graph;
+  rg::ResourceId presentTarget = rg::kInvalidResource;  // imported swapchain image (window mode)
+  uint64_t graphGeneration = ~0ull;
+  bool wantsReadback = false;
+  VkFormat presentFormat = VK_FORMAT_UNDEFINED;
+  GpuTimer timer;
+  glm::vec4 clear{0.0f, 0.0f, 0.0f, 1.0f};  // linear
+};
+
+// Creates targets + context at width x height. `presentFormat` != UNDEFINED adds a blit to an
+// imported swapchain image (bound per frame); `readback` adds the copy for PNG output.
+Status createHost(Device& device, const VegetationModel& model, const Options& o, uint32_t width, uint32_t height,
+                  bool readback, VkFormat presentFormat, Host* out);
+void destroyHost(Host& host);
+// Records one frame (Canopy's frame prepared with `frame`) into `cmd`; `present` is the swapchain
+// image for this frame in window mode.
+Status recordHostFrame(Host& host, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present);
+// The frame's pixels after its submission completed (RGBA8, rows top to bottom, alpha = 255).
+void readPixels(const Host& host, std::vector<uint8_t>* rgba);
+
+// Per-pass timing: medians over the frames added.
+struct TimingLog {
+  std::map<std::string, std::vector<double>> passMs;
+  std::vector<double> wallMs;
+  std::vector<std::string> order;  // pass names in first-seen order
+  void add(const std::vector<PassTiming>& passes, double wall);
+  std::string summary(const std::string& title) const;
+};
+
+}  // namespace canopy::demo

@@ -13,8 +13,9 @@ int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, boo
 int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layout,
                    uint32_t width, uint32_t height);
 // Per-frame animation cost (delay + warp + composite, and the whole still-camera frame) for leaf
-// clouds of the given face counts and the given layouts, then the compositing levers side by side.
+// clouds (scene empty) or generated scenes (render/scene_generator.h) of the given face counts and
+// the given layouts, then the compositing levers side by side.
 int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::vector<std::string>& layouts,
-                 int frames, uint32_t width, uint32_t height);
+                 int frames, uint32_t width, uint32_t height, const std::string& scene);
 }
 }  // namespace canopy

@@ -17,6 +17,7 @@
 #include "engine/timing.h"
 #include "render/canopy.h"
 #include "render/leaf_cloud.h"
+#include "render/scene_generator.h"
 
 namespace canopy::bench {
 namespace {
@@ -102,9 +103,9 @@ Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& time
 }  // namespace
 
 int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::vector<std::string>& layouts,
-                 int frames, uint32_t width, uint32_t height) {
-  std::printf("\nAnimation at %ux%u, still camera (layers sliced once, not per frame); medians of %d frames.\n", width,
-              height, frames);
+                 int frames, uint32_t width, uint32_t height, const std::string& scene) {
+  std::printf("\nAnimation at %ux%u, still camera (layers sliced once, not per frame); medians of %d frames; %s.\n", width,
+              height, frames, scene.empty() ? "leaf clouds with a trunk" : ("generated scene '" + scene + "'").c_str());
   std::printf("anim = delay + warp + composite (simulation held, dt = 0); frame = simulation step (N = 64, dt = 1/30 s)\n"
               "+ delay + warp + composite. Wall = submit-to-fence of one frame, minus the host's own clear.\n\n");
   std::printf("  %-10s %-9s %10s %8s %10s %8s %13s %13s\n", "faces", "layers", "anim ms", "FPS", "frame ms", "FPS",
@@ -117,7 +118,19 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
   std::vector<LeverRow> leverRows;
   for (uint64_t faces : faceCounts) {
     const double g0 = nowMs();
-    const VegetationModel model = makeLeafCloud(faces, 7, true);
+    VegetationModel model;
+    if (scene.empty()) {
+      model = makeLeafCloud(faces, 7, true);
+    } else {
+      SceneDesc sd;
+      sd.faces = faces;
+      Status gs = parseSceneKind(scene, &sd.kind);
+      if (gs.ok()) gs = generateScene(sd, &model);
+      if (!gs.ok()) {
+        std::fprintf(stderr, "canopy-bench: %s\n", gs.message().c_str());
+        return 2;
+      }
+    }
     const double genMs = nowMs() - g0;
     CanopyDesc desc;
     desc.width = width;

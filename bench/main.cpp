@@ -22,6 +22,7 @@ static int usage(const char* why) {
                "  layers         leaf-root preprocessing and layer rebuilds, one draw vs n draws\n"
                "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
+               "  --scene NAME   anim: a generated scene (shrub, tree, grass, kelp, field) instead of leaf clouds\n"
                "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
                "  --layers L     layers: layout (default 5(3-1-1))\n"
                "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
@@ -39,6 +40,7 @@ int main(int argc, char** argv) {
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
+  std::string scene;
   DeviceDesc desc;
   desc.applicationName = "canopy-bench";
   for (int i = 1; i < argc; ++i) {
@@ -60,6 +62,10 @@ int main(int argc, char** argv) {
         if (!cli::parseUint(item.c_str(), 2, 100000000, &n)) return usage("--faces: each must be an integer in [2, 100000000]");
         faces.push_back(n);
       }
+    } else if (a == "--scene") {
+      const char* v = next();
+      if (!v) return usage("--scene needs a name: shrub, tree, grass, kelp, field");
+      scene = v;
     } else if (a == "--rebuilds") {
       if (!cli::parseUint(next(), 1, 1000, &rebuilds)) return usage("--rebuilds needs an integer in [1, 1000]");
     } else if (a == "--layers") {
@@ -101,7 +107,8 @@ int main(int argc, char** argv) {
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
-  if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768);
+  if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768,
+                                             scene);
   destroyDevice(dev);
   return rc;
 }

@@ -30,13 +30,13 @@ double nowMs() {
 }
 
 // Up to 12 frames spread over the sequence, 4 per row, each shrunk by an integer factor to at most
-// 320 pixels wide (box filter), with a 4-pixel white gutter.
+// 240 pixels wide (box filter), with a 4-pixel white gutter.
 Status writeContactSheet(const std::string& path, const std::vector<std::vector<uint8_t>>& frames, uint32_t w, uint32_t h,
                          std::vector<size_t>* picked) {
   const size_t count = std::min<size_t>(12, frames.size());
   picked->clear();
   for (size_t i = 0; i < count; ++i) picked->push_back(count == 1 ? 0 : i * (frames.size() - 1) / (count - 1));
-  const uint32_t f = std::max(1u, (w + 319) / 320), tw = w / f, th = h / f, gap = 4;
+  const uint32_t f = std::max(1u, (w + 239) / 240), tw = w / f, th = h / f, gap = 4;
   const uint32_t cols = uint32_t(std::min<size_t>(4, count)), rows = uint32_t((count + cols - 1) / cols);
   const uint32_t W = cols * tw + (cols + 1) * gap, H = rows * th + (rows + 1) * gap;
   std::vector<uint8_t> sheet(size_t(W) * H * 4, 255);

@@ -345,6 +345,8 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.colorFormat = VK_FORMAT_R8G8B8A8_SRGB;
   desc.useRootCache = !o.gltf.empty();  // a generated scene has no file to keep a cache beside
   const auto t0 = std::chrono::steady_clock::now();
+  if (model.triangleCount() >= 1'000'000)
+    std::fprintf(stderr, "preparing %zu triangles (material split, leaf roots, GPU upload) ...\n", model.triangleCount());
   CANOPY_TRY(createCanopy(d, model, desc, &host.canopy));
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (model.triangleCount() >= 1'000'000)

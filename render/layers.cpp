@@ -209,7 +209,8 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
   for (uint32_t l = 0; l < roots.leafCount(); ++l) rootTable[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
   const VkDeviceSize rootBytes = rootTable.size() * sizeof(glm::vec4);
   if (rootBytes > d.properties.limits.maxStorageBufferRange)
-    return Status::error(m.path + ": " + std::to_string(roots.leafCount()) + " leaves need a " +
+    return Status::error((m.path.empty() ? std::string("the model") : m.path) + ": " + std::to_string(roots.leafCount()) +
+                         " leaves need a " +
                          std::to_string(rootBytes >> 20) + " MiB root table, over the device's storage-buffer range of " +
                          std::to_string(d.properties.limits.maxStorageBufferRange >> 20) + " MiB");
   CANOPY_TRY(createBuffer(d, verts.size() * sizeof(gpu::LayerVertex),

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# README command 1: install what is missing, build (Release) into build/release, run the main job.
-# Until the demo exists this is canopy-smoke: the chosen device and a timed example compute graph.
-# Arguments are passed to the program (canopy-smoke --help).
+# README command 1: install what is missing, build (Release) into build/release, run the demo
+# headless on its built-in default scene (an 80K-face shrub, generated, no asset needed): frames,
+# contact sheet and per-pass timing go to demo_out/ (and demo_out/demo.mp4 with ffmpeg).
+# Arguments are passed to the demo (canopy-demo --help), e.g. --window for a live window.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/deps.sh
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCANOPY_BUILD_TESTS=OFF >/dev/null
-cmake --build build/release --target canopy-smoke
-exec ./build/release/canopy-smoke "$@"
+cmake --build build/release --target canopy-demo canopy-scene
+exec ./build/release/canopy-demo "$@"

@@ -161,7 +161,8 @@ struct CrownFrame {
 
 class CanopyTest : public GpuTest {
  protected:
-  void renderCrown(float windStrength, uint32_t cellSize, int frames, CrownFrame* out) {
+  void renderCrown(float windStrength, uint32_t cellSize, int frames, CrownFrame* out,
+                   CompositeDebugView view = CompositeDebugView::None) {
     const uint32_t w = 128, h = 96;
     const VegetationModel model = makeLeafCloud(4000, 3, true);
     CanopyContext* ctx = nullptr;
@@ -170,6 +171,8 @@ class CanopyTest : public GpuTest {
     CanopyParams p = canopyParams(ctx);
     p.simulation.wind.strength = windStrength;
     p.dynamics.cellSize = cellSize;
+    p.composite.debugView = view;
+    p.composite.debugVelocityScale = std::max(windStrength, 0.1f);
     Host host;
     s = setCanopyParams(ctx, p);
     if (s.ok()) s = host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
@@ -215,6 +218,62 @@ TEST_F(CanopyTest, WindWarpsTheLayersAsTheCpuReferenceDoes) {
   }
   EXPECT_LE(off, r.color.size() / 200) << "pixels more than 3/255 off the CPU reference";
   EXPECT_LE(depthOff, r.color.size() / 100);
+}
+
+// The demo's debug views (issue 6), drawn by the composite pass itself.
+TEST_F(CanopyTest, DebugViewsShowLayersGridAndVelocity) {
+  const uint32_t w = 128;
+  // False colour: the vegetation shows the layers' palette colours instead of its own.
+  CrownFrame layers;
+  renderCrown(0.0f, 16, 3, &layers, CompositeDebugView::Layers);
+  if (HasFailure()) return;
+  const uint32_t count = 5;  // the default layout 5(3-1-1)
+  std::vector<size_t> perLayer(count, 0);
+  size_t foliage = 0;
+  for (size_t i = 0; i < layers.color.size(); ++i) {
+    if (layers.depth[i] >= 1.0f || layers.ref.color[i] == kSky) continue;
+    const glm::vec3 c = glm::vec3(layers.color[i]);
+    if (glm::length(c) < 1e-3f) continue;
+    foliage++;
+    for (uint32_t l = 0; l < count; ++l)
+      if (glm::dot(glm::normalize(c), glm::normalize(gpu::debugLayerColor(l))) > 0.995f) perLayer[l]++;
+  }
+  size_t shown = 0, matched = 0;
+  for (size_t n : perLayer) {
+    shown += n > foliage / 100;
+    matched += n;
+  }
+  EXPECT_GE(shown, 3u) << "at least three layers visible in their own colours";
+  EXPECT_GT(matched, foliage / 3) << "of " << foliage << " vegetation pixels";
+
+  // Warp grid without wind: the undisplaced grid, lines on the pixel columns next to multiples of 16.
+  CrownFrame grid;
+  renderCrown(0.0f, 16, 2, &grid, CompositeDebugView::Grid);
+  if (HasFailure()) return;
+  const glm::vec4 yellow(1.0f, 0.85f, 0.1f, 1.0f);
+  size_t onLine = 0, offLine = 0;
+  for (size_t i = 0; i < grid.color.size(); ++i) {
+    const uint32_t x = uint32_t(i % w), y = uint32_t(i / w);
+    const bool line = x % 16 == 0 || x % 16 == 15 || y % 16 == 0 || y % 16 == 15;
+    const bool isYellow = maxDiff(grid.color[i], yellow) < 2.0f / 255.0f;
+    onLine += line && isYellow;
+    offLine += !line && isYellow;
+  }
+  EXPECT_EQ(offLine, 0u);
+  EXPECT_GT(onLine, grid.color.size() / 5);
+
+  // Velocity field with wind from the left: the field's colour (red = +x) over the whole plane.
+  CrownFrame still, velocity;
+  renderCrown(2.0f, 16, 10, &still);
+  renderCrown(2.0f, 16, 10, &velocity, CompositeDebugView::Velocity);
+  if (HasFailure()) return;
+  double redStill = 0, redVelocity = 0;
+  for (size_t i = 0; i < still.color.size(); ++i) {
+    redStill += still.color[i].r - still.color[i].b;
+    redVelocity += velocity.color[i].r - velocity.color[i].b;
+  }
+  EXPECT_GT(redVelocity / double(still.color.size()), redStill / double(still.color.size()) + 0.1)
+      << "the velocity view is red where the wind blows toward +x";
 }
 
 TEST_F(CanopyTest, ParameterChangesRebuildOnlyWhatDependsOnThem) {

@@ -87,7 +87,10 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       LayerLayout l;
       if (!takes()) return bad("needs a layout such as 5(3-1-1) or 3");
       const Status s = parseLayerLayout(v, &l);
-      if (!s.ok()) return bad("'" + std::string(v) + "': " + s.message());
+      if (!s.ok()) {
+        std::string why = s.message();  // (built by appends: GCC 12's -Wrestrict misfires on "'" + std::string(v))
+        return bad(why.insert(0, std::string("'") + v + "': "));
+      }
       o->layout = v;
     } else if (a == "--wind") {
       if (!takes()) return bad("needs sides: left,right,top,bottom or none");

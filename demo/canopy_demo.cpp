@@ -29,19 +29,25 @@ double nowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-// Up to 12 frames spread over the sequence, 4 per row, each shrunk by an integer factor to at most
-// 240 pixels wide (box filter), with a 4-pixel white gutter.
-Status writeContactSheet(const std::string& path, const std::vector<std::vector<uint8_t>>& frames, uint32_t w, uint32_t h,
-                         std::vector<size_t>* picked) {
-  const size_t count = std::min<size_t>(12, frames.size());
-  picked->clear();
-  for (size_t i = 0; i < count; ++i) picked->push_back(count == 1 ? 0 : i * (frames.size() - 1) / (count - 1));
+// Up to 12 frames spread over the sequence (which ones depends only on the count, so only those
+// are kept in memory while rendering).
+std::vector<size_t> contactSheetFrames(size_t frameCount) {
+  const size_t count = std::min<size_t>(12, frameCount);
+  std::vector<size_t> picked;
+  for (size_t i = 0; i < count; ++i) picked.push_back(count == 1 ? 0 : i * (frameCount - 1) / (count - 1));
+  return picked;
+}
+
+// The picked frames, 4 per row, each shrunk by an integer factor to at most 240 pixels wide (box
+// filter), with a 4-pixel white gutter.
+Status writeContactSheet(const std::string& path, const std::vector<std::vector<uint8_t>>& frames, uint32_t w, uint32_t h) {
+  const size_t count = frames.size();
   const uint32_t f = std::max(1u, (w + 239) / 240), tw = w / f, th = h / f, gap = 4;
   const uint32_t cols = uint32_t(std::min<size_t>(4, count)), rows = uint32_t((count + cols - 1) / cols);
   const uint32_t W = cols * tw + (cols + 1) * gap, H = rows * th + (rows + 1) * gap;
   std::vector<uint8_t> sheet(size_t(W) * H * 4, 255);
   for (size_t k = 0; k < count; ++k) {
-    const std::vector<uint8_t>& src = frames[(*picked)[k]];
+    const std::vector<uint8_t>& src = frames[k];
     const uint32_t ox = gap + uint32_t(k % cols) * (tw + gap), oy = gap + uint32_t(k / cols) * (th + gap);
     for (uint32_t y = 0; y < th; ++y)
       for (uint32_t x = 0; x < tw; ++x)
@@ -54,6 +60,52 @@ Status writeContactSheet(const std::string& path, const std::vector<std::vector<
   }
   return writePng(path, W, H, sheet);
 }
+
+// How much the vegetation sways in the written frames, measured on the pixels themselves (still
+// camera): the vegetation is every pixel that differs from the clear colour; the rows of the top
+// third of frame 0's silhouette are followed, and the horizontal centroid of the vegetation in
+// those rows is recorded per frame. Its range is the sway of the crown in pixels.
+struct SwayMeter {
+  uint8_t clear[3] = {0, 0, 0};
+  uint32_t width = 0, height = 0, rowBegin = 0, rowEnd = 0;
+  std::vector<double> centroidX;
+
+  bool vegetation(const uint8_t* p) const {
+    return std::abs(int(p[0]) - clear[0]) + std::abs(int(p[1]) - clear[1]) + std::abs(int(p[2]) - clear[2]) > 24;
+  }
+  void add(const std::vector<uint8_t>& rgba) {
+    if (centroidX.empty()) {  // the rows to follow, from frame 0
+      uint32_t top = height, bottom = 0;
+      for (uint32_t y = 0; y < height; ++y)
+        for (uint32_t x = 0; x < width; ++x)
+          if (vegetation(&rgba[(size_t(y) * width + x) * 4])) {
+            top = std::min(top, y);
+            bottom = std::max(bottom, y);
+          }
+      rowBegin = top;
+      rowEnd = top < bottom ? top + (bottom - top + 1) / 3 : top;
+    }
+    double sum = 0, count = 0;
+    for (uint32_t y = rowBegin; y < rowEnd; ++y)
+      for (uint32_t x = 0; x < width; ++x)
+        if (vegetation(&rgba[(size_t(y) * width + x) * 4])) {
+          sum += x;
+          count += 1;
+        }
+    centroidX.push_back(count > 0 ? sum / count : 0.0);
+  }
+  std::string summary() const {
+    if (centroidX.size() < 2 || rowEnd <= rowBegin) return "";
+    const auto lo = std::min_element(centroidX.begin(), centroidX.end());
+    const auto hi = std::max_element(centroidX.begin(), centroidX.end());
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "Sway (top third of the vegetation, rows %u..%u): horizontal centroid %.1f .. %.1f px, range %.1f px "
+                  "(frames %zu and %zu)\n",
+                  rowBegin, rowEnd - 1, *lo, *hi, *hi - *lo, size_t(lo - centroidX.begin()), size_t(hi - centroidX.begin()));
+    return line;
+  }
+};
 
 int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
   DeviceDesc dd;
@@ -81,47 +133,76 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(createHost(dev, model, o, o.width, o.height, true, VK_FORMAT_UNDEFINED, &host));
     const CameraRig rig0 = defaultRig(o);
     TimingLog first, steady;
-    std::vector<std::vector<uint8_t>> frames;
-    const double t0 = nowMs();
-    for (uint32_t i = 0; i < o.frames; ++i) {
+    const std::vector<size_t> picked = contactSheetFrames(o.frames);
+    std::vector<std::vector<uint8_t>> sheetFrames;
+    SwayMeter sway;
+    sway.width = o.width;
+    sway.height = o.height;
+    for (int c = 0; c < 3; ++c) {  // the clear colour as the sRGB target stores it
+      const float v = host.clear[c];
+      sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f, 0.0f, 1.0f)));
+    }
+    const bool measureSway = o.camera == CameraPath::Still && o.debug == CompositeDebugView::None;
+    // Warm-up: whole frames at the same dt and camera as frame 0, not written, so the wind has
+    // reached the plant and the history ring (exact delay) is full when the first frame is written.
+    const uint32_t warmup = uint32_t(std::lround(double(o.warmupSeconds) * o.fps));
+    bool firstSubmitted = false;
+    auto frameAt = [&](uint32_t i) {
       CameraRig rig = rig0;
       if (o.camera == CameraPath::Orbit && o.frames > 1) rig.yaw += o.orbitDegrees * float(i) / float(o.frames - 1);
       CanopyFrame f;
       f.camera = cameraView(rig, model, o.width, o.height);
       f.dt = 1.0f / o.fps;
+      return f;
+    };
+    auto submit = [&](const CanopyFrame& f, bool keep) -> Status {
       const double w0 = nowMs();
       CANOPY_TRY(submitAndWait(dev, [&](VkCommandBuffer cmd) { return recordHostFrame(host, cmd, f, nullptr); }));
       const double wall = nowMs() - w0;
       std::vector<PassTiming> t;
       CANOPY_TRY(host.timer.read(dev, &t));
       // The first frame slices the layers (and every orbit frame re-slices): kept apart from the steady state.
-      (i == 0 ? first : steady).add(t, wall);
+      if (!firstSubmitted) first.add(t, wall);
+      else if (keep) steady.add(t, wall);
+      firstSubmitted = true;
+      return Status();
+    };
+    if (warmup > 0) {
+      const double w0 = nowMs();
+      for (uint32_t i = 0; i < warmup; ++i) CANOPY_TRY(submit(frameAt(0), false));
+      std::fprintf(stderr, "warm-up: %u frames (%.2f s of simulation) in %.1f s\n", warmup, double(warmup) / o.fps,
+                   (nowMs() - w0) / 1000.0);
+    }
+    const double t0 = nowMs();
+    for (uint32_t i = 0; i < o.frames; ++i) {
+      CANOPY_TRY(submit(frameAt(i), true));
       std::vector<uint8_t> rgba;
       readPixels(host, &rgba);
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04u.png", i);
       CANOPY_TRY(writePng(o.outDir + name, o.width, o.height, rgba));
-      frames.push_back(std::move(rgba));
+      if (measureSway) sway.add(rgba);
+      if (std::find(picked.begin(), picked.end(), size_t(i)) != picked.end()) sheetFrames.push_back(std::move(rgba));
       std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", isatty(2) ? "\r" : "", i + 1, o.frames,
                    double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), isatty(2) && i + 1 < o.frames ? "" : "\n");
     }
-    std::vector<size_t> picked;
-    CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", frames, o.width, o.height, &picked));
+    CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height));
     const CanopyStats st = canopyStats(host.canopy);
     char head[2048];
     std::snprintf(head, sizeof head,
-                  "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz, %u frames at dt = 1/%g s, "
-                  "camera %s\ndevice: %s; %u layer re-slices\n"
+                  "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
+                  "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices\n"
                   "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
                   "(design.md): the wall-clock line is the figure to trust there.\n",
                   label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
-                  o.windStrength, o.windFrequency, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
+                  o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
                   dev.properties.deviceName, uint32_t(st.layers.rebuilds));
     std::string text = head;
-    text += first.summary("\nFirst frame (slices the layers):");
+    text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
     if (!steady.wallMs.empty())
-      text += steady.summary("\nFrames 2.." + std::to_string(o.frames) + " (medians" +
+      text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
                              (o.camera == CameraPath::Orbit ? std::string(", every frame re-slices") : std::string()) + "):");
+    if (measureSway) text += "\n" + sway.summary();
     if (FILE* f = std::fopen((o.outDir + "/timing.txt").c_str(), "w")) {
       std::fputs(text.c_str(), f);
       std::fclose(f);

@@ -28,13 +28,18 @@ void printHelp() {
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
       "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
       "  --strength V        wind strength, domain units/s, [0, 1000] (default %g)\n"
-      "  --frequency F       wind modulation frequency, Hz, [0, 1000] (default %g)\n"
+      "  --frequency F       wind modulation frequency f, Hz, [0, 1000] (default %g)\n"
+      "  --modulation B      wind modulation depth b, [0, 10] (default %g): the inflow speed is\n"
+      "                      strength * (1 + b sin(2 pi f t)) * (1 + G * noise travelling along the side)\n"
+      "  --gust G            gust noise amplitude G, [0, 1] (default %g)\n"
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
       "Output:\n"
       "  --size WxH          frame size, 16..8192 each (default %ux%u)\n"
       "  --frames N          frames to render, 1..100000 (default %u)\n"
+      "  --warmup S          headless: seconds of animation run (not written) before the first frame,\n"
+      "                      so the wind has reached the plant, [0, 60] (default %g)\n"
       "  --fps F             animation frames per second, dt = 1/F, [1, 1000] (default %g)\n"
       "  --camera PATH       still or orbit (default still)\n"
       "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
@@ -53,8 +58,8 @@ void printHelp() {
       "  --device NAME       substring of the Vulkan device name (default: best device, or $CANOPY_DEVICE)\n"
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
-      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.width, d.height,
-      d.frames, d.fps, d.orbitDegrees, d.outDir.c_str());
+      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust, d.width,
+      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.outDir.c_str());
 }
 
 int parseOptions(int argc, char** argv, Options* o, std::string* err) {
@@ -116,6 +121,15 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--frequency") {
       if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
       o->windFrequency = f;
+    } else if (a == "--modulation") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 10)) return bad("needs a number in [0, 10]");
+      o->windModulation = f;
+    } else if (a == "--gust") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1)) return bad("needs a number in [0, 1]");
+      o->windGust = f;
+    } else if (a == "--warmup") {
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 60)) return bad("needs seconds in [0, 60]");
+      o->warmupSeconds = f;
     } else if (a == "--delay") {
       if (!takes()) return bad("needs exact or approx");
       if (std::string(v) == "exact") o->delay = DelayMode::Exact;
@@ -230,6 +244,8 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.simulation.wind.sides = o.windSides;
   p.simulation.wind.strength = o.windStrength;
   p.simulation.wind.frequency = o.windFrequency;
+  p.simulation.wind.modulation = o.windModulation;
+  p.simulation.wind.gust = o.windGust;
   p.dynamics.delay = o.delay;
   p.composite.debugView = o.debug;
   p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);

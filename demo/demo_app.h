@@ -28,13 +28,16 @@ struct Options {
   // Method
   std::string layout = "5(3-1-1)";
   uint32_t windSides = kWindFromLeft;
-  float windStrength = 1.5f;           // domain units/s
-  float windFrequency = 0.25f;         // Hz
+  float windStrength = 2.0f;           // domain units/s
+  float windFrequency = 0.5f;          // Hz
+  float windModulation = 0.8f;         // b of strength * (a + b sin(2 pi f t)), a = 1
+  float windGust = 0.3f;               // relative gust amplitude
+  float warmupSeconds = 2.0f;          // headless: simulation time run before the first written frame
   DelayMode delay = DelayMode::Exact;
   CompositeDebugView debug = CompositeDebugView::None;
   // Output
   uint32_t width = 640, height = 480;
-  uint32_t frames = 48;
+  uint32_t frames = 60;
   float fps = 30.0f;                   // simulation steps per second of animation (dt = 1 / fps)
   CameraPath camera = CameraPath::Still;
   float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence

@@ -7,14 +7,27 @@ demo=$1 scene=$2 out=$3
 rm -rf "$out" && mkdir -p "$out"
 fail() { echo "FAIL: $*"; exit 1; }
 
-"$demo" --frames 4 --size 160x120 --validate --no-mp4 --out "$out/headless" >"$out/stdout" 2>"$out/stderr" ||
+"$demo" --frames 4 --size 160x120 --warmup 0.2 --validate --no-mp4 --out "$out/headless" >"$out/stdout" 2>"$out/stderr" ||
   fail "headless: exit $? ($(tail -5 "$out/stderr"))"
+grep -q "warm-up: 6 frames" "$out/stderr" || fail "no warm-up line: $(cat "$out/stderr")"
 for f in frame_0000 frame_0001 frame_0002 frame_0003 contact_sheet; do
   [ -s "$out/headless/$f.png" ] || fail "missing $f.png"
 done
 grep -q "composite: warp + composite" "$out/headless/timing.txt" || fail "timing.txt lacks the composite pass"
 grep -q "wall clock" "$out/headless/timing.txt" || fail "timing.txt lacks the wall-clock line"
+grep -q "^Sway (top third" "$out/headless/timing.txt" || fail "timing.txt lacks the sway line"
 echo "headless: $(grep -c . "$out/headless/timing.txt") lines of timing, $(ls "$out/headless" | wc -l) files"
+
+# The default wind visibly sways the shrub; no wind leaves it still (the sway is measured by the
+# demo on its own frames: the horizontal centroid of the top third of the vegetation).
+sway_range() { sed -n 's/^Sway .* range \([0-9.]*\) px.*/\1/p' "$1/timing.txt"; }
+"$demo" --frames 24 --size 320x240 --warmup 1 --no-mp4 --out "$out/wind" >/dev/null 2>&1 || fail "wind run: exit $?"
+"$demo" --frames 24 --size 320x240 --warmup 1 --strength 0 --no-mp4 --out "$out/calm" >/dev/null 2>&1 || fail "calm run: exit $?"
+wind=$(sway_range "$out/wind") calm=$(sway_range "$out/calm")
+[ -n "$wind" ] && [ -n "$calm" ] || fail "no sway figures"
+awk -v w="$wind" -v c="$calm" 'BEGIN { exit !(w >= 2.0 && c <= 0.25) }' ||
+  fail "sway: wind $wind px (expected >= 2), no wind $calm px (expected <= 0.25)"
+echo "sway over 24 frames at 320x240: wind $wind px, no wind $calm px"
 
 # Another scene, orbit camera, approximate delay, a debug view, through a .glb written by canopy-scene.
 "$scene" --scene kelp --faces 20K --out "$out/kelp.glb" >/dev/null || fail "canopy-scene"
@@ -43,8 +56,11 @@ expect_refusal "palm" --scene palm
 expect_refusal "--size" --size 10x10
 expect_refusal "north" --wind north
 expect_refusal "--strength" --strength -1
+expect_refusal "--gust" --gust 2
+expect_refusal "--warmup" --warmup -1
 expect_refusal "--bogus" --bogus
-"$demo" --help | grep -q -- "--frames N .*default 48" || fail "--help does not document --frames with its default"
+"$demo" --help | grep -q -- "--frames N .*default 60" || fail "--help does not document --frames with its default"
+"$demo" --help | grep -q -- "--warmup S .*" || fail "--help does not document --warmup"
 "$demo" --gltf "$out/absent.glb" --frames 1 >/dev/null 2>"$out/err" && fail "a missing glTF file was accepted"
 grep -q "absent.glb" "$out/err" || fail "missing file not named: $(cat "$out/err")"
 echo "PASS"

@@ -48,17 +48,9 @@ int usage(const std::string& why) {
   return 0;
 }
 
-std::vector<std::string> splitList(const std::string& s) {
-  std::vector<std::string> out;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(item);
-  return out;
-}
-
 bool parsePair(const char* s, float* a, float* b) {
   if (!s) return false;
-  const std::vector<std::string> p = splitList(s);
+  const std::vector<std::string> p = cli::splitList(s);
   return p.size() == 2 && cli::parseFloat(p[0].c_str(), a) && cli::parseFloat(p[1].c_str(), b);
 }
 
@@ -122,7 +114,7 @@ int main(int argc, char** argv) {
       if (!cli::parseFloat(next(), &distance) || !(distance > 0 && distance <= 100)) return usage("--distance needs a number in (0, 100]");
     } else if (a == "--rigid" || a == "--foliage") {
       if (!(v = next())) return usage(a + " needs material names or #indices");
-      (a == "--rigid" ? desc.split.rigid : desc.split.foliage) = splitList(v);
+      (a == "--rigid" ? desc.split.rigid : desc.split.foliage) = cli::splitList(v);
     } else if (a == "--slice") {
       if (!(v = next())) return usage("--slice needs roots or geometry");
       const std::string s = v;

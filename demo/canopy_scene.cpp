@@ -67,6 +67,16 @@ int main(int argc, char** argv) {
       return fail("unknown argument '" + a + "' (see --help)");
     }
   }
+  // About 80 bytes per face (render/scene_generator.h; 50M shrub faces peak at 3.9 GB): refuse what
+  // cannot fit rather than be ended by the OOM killer, which no bad_alloc reports.
+  constexpr uint64_t kPeakBytesPerFace = 90;
+  const uint64_t available = cli::availableMemoryBytes();
+  if (available > 0 && desc.faces * kPeakBytesPerFace > available) {
+    std::fprintf(stderr, "canopy-scene: --faces %llu needs about %llu GiB of memory (about 90 bytes per face); this machine has %llu GiB available\n",
+                 (unsigned long long)desc.faces, (unsigned long long)((desc.faces * kPeakBytesPerFace + (1ull << 29)) >> 30),
+                 (unsigned long long)((available + (1ull << 29)) >> 30));
+    return 1;
+  }
   VegetationModel model;
   SceneStats st;
   cli::ProgressLine progress(std::string("generating ") + sceneName(desc.kind));

@@ -2,7 +2,10 @@
 // Strict number parsing for the command-line programs (demo/, bench/): the whole argument must be
 // a number in range, otherwise the caller prints a one-line reason.
 #include <cstdint>
+#include <algorithm>
 #include <cstdlib>
+#include <string>
+#include <vector>
 
 namespace canopy::cli {
 
@@ -37,6 +40,31 @@ inline bool parseFloat(const char* s, float* out) {
   if (*end) return false;
   *out = float(v);
   return true;
+}
+
+// "a,b,c" -> {"a", "b", "c"} (empty items kept, so "a,,b" is refused by whoever checks names).
+inline std::vector<std::string> splitList(const std::string& s) {
+  std::vector<std::string> out;
+  size_t start = 0;
+  while (start <= s.size()) {
+    const size_t comma = std::min(s.find(',', start), s.size());
+    out.push_back(s.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return out;
+}
+
+// MemAvailable of /proc/meminfo in bytes (0 when unknown): the memory a big request may use
+// before the kernel's OOM killer ends the process, which no bad_alloc would report.
+inline uint64_t availableMemoryBytes() {
+  uint64_t kb = 0;
+  if (FILE* f = std::fopen("/proc/meminfo", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::sscanf(line, "MemAvailable: %lu kB", (unsigned long*)&kb) == 1) break;
+    std::fclose(f);
+  }
+  return kb * 1024;
 }
 
 }  // namespace canopy::cli

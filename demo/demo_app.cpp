@@ -24,6 +24,9 @@ void printHelp() {
       "  --faces N           generated scene's triangles, %llu..%llu, K/M suffixes (default %lluK)\n"
       "  --seed S            generated scene's seed, 0..4294967295 (default %u)\n"
       "  --gltf FILE         load a .gltf/.glb instead of generating a scene\n"
+      "  --rigid M1,M2       materials (names or #index) forced to be rigid background (trunk, branches)\n"
+      "  --foliage M1,M2     materials forced to be foliage (default rule: render/material_split.h)\n"
+      "  --cache-dir DIR     leaf-root cache of a --gltf model (default: the output folder)\n"
       "Method:\n"
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
       "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
@@ -62,6 +65,16 @@ void printHelp() {
       d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.outDir.c_str());
 }
 
+namespace {
+// 'text' built by appends: GCC 12's -Wrestrict misfires on "'" + std::string(text) once inlined.
+std::string quoted(const std::string& text) {
+  std::string q(1, '\'');
+  q += text;
+  q += '\'';
+  return q;
+}
+}  // namespace
+
 int parseOptions(int argc, char** argv, Options* o, std::string* err) {
   bool framesGiven = false;
   for (int i = 1; i < argc; ++i) {
@@ -79,7 +92,7 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--scene") {
       if (!takes()) return bad("needs a name: shrub, tree, grass, kelp, field");
       const Status s = parseSceneKind(v, &o->scene);
-      if (!s.ok()) return bad("'" + std::string(v) + "' is not one of shrub, tree, grass, kelp, field");
+      if (!s.ok()) return bad(quoted(v) + " is not one of shrub, tree, grass, kelp, field");
     } else if (a == "--faces") {
       if (!takes() || !cli::parseCount(v, kMinSceneFaces, kMaxSceneFaces, &o->faces))
         return bad("needs a count in [" + std::to_string(kMinSceneFaces) + ", " + std::to_string(kMaxSceneFaces) + "]");
@@ -88,32 +101,31 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--gltf") {
       if (!takes()) return bad("needs a file");
       o->gltf = v;
+    } else if (a == "--rigid" || a == "--foliage") {
+      if (!takes() || !*v) return bad("needs material names or #indices, comma-separated");
+      (a == "--rigid" ? o->split.rigid : o->split.foliage) = cli::splitList(v);
+    } else if (a == "--cache-dir") {
+      if (!takes() || !*v) return bad("needs a folder");
+      o->cacheDir = v;
     } else if (a == "--layers") {
       LayerLayout l;
       if (!takes()) return bad("needs a layout such as 5(3-1-1) or 3");
       const Status s = parseLayerLayout(v, &l);
       if (!s.ok()) {
-        std::string why = s.message();  // (built by appends: GCC 12's -Wrestrict misfires on "'" + std::string(v))
-        return bad(why.insert(0, std::string("'") + v + "': "));
+        return bad(quoted(v) + ": " + s.message());
       }
       o->layout = v;
     } else if (a == "--wind") {
       if (!takes()) return bad("needs sides: left,right,top,bottom or none");
       uint32_t sides = 0;
-      std::string list = v;
-      if (list != "none") {
-        size_t start = 0;
-        while (start <= list.size()) {
-          const size_t comma = std::min(list.find(',', start), list.size());
-          const std::string side = list.substr(start, comma - start);
+      if (std::string(v) != "none")
+        for (const std::string& side : cli::splitList(v)) {
           if (side == "left") sides |= kWindFromLeft;
           else if (side == "right") sides |= kWindFromRight;
           else if (side == "top") sides |= kWindFromTop;
           else if (side == "bottom") sides |= kWindFromBottom;
           else return bad("side '" + side + "' is not left, right, top or bottom");
-          start = comma + 1;
         }
-      }
       o->windSides = sides;
     } else if (a == "--strength") {
       if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
@@ -134,7 +146,7 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (!takes()) return bad("needs exact or approx");
       if (std::string(v) == "exact") o->delay = DelayMode::Exact;
       else if (std::string(v) == "approx" || std::string(v) == "approximate") o->delay = DelayMode::Approximate;
-      else return bad("'" + std::string(v) + "' is not exact or approx");
+      else return bad(quoted(v) + " is not exact or approx");
     } else if (a == "--debug") {
       if (!takes()) return bad("needs none, layers, velocity or grid");
       const std::string d = v;
@@ -142,7 +154,7 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       else if (d == "layers") o->debug = CompositeDebugView::Layers;
       else if (d == "velocity") o->debug = CompositeDebugView::Velocity;
       else if (d == "grid") o->debug = CompositeDebugView::Grid;
-      else return bad("'" + d + "' is not none, layers, velocity or grid");
+      else return bad(quoted(d) + " is not none, layers, velocity or grid");
     } else if (a == "--size") {
       unsigned w = 0, h = 0;
       char tail = 0;
@@ -160,7 +172,7 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (!takes()) return bad("needs still or orbit");
       if (std::string(v) == "still") o->camera = CameraPath::Still;
       else if (std::string(v) == "orbit") o->camera = CameraPath::Orbit;
-      else return bad("'" + std::string(v) + "' is not still or orbit");
+      else return bad(quoted(v) + " is not still or orbit");
     } else if (a == "--orbit-degrees") {
       if (!takes() || !cli::parseFloat(v, &f) || !(f >= -3600 && f <= 3600)) return bad("needs a number in [-3600, 3600]");
       o->orbitDegrees = f;
@@ -208,6 +220,16 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
     *label = o.gltf;
     return Status();
   }
+  // Generating and preparing a scene peaks at about 330 bytes per face (measured with /usr/bin/time
+  // on `canopy-demo --scene shrub --faces 10M`: 3.27 GB; on a CPU driver the GPU buffers are host
+  // memory too). Refuse what cannot fit instead of being killed by the OOM killer half-way.
+  constexpr uint64_t kPeakBytesPerFace = 350;
+  const uint64_t available = cli::availableMemoryBytes();
+  if (available > 0 && o.faces * kPeakBytesPerFace > available)
+    return Status::error("--faces " + std::to_string(o.faces) + " needs about " +
+                         std::to_string((o.faces * kPeakBytesPerFace + (1ull << 29)) >> 30) +
+                         " GiB of memory to generate and prepare (about 350 bytes per face); this machine has " +
+                         std::to_string((available + (1ull << 29)) >> 30) + " GiB available");
   SceneDesc d;
   d.kind = o.scene;
   d.faces = o.faces;
@@ -331,6 +353,39 @@ Status buildGraph(Host& h) {
 
 }  // namespace
 
+namespace {
+
+// The host's own colour (sRGB: the layers hold linear colour, so the PNG bytes and the swapchain
+// show the colours the textures were painted with), depth and read-back buffer at the host's size.
+Status createTargets(Host& host) {
+  Device& d = *host.device;
+  ImageDesc c;
+  c.format = VK_FORMAT_R8G8B8A8_SRGB;
+  c.width = host.width;
+  c.height = host.height;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, c, &host.color, "demo colour"));
+  c.format = VK_FORMAT_D32_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, c, &host.depth, "demo depth"));
+  if (host.wantsReadback)
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(host.width) * host.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::Readback, &host.readback, "demo readback"));
+  return Status();
+}
+
+void destroyTargets(Host& h) {
+  Device& d = *h.device;
+  h.graph.release(d);
+  h.graph = rg::RenderGraph();
+  h.graphGeneration = ~0ull;
+  destroyImage(d, h.color);
+  destroyImage(d, h.depth);
+  destroyBuffer(d, h.readback);
+}
+
+}  // namespace
+
 Status createHost(Device& d, const VegetationModel& model, const Options& o, uint32_t w, uint32_t h, bool readback,
                   VkFormat presentFormat, Host* out) {
   Host& host = *out;
@@ -339,34 +394,29 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   host.height = h;
   host.wantsReadback = readback;
   host.presentFormat = presentFormat;
-  // The layers hold linear colour (sRGB textures are decoded when sampled): an sRGB target encodes
-  // it again, so the PNG bytes and the swapchain show the colours the textures were painted with.
   auto linear = [](float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); };
   const glm::vec3 sky = o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
                                                                      : glm::vec3(0.62f, 0.75f, 0.88f);
   host.clear = glm::vec4(linear(sky.r), linear(sky.g), linear(sky.b), 1.0f);
-  ImageDesc c;
-  c.format = VK_FORMAT_R8G8B8A8_SRGB;
-  c.width = w;
-  c.height = h;
-  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  CANOPY_TRY(createImage(d, c, &host.color, "demo colour"));
-  c.format = VK_FORMAT_D32_SFLOAT;
-  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  CANOPY_TRY(createImage(d, c, &host.depth, "demo depth"));
-  if (readback)
-    CANOPY_TRY(createBuffer(d, VkDeviceSize(w) * h * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback,
-                            &host.readback, "demo readback"));
+  CANOPY_TRY(createTargets(host));
   CANOPY_TRY(host.timer.init(d, 64));
   CanopyDesc desc;
   desc.width = w;
   desc.height = h;
   desc.colorFormat = VK_FORMAT_R8G8B8A8_SRGB;
-  desc.useRootCache = !o.gltf.empty();  // a generated scene has no file to keep a cache beside
+  // A generated scene has no file to key a cache by. A loaded model's cache goes to the output
+  // folder (or --cache-dir), not beside the model: the demo writes only where it was told to.
+  desc.useRootCache = !o.gltf.empty();
+  LayerLayout layout;
+  if (parseLayerLayout(o.layout, &layout).ok()) desc.maxLayers = std::max(desc.maxLayers, layout.count());
+  desc.rootCacheDir = o.cacheDir.empty() ? o.outDir : o.cacheDir;
+  desc.split = o.split;
   const auto t0 = std::chrono::steady_clock::now();
   if (model.triangleCount() >= 1'000'000)
     std::fprintf(stderr, "preparing %zu triangles (material split, leaf roots, GPU upload) ...\n", model.triangleCount());
-  CANOPY_TRY(createCanopy(d, model, desc, &host.canopy));
+  const Status made = createCanopy(d, model, desc, &host.canopy);
+  if (!made.ok())
+    return made.context(std::to_string(w) + "x" + std::to_string(h) + " frame, " + std::to_string(desc.maxLayers) + " layers at most");
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (model.triangleCount() >= 1'000'000)
     std::fprintf(stderr, "prepared %zu triangles (material split, leaf roots, GPU upload) in %.2f s (%.2fM/s)\n",
@@ -375,17 +425,24 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   return Status();
 }
 
+Status resizeHost(Host& host, uint32_t width, uint32_t height, VkFormat presentFormat) {
+  vkDeviceWaitIdle(host.device->device);
+  destroyTargets(host);
+  host.width = width;
+  host.height = height;
+  host.presentFormat = presentFormat;
+  CANOPY_TRY(createTargets(host));
+  return resizeCanopy(host.canopy, width, height);
+}
+
 void destroyHost(Host& h) {
   if (!h.device) return;
   Device& d = *h.device;
   vkDeviceWaitIdle(d.device);
-  h.graph.release(d);
+  destroyTargets(h);
   h.timer.destroy(d);
   destroyCanopy(h.canopy);
   h.canopy = nullptr;
-  destroyImage(d, h.color);
-  destroyImage(d, h.depth);
-  destroyBuffer(d, h.readback);
   h.device = nullptr;
 }
 

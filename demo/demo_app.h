@@ -22,6 +22,8 @@ enum class CameraPath { Still, Orbit };
 struct Options {
   // Scene
   std::string gltf;                    // a glTF/GLB file instead of a generated scene
+  MaterialSplitOptions split;          // --rigid / --foliage overrides of the default material rule
+  std::string cacheDir;                // leaf-root cache folder; empty: the output folder
   SceneKind scene = SceneKind::Shrub;
   uint64_t faces = 80000;
   uint32_t seed = 1;
@@ -90,6 +92,9 @@ struct Host {
 // imported swapchain image (bound per frame); `readback` adds the copy for PNG output.
 Status createHost(Device& device, const VegetationModel& model, const Options& o, uint32_t width, uint32_t height,
                   bool readback, VkFormat presentFormat, Host* out);
+// A new size (window resize) or swapchain format: the host's targets are recreated and Canopy's
+// context resized (resizeCanopy), so the scene is not prepared again.
+Status resizeHost(Host& host, uint32_t width, uint32_t height, VkFormat presentFormat);
 void destroyHost(Host& host);
 // Records one frame (Canopy's frame prepared with `frame`) into `cmd`; `present` is the swapchain
 // image for this frame in window mode.

@@ -327,14 +327,15 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
         }
         if (!host.device || host.width != sc.extent.width || host.height != sc.extent.height ||
             host.presentFormat != sc.format) {
-          const CanopyParams keep = host.canopy ? live.params : CanopyParams();
-          const bool hadHost = host.canopy != nullptr;
-          destroyHost(host);
-          host = Host();
-          // With a read-back copy of every presented frame: P (or --screenshot) saves what was on screen.
-          CANOPY_TRY(createHost(dev, model, o, sc.extent.width, sc.extent.height, true, sc.format, &host));
-          if (hadHost) CANOPY_TRY(setCanopyParams(host.canopy, keep));
-          live.params = canopyParams(host.canopy);
+          if (!host.canopy) {
+            // With a read-back copy of every presented frame: P (or --screenshot) saves what was on screen.
+            CANOPY_TRY(createHost(dev, model, o, sc.extent.width, sc.extent.height, true, sc.format, &host));
+            live.params = canopyParams(host.canopy);
+          } else {  // the scene, the simulation and the live parameters are kept
+            CANOPY_TRY(resizeHost(host, sc.extent.width, sc.extent.height, sc.format));
+            std::printf("Canopy resized to %ux%u: scene and simulation kept (%llu steps so far)\n", sc.extent.width,
+                        sc.extent.height, (unsigned long long)canopyStats(host.canopy).simulation.steps);
+          }
           std::printf("swapchain %ux%u (%s)\n", sc.extent.width, sc.extent.height,
                       sc.presentMode == VK_PRESENT_MODE_FIFO_KHR ? "vsync" : "no vsync");
           std::fflush(stdout);

@@ -123,6 +123,11 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   CANOPY_TRY(checkRange("CanopyDesc.height", desc.height, 1, 16384));
   CANOPY_TRY(checkRange("CanopyDesc.maxLayers", desc.maxLayers, 1, CANOPY_MAX_LAYERS));
   CANOPY_TRY(checkRange("CanopyDesc.minCellSize", desc.minCellSize, 2, 256));
+  // Nothing to animate is a mistake in the input (a glTF whose scene reaches no triangle mesh),
+  // not an empty frame to draw silently.
+  const std::string what = model.path.empty() ? std::string("the model") : "'" + model.path + "'";
+  if (model.triangleCount() == 0)
+    return Status::error("createCanopy: " + what + " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
   auto* c = new CanopyContext();
   c->device = &d;
   c->desc = desc;
@@ -148,6 +153,18 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
     CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    if (c->layers.split.foliageTriangles == 0) {
+      std::string names;
+      for (size_t i = 0; i < model.materials.size(); ++i) {  // appends: GCC 12's -Wrestrict misfires on "#" + ...
+        names += i ? ", #" : "#";
+        names += std::to_string(i);
+        names += " '";
+        names += model.materials[i].name;
+        names += "'";
+      }
+      return Status::error(what + " has no foliage: every material is rigid (" + names +
+                           "); name the leaf materials in CanopyDesc.split.foliage");
+    }
     CANOPY_TRY(createSimulation(d, desc.simulation, &c->simulation));
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     return Status();
@@ -191,6 +208,34 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
 }
 
 const CanopyParams& canopyParams(const CanopyContext* c) { return c->params; }
+
+Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
+  if (!c) return Status::error("resizeCanopy: null context");
+  CANOPY_TRY(checkRange("resizeCanopy width", width, 1, 16384));
+  CANOPY_TRY(checkRange("resizeCanopy height", height, 1, 16384));
+  if (width == c->desc.width && height == c->desc.height) return Status();
+  Device& d = *c->device;
+  vkDeviceWaitIdle(d.device);
+  if (c->graphReady) c->graph.release(d);
+  c->graphReady = false;
+  c->desc.width = width;
+  c->desc.height = height;
+  Status s = [&]() -> Status {
+    CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
+    CompositorDesc cd = c->compositor.desc;
+    cd.width = width;
+    cd.height = height;
+    destroyCompositor(c->compositor);
+    CANOPY_TRY(createCompositor(d, cd, &c->compositor));
+    // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
+    // motion vectors against (beginCanopyFrame sees the grid change).
+    c->last = gpu::AnimFrame{};
+    destroyLayerDynamics(c->dynamics);
+    return createLayerDynamics(d, width, height, c->desc.minCellSize, c->desc.maxLayers, &c->dynamics);
+  }();
+  c->generation++;
+  return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
+}
 
 Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (!c) return Status::error("beginCanopyFrame: null context");

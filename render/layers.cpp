@@ -538,6 +538,19 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s) {
   return Status();
 }
 
+Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height) {
+  if (width < 1 || width > 16384 || height < 1 || height > 16384)
+    return Status::error("layers: size " + std::to_string(width) + "x" + std::to_string(height) +
+                         " is outside 1..16384 per side");
+  if (width == lv.desc.width && height == lv.desc.height) return Status();
+  vkDeviceWaitIdle(lv.device->device);
+  destroyTargets(lv);
+  lv.desc.width = width;
+  lv.desc.height = height;
+  lv.settingsChanged = true;  // the placement is in pixels of the old size: re-slice
+  return createTargets(lv);
+}
+
 Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebuild) {
   lv.stats.viewUpdates++;
   std::string reason;

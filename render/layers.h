@@ -135,6 +135,11 @@ void destroyLayeredVegetation(LayeredVegetation& lv);
 // holding them must be rebuilt), anything else only marks the layers for a rebuild.
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings);
 
+// Changes the layer images' size (the host's target was resized): recreates the layer and
+// background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;
+// the mesh, leaf roots and settings are kept.
+Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height);
+
 // Applies the re-slicing policy for the new view: *rebuild tells whether the next recorded layer
 // passes will redraw the layers (then the placement has been recomputed for `view`).
 Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebuild);

@@ -331,6 +331,84 @@ TEST_F(CanopyTest, ParameterChangesRebuildOnlyWhatDependsOnThem) {
   destroyCanopy(ctx);
 }
 
+// A host's resize (the demo's window): the size-dependent parts are recreated, the simulation goes
+// on where it was (no reload, no reset), and the frame at the new size is still the CPU
+// reference's warp of its layers.
+TEST_F(CanopyTest, ResizeKeepsTheSimulationAndWarpsAtTheNewSize) {
+  const VegetationModel model = makeLeafCloud(3000, 3, true);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(96, 64, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 2.0f;
+  p.dynamics.cellSize = 8;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  Host small;
+  ASSERT_TRUE(small.create(dev, 96, 64, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = cameraFor(model, 96, 64, 20.0f);
+  for (int i = 0; i < 5 && s.ok(); ++i) s = small.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  small.destroy();
+  const CanopyStats before = canopyStats(ctx);
+  EXPECT_EQ(before.simulation.steps, 5u);
+
+  const uint32_t w = 128, h = 96;
+  s = resizeCanopy(ctx, w, h);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(canopyStats(ctx).resourceGeneration, before.resourceGeneration + 1) << "a graph holding Canopy must be rebuilt";
+  EXPECT_EQ(canopyStats(ctx).simulation.steps, 5u) << "resizing does not touch the simulation";
+  Host big;
+  ASSERT_TRUE(big.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  f.camera = cameraFor(model, w, h, 20.0f);
+  for (int i = 0; i < 10 && s.ok(); ++i) s = big.frame(ctx, f);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(canopyStats(ctx).simulation.steps, 15u) << "the simulation goes on from where it was";
+  EXPECT_GE(canopyStats(ctx).layers.rebuilds, before.layers.rebuilds + 1) << "the layers are re-sliced at the new size";
+  std::vector<glm::vec4> color;
+  std::vector<float> depth;
+  CompositeReferenceOutputs ref;
+  float maxDisplacement = 0.0f;
+  ASSERT_TRUE(big.read(&color, &depth).ok());
+  ASSERT_TRUE(referenceFrame(dev, ctx, w, h, &ref, &maxDisplacement).ok());
+  ASSERT_EQ(ref.color.size(), color.size()) << "the layers have the new size";
+  EXPECT_GT(maxDisplacement, 0.5f);
+  size_t off = 0, leaves = 0;
+  for (size_t i = 0; i < color.size(); ++i) {
+    off += maxDiff(color[i], ref.color[i]) > 3.0f / 255.0f;
+    leaves += depth[i] < 1.0f;
+  }
+  EXPECT_LE(off, color.size() / 200) << "pixels more than 3/255 off the CPU reference after the resize";
+  EXPECT_GT(leaves, color.size() / 20);
+
+  s = resizeCanopy(ctx, 0, 96);
+  EXPECT_NE(s.message().find("width = 0 is outside [1, 16384]"), std::string::npos) << s.message();
+  big.destroy();
+  destroyCanopy(ctx);
+}
+
+// Nothing to animate is refused with the reason, not drawn as an empty frame: a model without
+// triangles (a glTF whose scene reaches no triangle mesh), and one whose materials are all rigid.
+TEST_F(CanopyTest, ModelsWithNothingToAnimateAreRefused) {
+  CanopyContext* ctx = nullptr;
+  VegetationModel empty;
+  empty.path = "empty.gltf";
+  empty.materials.resize(1);
+  Status s = createCanopy(dev, empty, smallDesc(64, 48, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(ctx, nullptr);
+  EXPECT_NE(s.message().find("'empty.gltf' has no triangles"), std::string::npos) << s.message();
+
+  const VegetationModel cloud = makeLeafCloud(500, 4, true);
+  CanopyDesc d = smallDesc(64, 48, VK_FORMAT_R16G16B16A16_SFLOAT);
+  for (size_t i = 0; i < cloud.materials.size(); ++i) d.split.rigid.push_back("#" + std::to_string(i));
+  s = createCanopy(dev, cloud, d, &ctx);
+  EXPECT_FALSE(s.ok());
+  EXPECT_EQ(ctx, nullptr);
+  EXPECT_NE(s.message().find("has no foliage: every material is rigid"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("split.foliage"), std::string::npos) << s.message();
+}
+
 // ---- golden images ------------------------------------------------------------------------------
 
 struct GoldenScene {

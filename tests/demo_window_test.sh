@@ -13,6 +13,8 @@ xvfb-run -a -s "-screen 0 1024x768x24" "$demo" --window --frames 16 --resize-at 
 cat "$out/stdout"
 grep -q "swapchain 320x240" "$out/stdout" || fail "no initial swapchain"
 grep -q "swapchain 240x180" "$out/stdout" || fail "the swapchain was not recreated at the new size"
+grep -q "Canopy resized to 240x180: scene and simulation kept ([1-9][0-9]* steps so far)" "$out/stdout" ||
+  fail "the resize did not keep Canopy's context"
 grep -q "window closed after 16 frames" "$out/stdout" || fail "did not close after 16 frames"
 [ -s "$out/window.png" ] || fail "no screenshot"
 echo "PASS"

@@ -38,11 +38,28 @@ std::vector<size_t> contactSheetFrames(size_t frameCount) {
   return picked;
 }
 
-// The picked frames, 4 per row, each shrunk by an integer factor to at most 240 pixels wide (box
-// filter), with a 4-pixel white gutter.
-Status writeContactSheet(const std::string& path, const std::vector<std::vector<uint8_t>>& frames, uint32_t w, uint32_t h) {
+// The picked frames, 4 per row, with a 4-pixel white gutter. All are cropped to one box, the
+// union of where anything differs from the clear colour in any of them plus a margin, so the
+// vegetation fills the sheet and its motion between frames is comparable; each crop is shrunk by
+// an integer factor (box filter) to at most 240 pixels wide. *crop receives the box (x0, y0, x1, y1).
+Status writeContactSheet(const std::string& path, const std::vector<std::vector<uint8_t>>& frames, uint32_t w, uint32_t h,
+                         const uint8_t clear[3], glm::uvec4* crop) {
   const size_t count = frames.size();
-  const uint32_t f = std::max(1u, (w + 239) / 240), tw = w / f, th = h / f, gap = 4;
+  uint32_t x0 = w, y0 = h, x1 = 0, y1 = 0;
+  for (const std::vector<uint8_t>& f : frames)
+    for (uint32_t y = 0; y < h; ++y)
+      for (uint32_t x = 0; x < w; ++x) {
+        const uint8_t* p = &f[(size_t(y) * w + x) * 4];
+        if (std::abs(int(p[0]) - clear[0]) + std::abs(int(p[1]) - clear[1]) + std::abs(int(p[2]) - clear[2]) > 24) {
+          x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+        }
+      }
+  if (x0 >= x1 || y0 >= y1) x0 = y0 = 0, x1 = w, y1 = h;  // nothing drawn: the whole frame
+  const uint32_t mx = w / 25, my = h / 25;
+  x0 = x0 > mx ? x0 - mx : 0, y0 = y0 > my ? y0 - my : 0, x1 = std::min(w, x1 + mx), y1 = std::min(h, y1 + my);
+  *crop = glm::uvec4(x0, y0, x1, y1);
+  const uint32_t cw = x1 - x0, ch = y1 - y0;
+  const uint32_t f = std::max(1u, (cw + 239) / 240), tw = std::max(1u, cw / f), th = std::max(1u, ch / f), gap = 4;
   const uint32_t cols = uint32_t(std::min<size_t>(4, count)), rows = uint32_t((count + cols - 1) / cols);
   const uint32_t W = cols * tw + (cols + 1) * gap, H = rows * th + (rows + 1) * gap;
   std::vector<uint8_t> sheet(size_t(W) * H * 4, 255);
@@ -52,10 +69,13 @@ Status writeContactSheet(const std::string& path, const std::vector<std::vector<
     for (uint32_t y = 0; y < th; ++y)
       for (uint32_t x = 0; x < tw; ++x)
         for (int c = 0; c < 4; ++c) {
-          uint32_t sum = 0;
+          uint32_t sum = 0, n = 0;
           for (uint32_t j = 0; j < f; ++j)
-            for (uint32_t i = 0; i < f; ++i) sum += src[((size_t(y) * f + j) * w + x * f + i) * 4 + c];
-          sheet[((size_t(oy) + y) * W + ox + x) * 4 + c] = uint8_t(sum / (f * f));
+            for (uint32_t i = 0; i < f; ++i) {
+              const uint32_t sx = x0 + x * f + i, sy = y0 + y * f + j;
+              if (sx < x1 && sy < y1) sum += src[(size_t(sy) * w + sx) * 4 + c], ++n;
+            }
+          sheet[((size_t(oy) + y) * W + ox + x) * 4 + c] = uint8_t(n ? sum / n : 255);
         }
   }
   return writePng(path, W, H, sheet);
@@ -174,6 +194,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
                    (nowMs() - w0) / 1000.0);
     }
     const double t0 = nowMs();
+    double lastProgress = t0;
     for (uint32_t i = 0; i < o.frames; ++i) {
       CANOPY_TRY(submit(frameAt(i), true));
       std::vector<uint8_t> rgba;
@@ -183,10 +204,16 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       CANOPY_TRY(writePng(o.outDir + name, o.width, o.height, rgba));
       if (measureSway) sway.add(rgba);
       if (std::find(picked.begin(), picked.end(), size_t(i)) != picked.end()) sheetFrames.push_back(std::move(rgba));
-      std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", isatty(2) ? "\r" : "", i + 1, o.frames,
-                   double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), isatty(2) && i + 1 < o.frames ? "" : "\n");
+      // On a terminal one line rewritten in place; in a log at most one line a second, and the last.
+      const bool tty = isatty(2), lastFrame = i + 1 == o.frames;
+      if (tty || lastFrame || nowMs() - lastProgress >= 1000.0) {
+        lastProgress = nowMs();
+        std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", tty ? "\r" : "", i + 1, o.frames,
+                     double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), tty && !lastFrame ? "" : "\n");
+      }
     }
-    CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height));
+    glm::uvec4 crop;
+    CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
     const CanopyStats st = canopyStats(host.canopy);
     char head[2048];
     std::snprintf(head, sizeof head,
@@ -211,7 +238,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     std::printf("wrote %u frames (%s/frame_0000.png ...), %s/contact_sheet.png (frames", o.frames, o.outDir.c_str(),
                 o.outDir.c_str());
     for (size_t k : picked) std::printf(" %zu", k);
-    std::printf("), %s/timing.txt\n", o.outDir.c_str());
+    std::printf(", cropped to x %u..%u, y %u..%u), %s/timing.txt\n", crop.x, crop.z - 1, crop.y, crop.w - 1, o.outDir.c_str());
     if (o.mp4 && std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
       const std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::to_string(int(std::lround(o.fps))) + " -i '" +
                               o.outDir + "/frame_%04d.png' -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -pix_fmt yuv420p '" +

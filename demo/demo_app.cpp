@@ -85,7 +85,17 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       *err = a + " " + why;
       return 2;
     };
-    float f = 0;
+    // A number in [lo, hi] into *dst; 0 when taken, else 2 with the reason.
+    auto number = [&](float lo, float hi, float* dst, const char* what = "a number") {
+      float f = 0;
+      if (!takes() || !cli::parseFloat(v, &f) || !(f >= lo && f <= hi)) {
+        char range[96];
+        std::snprintf(range, sizeof range, "needs %s in [%g, %g]", what, double(lo), double(hi));
+        return bad(range);
+      }
+      *dst = f;
+      return 0;
+    };
     if (a == "--help" || a == "-h") {
       printHelp();
       return 1;
@@ -128,20 +138,15 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
         }
       o->windSides = sides;
     } else if (a == "--strength") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
-      o->windStrength = f;
+      if (const int rc = number(0, 1000, &o->windStrength)) return rc;
     } else if (a == "--frequency") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1000)) return bad("needs a number in [0, 1000]");
-      o->windFrequency = f;
+      if (const int rc = number(0, 1000, &o->windFrequency)) return rc;
     } else if (a == "--modulation") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 10)) return bad("needs a number in [0, 10]");
-      o->windModulation = f;
+      if (const int rc = number(0, 10, &o->windModulation)) return rc;
     } else if (a == "--gust") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 1)) return bad("needs a number in [0, 1]");
-      o->windGust = f;
+      if (const int rc = number(0, 1, &o->windGust)) return rc;
     } else if (a == "--warmup") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 0 && f <= 60)) return bad("needs seconds in [0, 60]");
-      o->warmupSeconds = f;
+      if (const int rc = number(0, 60, &o->warmupSeconds, "seconds")) return rc;
     } else if (a == "--delay") {
       if (!takes()) return bad("needs exact or approx");
       if (std::string(v) == "exact") o->delay = DelayMode::Exact;
@@ -166,16 +171,14 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (!takes() || !cli::parseUint(v, 1, 100000, &o->frames)) return bad("needs an integer in [1, 100000]");
       framesGiven = true;
     } else if (a == "--fps") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= 1 && f <= 1000)) return bad("needs a number in [1, 1000]");
-      o->fps = f;
+      if (const int rc = number(1, 1000, &o->fps)) return rc;
     } else if (a == "--camera") {
       if (!takes()) return bad("needs still or orbit");
       if (std::string(v) == "still") o->camera = CameraPath::Still;
       else if (std::string(v) == "orbit") o->camera = CameraPath::Orbit;
       else return bad(quoted(v) + " is not still or orbit");
     } else if (a == "--orbit-degrees") {
-      if (!takes() || !cli::parseFloat(v, &f) || !(f >= -3600 && f <= 3600)) return bad("needs a number in [-3600, 3600]");
-      o->orbitDegrees = f;
+      if (const int rc = number(-3600, 3600, &o->orbitDegrees)) return rc;
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
@@ -412,8 +415,11 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.rootCacheDir = o.cacheDir.empty() ? o.outDir : o.cacheDir;
   desc.split = o.split;
   const auto t0 = std::chrono::steady_clock::now();
-  if (model.triangleCount() >= 1'000'000)
+  cli::ProgressLine progress("preparing");
+  if (model.triangleCount() >= 1'000'000) {
     std::fprintf(stderr, "preparing %zu triangles (material split, leaf roots, GPU upload) ...\n", model.triangleCount());
+    desc.progress = std::ref(progress);
+  }
   const Status made = createCanopy(d, model, desc, &host.canopy);
   if (!made.ok())
     return made.context(std::to_string(w) + "x" + std::to_string(h) + " frame, " + std::to_string(desc.maxLayers) + " layers at most");

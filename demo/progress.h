@@ -15,6 +15,11 @@ class ProgressLine {
   // (stage, done, total): the signature of SceneProgress.
   void operator()(const char* stage, uint64_t done, uint64_t total) {
     const auto now = Clock::now();
+    if (stage_ != stage) {  // a new stage: its own rate and clock
+      stage_ = stage;
+      start_ = now;
+      printed_ = {};
+    }
     const double s = std::chrono::duration<double>(now - start_).count();
     const bool last = done >= total;
     if (!last && !tty_ && std::chrono::duration<double>(now - printed_).count() < 1.0) return;
@@ -33,7 +38,7 @@ class ProgressLine {
     else std::snprintf(b, sizeof b, "%llu", (unsigned long long)v);
     return b;
   }
-  std::string what_;
+  std::string what_, stage_;
   bool tty_;
   Clock::time_point start_, printed_{};
 };

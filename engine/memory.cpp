@@ -120,6 +120,12 @@ void destroyBuffer(Device& d, Buffer& b) {
   b = Buffer{};
 }
 
+void* hostCoherentPointer(const Device& d, const Allocation& a) {
+  if (!a.mapped || !a.block) return nullptr;
+  const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  return (d.memoryProperties.memoryTypes[a.block->typeIndex].propertyFlags & want) == want ? a.mapped : nullptr;
+}
+
 ImageDesc descOf(const Image& img) {
   ImageDesc d;
   d.format = img.format;

@@ -73,6 +73,10 @@ void destroyBuffer(Device& device, Buffer& buffer);
 Status createImage(Device& device, const ImageDesc& desc, Image* out, const char* debugName = nullptr);
 void destroyImage(Device& device, Image& image);
 
+// The allocation's host pointer when its memory is HOST_VISIBLE and HOST_COHERENT (a CPU driver,
+// UMA or ReBAR memory), so data can be written in place without a staging copy; else nullptr.
+void* hostCoherentPointer(const Device& device, const Allocation& allocation);
+
 // The description an existing image would be created from (format, extent, layers), e.g. to import
 // it into a render graph.
 ImageDesc descOf(const Image& image);

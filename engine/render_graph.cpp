@@ -64,10 +64,14 @@ std::string bitNames(uint64_t v, const std::pair<uint64_t, const char*>* table, 
   std::string s;
   for (size_t i = 0; i < n; ++i)
     if ((v & table[i].first) == table[i].first) {
-      s += (s.empty() ? "" : "|") + std::string(table[i].second);
+      if (!s.empty()) s += '|';  // appends: GCC 12's -Wrestrict misfires on "" + std::string(...)
+      s += table[i].second;
       v &= ~table[i].first;
     }
-  if (v) s += (s.empty() ? "" : "|") + flagsHex(v);
+  if (v) {
+    if (!s.empty()) s += '|';
+    s += flagsHex(v);
+  }
   return s;
 }
 std::string stageNames(VkPipelineStageFlags2 v) {

@@ -1,6 +1,8 @@
 #pragma once
 // Errors are returned, never thrown across the API and never swallowed (VMA style): a Status is
 // empty on success and carries a message naming what failed otherwise.
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vulkan/vulkan.h>
@@ -21,6 +23,10 @@ class [[nodiscard]] Status {
   std::string message_;
   bool failed_ = false;
 };
+
+// Progress of long work (scene generation, leaf roots, mesh upload): (stage, done, total), called
+// on the calling thread now and then (about every million items), last with done == total.
+using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
 
 const char* vkResultName(VkResult r);
 // "vkCreateDevice failed: VK_ERROR_INITIALIZATION_FAILED"

@@ -150,6 +150,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.roots = desc.roots;
     ld.useRootCache = desc.useRootCache;
     ld.rootCacheDir = desc.rootCacheDir;
+    ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
     CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));

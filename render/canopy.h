@@ -46,6 +46,7 @@ struct CanopyDesc {
   LeafRootOptions roots;
   bool useRootCache = true;         // leaf-root cache file beside the model (or in rootCacheDir)
   std::string rootCacheDir;
+  Progress progress;                // optional: called during createCanopy ("leaf roots", "vertices")
 };
 
 struct CanopyParams {

@@ -197,14 +197,6 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
     LayerDraw draw{uint32_t(k % nm), uint32_t(start[k] * 3), uint32_t((start[k + 1] - start[k]) * 3)};
     (k < nm ? lv.foliageDraws : lv.rigidDraws).push_back(draw);
   }
-  std::vector<gpu::LayerVertex> verts(std::max<size_t>(nv, 1));
-  for (size_t v = 0; v < nv; ++v) {
-    gpu::LayerVertex& x = verts[v];
-    x.position = m.positions[v];
-    x.normal = packNormal(v < m.normals.size() ? m.normals[v] : glm::vec3(0, 0, 1));
-    x.uv = m.uvs[v];
-    x.leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_NO_LEAF : roots.leafOfVertex[v];
-  }
   std::vector<glm::vec4> rootTable(std::max<size_t>(roots.leafCount(), 1), glm::vec4(0));
   for (uint32_t l = 0; l < roots.leafCount(); ++l) rootTable[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
   const VkDeviceSize rootBytes = rootTable.size() * sizeof(glm::vec4);
@@ -213,10 +205,26 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
                          " leaves need a " +
                          std::to_string(rootBytes >> 20) + " MiB root table, over the device's storage-buffer range of " +
                          std::to_string(d.properties.limits.maxStorageBufferRange >> 20) + " MiB");
-  CANOPY_TRY(createBuffer(d, verts.size() * sizeof(gpu::LayerVertex),
+  CANOPY_TRY(createBuffer(d, std::max<size_t>(nv, 1) * sizeof(gpu::LayerVertex),
                           VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
                           &lv.vertices, "layers: vertices"));
-  CANOPY_TRY(uploadBuffer(d, lv.vertices, verts.data(), lv.vertices.size, rg::stateOf(rg::Use::VertexBuffer)));
+  // Where device memory is host-visible and coherent (CPU drivers, UMA and ReBAR GPUs) the vertices
+  // are written in place: no staging copy and no second pass over a mesh of hundreds of MB. The
+  // queue submission that first reads them makes the host writes visible.
+  auto* direct = static_cast<gpu::LayerVertex*>(hostCoherentPointer(d, lv.vertices.allocation));
+  std::vector<gpu::LayerVertex> staged;
+  if (!direct) staged.resize(std::max<size_t>(nv, 1));
+  gpu::LayerVertex* verts = direct ? direct : staged.data();
+  for (size_t v = 0; v < nv; ++v) {
+    if ((v & 0xfffff) == 0 && lv.desc.progress) lv.desc.progress("vertices", v, nv);
+    gpu::LayerVertex& x = verts[v];
+    x.position = m.positions[v];
+    x.normal = packNormal(v < m.normals.size() ? m.normals[v] : glm::vec3(0, 0, 1));
+    x.uv = m.uvs[v];
+    x.leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_NO_LEAF : roots.leafOfVertex[v];
+  }
+  if (lv.desc.progress) lv.desc.progress("vertices", nv, nv);
+  if (!direct) CANOPY_TRY(uploadBuffer(d, lv.vertices, staged.data(), lv.vertices.size, rg::stateOf(rg::Use::VertexBuffer)));
   const std::vector<uint32_t> dummy = {0, 0, 0};
   const std::vector<uint32_t>& idx = lv.indices.empty() ? dummy : lv.indices;
   CANOPY_TRY(createBuffer(d, idx.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
@@ -479,7 +487,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
       lv.stats.rootCacheNote = "cache off";
     }
     if (!cached) {
-      CANOPY_TRY(computeLeafRoots(m, foliage, desc.roots, &roots));
+      CANOPY_TRY(computeLeafRoots(m, foliage, desc.roots, &roots, desc.progress));
       if (cacheOn) {
         Status w = writeLeafRootCache(cachePath, key, roots);
         lv.stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();

@@ -62,6 +62,7 @@ struct LayeredVegetationDesc {
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;
+  Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
 
 struct LayerInfo {

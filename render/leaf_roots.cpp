@@ -58,7 +58,7 @@ void indexLeaves(LeafRoots* r) {
 }
 
 Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRootOptions& o,
-                        LeafRoots* out) {
+                        LeafRoots* out, const Progress& progress) {
   *out = LeafRoots{};
   const size_t nv = m.positions.size(), nt = m.indices.size() / 3;
   if (m.indices.size() % 3) return Status::error("leaf roots: index count " + std::to_string(m.indices.size()) + " is not a multiple of 3");
@@ -67,10 +67,16 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
                          std::to_string(nt) + " triangles");
   if (m.uvs.size() != nv) return Status::error("leaf roots: " + std::to_string(m.uvs.size()) + " uvs for " + std::to_string(nv) + " vertices");
   if (nv >= kNoLeaf) return Status::error("leaf roots: too many vertices");
+  // Progress over the four linear passes: triangles (union), vertices (weld), vertices (roots), vertices (assign).
+  const uint64_t work = uint64_t(nt) + 3ull * nv;
+  auto report = [&](uint64_t done) {
+    if (progress) progress("leaf roots", done, work);
+  };
   std::vector<uint32_t> parent(nv), size(nv, 1);
   for (size_t v = 0; v < nv; ++v) parent[v] = uint32_t(v);
   std::vector<uint8_t> used(nv, 0);
   for (size_t t = 0; t < nt; ++t) {
+    if ((t & 0xfffff) == 0) report(t);
     if (!foliage[t]) continue;
     const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
     if (a >= nv || b >= nv || c >= nv)
@@ -86,6 +92,7 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
     while (cap < usedCount * 2) cap <<= 1;
     std::vector<uint32_t> table(cap, kNoLeaf);  // open addressing, linear probing: vertex index
     for (size_t v = 0; v < nv; ++v) {
+      if ((v & 0xfffff) == 0) report(nt + v);
       if (!used[v]) continue;
       size_t slot = hashPosition(m.positions[v]) & (cap - 1);
       for (;; slot = (slot + 1) & (cap - 1)) {
@@ -105,6 +112,7 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
   // Root: smallest (u, v) in each component (u first, then v, then the lower index).
   std::vector<uint32_t> best(nv, kNoLeaf);
   for (size_t v = 0; v < nv; ++v) {
+    if ((v & 0xfffff) == 0) report(nt + nv + v);
     if (!used[v]) continue;
     const uint32_t c = findRoot(parent, uint32_t(v));
     const uint32_t b = best[c];
@@ -116,8 +124,11 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
     if (uv.x < ub.x || (uv.x == ub.x && uv.y < ub.y)) best[c] = uint32_t(v);
   }
   out->rootOfVertex.assign(nv, kNoLeaf);
-  for (size_t v = 0; v < nv; ++v)
+  for (size_t v = 0; v < nv; ++v) {
+    if ((v & 0xfffff) == 0) report(nt + 2 * nv + v);
     if (used[v]) out->rootOfVertex[v] = best[findRoot(parent, uint32_t(v))];
+  }
+  report(work);
   indexLeaves(out);
   return Status();
 }

@@ -34,7 +34,7 @@ struct LeafRoots {
 // Components of the triangles with triangleIsFoliage[t] != 0. Errors on inconsistent sizes or
 // indices past the vertex count (a model from loadGltf has neither).
 Status computeLeafRoots(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,
-                        const LeafRootOptions& options, LeafRoots* out);
+                        const LeafRootOptions& options, LeafRoots* out, const Progress& progress = {});
 
 // Fills leafOfVertex and leafRoot from rootOfVertex (used after loading a cache).
 void indexLeaves(LeafRoots* roots);

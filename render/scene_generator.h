@@ -46,7 +46,7 @@ struct SceneStats {
 };
 
 // Called from the calling thread while leaves are generated: (stage, done, total).
-using SceneProgress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
+using SceneProgress = Progress;
 
 // "shrub", "tree", "grass", "kelp", "field" (also "tree-crown", "grass-field", "underwater").
 Status parseSceneKind(const std::string& text, SceneKind* out);

@@ -10,7 +10,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <cerrno>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+extern char** environ;
 
 #include "demo/demo_app.h"
 #include "engine/image_io.h"
@@ -127,6 +132,23 @@ struct SwayMeter {
   }
 };
 
+constexpr int kNotInstalled = 127;
+
+// Runs a program found on PATH with these arguments and waits: its exit code, kNotInstalled when
+// it cannot be started, 128 + signal when a signal ended it.
+int runProgram(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return kNotInstalled;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return kNotInstalled;
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : 1;
+}
+
 int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
   DeviceDesc dd;
   dd.applicationName = "canopy-demo";
@@ -150,6 +172,13 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     std::error_code ec;
     std::filesystem::create_directories(o.outDir, ec);
     if (ec) return Status::error("cannot create the output folder '" + o.outDir + "': " + ec.message());
+    // Frames beyond this run's count left by a longer earlier run in the same folder would read as
+    // part of this sequence (and of the MP4): they go.
+    for (uint32_t i = o.frames;; ++i) {
+      char name[64];
+      std::snprintf(name, sizeof name, "/frame_%04u.png", i);
+      if (!std::filesystem::remove(o.outDir + name, ec)) break;
+    }
     CANOPY_TRY(createHost(dev, model, o, o.width, o.height, true, VK_FORMAT_UNDEFINED, &host));
     const CameraRig rig0 = defaultRig(o);
     TimingLog first, steady;
@@ -239,14 +268,16 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
                 o.outDir.c_str());
     for (size_t k : picked) std::printf(" %zu", k);
     std::printf(", cropped to x %u..%u, y %u..%u), %s/timing.txt\n", crop.x, crop.z - 1, crop.y, crop.w - 1, o.outDir.c_str());
-    if (o.mp4 && std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
-      const std::string cmd = "ffmpeg -y -loglevel error -framerate " + std::to_string(int(std::lround(o.fps))) + " -i '" +
-                              o.outDir + "/frame_%04d.png' -vf 'scale=trunc(iw/2)*2:trunc(ih/2)*2' -pix_fmt yuv420p '" +
-                              o.outDir + "/demo.mp4'";
-      if (std::system(cmd.c_str()) == 0) std::printf("wrote %s/demo.mp4\n", o.outDir.c_str());
-      else std::fprintf(stderr, "canopy-demo: ffmpeg failed; the PNG frames are complete\n");
-    } else if (o.mp4) {
-      std::printf("(no demo.mp4: ffmpeg is not installed)\n");
+    if (o.mp4) {
+      // ffmpeg gets its arguments directly (no shell), so an output folder with quotes or spaces
+      // cannot break or inject into the command.
+      const std::string fps = std::to_string(std::max(1l, std::lround(o.fps)));
+      const int rc = runProgram({"ffmpeg", "-y", "-loglevel", "error", "-framerate", fps, "-i", o.outDir + "/frame_%04d.png",
+                                 "-frames:v", std::to_string(o.frames),
+                                 "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-pix_fmt", "yuv420p", o.outDir + "/demo.mp4"});
+      if (rc == 0) std::printf("wrote %s/demo.mp4\n", o.outDir.c_str());
+      else if (rc == kNotInstalled) std::printf("(no demo.mp4: ffmpeg is not installed)\n");
+      else std::fprintf(stderr, "canopy-demo: ffmpeg failed (exit %d); the PNG frames are complete\n", rc);
     }
     return Status();
   }();

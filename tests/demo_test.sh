@@ -18,6 +18,21 @@ grep -q "wall clock" "$out/headless/timing.txt" || fail "timing.txt lacks the wa
 grep -q "^Sway (top third" "$out/headless/timing.txt" || fail "timing.txt lacks the sway line"
 echo "headless: $(grep -c . "$out/headless/timing.txt") lines of timing, $(ls "$out/headless" | wc -l) files"
 
+# An output folder with a space and quotes (ffmpeg is run without a shell: nothing is injected);
+# a shorter second run into the same folder leaves no frames of the first one behind.
+weird="$out/we ird'; touch INJECTED; '"
+"$demo" --frames 3 --size 96x72 --warmup 0 --out "$weird" >/dev/null 2>"$out/stderr_w" || fail "quoted folder: exit $?"
+"$demo" --frames 2 --size 96x72 --warmup 0 --out "$weird" >/dev/null 2>>"$out/stderr_w" || fail "second run: exit $?"
+[ ! -e INJECTED ] && [ ! -e "$out/INJECTED" ] || fail "the output folder's name was run as a command"
+[ -s "$weird/frame_0001.png" ] && [ ! -e "$weird/frame_0002.png" ] || fail "frames of the longer first run were left: $(ls "$weird")"
+if command -v ffmpeg >/dev/null && command -v ffprobe >/dev/null; then
+  n=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 "$weird/demo.mp4")
+  [ "$n" = 2 ] || fail "demo.mp4 has $n frames, expected 2"
+  echo "demo.mp4: $n frames"
+else
+  echo "ffmpeg not installed: demo.mp4 not checked (the demo says so and writes the PNGs)"
+fi
+
 # The default wind visibly sways the shrub; no wind leaves it still (the sway is measured by the
 # demo on its own frames: the horizontal centroid of the top third of the vegetation).
 sway_range() { sed -n 's/^Sway .* range \([0-9.]*\) px.*/\1/p' "$1/timing.txt"; }

@@ -34,6 +34,11 @@ double nowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
+// Whether an RGBA8 pixel differs from the clear colour (sRGB bytes): something was drawn there.
+bool drawn(const uint8_t* p, const uint8_t clear[3]) {
+  return std::abs(int(p[0]) - clear[0]) + std::abs(int(p[1]) - clear[1]) + std::abs(int(p[2]) - clear[2]) > 24;
+}
+
 // Up to 12 frames spread over the sequence (which ones depends only on the count, so only those
 // are kept in memory while rendering).
 std::vector<size_t> contactSheetFrames(size_t frameCount) {
@@ -54,10 +59,8 @@ Status writeContactSheet(const std::string& path, const std::vector<std::vector<
   for (const std::vector<uint8_t>& f : frames)
     for (uint32_t y = 0; y < h; ++y)
       for (uint32_t x = 0; x < w; ++x) {
-        const uint8_t* p = &f[(size_t(y) * w + x) * 4];
-        if (std::abs(int(p[0]) - clear[0]) + std::abs(int(p[1]) - clear[1]) + std::abs(int(p[2]) - clear[2]) > 24) {
+        if (drawn(&f[(size_t(y) * w + x) * 4], clear))
           x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
-        }
       }
   if (x0 >= x1 || y0 >= y1) x0 = y0 = 0, x1 = w, y1 = h;  // nothing drawn: the whole frame
   const uint32_t mx = w / 25, my = h / 25;
@@ -95,9 +98,7 @@ struct SwayMeter {
   uint32_t width = 0, height = 0, rowBegin = 0, rowEnd = 0;
   std::vector<double> centroidX;
 
-  bool vegetation(const uint8_t* p) const {
-    return std::abs(int(p[0]) - clear[0]) + std::abs(int(p[1]) - clear[1]) + std::abs(int(p[2]) - clear[2]) > 24;
-  }
+  bool vegetation(const uint8_t* p) const { return drawn(p, clear); }
   void add(const std::vector<uint8_t>& rgba) {
     if (centroidX.empty()) {  // the rows to follow, from frame 0
       uint32_t top = height, bottom = 0;
@@ -187,10 +188,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     SwayMeter sway;
     sway.width = o.width;
     sway.height = o.height;
-    for (int c = 0; c < 3; ++c) {  // the clear colour as the sRGB target stores it
-      const float v = host.clear[c];
-      sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f, 0.0f, 1.0f)));
-    }
+    for (int c = 0; c < 3; ++c) sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(host.clearSrgb[c], 0.0f, 1.0f)));
     const bool measureSway = o.camera == CameraPath::Still && o.debug == CompositeDebugView::None;
     // Warm-up: whole frames at the same dt and camera as frame 0, not written, so the wind has
     // reached the plant and the history ring (exact delay) is full when the first frame is written.

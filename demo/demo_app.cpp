@@ -402,6 +402,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   const glm::vec3 sky = o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
                                                                      : glm::vec3(0.62f, 0.75f, 0.88f);
   host.clear = glm::vec4(linear(sky.r), linear(sky.g), linear(sky.b), 1.0f);
+  host.clearSrgb = sky;
   CANOPY_TRY(createTargets(host));
   CANOPY_TRY(host.timer.init(d, 64));
   CanopyDesc desc;

@@ -86,6 +86,7 @@ struct Host {
   VkFormat presentFormat = VK_FORMAT_UNDEFINED;
   GpuTimer timer;
   glm::vec4 clear{0.0f, 0.0f, 0.0f, 1.0f};  // linear
+  glm::vec3 clearSrgb{0.0f};                 // the same colour as the sRGB target stores it
 };
 
 // Creates targets + context at width x height. `presentFormat` != UNDEFINED adds a blit to an

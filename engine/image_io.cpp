@@ -17,17 +17,23 @@
 namespace canopy {
 
 namespace {
-// An opaque image is written as RGB: a quarter fewer bytes to compress (the demo writes many
+// An opaque image is encoded as RGB: a quarter fewer bytes to compress (the demo writes many
 // frames; docs/ keeps a few); readers get alpha = 255 back either way.
-bool opaque(const std::vector<uint8_t>& rgba) {
+struct PngPixels {
+  std::vector<uint8_t> rgb;  // filled only for an opaque image
+  const uint8_t* data = nullptr;
+  int channels = 4;
+};
+PngPixels pngPixels(const std::vector<uint8_t>& rgba) {
+  PngPixels p;
+  p.data = rgba.data();
   for (size_t i = 3; i < rgba.size(); i += 4)
-    if (rgba[i] != 255) return false;
-  return true;
-}
-std::vector<uint8_t> dropAlpha(const std::vector<uint8_t>& rgba) {
-  std::vector<uint8_t> rgb(rgba.size() / 4 * 3);
-  for (size_t i = 0, j = 0; i < rgba.size(); i += 4, j += 3) std::memcpy(&rgb[j], &rgba[i], 3);
-  return rgb;
+    if (rgba[i] != 255) return p;
+  p.rgb.resize(rgba.size() / 4 * 3);
+  for (size_t i = 0, j = 0; i < rgba.size(); i += 4, j += 3) std::memcpy(&p.rgb[j], &rgba[i], 3);
+  p.data = p.rgb.data();
+  p.channels = 3;
+  return p;
 }
 }  // namespace
 
@@ -35,10 +41,8 @@ Status writePng(const std::string& path, uint32_t w, uint32_t h, const std::vect
   if (w == 0 || h == 0 || rgba.size() != size_t(w) * h * 4)
     return Status::error("writePng '" + path + "': " + std::to_string(rgba.size()) + " bytes for " + std::to_string(w) + "x" +
                          std::to_string(h) + " RGBA");
-  const bool rgb = opaque(rgba);
-  const std::vector<uint8_t> packed = rgb ? dropAlpha(rgba) : std::vector<uint8_t>();
-  const int channels = rgb ? 3 : 4;
-  if (!stbi_write_png(path.c_str(), int(w), int(h), channels, rgb ? packed.data() : rgba.data(), int(w) * channels))
+  const PngPixels p = pngPixels(rgba);
+  if (!stbi_write_png(path.c_str(), int(w), int(h), p.channels, p.data, int(w) * p.channels))
     return Status::error("cannot write PNG '" + path + "'");
   return Status();
 }
@@ -52,10 +56,8 @@ Status encodePng(uint32_t w, uint32_t h, const std::vector<uint8_t>& rgba, std::
     auto* out = static_cast<std::vector<uint8_t>*>(ctx);
     out->insert(out->end(), static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + size);
   };
-  const bool rgb = opaque(rgba);
-  const std::vector<uint8_t> packed = rgb ? dropAlpha(rgba) : std::vector<uint8_t>();
-  const int channels = rgb ? 3 : 4;
-  if (!stbi_write_png_to_func(append, png, int(w), int(h), channels, rgb ? packed.data() : rgba.data(), int(w) * channels))
+  const PngPixels p = pngPixels(rgba);
+  if (!stbi_write_png_to_func(append, png, int(w), int(h), p.channels, p.data, int(w) * p.channels))
     return Status::error("encodePng: the encoder failed");
   return Status();
 }

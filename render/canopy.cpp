@@ -153,8 +153,11 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
-    CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
-    if (c->layers.split.foliageTriangles == 0) {
+    // The split is cheap; knowing there is nothing to animate before leaf roots and the mesh
+    // upload saves a big model's preparation.
+    MaterialSplit split;
+    CANOPY_TRY(splitMaterials(model, desc.split, &split));
+    if (split.foliageTriangles == 0) {
       std::string names;
       for (size_t i = 0; i < model.materials.size(); ++i) {  // appends: GCC 12's -Wrestrict misfires on "#" + ...
         names += i ? ", #" : "#";
@@ -166,6 +169,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       return Status::error(what + " has no foliage: every material is rigid (" + names +
                            "); name the leaf materials in CanopyDesc.split.foliage");
     }
+    CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
     CANOPY_TRY(createSimulation(d, desc.simulation, &c->simulation));
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     return Status();

@@ -86,9 +86,9 @@ void destroyCanopy(CanopyContext* context);
 Status setCanopyParams(CanopyContext* context, const CanopyParams& params);
 const CanopyParams& canopyParams(const CanopyContext* context);
 
-// The host's targets changed size (a window resize): recreates what depends on the size (layer
-// images, warp grid, the compositor's buffers) and keeps the mesh, leaf roots, simulation state
-// and parameters, so a resize costs no reload. Waits for the device to be idle. Bumps
+// The host's targets changed size (a window resize): recreates the layer images, the compositor
+// and the warp-grid dynamics (small objects, pipelines included) and keeps the mesh, leaf roots,
+// simulation state and parameters, so a resize costs no reload. Waits for the device to be idle. Bumps
 // canopyResourceGeneration() (rebuild a graph holding Canopy's passes); recordCanopy() rebuilds
 // its own. Width and height in [1, 16384]; on any other failure (out of memory) destroy the context.
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);

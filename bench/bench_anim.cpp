@@ -16,8 +16,8 @@
 #include "engine/device.h"
 #include "engine/timing.h"
 #include "render/canopy.h"
-#include "render/leaf_cloud.h"
-#include "render/scene_generator.h"
+#include "tools/leaf_cloud.h"
+#include "tools/scene_generator.h"
 
 namespace canopy::bench {
 namespace {
@@ -79,7 +79,7 @@ Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& time
   for (int i = 0; i < frames + 1; ++i) {
     if (canopy) {
       CanopyFrame f;
-      f.camera = view;
+      f.camera = toCamera(view);
       f.dt = dt;
       CANOPY_TRY(beginCanopyFrame(ctx, f));
     }
@@ -135,7 +135,6 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
     CanopyDesc desc;
     desc.width = width;
     desc.height = height;
-    desc.useRootCache = false;
     CanopyContext* ctx = nullptr;
     Status s = createCanopy(dev, model, desc, &ctx);
     HostTargets host;

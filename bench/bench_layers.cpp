@@ -10,7 +10,7 @@
 #include "engine/device.h"
 #include "engine/timing.h"
 #include "render/layers.h"
-#include "render/leaf_cloud.h"
+#include "tools/leaf_cloud.h"
 
 namespace canopy::bench {
 namespace {
@@ -65,7 +65,6 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
       LayeredVegetationDesc d;
       d.width = width;
       d.height = height;
-      d.useRootCache = false;
       d.settings.layout = layout;
       d.settings.draw = mode;
       d.settings.policy = ReslicePolicy::EveryFrame;

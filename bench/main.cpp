@@ -10,6 +10,7 @@
 
 #include "bench/bench.h"
 #include "engine/device.h"
+#include "tools/own_device.h"
 #include "demo/cli.h"
 
 using namespace canopy;

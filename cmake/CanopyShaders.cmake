@@ -50,6 +50,6 @@ const EmbeddedShader* findEmbeddedShader(const char* name) {
 }
 }  // namespace @ns@
 " @ONLY)
-  add_library(${target} STATIC ${registry} ${headers})
+  add_library(${target} OBJECT ${registry} ${headers})
   target_include_directories(${target} PRIVATE ${out_dir} ${CMAKE_CURRENT_SOURCE_DIR})
 endfunction()

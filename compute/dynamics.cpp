@@ -15,14 +15,15 @@ bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.
 SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth) {
   SimulationPlane p;
   const glm::mat4 inv = glm::inverse(view.view);
-  p.right = glm::normalize(glm::vec3(inv[0]));
-  p.up = glm::normalize(glm::vec3(inv[1]));
+  const glm::vec3 right = glm::normalize(glm::vec3(inv[0])), up = glm::normalize(glm::vec3(inv[1]));
   const glm::vec3 eye = glm::vec3(inv[3]), forward = -glm::normalize(glm::vec3(inv[2]));
   // Half extents of the visible region at that depth, from the projection's scale terms.
   const float halfW = centreDepth / std::max(std::abs(view.proj[0][0]), 1e-6f);
   const float halfH = centreDepth / std::max(std::abs(view.proj[1][1]), 1e-6f);
   p.tileSize = 2.0f * std::max(halfW, halfH);
-  p.origin = eye + forward * centreDepth - p.right * (0.5f * p.tileSize) - p.up * (0.5f * p.tileSize);
+  p.right = toFloat3(right);
+  p.up = toFloat3(up);
+  p.origin = toFloat3(eye + forward * centreDepth - right * (0.5f * p.tileSize) - up * (0.5f * p.tileSize));
   return p;
 }
 
@@ -57,19 +58,20 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     return Status::error("dynamics: " + std::to_string(n) + " layers, expected 1.." + std::to_string(CANOPY_MAX_LAYERS));
   if (d.width < 1 || d.height < 1) return Status::error("dynamics: empty image");
   if (d.simSize < 4 || d.ringSize < 1) return Status::error("dynamics: no simulation field (N < 4 or no history)");
-  const SimulationPlane& s = d.plane;
-  if (!finite3(s.origin) || !(s.tileSize > 0 && std::isfinite(s.tileSize)) ||
-      std::abs(glm::length(s.right) - 1.0f) > 1e-3f || std::abs(glm::length(s.up) - 1.0f) > 1e-3f ||
-      std::abs(glm::dot(s.right, s.up)) > 1e-3f)
+  const glm::vec3 origin = toGlm(d.plane.origin), right = toGlm(d.plane.right), up = toGlm(d.plane.up);
+  const float tileSize = d.plane.tileSize;
+  if (!finite3(origin) || !(tileSize > 0 && std::isfinite(tileSize)) ||
+      std::abs(glm::length(right) - 1.0f) > 1e-3f || std::abs(glm::length(up) - 1.0f) > 1e-3f ||
+      std::abs(glm::dot(right, up)) > 1e-3f)
     return Status::error("dynamics: the simulation plane needs unit, orthogonal right/up axes and tileSize > 0");
   gpu::AnimFrame f{};
   f.invViewProj = glm::inverse(d.view.proj * d.view.view);
   f.viewRotation = glm::mat4(glm::mat3(d.view.view));
   f.depthRow = -glm::vec4(d.view.view[0][2], d.view.view[1][2], d.view.view[2][2], d.view.view[3][2]);
-  f.simOrigin = glm::vec4(s.origin, s.tileSize);
-  f.simRight = glm::vec4(s.right, 0.0f);
-  f.simUp = glm::vec4(s.up, 0.0f);
-  f.lambda = glm::vec4(p.lambda, p.dt);
+  f.simOrigin = glm::vec4(origin, tileSize);
+  f.simRight = glm::vec4(right, 0.0f);
+  f.simUp = glm::vec4(up, 0.0f);
+  f.lambda = glm::vec4(toGlm(p.lambda), p.dt);
   f.time = d.time;
   f.vd = p.vd;
   f.propagation = p.propagationSpeed;
@@ -144,7 +146,7 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   const auto prev = g.importBuffer("dynamics: previous displacement", x.previous.size, kComputeRead, kComputeRead);
   LayerDynamics* p = &x;
   g.addPass("dynamics: frame", [p](rg::PassContext& c) {
-     vkCmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
+     c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
      return Status();
    }).write(frame, rg::Use::TransferDst);
   g.addPass("dynamics: displacement", [p, tiled, ring, ringTimes](rg::PassContext& c) {

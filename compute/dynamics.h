@@ -10,38 +10,18 @@
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"
 #include "engine/status.h"
-#include "render/camera.h"
+#include "engine/camera.h"
 #include "shared/anim.h"
 
 namespace canopy {
 struct Device;
 
-enum class DelayMode { Exact, Approximate };
-
-// The simulation plane in world space (design.md): the 2D field is the same on every parallel
-// plane; a world point maps to tile coordinates by orthogonal projection, / tileSize, fract().
-struct SimulationPlane {
-  glm::vec3 origin{0.0f};          // world point at simulation coordinate (0, 0)
-  glm::vec3 right{1.0f, 0, 0};     // unit x axis
-  glm::vec3 up{0, 1.0f, 0};        // unit y axis, orthogonal to right
-  float tileSize = 1.0f;           // world units covered by one tile (one simulation domain), > 0
-};
+// DelayMode and SimulationPlane: <canopy/canopy.h> (world-space vectors as Float3).
 // The default plane: the camera's own right/up, one tile covering the visible region at depth
 // `centreDepth` (the larger of its width and height), origin at that region's lower-left corner.
 SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth);
 
-struct DynamicsParams {
-  DelayMode delay = DelayMode::Exact;
-  float vd = 2.0f;                  // V_D of eq. 4, domain units/s, [-1000, 1000]
-  float propagationSpeed = 1.0f;    // s of eq. 5, [0, 1000]
-  glm::vec3 lambda{300.0f, 300.0f, 150.0f};  // lambda_x,y,z: pixels per domain unit, [0, 1e6] each
-  float rigidity = 1.0f;            // r of eq. 7, [0, 10]
-  bool everyPartMoves = false;      // eq. 7: R = 1 everywhere
-  float depthAttenuation = 0.3f;    // m of eq. 6, [0, 1]
-  float dt = 1.0f / 30.0f;          // Delta t of eq. 6, s, (0, 10]
-  uint32_t cellSize = 16;           // warp-grid cell, pixels, [2, 256]
-  float maxDelay = 10.0f;           // |gamma| bound for a vanishing eq. 4 denominator, s, (0, 3600]
-};
+// DynamicsParams: <canopy/canopy.h>.
 Status validateDynamicsParams(const DynamicsParams& params);
 
 // One layer as the dynamics see it (from the layer placement).

@@ -247,7 +247,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   std::vector<rg::ResourceId> ids;
   for (Buffer* x : bufs) ids.push_back(g.importBuffer("sim state", x->size, {}, x == &s.frame ? kFrameRest : kPersistent));
   auto pass = g.addPass("sim: clear", [&](rg::PassContext& c) {
-    for (rg::ResourceId id : ids) vkCmdFillBuffer(c.cmd, c.buffer(id), 0, VK_WHOLE_SIZE, 0);
+    for (rg::ResourceId id : ids) c.device->vk.CmdFillBuffer(c.cmd, c.buffer(id), 0, VK_WHOLE_SIZE, 0);
     return Status();
   });
   for (size_t i = 0; i < ids.size(); ++i) {
@@ -267,15 +267,15 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
 
 void destroySimulation(Simulation& s) {
   if (!s.device) return;
-  Device& d = *s.device;
-  vkDeviceWaitIdle(d.device);
+  Device& d = *s.device;  // the caller made sure no frame in flight uses it (destroyCanopy defers)
   s.graph.release(d);
   for (ComputePipeline* p : {&s.diffuse, &s.project, &s.advect, &s.stam, &s.oscillator, &s.tile}) destroyComputePipeline(d, *p);
   for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes}) destroyBuffer(d, *b);
   s.device = nullptr;
 }
 
-Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResources* out) {
+Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResources* out, const bool* hold) {
+  if (!hold) hold = &s.paused;
   SimulationResources r;
   r.frame = g.importBuffer("sim frame", s.frame.size, kFrameRest, kFrameRest);
   r.velocity = g.importBuffer("sim velocity", s.velocity.size, kPersistent, kPersistent);
@@ -292,13 +292,13 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   CANOPY_TRY(g.bindBuffer(r.ring, s.ring.buffer));
   CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
   Simulation* sp = &s;
-  auto run = [sp](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
-    return sp->paused ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
+  auto run = [sp, hold](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
+    return *hold ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
   };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
   const uint32_t one = SIM_GROUP_SIZE;  // single-workgroup kernels
-  g.addPass("sim: upload step parameters", [sp](rg::PassContext& c) {
-     if (!sp->paused) vkCmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
+  g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
+     if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
    }).write(r.frame, rg::Use::TransferDst);
   g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->diffuse, one, 1, 0) : Status(); })
@@ -380,8 +380,8 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
   auto mg = g.importBuffer("sim multigrid", s.multigrid.size, kPersistent, kPersistent);
   Simulation* sp = &s;
   g.addPass("sim: upload", [&](rg::PassContext& c) {
-     vkCmdUpdateBuffer(c.cmd, c.buffer(frame), 0, sizeof f, &f);
-     vkCmdFillBuffer(c.cmd, c.buffer(mg), 0, VK_WHOLE_SIZE, 0);
+     c.device->vk.CmdUpdateBuffer(c.cmd, c.buffer(frame), 0, sizeof f, &f);
+     c.device->vk.CmdFillBuffer(c.cmd, c.buffer(mg), 0, VK_WHOLE_SIZE, 0);
      return Status();
    })
       .write(frame, rg::Use::TransferDst)

@@ -19,86 +19,16 @@
 namespace canopy {
 struct Device;
 
-enum class FluidScheme : uint32_t {
-  MacMultigrid = SIM_SCHEME_MAC_MULTIGRID,  // staggered grid + multigrid projection (default)
-  Stam = SIM_SCHEME_STAM,                   // Stam's collocated games-paper solver, closed walls
-};
-enum class FluidBoundary : uint32_t {
-  WindTunnel = SIM_BOUNDARY_TUNNEL,  // inflow on source sides, open outflow elsewhere (default)
-  Walls = SIM_BOUNDARY_WALLS,        // closed box (no net wind can cross it)
-};
-// Wind source sides (combinable): a source on the left blows toward +x, on the top toward -y.
-enum WindSide : uint32_t {
-  kWindFromLeft = SIM_SIDE_LEFT,
-  kWindFromRight = SIM_SIDE_RIGHT,
-  kWindFromBottom = SIM_SIDE_BOTTOM,
-  kWindFromTop = SIM_SIDE_TOP,
-};
-
-// Injected wind: speed through a source side = strength * (baseline + modulation sin(2 pi f t))
-// * (1 + gust * noise), the noise travelling along the side. Changeable every step.
-struct WindParams {
-  uint32_t sides = kWindFromLeft;  // WindSide mask, 0..15 (0: no boundary wind)
-  float strength = 0.5f;           // domain units/s, [0, 1000]
-  float frequency = 0.25f;         // Hz, [0, 1000]
-  float baseline = 1.0f;           // a, [-10, 10]
-  float modulation = 0.3f;         // b, [-10, 10]
-  float gust = 0.3f;               // relative gust amplitude, [0, 1]
-  float gustScale = 0.25f;         // gust wavelength along a side, domain units, (0, 100]
-  float gustSpeed = 0.3f;          // gust travel speed along a side, domain units/s, [-1000, 1000]
-  uint32_t seed = 1;               // gust noise seed
-};
-
-// A point "motor" (a character, an explosion): a mass source in the fluid, so air flows outward
-// around it (negative strength: inward). The source density falls linearly to zero at the radius.
-struct Motor {
-  float x = 0.5f, y = 0.5f;  // centre, domain units (may lie outside [0,1])
-  float radius = 0.1f;       // domain units, (0, 100]
-  float strength = 1.0f;     // outward flow speed at the radius, domain units/s, [-1000, 1000]
-};
-
-struct FluidParams {
-  FluidScheme scheme = FluidScheme::MacMultigrid;
-  FluidBoundary boundary = FluidBoundary::WindTunnel;  // MAC scheme only; Stam's has walls
-  float viscosity = 1e-4f;       // domain units^2/s, [0, 10]
-  uint32_t iterations = 20;      // relaxation sweeps: Stam's linear solves; cap of the diffusion sweeps, [1, 10000]
-  uint32_t multigridCycles = 2;  // V-cycles per MAC projection, [1, 64]
-};
-
-// The oscillator V'' = c^2 lap V - k (V - g V_wind) - zeta V' (design.md).
-struct WaveParams {
-  float stiffness = 40.0f;    // k, 1/s^2, [0, 1e6]: undamped angular frequency sqrt(k)
-  float speed = 0.05f;        // c, domain units/s, [0, 100]
-  float damping = 2.0f;       // zeta, 1/s, [0, 1000]
-  float gain = 1.0f;          // g, [-100, 100]
-  uint32_t maxSubsteps = 64;  // [1, 4096]: a longer step is clamped (stats.clampedSeconds)
-};
-
-struct SimulationParams {
-  WindParams wind;
-  FluidParams fluid;
-  WaveParams wave;
-  std::vector<Motor> motors;  // at most SIM_MAX_MOTORS (8)
-};
-
-struct SimulationDesc {
-  uint32_t gridSize = 64;        // N: a power of two in [4, 1024]
-  uint32_t historySize = 0;      // H tiled fields kept; 0: enough for historySeconds at nominalDt
-  float historySeconds = 1.0f;   // (0, 3600]
-  float nominalDt = 1.0f / 30.0f;
-};
+// WindParams, Motor, FluidParams, WaveParams, SimulationParams, SimulationDesc and SimulationStats
+// are the public API's (<canopy/canopy.h>); their enum values are the shader's constants.
+static_assert(uint32_t(FluidScheme::MacMultigrid) == SIM_SCHEME_MAC_MULTIGRID && uint32_t(FluidScheme::Stam) == SIM_SCHEME_STAM);
+static_assert(uint32_t(FluidBoundary::WindTunnel) == SIM_BOUNDARY_TUNNEL && uint32_t(FluidBoundary::Walls) == SIM_BOUNDARY_WALLS);
+static_assert(kWindFromLeft == SIM_SIDE_LEFT && kWindFromRight == SIM_SIDE_RIGHT && kWindFromBottom == SIM_SIDE_BOTTOM &&
+              kWindFromTop == SIM_SIDE_TOP && kMaxMotors == SIM_MAX_MOTORS);
 
 // Resources of one simulation as seen by a render graph (addSimulationPasses).
 struct SimulationResources {
   rg::ResourceId frame, velocity, multigrid, wave, tiled, ring, ringTimes;
-};
-
-struct SimulationStats {
-  uint64_t steps = 0;
-  uint32_t lastWaveSubsteps = 0;
-  uint32_t lastDiffuseSweeps = 0;
-  uint32_t dispatchesPerStep = 0;
-  double clampedSeconds = 0.0;  // oscillator time dropped by the maxSubsteps clamp (frame hitches)
 };
 
 // GPU state of a simulation. Memory: velocity 2 * 2(N+2)^2 floats, multigrid ~(8/3) N^2 floats,
@@ -138,7 +68,9 @@ void destroySimulation(Simulation& sim);
 
 // Adds one step's passes to `graph` (the host's, or Canopy's own), importing the simulation's
 // buffers. Each record() of that graph runs the step prepared last by prepareSimulationStep.
-Status addSimulationPasses(Simulation& sim, rg::RenderGraph& graph, SimulationResources* out);
+// `hold` (default: &sim.paused) is read when the graph is recorded: true records no step (a paused
+// host frame, or a context that shares a simulation another context stepped this frame).
+Status addSimulationPasses(Simulation& sim, rg::RenderGraph& graph, SimulationResources* out, const bool* hold = nullptr);
 // Validates `params` and fixes the next recorded step (advances the clock by dt and the ring slot).
 Status prepareSimulationStep(Simulation& sim, const SimulationParams& params, float dt);
 // Standalone: records `count` steps (one command buffer per 256 steps), submits and waits.

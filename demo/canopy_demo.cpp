@@ -18,7 +18,7 @@
 extern char** environ;
 
 #include "demo/demo_app.h"
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 
 using namespace canopy;
 using namespace canopy::demo;
@@ -198,7 +198,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       CameraRig rig = rig0;
       if (o.camera == CameraPath::Orbit && o.frames > 1) rig.yaw += o.orbitDegrees * float(i) / float(o.frames - 1);
       CanopyFrame f;
-      f.camera = cameraView(rig, model, o.width, o.height);
+      f.camera = toCamera(cameraView(rig, model, o.width, o.height));
       f.dt = 1.0f / o.fps;
       return f;
     };

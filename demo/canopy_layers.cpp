@@ -13,7 +13,8 @@
 
 #include "demo/cli.h"
 #include "engine/device.h"
-#include "engine/image_io.h"
+#include "tools/own_device.h"
+#include "tools/image_io.h"
 #include "render/layers.h"
 
 using namespace canopy;
@@ -78,6 +79,7 @@ int main(int argc, char** argv) {
   desc.settings.regions = RegionSplit{};
   float yaw = 0, pitch = 10, fov = 40, distance = 0.8f;
   DeviceDesc dd;
+  bool noCache = false;
   dd.applicationName = "canopy-layers";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -126,7 +128,7 @@ int main(int argc, char** argv) {
     } else if (a == "--no-weld") {
       desc.roots.weldPositions = false;
     } else if (a == "--no-cache") {
-      desc.useRootCache = false;
+      noCache = true;
     } else if (a == "--cache-dir") {
       if (!(v = next())) return usage("--cache-dir needs a folder");
       desc.rootCacheDir = v;
@@ -147,6 +149,9 @@ int main(int argc, char** argv) {
     return 1;
   };
 
+  // The tool's own default (the library writes nothing unless asked): the cache beside the model.
+  if (noCache) desc.rootCacheDir.clear();
+  else if (desc.rootCacheDir.empty()) desc.rootCacheDir = std::filesystem::path(model).parent_path().empty() ? std::string(".") : std::filesystem::path(model).parent_path().string();
   if (!desc.rootCacheDir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(desc.rootCacheDir, ec);

@@ -10,8 +10,8 @@
 
 #include "demo/cli.h"
 #include "demo/progress.h"
-#include "render/gltf_writer.h"
-#include "render/scene_generator.h"
+#include "tools/gltf_writer.h"
+#include "tools/scene_generator.h"
 
 using namespace canopy;
 

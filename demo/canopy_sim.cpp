@@ -12,7 +12,8 @@
 
 #include "compute/simulation.h"
 #include "engine/device.h"
-#include "engine/image_io.h"
+#include "tools/own_device.h"
+#include "tools/image_io.h"
 #include "demo/cli.h"
 
 using namespace canopy;

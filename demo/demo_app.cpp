@@ -411,7 +411,6 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.colorFormat = VK_FORMAT_R8G8B8A8_SRGB;
   // A generated scene has no file to key a cache by. A loaded model's cache goes to the output
   // folder (or --cache-dir), not beside the model: the demo writes only where it was told to.
-  desc.useRootCache = !o.gltf.empty();
   LayerLayout layout;
   if (parseLayerLayout(o.layout, &layout).ok()) desc.maxLayers = std::max(desc.maxLayers, layout.count());
   desc.rootCacheDir = o.cacheDir.empty() ? o.outDir : o.cacheDir;

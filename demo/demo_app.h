@@ -9,11 +9,12 @@
 #include <vector>
 
 #include "engine/device.h"
+#include "tools/own_device.h"
 #include "engine/memory.h"
 #include "engine/render_graph.h"
 #include "engine/timing.h"
 #include "render/canopy.h"
-#include "render/scene_generator.h"
+#include "tools/scene_generator.h"
 
 namespace canopy::demo {
 

@@ -16,7 +16,7 @@
 #include <GLFW/glfw3.h>
 
 #include "demo/demo_app.h"
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 
 namespace canopy::demo {
 namespace {
@@ -382,7 +382,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       }
       if (r != VK_SUCCESS && r != VK_SUBOPTIMAL_KHR) return Status::error("vkAcquireNextImageKHR failed (" + std::to_string(int(r)) + ")");
       CanopyFrame f;
-      f.camera = cameraView(live.rig, model, sc.extent.width, sc.extent.height);
+      f.camera = toCamera(cameraView(live.rig, model, sc.extent.width, sc.extent.height));
       f.dt = live.paused ? 0.0f : 1.0f / o.fps;
       const auto w0 = std::chrono::steady_clock::now();
       vkResetCommandBuffer(cmd, 0);

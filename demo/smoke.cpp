@@ -9,8 +9,9 @@
 #include <cstring>
 #include <string>
 
-#include "compute/example_passes.h"
+#include "tools/example_passes.h"
 #include "engine/device.h"
+#include "tools/own_device.h"
 #include "engine/timing.h"
 #include "demo/cli.h"
 

@@ -1,8 +1,6 @@
 #include "engine/device.h"
 
 #include <algorithm>
-#include <cctype>
-#include <cstdlib>
 #include <cstring>
 
 #include "engine/memory.h"
@@ -10,284 +8,333 @@
 namespace canopy {
 namespace {
 
-const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
+// What Canopy needs (docs/design.md, "Embedding contract"): Vulkan 1.2, push descriptors,
+// synchronization2 and dynamic rendering (core in 1.3), scalar block layout; and one way to put a
+// triangle in a layer: gl_Layer from the vertex shader (single pass) or gl_ClipDistance (one draw
+// per layer).
+struct FeatureView {
+  VkPhysicalDeviceFeatures core{};
+  bool scalarBlockLayout = false, shaderOutputLayer = false;
+  bool synchronization2 = false, dynamicRendering = false;
+  bool has11 = false, has12 = false, has13 = false, hasSync2 = false, hasDynRender = false;
+};
 
-VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
-                                             VkDebugUtilsMessageTypeFlagsEXT,
-                                             const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-  auto* sink = static_cast<ValidationSink*>(user);
-  if (sink && *sink) (*sink)(severity, data->pMessageIdName ? data->pMessageIdName : "", data->pMessage ? data->pMessage : "");
-  return VK_FALSE;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  return s;
-}
-
-bool hasLayer(const char* name) {
-  uint32_t n = 0;
-  vkEnumerateInstanceLayerProperties(&n, nullptr);
-  std::vector<VkLayerProperties> layers(n);
-  vkEnumerateInstanceLayerProperties(&n, layers.data());
-  for (auto& l : layers)
-    if (std::strcmp(l.layerName, name) == 0) return true;
-  return false;
-}
-
-bool hasDeviceExtension(VkPhysicalDevice pd, const char* name) {
-  uint32_t n = 0;
-  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
-  std::vector<VkExtensionProperties> exts(n);
-  vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, exts.data());
-  for (auto& e : exts)
-    if (std::strcmp(e.extensionName, name) == 0) return true;
-  return false;
-}
-
-int typeScore(VkPhysicalDeviceType t) {
-  switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 4;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 3;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 1;
-    default: return 0;
+// Reads the booleans out of a feature chain (VkPhysicalDeviceFeatures2 and what hangs from it).
+FeatureView readChain(const void* chain, const VkPhysicalDeviceFeatures* plain) {
+  FeatureView v;
+  if (plain) v.core = *plain;
+  for (auto* s = static_cast<const VkBaseInStructure*>(chain); s; s = s->pNext) {
+    switch (s->sType) {
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2:
+        v.core = reinterpret_cast<const VkPhysicalDeviceFeatures2*>(s)->features;
+        break;
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES: v.has11 = true; break;
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES: {
+        auto* f = reinterpret_cast<const VkPhysicalDeviceVulkan12Features*>(s);
+        v.has12 = true;
+        v.scalarBlockLayout |= f->scalarBlockLayout == VK_TRUE;
+        v.shaderOutputLayer |= f->shaderOutputLayer == VK_TRUE;
+        break;
+      }
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES: {
+        auto* f = reinterpret_cast<const VkPhysicalDeviceVulkan13Features*>(s);
+        v.has13 = true;
+        v.synchronization2 |= f->synchronization2 == VK_TRUE;
+        v.dynamicRendering |= f->dynamicRendering == VK_TRUE;
+        break;
+      }
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SCALAR_BLOCK_LAYOUT_FEATURES:
+        v.scalarBlockLayout |= reinterpret_cast<const VkPhysicalDeviceScalarBlockLayoutFeatures*>(s)->scalarBlockLayout == VK_TRUE;
+        break;
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES:
+        v.hasSync2 = true;
+        v.synchronization2 |= reinterpret_cast<const VkPhysicalDeviceSynchronization2Features*>(s)->synchronization2 == VK_TRUE;
+        break;
+      case VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES:
+        v.hasDynRender = true;
+        v.dynamicRendering |= reinterpret_cast<const VkPhysicalDeviceDynamicRenderingFeatures*>(s)->dynamicRendering == VK_TRUE;
+        break;
+      default: break;
+    }
   }
+  return v;
 }
 
-// Why a device cannot run Canopy, or "" when it can.
-std::string unsuitableReason(VkPhysicalDevice pd, uint32_t* family) {
-  VkPhysicalDeviceProperties props;
-  vkGetPhysicalDeviceProperties(pd, &props);
-  if (props.apiVersion < VK_API_VERSION_1_2) return "Vulkan 1.2 is required";
-  if (!hasDeviceExtension(pd, VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME)) return "VK_KHR_push_descriptor is missing";
-  if (props.apiVersion < VK_API_VERSION_1_3 && !hasDeviceExtension(pd, VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME))
-    return "synchronization2 is missing";
-  if (props.apiVersion < VK_API_VERSION_1_3 && !hasDeviceExtension(pd, VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME))
-    return "dynamic rendering is missing";
+// What the physical device supports.
+FeatureView supported(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t apiVersion) {
   VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
   VkPhysicalDeviceSynchronization2Features fs2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
   VkPhysicalDeviceDynamicRenderingFeatures fdr{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-  fs2.pNext = &fdr;
-  f12.pNext = &fs2;
+  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
   VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-  vkGetPhysicalDeviceFeatures2(pd, &f2);
-  if (!f12.scalarBlockLayout) return "scalarBlockLayout is not supported";
-  if (!fs2.synchronization2) return "synchronization2 feature is not supported";
-  if (!fdr.dynamicRendering) return "dynamicRendering feature is not supported";
-  if (!f12.hostQueryReset) return "hostQueryReset is not supported";
-  if (!props.limits.timestampComputeAndGraphics) return "timestamps on compute/graphics queues are not supported";
-  uint32_t n = 0;
-  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
-  std::vector<VkQueueFamilyProperties> fams(n);
-  vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
-  for (uint32_t i = 0; i < n; ++i) {
-    const VkQueueFlags need = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
-    if ((fams[i].queueFlags & need) == need && fams[i].timestampValidBits > 0) {
-      *family = i;
-      return "";
-    }
+  if (apiVersion >= VK_API_VERSION_1_3) {
+    f12.pNext = &f13;
+  } else {
+    f12.pNext = &fs2;
+    fs2.pNext = &fdr;
   }
-  return "no queue family with graphics + compute + timestamps";
+  vk.GetPhysicalDeviceFeatures2(pd, &f2);
+  return readChain(&f2, nullptr);
+}
+
+std::vector<std::string> deviceExtensions(const VulkanFunctions& vk, VkPhysicalDevice pd) {
+  uint32_t n = 0;
+  vk.EnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr);
+  std::vector<VkExtensionProperties> exts(n);
+  vk.EnumerateDeviceExtensionProperties(pd, nullptr, &n, exts.data());
+  std::vector<std::string> names;
+  for (auto& e : exts) names.push_back(e.extensionName);
+  return names;
+}
+
+bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
+
+// The requirements of one physical device; `core13` when it and the instance run 1.3.
+void fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t instanceApi, DeviceRequirements* r,
+                      bool* core13Out) {
+  *r = DeviceRequirements{};
+  VkPhysicalDeviceProperties props;
+  vk.GetPhysicalDeviceProperties(pd, &props);
+  const bool core13 = props.apiVersion >= VK_API_VERSION_1_3 && instanceApi >= VK_API_VERSION_1_3;
+  if (core13Out) *core13Out = core13;
+  r->extensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+  if (!core13) {
+    r->extensions.push_back(VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME);
+    r->extensions.push_back(VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME);
+  }
+  r->optionalExtensions = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME + std::string(" (instance; debug names)")};
+  r->features = {"VkPhysicalDeviceVulkan12Features.scalarBlockLayout",
+                 core13 ? "VkPhysicalDeviceVulkan13Features.synchronization2"
+                        : "VkPhysicalDeviceSynchronization2Features.synchronization2",
+                 core13 ? "VkPhysicalDeviceVulkan13Features.dynamicRendering"
+                        : "VkPhysicalDeviceDynamicRenderingFeatures.dynamicRendering",
+                 "VkPhysicalDeviceVulkan12Features.shaderOutputLayer or VkPhysicalDeviceFeatures.shaderClipDistance"};
+  r->optionalFeatures = {"VkPhysicalDeviceVulkan12Features.shaderOutputLayer (all layers in one draw)",
+                         "VkPhysicalDeviceFeatures.shaderClipDistance (one draw per layer; geometry slicing)",
+                         "VkPhysicalDeviceFeatures.geometryShader + independentBlend (layer id debug output)"};
+  std::string why;
+  if (props.apiVersion < VK_API_VERSION_1_2 || instanceApi < VK_API_VERSION_1_2) {
+    why = "Vulkan 1.2 is required (device " + std::to_string(VK_API_VERSION_MAJOR(props.apiVersion)) + "." +
+          std::to_string(VK_API_VERSION_MINOR(props.apiVersion)) + ", instance " +
+          std::to_string(VK_API_VERSION_MAJOR(instanceApi)) + "." + std::to_string(VK_API_VERSION_MINOR(instanceApi)) + ")";
+  } else {
+    const std::vector<std::string> have = deviceExtensions(vk, pd);
+    for (const std::string& e : r->extensions)
+      if (why.empty() && !contains(have, e)) why = "extension " + e + " is not supported";
+    const FeatureView f = supported(vk, pd, core13 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2);
+    if (why.empty() && !f.scalarBlockLayout) why = "feature scalarBlockLayout is not supported";
+    if (why.empty() && !f.synchronization2) why = "feature synchronization2 is not supported";
+    if (why.empty() && !f.dynamicRendering) why = "feature dynamicRendering is not supported";
+    if (why.empty() && !f.shaderOutputLayer && !f.core.shaderClipDistance)
+      why = "neither shaderOutputLayer nor shaderClipDistance is supported (no way to draw into a layer)";
+    uint32_t n = 0;
+    vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> fams(n);
+    vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+    bool queue = false;
+    for (auto& q : fams) queue |= (q.queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) == (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT);
+    if (why.empty() && !queue) why = "no queue family with graphics + compute";
+  }
+  r->unsupported = why;
 }
 
 }  // namespace
 
-Status createDevice(const DeviceDesc& desc, Device* out) {
-  *out = Device{};
+Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd,
+                               DeviceRequirements* out) {
+  if (!out || !pd) return Status::error("queryDeviceRequirements: physicalDevice and out are required");
+  VulkanFunctions vk;
+  const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
+  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
+  fillRequirements(vk, pd, VK_API_VERSION_1_3, out, nullptr);
+  return Status();
+}
+
+Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd,
+                            VkPhysicalDeviceFeatures2* chain) {
+  if (!chain || chain->sType != VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2)
+    return Status::error("enableDeviceFeatures: chain must start with a VkPhysicalDeviceFeatures2");
+  VulkanFunctions vk;
+  const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
+  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "enableDeviceFeatures: " + missing + " is unavailable");
+  VkPhysicalDeviceProperties props;
+  vk.GetPhysicalDeviceProperties(pd, &props);
+  const FeatureView have = supported(vk, pd, props.apiVersion);
+  VkPhysicalDeviceVulkan12Features* f12 = nullptr;
+  VkPhysicalDeviceVulkan13Features* f13 = nullptr;
+  VkPhysicalDeviceSynchronization2Features* fs2 = nullptr;
+  VkPhysicalDeviceDynamicRenderingFeatures* fdr = nullptr;
+  for (auto* s = reinterpret_cast<VkBaseOutStructure*>(chain); s; s = s->pNext) {
+    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES) f12 = reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(s);
+    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES) f13 = reinterpret_cast<VkPhysicalDeviceVulkan13Features*>(s);
+    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES) fs2 = reinterpret_cast<VkPhysicalDeviceSynchronization2Features*>(s);
+    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES) fdr = reinterpret_cast<VkPhysicalDeviceDynamicRenderingFeatures*>(s);
+  }
+  if (!f12) return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain has no VkPhysicalDeviceVulkan12Features");
+  if (!f13 && (!fs2 || !fdr))
+    return Status::error(Result::InvalidArgument,
+                         "enableDeviceFeatures: the chain needs VkPhysicalDeviceVulkan13Features, or "
+                         "VkPhysicalDeviceSynchronization2Features and VkPhysicalDeviceDynamicRenderingFeatures");
+  f12->scalarBlockLayout = VK_TRUE;
+  f12->shaderOutputLayer = have.shaderOutputLayer ? VK_TRUE : f12->shaderOutputLayer;
+  if (f13) {
+    f13->synchronization2 = VK_TRUE;
+    f13->dynamicRendering = VK_TRUE;
+  } else {
+    fs2->synchronization2 = VK_TRUE;
+    fdr->dynamicRendering = VK_TRUE;
+  }
+  if (have.core.shaderClipDistance) chain->features.shaderClipDistance = VK_TRUE;
+  if (have.core.geometryShader) chain->features.geometryShader = VK_TRUE;
+  if (have.core.independentBlend) chain->features.independentBlend = VK_TRUE;
+  return Status();
+}
+
+Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out) {
   Device& d = *out;
-  uint32_t loaderVersion = VK_API_VERSION_1_0;
-  vkEnumerateInstanceVersion(&loaderVersion);
-  if (loaderVersion < VK_API_VERSION_1_2)
-    return Status::error("the Vulkan loader supports only " + std::to_string(VK_API_VERSION_MAJOR(loaderVersion)) + "." +
-                         std::to_string(VK_API_VERSION_MINOR(loaderVersion)) + "; Canopy needs 1.2");
+  if (!desc.getInstanceProcAddr || !desc.instance || !desc.physicalDevice || !desc.device || !desc.queue)
+    return Status::error("AdoptDeviceDesc: getInstanceProcAddr, instance, physicalDevice, device and queue are required");
+  if (!desc.deviceCreateInfo)
+    return Status::error("AdoptDeviceDesc.deviceCreateInfo is required (the VkDeviceCreateInfo the device was created with)");
+  if (desc.framesInFlight < 1 || desc.framesInFlight > 3)
+    return Status::error("AdoptDeviceDesc.framesInFlight = " + std::to_string(desc.framesInFlight) + " is outside [1, 3]");
+  if (desc.memoryAllocator && (!desc.memoryAllocator->allocate || !desc.memoryAllocator->free))
+    return Status::error("AdoptDeviceDesc.memoryAllocator needs both allocate and free");
+  VulkanFunctions probe;
+  std::string missing = loadInstanceFunctions(desc.getInstanceProcAddr, desc.instance, &probe);
+  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "adoptDevice: " + missing + " is unavailable");
+  DeviceRequirements req;
+  bool core13 = false;
+  fillRequirements(probe, desc.physicalDevice, desc.instanceApiVersion, &req, &core13);
+  if (!req.unsupported.empty())
+    return Status::error(Result::UnsupportedDevice, "adoptDevice: this physical device cannot run Canopy: " + req.unsupported);
 
-  std::vector<const char*> layers;
-  std::vector<const char*> instExts = desc.instanceExtensions;
-  bool validation = false;
-  if (desc.enableValidation) {
-    if (hasLayer(kValidationLayer)) {
-      validation = true;
-      layers.push_back(kValidationLayer);
-      instExts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-    } else if (desc.requireValidation) {
-      return Status::error(std::string(kValidationLayer) +
-                           " is not installed (apt-get install vulkan-validationlayers)");
-    }
-    if (validation && !desc.validationSink) return Status::error("DeviceDesc.validationSink is required with validation");
-  }
-  d.sink = new ValidationSink(desc.validationSink);
+  // What the host enabled, read from its create info.
+  const VkDeviceCreateInfo& ci = *desc.deviceCreateInfo;
+  std::vector<std::string> enabled;
+  for (uint32_t i = 0; i < ci.enabledExtensionCount; ++i) enabled.push_back(ci.ppEnabledExtensionNames[i]);
+  std::string absent;
+  for (const std::string& e : req.extensions)
+    if (!contains(enabled, e)) absent += (absent.empty() ? "" : ", ") + ("extension " + e);
+  const FeatureView on = readChain(ci.pNext, ci.pEnabledFeatures);
+  if (!on.scalarBlockLayout) absent += std::string(absent.empty() ? "" : ", ") + "feature scalarBlockLayout";
+  if (!on.synchronization2) absent += std::string(absent.empty() ? "" : ", ") + "feature synchronization2";
+  if (!on.dynamicRendering) absent += std::string(absent.empty() ? "" : ", ") + "feature dynamicRendering";
+  if (!on.shaderOutputLayer && !on.core.shaderClipDistance)
+    absent += std::string(absent.empty() ? "" : ", ") + "feature shaderOutputLayer or shaderClipDistance";
+  if (!absent.empty())
+    return Status::error(Result::UnsupportedDevice, "adoptDevice: the device was created without what Canopy needs: " + absent +
+                                                        " (queryDeviceRequirements / enableDeviceFeatures list them)");
 
-  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.pApplicationName = desc.applicationName;
-  app.pEngineName = "canopy";
-  app.apiVersion = loaderVersion >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
-
-  VkValidationFeatureEnableEXT enables[] = {VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT};
-  VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
-  features.enabledValidationFeatureCount = desc.enableSyncValidation ? 1 : 0;
-  features.pEnabledValidationFeatures = enables;
-
-  VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-  mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-  mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                    VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-  mci.pfnUserCallback = debugCallback;
-  mci.pUserData = d.sink;
-  if (validation) {
-    mci.pNext = &features;
-  }
-
-  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-  ici.pNext = validation ? &mci : nullptr;
-  ici.pApplicationInfo = &app;
-  ici.enabledLayerCount = uint32_t(layers.size());
-  ici.ppEnabledLayerNames = layers.data();
-  ici.enabledExtensionCount = uint32_t(instExts.size());
-  ici.ppEnabledExtensionNames = instExts.data();
-  CANOPY_VK(vkCreateInstance(&ici, nullptr, &d.instance));
-  d.validationEnabled = validation;
-  if (validation) {
-    auto create = (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(d.instance, "vkCreateDebugUtilsMessengerEXT");
-    mci.pNext = nullptr;
-    if (!create) return Status::error("vkCreateDebugUtilsMessengerEXT is unavailable");
-    CANOPY_VK(create(d.instance, &mci, nullptr, &d.messenger));
-    d.setObjectName = (PFN_vkSetDebugUtilsObjectNameEXT)vkGetInstanceProcAddr(d.instance, "vkSetDebugUtilsObjectNameEXT");
-  }
-
-  // Device selection: explicit name (option or $CANOPY_DEVICE) first, else best type.
-  uint32_t n = 0;
-  CANOPY_VK(vkEnumeratePhysicalDevices(d.instance, &n, nullptr));
-  std::vector<VkPhysicalDevice> pds(n);
-  CANOPY_VK(vkEnumeratePhysicalDevices(d.instance, &n, pds.data()));
-  if (n == 0) return Status::error("no Vulkan device found (on a machine without a GPU install mesa-vulkan-drivers for lavapipe)");
-  std::string want = desc.preferredDevice;
-  if (want.empty())
-    if (const char* env = std::getenv("CANOPY_DEVICE")) want = env;
-  want = lower(want);
-  int bestScore = -1;
-  std::string rejected;
-  for (auto pd : pds) {
-    VkPhysicalDeviceProperties p;
-    vkGetPhysicalDeviceProperties(pd, &p);
-    uint32_t family = 0;
-    std::string why = unsuitableReason(pd, &family);
-    bool nameOk = want.empty() || lower(p.deviceName).find(want) != std::string::npos;
-    if (!nameOk) {
-      rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": name does not match '" + want + "'";
-      continue;
-    }
-    if (!why.empty()) {
-      rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": " + why;
-      continue;
-    }
-    int score = typeScore(p.deviceType);
-    if (score > bestScore) {
-      bestScore = score;
-      d.physical = pd;
-      d.queueFamily = family;
-    }
-  }
-  if (!d.physical) return Status::error("no suitable Vulkan device (" + rejected + ")");
-  vkGetPhysicalDeviceProperties(d.physical, &d.properties);
-  vkGetPhysicalDeviceMemoryProperties(d.physical, &d.memoryProperties);
+  d.instance = desc.instance;
+  d.physical = desc.physicalDevice;
+  d.device = desc.device;
+  d.queue = desc.queue;
+  d.queueFamily = desc.queueFamily;
+  d.allocationCallbacks = desc.allocationCallbacks;
+  d.pipelineCache = desc.pipelineCache;
+  if (desc.memoryAllocator) d.hostAllocator = *desc.memoryAllocator;
+  d.framesInFlight = desc.framesInFlight;
+  missing = loadVulkanFunctions(desc.getInstanceProcAddr, desc.instance, desc.device, core13, &d.vk);
+  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "adoptDevice: " + missing + " is unavailable");
+  d.cmdPipelineBarrier2 = d.vk.CmdPipelineBarrier2;
+  d.cmdPushDescriptorSet = d.vk.CmdPushDescriptorSetKHR;
+  d.cmdBeginRendering = d.vk.CmdBeginRendering;
+  d.cmdEndRendering = d.vk.CmdEndRendering;
+  // Used only where debug utils is known to be enabled (createDevice with validation sets
+  // validationEnabled); the public desc does not list the host's instance extensions.
+  d.setObjectName = d.vk.SetDebugUtilsObjectNameEXT;
+  d.vk.GetPhysicalDeviceProperties(d.physical, &d.properties);
+  d.vk.GetPhysicalDeviceMemoryProperties(d.physical, &d.memoryProperties);
   {
     uint32_t qn = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(d.physical, &qn, nullptr);
+    d.vk.GetPhysicalDeviceQueueFamilyProperties(d.physical, &qn, nullptr);
     std::vector<VkQueueFamilyProperties> fams(qn);
-    vkGetPhysicalDeviceQueueFamilyProperties(d.physical, &qn, fams.data());
-    d.timestampValidBits = fams[d.queueFamily].timestampValidBits;
+    d.vk.GetPhysicalDeviceQueueFamilyProperties(d.physical, &qn, fams.data());
+    if (d.queueFamily >= qn) return Status::error("AdoptDeviceDesc.queueFamily = " + std::to_string(d.queueFamily) + " does not exist");
+    const VkQueueFlags need = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+    if ((fams[d.queueFamily].queueFlags & need) != need)
+      return Status::error(Result::UnsupportedDevice, "AdoptDeviceDesc.queueFamily " + std::to_string(d.queueFamily) +
+                                                          " lacks graphics + compute");
+    d.timestampValidBits = d.properties.limits.timestampComputeAndGraphics ? fams[d.queueFamily].timestampValidBits : 0;
   }
-  const bool core13 = d.properties.apiVersion >= VK_API_VERSION_1_3 && app.apiVersion >= VK_API_VERSION_1_3;
-
-  VkPhysicalDeviceVulkan11Features have11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceFeatures2 have{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &have11};
-  vkGetPhysicalDeviceFeatures2(d.physical, &have);
-  VkPhysicalDeviceVulkan12Features have12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceFeatures2 have2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &have12};
-  vkGetPhysicalDeviceFeatures2(d.physical, &have2);
-  d.shaderOutputLayer = have12.shaderOutputLayer && !desc.disableShaderOutputLayer;
-
-  // Layers and the background are drawn with dynamic rendering (core 1.3, KHR extension on 1.2).
-  VkPhysicalDeviceDynamicRenderingFeatures dynRender{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-  dynRender.dynamicRendering = VK_TRUE;
-  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dynRender};
-  sync2.synchronization2 = VK_TRUE;
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &sync2};
-  f12.scalarBlockLayout = VK_TRUE;
-  f12.hostQueryReset = VK_TRUE;
-  f12.shaderOutputLayer = d.shaderOutputLayer;
-  f12.shaderFloat16 = have12.shaderFloat16;
-  f12.storageBuffer8BitAccess = have12.storageBuffer8BitAccess;
-  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES, &f12};
-  f11.storageBuffer16BitAccess = have11.storageBuffer16BitAccess;
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f11};
-  f2.features.fragmentStoresAndAtomics = have.features.fragmentStoresAndAtomics;
-  f2.features.shaderInt16 = have.features.shaderInt16;
-  f2.features.samplerAnisotropy = have.features.samplerAnisotropy;
-  // The per-layer fallback clips leaves with gl_ClipDistance (near/far planes on the leaf root).
-  f2.features.shaderClipDistance = have.features.shaderClipDistance;
-  d.shaderClipDistance = have.features.shaderClipDistance;
-  // gl_PrimitiveID in a fragment shader needs the Geometry capability (the layer-id debug output).
-  f2.features.geometryShader = have.features.geometryShader;
-  d.fragmentPrimitiveId = have.features.geometryShader;
-  // The layer-id debug output is an integer attachment beside a blended colour attachment.
-  f2.features.independentBlend = have.features.independentBlend;
-  d.independentBlend = have.features.independentBlend;
-
-  std::vector<const char*> devExts = desc.deviceExtensions;
-  devExts.push_back(VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME);
-  if (!core13) devExts.push_back(VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME);
-  if (!core13) devExts.push_back(VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME);
-
-  float priority = 1.0f;
-  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-  qci.queueFamilyIndex = d.queueFamily;
-  qci.queueCount = 1;
-  qci.pQueuePriorities = &priority;
-  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
-  dci.queueCreateInfoCount = 1;
-  dci.pQueueCreateInfos = &qci;
-  dci.enabledExtensionCount = uint32_t(devExts.size());
-  dci.ppEnabledExtensionNames = devExts.data();
-  CANOPY_VK(vkCreateDevice(d.physical, &dci, nullptr, &d.device));
-  vkGetDeviceQueue(d.device, d.queueFamily, 0, &d.queue);
-
-  d.cmdPipelineBarrier2 = (PFN_vkCmdPipelineBarrier2)vkGetDeviceProcAddr(
-      d.device, core13 ? "vkCmdPipelineBarrier2" : "vkCmdPipelineBarrier2KHR");
-  d.cmdPushDescriptorSet = (PFN_vkCmdPushDescriptorSetKHR)vkGetDeviceProcAddr(d.device, "vkCmdPushDescriptorSetKHR");
-  d.cmdBeginRendering = (PFN_vkCmdBeginRendering)vkGetDeviceProcAddr(
-      d.device, core13 ? "vkCmdBeginRendering" : "vkCmdBeginRenderingKHR");
-  d.cmdEndRendering = (PFN_vkCmdEndRendering)vkGetDeviceProcAddr(
-      d.device, core13 ? "vkCmdEndRendering" : "vkCmdEndRenderingKHR");
-  if (!d.cmdPipelineBarrier2 || !d.cmdPushDescriptorSet || !d.cmdBeginRendering || !d.cmdEndRendering)
-    return Status::error("device did not return vkCmdPipelineBarrier2 / vkCmdPushDescriptorSetKHR / vkCmdBeginRendering");
+  d.shaderOutputLayer = on.shaderOutputLayer;
+  d.shaderClipDistance = on.core.shaderClipDistance;
+  d.fragmentPrimitiveId = on.core.geometryShader;
+  d.independentBlend = on.core.independentBlend;
 
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
   pci.queueFamilyIndex = d.queueFamily;
-  CANOPY_VK(vkCreateCommandPool(d.device, &pci, nullptr, &d.oneShotPool));
-
+  CANOPY_VK(d.vk.CreateCommandPool(d.device, &pci, d.allocationCallbacks, &d.oneShotPool));
   d.allocator = new Allocator();
   CANOPY_TRY(initAllocator(d, d.allocator));
   return Status();
 }
 
-void destroyDevice(Device& d) {
-  if (d.device) vkDeviceWaitIdle(d.device);
+void releaseAdoptedDevice(Device& d) {
+  if (!d.device || !d.vk.DestroyCommandPool) return;  // adoption stopped before the table was loaded
+  releaseAllPending(d);
   if (d.allocator) {
     destroyAllocator(d, *d.allocator);
     delete d.allocator;
+    d.allocator = nullptr;
   }
-  if (d.oneShotPool) vkDestroyCommandPool(d.device, d.oneShotPool, nullptr);
-  if (d.device) vkDestroyDevice(d.device, nullptr);
-  if (d.messenger) {
-    auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(d.instance, "vkDestroyDebugUtilsMessengerEXT");
-    if (destroy) destroy(d.instance, d.messenger, nullptr);
+  if (d.oneShotPool) d.vk.DestroyCommandPool(d.device, d.oneShotPool, d.allocationCallbacks);
+  d.oneShotPool = VK_NULL_HANDLE;
+}
+
+Status adoptDevice(const AdoptDeviceDesc& desc, Device** out) {
+  if (!out) return Status::error("adoptDevice: out is null");
+  *out = nullptr;
+  auto* d = new (std::nothrow) Device();
+  if (!d) return Status::error(Result::OutOfHostMemory, "adoptDevice: out of host memory");
+  Status s = adoptDeviceInto(desc, d);
+  if (!s.ok()) {
+    releaseAdoptedDevice(*d);
+    delete d;
+    return s;
   }
-  if (d.instance) vkDestroyInstance(d.instance, nullptr);
-  delete d.sink;
-  d = Device{};
+  *out = d;
+  return Status();
+}
+
+void releaseDevice(Device* d) {
+  if (!d) return;
+  releaseAdoptedDevice(*d);
+  delete d;
+}
+
+void deferRelease(Device& d, std::function<void()> release) {
+  if (!d.anyFrame) {
+    release();  // nothing was ever recorded: no frame can be using it
+    return;
+  }
+  d.pending.push_back({d.frameNumber, std::move(release)});
+}
+
+Status beginDeviceFrame(Device& d, uint64_t frameNumber) {
+  if (d.anyFrame && frameNumber < d.frameNumber)
+    return Status::error("CanopyFrame.frameNumber = " + std::to_string(frameNumber) + " is older than frame " +
+                         std::to_string(d.frameNumber) + " already recorded (frame numbers never decrease)");
+  d.frameNumber = frameNumber;
+  d.anyFrame = true;
+  // A frame tagged T was last used by host frame T; recording F promises F - framesInFlight done.
+  std::vector<Device::PendingRelease> keep;
+  std::vector<Device::PendingRelease> now;
+  for (auto& p : d.pending) (p.frame + d.framesInFlight <= frameNumber ? now : keep).push_back(std::move(p));
+  d.pending = std::move(keep);
+  for (auto& p : now) p.release();
+  return Status();
+}
+
+void releaseAllPending(Device& d) {
+  // Releases can queue further releases (a context freeing its parts): drain until empty.
+  while (!d.pending.empty()) {
+    std::vector<Device::PendingRelease> now = std::move(d.pending);
+    d.pending.clear();
+    for (auto& p : now) p.release();
+  }
 }
 
 Status submitAndWait(Device& d, const std::function<Status(VkCommandBuffer)>& record) {
@@ -296,38 +343,37 @@ Status submitAndWait(Device& d, const std::function<Status(VkCommandBuffer)>& re
   ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   ai.commandBufferCount = 1;
   VkCommandBuffer cmd;
-  CANOPY_VK(vkAllocateCommandBuffers(d.device, &ai, &cmd));
+  CANOPY_VK(d.vk.AllocateCommandBuffers(d.device, &ai, &cmd));
   VkFence fence = VK_NULL_HANDLE;
-  auto cleanup = [&] {
-    if (fence) vkDestroyFence(d.device, fence, nullptr);
-    vkFreeCommandBuffers(d.device, d.oneShotPool, 1, &cmd);
-  };
+  bool submitted = false;
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   Status s = [&]() -> Status {
-    CANOPY_VK(vkBeginCommandBuffer(cmd, &bi));
+    CANOPY_VK(d.vk.BeginCommandBuffer(cmd, &bi));
     CANOPY_TRY(record(cmd));
-    CANOPY_VK(vkEndCommandBuffer(cmd));
+    CANOPY_VK(d.vk.EndCommandBuffer(cmd));
     VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    CANOPY_VK(vkCreateFence(d.device, &fci, nullptr, &fence));
+    CANOPY_VK(d.vk.CreateFence(d.device, &fci, d.allocationCallbacks, &fence));
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd;
-    CANOPY_VK(vkQueueSubmit(d.queue, 1, &si, fence));
-    CANOPY_VK(vkWaitForFences(d.device, 1, &fence, VK_TRUE, UINT64_MAX));
+    CANOPY_VK(d.vk.QueueSubmit(d.queue, 1, &si, fence));
+    submitted = true;
+    CANOPY_VK(d.vk.WaitForFences(d.device, 1, &fence, VK_TRUE, UINT64_MAX));
     return Status();
   }();
-  if (!s.ok() && fence == VK_NULL_HANDLE) {
-    // Recording failed: nothing was submitted, safe to free.
-  } else if (!s.ok()) {
-    vkQueueWaitIdle(d.queue);
+  // A submitted buffer whose wait failed (device lost) cannot be proven idle; it is leaked with its
+  // fence rather than freed under the GPU.
+  const bool safe = !submitted || s.ok();
+  if (safe) {
+    if (fence) d.vk.DestroyFence(d.device, fence, d.allocationCallbacks);
+    d.vk.FreeCommandBuffers(d.device, d.oneShotPool, 1, &cmd);
   }
-  cleanup();
   return s;
 }
 
 void setDebugName(const Device& d, VkObjectType type, uint64_t handle, const char* name) {
-  if (!d.setObjectName || !name) return;
+  if (!d.setObjectName || !name || !d.validationEnabled) return;
   VkDebugUtilsObjectNameInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_OBJECT_NAME_INFO_EXT};
   info.objectType = type;
   info.objectHandle = handle;

@@ -1,11 +1,15 @@
 #pragma once
-// Vulkan instance + device + queue: the one object every other engine/ function takes.
+// canopy::Device: Canopy's view of one VkDevice, the object every other engine/ function takes.
+// It is made by adoptDevice() from the host's instance, device and queue (the public API), or by
+// createDevice() (tools/own_device.h) for the demo, tools and tests, which creates its own
+// Vulkan objects and then adopts them through the same path.
 #include <functional>
 #include <string>
 #include <vector>
 #include <vulkan/vulkan.h>
 
 #include "engine/status.h"
+#include "engine/vulkan_functions.h"
 
 namespace canopy {
 
@@ -16,32 +20,16 @@ struct Allocator;
 using ValidationSink = std::function<void(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                           const char* messageId, const char* message)>;
 
-struct DeviceDesc {
-  const char* applicationName = "canopy";
-  // Enable VK_LAYER_KHRONOS_validation. With requireValidation a missing layer is an error
-  // (tests); otherwise it is skipped with a note in DeviceInfo.
-  bool enableValidation = false;
-  bool requireValidation = false;
-  // Also enable synchronization validation (hazard detection between unsynchronized accesses).
-  bool enableSyncValidation = true;
-  ValidationSink validationSink;  // required when enableValidation
-  // Substring (case-insensitive) of the device name to pick; empty = $CANOPY_DEVICE if set, else
-  // prefer discrete > integrated > virtual > CPU (lavapipe).
-  std::string preferredDevice;
-  // Instance extensions the host needs in addition (e.g. from glfwGetRequiredInstanceExtensions).
-  std::vector<const char*> instanceExtensions;
-  std::vector<const char*> deviceExtensions;
-  // Behave as a device without shaderOutputLayer (tests and benchmarks of the per-layer fallback).
-  bool disableShaderOutputLayer = false;
-};
-
 struct Device {
   VkInstance instance = VK_NULL_HANDLE;
-  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
   VkPhysicalDevice physical = VK_NULL_HANDLE;
   VkDevice device = VK_NULL_HANDLE;
   VkQueue queue = VK_NULL_HANDLE;  // graphics + compute + transfer
   uint32_t queueFamily = 0;
+  VulkanFunctions vk;              // every entry point, through the host's loader
+  const VkAllocationCallbacks* allocationCallbacks = nullptr;
+  VkPipelineCache pipelineCache = VK_NULL_HANDLE;
+  DeviceMemoryAllocator hostAllocator;  // allocate == null: Canopy's own sub-allocator
   VkPhysicalDeviceProperties properties{};
   VkPhysicalDeviceMemoryProperties memoryProperties{};
   bool validationEnabled = false;
@@ -53,23 +41,49 @@ struct Device {
   Allocator* allocator = nullptr;
   VkCommandPool oneShotPool = VK_NULL_HANDLE;  // for submitAndWait()
 
-  // Entry points resolved at creation (sync2 may be core 1.3 or the KHR extension on 1.2).
+  // Shorthands of vk.* (sync2 and dynamic rendering may be core 1.3 or KHR on 1.2).
   PFN_vkCmdPipelineBarrier2 cmdPipelineBarrier2 = nullptr;
   PFN_vkCmdPushDescriptorSetKHR cmdPushDescriptorSet = nullptr;
-  PFN_vkCmdBeginRendering cmdBeginRendering = nullptr;  // dynamic rendering (core 1.3 or KHR on 1.2)
+  PFN_vkCmdBeginRendering cmdBeginRendering = nullptr;
   PFN_vkCmdEndRendering cmdEndRendering = nullptr;
   PFN_vkSetDebugUtilsObjectNameEXT setObjectName = nullptr;
 
-  ValidationSink* sink = nullptr;  // owned; the messenger's user data
+  // Frames in flight (docs/design.md, "Embedding contract"): objects replaced or destroyed while
+  // host frames may still use them wait here, tagged with the newest host frame number seen, and
+  // are released once the host records frame tag + framesInFlight.
+  struct PendingRelease {
+    uint64_t frame = 0;
+    std::function<void()> release;
+  };
+  uint32_t framesInFlight = 2;
+  uint64_t frameNumber = 0;     // the newest host frame number recorded
+  bool anyFrame = false;        // a frame was recorded on this device
+  std::vector<PendingRelease> pending;
+
+  // Only for a device made by createDevice(): what it created beside the adopted objects.
+  bool ownsVulkanObjects = false;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  ValidationSink* sink = nullptr;  // the messenger's user data
 };
 
-// Creates instance, picks the physical device, creates the logical device with one queue.
-// Requires Vulkan 1.2, synchronization2, dynamic rendering, push descriptors, scalar block layout,
-// timestamps.
-Status createDevice(const DeviceDesc& desc, Device* out);
-void destroyDevice(Device& device);
+// The internal form of the public adoptDevice(): fills `out` in place (the tools keep a Device by
+// value). Checks the version, extensions and features the host enabled, loads every entry point
+// and creates Canopy's command pool and allocator.
+Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out);
+// Destroys what adoptDeviceInto created (and everything still pending release).
+void releaseAdoptedDevice(Device& device);
 
-// Records with `record` into a fresh command buffer, submits it and waits for completion.
+// Runs `release` once no host frame in flight can use what it frees (at once when no frame was
+// ever recorded on the device).
+void deferRelease(Device& device, std::function<void()> release);
+// A host frame with this number is being recorded: frees what its frames in flight no longer use.
+// Refuses a number smaller than the newest seen.
+Status beginDeviceFrame(Device& device, uint64_t frameNumber);
+// Frees everything pending (the host's frames have completed: destroy, releaseDevice).
+void releaseAllPending(Device& device);
+
+// Records with `record` into a fresh command buffer, submits it to the device's queue and waits
+// for that submission's own fence (never for the queue or device to be idle).
 Status submitAndWait(Device& device, const std::function<Status(VkCommandBuffer)>& record);
 
 // Attaches a debug name (seen in validation messages and captures) when debug utils is present.

@@ -13,13 +13,14 @@ Status makeModule(Device& d, ShaderLookup lookup, const char* name, VkShaderModu
   VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   mi.codeSize = sh->sizeBytes;
   mi.pCode = sh->code;
-  CANOPY_VK(vkCreateShaderModule(d.device, &mi, nullptr, out));
+  CANOPY_VK(d.vk.CreateShaderModule(d.device, &mi, d.allocationCallbacks, out));
   return Status();
 }
 }  // namespace
 
 Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, GraphicsPipeline* out) {
   *out = GraphicsPipeline{};
+  out->device = &d;
   const std::string what = std::string("graphics pipeline '") + (desc.vertexShader ? desc.vertexShader : "?") + "+" +
                            (desc.fragmentShader ? desc.fragmentShader : "?") + "'";
   if (desc.pushConstantSize > d.properties.limits.maxPushConstantsSize)
@@ -107,12 +108,12 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
     ci.pColorBlendState = &cb;
     ci.pDynamicState = &dy;
     ci.layout = out->layout;
-    CANOPY_VK(vkCreateGraphicsPipelines(d.device, VK_NULL_HANDLE, 1, &ci, nullptr, &out->pipeline));
+    CANOPY_VK(d.vk.CreateGraphicsPipelines(d.device, d.pipelineCache, 1, &ci, d.allocationCallbacks, &out->pipeline));
     setDebugName(d, VK_OBJECT_TYPE_PIPELINE, uint64_t(out->pipeline), what.c_str());
     return Status();
   }();
-  if (vs) vkDestroyShaderModule(d.device, vs, nullptr);
-  if (fs) vkDestroyShaderModule(d.device, fs, nullptr);
+  if (vs) d.vk.DestroyShaderModule(d.device, vs, d.allocationCallbacks);
+  if (fs) d.vk.DestroyShaderModule(d.device, fs, d.allocationCallbacks);
   if (!s.ok()) {
     destroyGraphicsPipeline(d, *out);
     return s.context(what);
@@ -121,9 +122,9 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
 }
 
 void destroyGraphicsPipeline(Device& d, GraphicsPipeline& p) {
-  if (p.pipeline) vkDestroyPipeline(d.device, p.pipeline, nullptr);
-  if (p.layout) vkDestroyPipelineLayout(d.device, p.layout, nullptr);
-  if (p.setLayout) vkDestroyDescriptorSetLayout(d.device, p.setLayout, nullptr);
+  if (p.pipeline) d.vk.DestroyPipeline(d.device, p.pipeline, d.allocationCallbacks);
+  if (p.layout) d.vk.DestroyPipelineLayout(d.device, p.layout, d.allocationCallbacks);
+  if (p.setLayout) d.vk.DestroyDescriptorSetLayout(d.device, p.setLayout, d.allocationCallbacks);
   p = GraphicsPipeline{};
 }
 
@@ -131,23 +132,23 @@ Status pushGraphicsConstants(VkCommandBuffer cmd, const GraphicsPipeline& p, con
   if (pushSize != p.pushConstantSize)
     return Status::error(p.name + ": push constants are " + std::to_string(pushSize) + " bytes, the pipeline declares " +
                          std::to_string(p.pushConstantSize));
-  if (pushSize) vkCmdPushConstants(cmd, p.layout, kStages, 0, pushSize, push);
+  if (pushSize) p.device->vk.CmdPushConstants(cmd, p.layout, kStages, 0, pushSize, push);
   return Status();
 }
 
 Status bindGraphics(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, std::initializer_list<Binding> bindings,
                     const void* push, uint32_t pushSize) {
   if (pushSize != p.pushConstantSize) return pushGraphicsConstants(cmd, p, push, pushSize);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.pipeline);
+  d.vk.CmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.pipeline);
   CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.layout, p.bindings, bindings, p.name));
   return pushGraphicsConstants(cmd, p, push, pushSize);
 }
 
-void setViewportScissor(VkCommandBuffer cmd, uint32_t width, uint32_t height) {
+void setViewportScissor(const Device& d, VkCommandBuffer cmd, uint32_t width, uint32_t height) {
   VkViewport v{0.0f, 0.0f, float(width), float(height), 0.0f, 1.0f};
   VkRect2D r{{0, 0}, {width, height}};
-  vkCmdSetViewport(cmd, 0, 1, &v);
-  vkCmdSetScissor(cmd, 0, 1, &r);
+  d.vk.CmdSetViewport(cmd, 0, 1, &v);
+  d.vk.CmdSetScissor(cmd, 0, 1, &r);
 }
 
 }  // namespace canopy

@@ -42,6 +42,7 @@ struct GraphicsPipelineDesc {
 };
 
 struct GraphicsPipeline {
+  const Device* device = nullptr;  // whose entry points record it
   VkPipeline pipeline = VK_NULL_HANDLE;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
@@ -65,6 +66,6 @@ Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline&
 Status pushGraphicsConstants(VkCommandBuffer cmd, const GraphicsPipeline& pipeline, const void* push, uint32_t pushSize);
 
 // Sets a full-target viewport (y down, depth 0..1) and scissor.
-void setViewportScissor(VkCommandBuffer cmd, uint32_t width, uint32_t height);
+void setViewportScissor(const Device& device, VkCommandBuffer cmd, uint32_t width, uint32_t height);
 
 }  // namespace canopy

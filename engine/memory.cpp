@@ -26,7 +26,38 @@ Status findMemoryType(const Device& d, uint32_t typeBits, MemoryUsage usage, uin
   return Status::error("no memory type fits (type bits 0x" + std::to_string(typeBits) + ")");
 }
 
+// The host's allocator (public DeviceMemoryAllocator): Canopy says what it needs and prefers.
+Status allocateFromHost(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, Allocation* out) {
+  const VkMemoryPropertyFlags HV = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT, HC = VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+  const VkMemoryPropertyFlags required = usage == MemoryUsage::DeviceLocal ? 0 : HV | HC;
+  const VkMemoryPropertyFlags preferred = usage == MemoryUsage::DeviceLocal ? VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT
+                                          : usage == MemoryUsage::Readback ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT
+                                                                           : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
+  DeviceMemoryRange r;
+  const VkResult vr = d.hostAllocator.allocate(d.hostAllocator.user, req, required, preferred, &r);
+  if (vr != VK_SUCCESS) return vkError("DeviceMemoryAllocator::allocate", vr);
+  if (!r.memory || r.size < req.size || (req.alignment && r.offset % req.alignment) ||
+      r.memoryTypeIndex >= d.memoryProperties.memoryTypeCount || !(req.memoryTypeBits & (1u << r.memoryTypeIndex)) ||
+      (required && !r.mapped)) {
+    d.hostAllocator.free(d.hostAllocator.user, r);
+    return Status::error(Result::InvalidArgument,
+                         "DeviceMemoryAllocator::allocate returned a range that does not fit the request (no memory, "
+                         "too small, misaligned, a memory type outside the allowed bits, or not mapped for host access)");
+  }
+  *out = Allocation{};
+  out->memory = r.memory;
+  out->offset = r.offset;
+  out->size = r.size;
+  out->mapped = r.mapped;
+  out->typeIndex = r.memoryTypeIndex;
+  out->host = true;
+  out->hostHandle = r.hostHandle;
+  d.allocator->allocationCount++;
+  return Status();
+}
+
 Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, bool linear, Allocation* out) {
+  if (d.hostAllocator.allocate) return allocateFromHost(d, req, usage, out);
   Allocator& a = *d.allocator;
   uint32_t type = 0;
   CANOPY_TRY(findMemoryType(d, req.memoryTypeBits, usage, &type));
@@ -34,7 +65,7 @@ Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, b
     if (b->typeIndex != type || b->linear != linear) continue;
     uint64_t off = b->ranges.allocate(req.size, req.alignment);
     if (off == RangeAllocator::kInvalid) continue;
-    *out = {b.get(), off, req.size, b->mapped ? static_cast<char*>(b->mapped) + off : nullptr};
+    *out = {b.get(), b->memory, off, req.size, b->mapped ? static_cast<char*>(b->mapped) + off : nullptr, type};
     a.allocationCount++;
     return Status();
   }
@@ -43,22 +74,35 @@ Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, b
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = size;
   ai.memoryTypeIndex = type;
-  VkResult r = vkAllocateMemory(d.device, &ai, nullptr, &block->memory);
+  VkResult r = d.vk.AllocateMemory(d.device, &ai, d.allocationCallbacks, &block->memory);
   if (r != VK_SUCCESS)
     return vkError("vkAllocateMemory", r).context("allocating a " + std::to_string(size >> 20) + " MiB memory block");
   block->typeIndex = type;
   block->linear = linear;
   block->ranges = RangeAllocator(size);
   if (d.memoryProperties.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)
-    CANOPY_VK(vkMapMemory(d.device, block->memory, 0, VK_WHOLE_SIZE, 0, &block->mapped));
+    {
+    r = d.vk.MapMemory(d.device, block->memory, 0, VK_WHOLE_SIZE, 0, &block->mapped);
+    if (r != VK_SUCCESS) {
+      d.vk.FreeMemory(d.device, block->memory, d.allocationCallbacks);
+      return vkError("vkMapMemory", r);
+    }
+  }
   uint64_t off = block->ranges.allocate(req.size, req.alignment);
-  *out = {block.get(), off, req.size, block->mapped ? static_cast<char*>(block->mapped) + off : nullptr};
+  *out = {block.get(), block->memory, off, req.size, block->mapped ? static_cast<char*>(block->mapped) + off : nullptr,
+          type};
   a.blocks.push_back(std::move(block));
   a.allocationCount++;
   return Status();
 }
 
 void release(Device& d, Allocation& al) {
+  if (al.host) {
+    d.hostAllocator.free(d.hostAllocator.user, {al.memory, al.offset, al.size, al.mapped, al.typeIndex, al.hostHandle});
+    d.allocator->allocationCount--;
+    al = Allocation{};
+    return;
+  }
   if (!al.block) return;
   al.block->ranges.free(al.offset);
   d.allocator->allocationCount--;
@@ -71,8 +115,8 @@ Status initAllocator(Device&, Allocator*) { return Status(); }
 
 void destroyAllocator(Device& d, Allocator& a) {
   for (auto& b : a.blocks) {
-    if (b->mapped) vkUnmapMemory(d.device, b->memory);
-    vkFreeMemory(d.device, b->memory, nullptr);
+    if (b->mapped) d.vk.UnmapMemory(d.device, b->memory);
+    d.vk.FreeMemory(d.device, b->memory, d.allocationCallbacks);
   }
   a.blocks.clear();
 }
@@ -97,12 +141,12 @@ Status createBuffer(Device& d, VkDeviceSize size, VkBufferUsageFlags usage, Memo
   ci.size = size;
   ci.usage = usage;
   ci.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  CANOPY_VK(vkCreateBuffer(d.device, &ci, nullptr, &out->buffer));
+  CANOPY_VK(d.vk.CreateBuffer(d.device, &ci, d.allocationCallbacks, &out->buffer));
   VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(d.device, out->buffer, &req);
+  d.vk.GetBufferMemoryRequirements(d.device, out->buffer, &req);
   Status s = allocate(d, req, memory, true, &out->allocation);
   if (s.ok()) {
-    VkResult r = vkBindBufferMemory(d.device, out->buffer, out->allocation.block->memory, out->allocation.offset);
+    VkResult r = d.vk.BindBufferMemory(d.device, out->buffer, out->allocation.memory, out->allocation.offset);
     if (r != VK_SUCCESS) s = vkError("vkBindBufferMemory", r);
   }
   if (!s.ok()) {
@@ -115,15 +159,15 @@ Status createBuffer(Device& d, VkDeviceSize size, VkBufferUsageFlags usage, Memo
 }
 
 void destroyBuffer(Device& d, Buffer& b) {
-  if (b.buffer) vkDestroyBuffer(d.device, b.buffer, nullptr);
+  if (b.buffer) d.vk.DestroyBuffer(d.device, b.buffer, d.allocationCallbacks);
   release(d, b.allocation);
   b = Buffer{};
 }
 
 void* hostCoherentPointer(const Device& d, const Allocation& a) {
-  if (!a.mapped || !a.block) return nullptr;
+  if (!a.mapped) return nullptr;
   const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-  return (d.memoryProperties.memoryTypes[a.block->typeIndex].propertyFlags & want) == want ? a.mapped : nullptr;
+  return (d.memoryProperties.memoryTypes[a.typeIndex].propertyFlags & want) == want ? a.mapped : nullptr;
 }
 
 ImageDesc descOf(const Image& img) {
@@ -150,12 +194,12 @@ Status createImage(Device& d, const ImageDesc& desc, Image* out, const char* deb
   ci.tiling = VK_IMAGE_TILING_OPTIMAL;
   ci.usage = desc.usage;
   ci.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  CANOPY_VK(vkCreateImage(d.device, &ci, nullptr, &out->image));
+  CANOPY_VK(d.vk.CreateImage(d.device, &ci, d.allocationCallbacks, &out->image));
   VkMemoryRequirements req;
-  vkGetImageMemoryRequirements(d.device, out->image, &req);
+  d.vk.GetImageMemoryRequirements(d.device, out->image, &req);
   Status s = allocate(d, req, MemoryUsage::DeviceLocal, false, &out->allocation);
   if (s.ok()) {
-    VkResult r = vkBindImageMemory(d.device, out->image, out->allocation.block->memory, out->allocation.offset);
+    VkResult r = d.vk.BindImageMemory(d.device, out->image, out->allocation.memory, out->allocation.offset);
     if (r != VK_SUCCESS) s = vkError("vkBindImageMemory", r);
   }
   out->format = desc.format;
@@ -168,7 +212,7 @@ Status createImage(Device& d, const ImageDesc& desc, Image* out, const char* deb
     vi.viewType = (desc.layers > 1 || desc.arrayView) ? VK_IMAGE_VIEW_TYPE_2D_ARRAY : VK_IMAGE_VIEW_TYPE_2D;
     vi.format = desc.format;
     vi.subresourceRange = {out->aspect, 0, 1, 0, desc.layers};
-    VkResult r = vkCreateImageView(d.device, &vi, nullptr, &out->view);
+    VkResult r = d.vk.CreateImageView(d.device, &vi, d.allocationCallbacks, &out->view);
     if (r != VK_SUCCESS) s = vkError("vkCreateImageView", r);
   }
   if (!s.ok()) {
@@ -180,8 +224,8 @@ Status createImage(Device& d, const ImageDesc& desc, Image* out, const char* deb
 }
 
 void destroyImage(Device& d, Image& img) {
-  if (img.view) vkDestroyImageView(d.device, img.view, nullptr);
-  if (img.image) vkDestroyImage(d.device, img.image, nullptr);
+  if (img.view) d.vk.DestroyImageView(d.device, img.view, d.allocationCallbacks);
+  if (img.image) d.vk.DestroyImage(d.device, img.image, d.allocationCallbacks);
   release(d, img.allocation);
   img = Image{};
 }

@@ -1,5 +1,6 @@
 #pragma once
-// Buffers and images backed by a small sub-allocator: memory comes in large blocks (one
+// Buffers and images backed by the host's DeviceMemoryAllocator when it gave one, else by a small
+// sub-allocator: memory comes in large blocks (one
 // vkAllocateMemory per block, not per resource), split by a RangeAllocator. Linear (buffers) and
 // optimal-tiling (images) resources never share a block, so bufferImageGranularity cannot bite.
 #include <memory>
@@ -28,10 +29,14 @@ struct Allocator {
 };
 
 struct Allocation {
-  MemoryBlock* block = nullptr;
+  MemoryBlock* block = nullptr;            // Canopy's sub-allocator; null for a host allocation
+  VkDeviceMemory memory = VK_NULL_HANDLE;  // what the resource is bound to
   VkDeviceSize offset = 0;
   VkDeviceSize size = 0;
   void* mapped = nullptr;  // host pointer when the memory is host-visible, else nullptr
+  uint32_t typeIndex = 0;
+  bool host = false;       // from the host's DeviceMemoryAllocator
+  uint64_t hostHandle = 0;
 };
 
 enum class MemoryUsage {

@@ -30,14 +30,14 @@ Status createPushDescriptorLayouts(Device& d, const std::vector<VkDescriptorType
   sl.flags = VK_DESCRIPTOR_SET_LAYOUT_CREATE_PUSH_DESCRIPTOR_BIT_KHR;
   sl.bindingCount = uint32_t(b.size());
   sl.pBindings = b.data();
-  CANOPY_VK(vkCreateDescriptorSetLayout(d.device, &sl, nullptr, setLayout));
+  CANOPY_VK(d.vk.CreateDescriptorSetLayout(d.device, &sl, d.allocationCallbacks, setLayout));
   VkPushConstantRange pr{stages, 0, pushConstantSize};
   VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   pl.setLayoutCount = 1;
   pl.pSetLayouts = setLayout;
   pl.pushConstantRangeCount = pushConstantSize ? 1 : 0;
   pl.pPushConstantRanges = &pr;
-  CANOPY_VK(vkCreatePipelineLayout(d.device, &pl, nullptr, layout));
+  CANOPY_VK(d.vk.CreatePipelineLayout(d.device, &pl, d.allocationCallbacks, layout));
   return Status();
 }
 
@@ -62,15 +62,15 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
     mi.codeSize = sh->sizeBytes;
     mi.pCode = sh->code;
     VkShaderModule module;
-    CANOPY_VK(vkCreateShaderModule(d.device, &mi, nullptr, &module));
+    CANOPY_VK(d.vk.CreateShaderModule(d.device, &mi, d.allocationCallbacks, &module));
     VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     ci.stage.module = module;
     ci.stage.pName = "main";
     ci.layout = out->layout;
-    VkResult r = vkCreateComputePipelines(d.device, VK_NULL_HANDLE, 1, &ci, nullptr, &out->pipeline);
-    vkDestroyShaderModule(d.device, module, nullptr);
+    VkResult r = d.vk.CreateComputePipelines(d.device, d.pipelineCache, 1, &ci, d.allocationCallbacks, &out->pipeline);
+    d.vk.DestroyShaderModule(d.device, module, d.allocationCallbacks);
     if (r != VK_SUCCESS) return vkError("vkCreateComputePipelines", r);
     setDebugName(d, VK_OBJECT_TYPE_PIPELINE, uint64_t(out->pipeline), desc.shader);
     return Status();
@@ -83,9 +83,9 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
 }
 
 void destroyComputePipeline(Device& d, ComputePipeline& p) {
-  if (p.pipeline) vkDestroyPipeline(d.device, p.pipeline, nullptr);
-  if (p.layout) vkDestroyPipelineLayout(d.device, p.layout, nullptr);
-  if (p.setLayout) vkDestroyDescriptorSetLayout(d.device, p.setLayout, nullptr);
+  if (p.pipeline) d.vk.DestroyPipeline(d.device, p.pipeline, d.allocationCallbacks);
+  if (p.layout) d.vk.DestroyPipelineLayout(d.device, p.layout, d.allocationCallbacks);
+  if (p.setLayout) d.vk.DestroyDescriptorSetLayout(d.device, p.setLayout, d.allocationCallbacks);
   p = ComputePipeline{};
 }
 
@@ -134,12 +134,12 @@ Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32
   if (bindings.size() != p.bindings.size())
     return Status::error("dispatch '" + p.name + "': " + std::to_string(bindings.size()) + " bindings given, " +
                          std::to_string(p.bindings.size()) + " declared");
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
+  d.vk.CmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
   CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, p.bindings, bindings,
                              "dispatch '" + p.name + "'"));
-  if (pushSize) vkCmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
+  if (pushSize) d.vk.CmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
   auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
-  vkCmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
+  d.vk.CmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
   return Status();
 }
 

@@ -24,11 +24,9 @@ using ResourceId = uint32_t;
 inline constexpr ResourceId kInvalidResource = ~0u;
 
 // A resource's synchronization state: the stages/accesses that last touched it and its layout.
-struct State {
-  VkPipelineStageFlags2 stage = VK_PIPELINE_STAGE_2_NONE;
-  VkAccessFlags2 access = VK_ACCESS_2_NONE;
-  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;  // ignored for buffers
-};
+// (The public ResourceState of <canopy/canopy.h>: the states a host hands recordCanopy. The layout
+// is ignored for buffers.)
+using State = ::canopy::ResourceState;
 
 // The common ways a pass touches a resource; each maps to one State (stateOf).
 enum class Use {

@@ -20,8 +20,39 @@ const char* vkResultName(VkResult r) {
   }
 }
 
+Result resultOf(VkResult r) {
+  switch (r) {
+    case VK_ERROR_OUT_OF_HOST_MEMORY: return Result::OutOfHostMemory;
+    case VK_ERROR_OUT_OF_DEVICE_MEMORY: return Result::OutOfDeviceMemory;
+    case VK_ERROR_DEVICE_LOST: return Result::DeviceLost;
+    case VK_ERROR_FEATURE_NOT_PRESENT:
+    case VK_ERROR_EXTENSION_NOT_PRESENT:
+    case VK_ERROR_FORMAT_NOT_SUPPORTED:
+    case VK_ERROR_INCOMPATIBLE_DRIVER: return Result::UnsupportedDevice;
+    default: return Result::VulkanError;
+  }
+}
+
+const char* toString(Result r) {
+  switch (r) {
+    case Result::Success: return "Success";
+    case Result::InvalidArgument: return "InvalidArgument";
+    case Result::InvalidModel: return "InvalidModel";
+    case Result::FileError: return "FileError";
+    case Result::UnsupportedDevice: return "UnsupportedDevice";
+    case Result::OutOfHostMemory: return "OutOfHostMemory";
+    case Result::OutOfDeviceMemory: return "OutOfDeviceMemory";
+    case Result::DeviceLost: return "DeviceLost";
+    case Result::VersionMismatch: return "VersionMismatch";
+    case Result::VulkanError: return "VulkanError";
+  }
+  return "Unknown";
+}
+
+uint32_t libraryVersion() { return CANOPY_HEADER_VERSION; }
+
 Status vkError(const char* call, VkResult r) {
-  return Status::error(std::string(call) + " failed: " + vkResultName(r) + " (" + std::to_string(int(r)) + ")");
+  return Status::error(resultOf(r), std::string(call) + " failed: " + vkResultName(r) + " (" + std::to_string(int(r)) + ")");
 }
 
 }  // namespace canopy

@@ -7,29 +7,15 @@
 #include <utility>
 #include <vulkan/vulkan.h>
 
+// Status, Result and Progress are the public API's (one definition for the library and hosts).
+#include <canopy/canopy.h>
+
 namespace canopy {
 
-class [[nodiscard]] Status {
- public:
-  Status() = default;
-  static Status error(std::string message) { Status s; s.message_ = std::move(message); s.failed_ = true; return s; }
-  bool ok() const { return !failed_; }
-  explicit operator bool() const { return ok(); }
-  const std::string& message() const { return message_; }
-  // Prefixes context ("while creating X: ") so the message reads outermost first.
-  Status context(const std::string& what) const { return ok() ? *this : error(what + ": " + message_); }
-
- private:
-  std::string message_;
-  bool failed_ = false;
-};
-
-// Progress of long work (scene generation, leaf roots, mesh upload): (stage, done, total), called
-// on the calling thread now and then (about every million items), last with done == total.
-using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
-
 const char* vkResultName(VkResult r);
-// "vkCreateDevice failed: VK_ERROR_INITIALIZATION_FAILED"
+// "vkCreateDevice failed: VK_ERROR_INITIALIZATION_FAILED", with the Result the VkResult maps to
+// (out of host/device memory, device lost, else VulkanError).
+Result resultOf(VkResult r);
 Status vkError(const char* call, VkResult r);
 
 }  // namespace canopy

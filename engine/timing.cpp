@@ -10,20 +10,21 @@ Status GpuTimer::init(Device& d, uint32_t maxPasses) {
   VkQueryPoolCreateInfo ci{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   ci.queryType = VK_QUERY_TYPE_TIMESTAMP;
   ci.queryCount = maxPasses * 2;
-  CANOPY_VK(vkCreateQueryPool(d.device, &ci, nullptr, &pool_));
+  CANOPY_VK(d.vk.CreateQueryPool(d.device, &ci, d.allocationCallbacks, &pool_));
   capacity_ = maxPasses;
+  vk_ = &d.vk;
   periodNs_ = d.properties.limits.timestampPeriod;
   mask_ = d.timestampValidBits >= 64 ? ~0ull : ((1ull << d.timestampValidBits) - 1);
   return Status();
 }
 
 void GpuTimer::destroy(Device& d) {
-  if (pool_) vkDestroyQueryPool(d.device, pool_, nullptr);
+  if (pool_) d.vk.DestroyQueryPool(d.device, pool_, d.allocationCallbacks);
   pool_ = VK_NULL_HANDLE;
 }
 
 void GpuTimer::reset(VkCommandBuffer cmd) {
-  vkCmdResetQueryPool(cmd, pool_, 0, capacity_ * 2);
+  vk_->CmdResetQueryPool(cmd, pool_, 0, capacity_ * 2);
   used_ = 0;
   open_ = ~0u;
   names_.clear();
@@ -33,12 +34,12 @@ void GpuTimer::begin(VkCommandBuffer cmd, const std::string& name) {
   if (used_ >= capacity_ || open_ != ~0u) return;  // over capacity: the pass is simply not timed
   open_ = used_++;
   names_.push_back(name);
-  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool_, open_ * 2);
+  vk_->CmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, pool_, open_ * 2);
 }
 
 void GpuTimer::end(VkCommandBuffer cmd) {
   if (open_ == ~0u) return;
-  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, open_ * 2 + 1);
+  vk_->CmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, open_ * 2 + 1);
   open_ = ~0u;
 }
 
@@ -46,7 +47,7 @@ Status GpuTimer::read(Device& d, std::vector<PassTiming>* out) {
   out->clear();
   if (used_ == 0) return Status();
   std::vector<uint64_t> ts(used_ * 2);
-  CANOPY_VK(vkGetQueryPoolResults(d.device, pool_, 0, used_ * 2, ts.size() * sizeof(uint64_t), ts.data(),
+  CANOPY_VK(d.vk.GetQueryPoolResults(d.device, pool_, 0, used_ * 2, ts.size() * sizeof(uint64_t), ts.data(),
                                   sizeof(uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT));
   for (uint32_t i = 0; i < used_; ++i) {
     uint64_t dt = (ts[2 * i + 1] - ts[2 * i]) & mask_;

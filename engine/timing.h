@@ -8,6 +8,8 @@
 
 #include "engine/status.h"
 
+#include "engine/vulkan_functions.h"
+
 namespace canopy {
 struct Device;
 
@@ -29,6 +31,7 @@ class GpuTimer {
   Status read(Device& device, std::vector<PassTiming>* out);
 
  private:
+  const VulkanFunctions* vk_ = nullptr;
   VkQueryPool pool_ = VK_NULL_HANDLE;
   uint32_t capacity_ = 0;
   uint32_t used_ = 0;

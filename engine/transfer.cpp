@@ -33,7 +33,7 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
   auto dstId = g.importBuffer("destination", dst.size, state, state);
   g.addPass("upload", [&](rg::PassContext& c) {
      VkBufferCopy region{0, offset, size};
-     vkCmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dstId), 1, &region);
+     c.device->vk.CmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dstId), 1, &region);
      return Status();
    })
       .read(src, rg::Use::TransferSrc)
@@ -63,7 +63,7 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
      VkBufferImageCopy region{};
      region.imageSubresource = {img.aspect, 0, 0, img.layers};
      region.imageExtent = img.extent;
-     vkCmdCopyBufferToImage(c.cmd, c.buffer(src), c.image(dst).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+     c.device->vk.CmdCopyBufferToImage(c.cmd, c.buffer(src), c.image(dst).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
      return Status();
    })
       .read(src, rg::Use::TransferSrc)
@@ -87,7 +87,7 @@ Status readbackBuffer(Device& d, const Buffer& srcBuf, void* out, VkDeviceSize s
   auto dst = g.importBuffer("staging", size, {}, kHostRead);
   g.addPass("readback", [&](rg::PassContext& c) {
      VkBufferCopy region{offset, 0, size};
-     vkCmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dst), 1, &region);
+     c.device->vk.CmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dst), 1, &region);
      return Status();
    })
       .read(src, rg::Use::TransferSrc)
@@ -113,7 +113,7 @@ Status readbackImage(Device& d, const Image& img, uint32_t layer, uint32_t bytes
      VkBufferImageCopy region{};
      region.imageSubresource = {img.aspect, 0, layer, 1};
      region.imageExtent = img.extent;
-     vkCmdCopyImageToBuffer(c.cmd, c.image(src).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, c.buffer(dst), 1, &region);
+     c.device->vk.CmdCopyImageToBuffer(c.cmd, c.image(src).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, c.buffer(dst), 1, &region);
      return Status();
    })
       .read(src, rg::Use::TransferSrc)

@@ -1,18 +1,32 @@
 #include "render/canopy.h"
 
 #include <cmath>
+#include <memory>
+#include <new>
 #include <string>
 
 #include "engine/memory.h"
+#include "render/material_split.h"
 
 namespace canopy {
+
+// One simulation, possibly followed by several contexts (CanopyDesc.shareSimulationWith): it is
+// stepped once per host frame number by whichever context records first, and freed with the
+// last context that follows it.
+struct SharedSimulation {
+  Simulation sim;
+  uint64_t lastStepFrame = 0;
+  bool everStepped = false;
+  ~SharedSimulation() { destroySimulation(sim); }
+};
 
 struct CanopyContext {
   Device* device = nullptr;
   CanopyDesc desc;
   CanopyParams params;
   LayeredVegetation layers;
-  Simulation simulation;
+  std::shared_ptr<SharedSimulation> shared;
+  bool holdStep = false;  // this context's record of the simulation step: nothing (see SharedSimulation)
   LayerDynamics dynamics;
   Compositor compositor;
   bool planeFixed = false;
@@ -20,6 +34,7 @@ struct CanopyContext {
   uint64_t generation = 0;
   uint64_t frames = 0;
   bool layersRebuilt = false;
+  bool cut = false;       // the last frame was a camera cut
   gpu::AnimFrame last{};  // the previous frame's dynamics constants (motion-vector validity)
   // recordCanopy(): the graph holding the host's images, and what it was built for.
   rg::RenderGraph graph;
@@ -39,11 +54,11 @@ Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi) {
 }
 
 Status validatePlane(const SimulationPlane& p) {
-  const bool finite = std::isfinite(p.tileSize) && std::isfinite(glm::dot(p.origin, p.origin)) &&
-                      std::isfinite(glm::dot(p.right, p.right)) && std::isfinite(glm::dot(p.up, p.up));
+  const glm::vec3 o = toGlm(p.origin), r = toGlm(p.right), u = toGlm(p.up);
+  const bool finite = std::isfinite(p.tileSize) && std::isfinite(glm::dot(o, o)) && std::isfinite(glm::dot(r, r)) &&
+                      std::isfinite(glm::dot(u, u));
   if (!finite || !(p.tileSize > 0.0f)) return Status::error("CanopyParams.plane: tileSize must be > 0 and every field finite");
-  if (std::abs(glm::length(p.right) - 1.0f) > 1e-3f || std::abs(glm::length(p.up) - 1.0f) > 1e-3f ||
-      std::abs(glm::dot(p.right, p.up)) > 1e-3f)
+  if (std::abs(glm::length(r) - 1.0f) > 1e-3f || std::abs(glm::length(u) - 1.0f) > 1e-3f || std::abs(glm::dot(r, u)) > 1e-3f)
     return Status::error("CanopyParams.plane: right and up must be orthogonal unit vectors");
   return Status();
 }
@@ -81,6 +96,38 @@ Image hostImage(const CanopyImage& h, VkFormat format, uint32_t width, uint32_t 
   return img;
 }
 
+// The host's camera in Canopy's standard depth convention (0 = near): a reverse-Z projection is
+// mirrored in depth, z_clip' = w_clip - z_clip (docs/design.md, "Embedding contract"), so the
+// layers are rasterised and compared as always and only the composite's depth I/O converts.
+LayerView standardView(const CanopyContext& c, const CanopyCamera& cam) {
+  LayerView v = toLayerView(cam);
+  if (c.desc.depthConvention == DepthConvention::Reverse) {
+    glm::mat4 mirror(1.0f);
+    mirror[2][2] = -1.0f;
+    mirror[3][2] = 1.0f;
+    v.proj = mirror * v.proj;
+  }
+  return v;
+}
+
+// Objects of the size-dependent parts, freed once no frame in flight reads them.
+void retire(CanopyContext& c, bool compositor, bool dynamics) {
+  Device* d = c.device;
+  auto graph = std::make_shared<rg::RenderGraph>(std::move(c.graph));
+  const bool graphReady = c.graphReady;
+  c.graph = rg::RenderGraph();
+  c.graphReady = false;
+  auto comp = std::make_shared<Compositor>();
+  auto dyn = std::make_shared<LayerDynamics>();
+  if (compositor) std::swap(*comp, c.compositor);
+  if (dynamics) std::swap(*dyn, c.dynamics);
+  deferRelease(*d, [d, graph, graphReady, comp, dyn] {
+    if (graphReady) graph->release(*d);
+    destroyCompositor(*comp);
+    destroyLayerDynamics(*dyn);
+  });
+}
+
 Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in) {
   const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   if (!in.color.image || !in.color.view || !in.depth.image || !in.depth.view)
@@ -88,7 +135,7 @@ Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in) {
   if (motion != (in.motion.image != VK_NULL_HANDLE) || (motion && !in.motion.view))
     return Status::error(motion ? "recordCanopy: CanopyDesc.motionFormat is set but no motion image (and view) was given"
                                 : "recordCanopy: a motion image was given but CanopyDesc.motionFormat is UNDEFINED");
-  if (c.graphReady) c.graph.release(*c.device);
+  if (c.graphReady) retire(c, false, false);  // the old graph may still be executing
   c.graph = rg::RenderGraph();
   c.graphReady = false;
   const uint32_t w = c.desc.width, h = c.desc.height;
@@ -114,23 +161,56 @@ Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in) {
   return Status();
 }
 
+void destroyNow(CanopyContext* c) {
+  if (c->device) {
+    if (c->graphReady) c->graph.release(*c->device);
+    destroyCompositor(c->compositor);
+    destroyLayerDynamics(c->dynamics);
+    destroyLayeredVegetation(c->layers);
+  }
+  c->shared.reset();  // the simulation goes with the last context that follows it
+  delete c;
+}
+
+Status checkVersion(uint32_t header) {
+  const uint32_t lib = libraryVersion();
+  auto text = [](uint32_t v) {
+    return std::to_string(v >> 22) + "." + std::to_string((v >> 12) & 0x3ff) + "." + std::to_string(v & 0xfff);
+  };
+  if ((header >> 22) != (lib >> 22) || ((header >> 12) & 0x3ff) > ((lib >> 12) & 0x3ff))
+    return Status::error(Result::VersionMismatch, "createCanopy: the host was compiled against Canopy " + text(header) +
+                                                      " but the library is " + text(lib) +
+                                                      " (the major versions must match and the library's minor version be at least the header's)");
+  return Status();
+}
+
 }  // namespace
 
 Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& desc, CanopyContext** out) {
   if (!out) return Status::error("createCanopy: out is null");
   *out = nullptr;
+  CANOPY_TRY(checkVersion(desc.headerVersion));
+  if (!d.device || !d.vk.CreateBuffer) return Status::error("createCanopy: the device was not adopted");
   CANOPY_TRY(checkRange("CanopyDesc.width", desc.width, 1, 16384));
   CANOPY_TRY(checkRange("CanopyDesc.height", desc.height, 1, 16384));
   CANOPY_TRY(checkRange("CanopyDesc.maxLayers", desc.maxLayers, 1, CANOPY_MAX_LAYERS));
   CANOPY_TRY(checkRange("CanopyDesc.minCellSize", desc.minCellSize, 2, 256));
+  if (desc.depthConvention != DepthConvention::Standard && desc.depthConvention != DepthConvention::Reverse)
+    return Status::error("CanopyDesc.depthConvention = " + std::to_string(uint32_t(desc.depthConvention)) + " is outside 0..1");
+  if (desc.shareSimulationWith && desc.shareSimulationWith->device != &d)
+    return Status::error("CanopyDesc.shareSimulationWith belongs to another Device");
   // Nothing to animate is a mistake in the input (a glTF whose scene reaches no triangle mesh),
   // not an empty frame to draw silently.
   const std::string what = model.path.empty() ? std::string("the model") : "'" + model.path + "'";
   if (model.triangleCount() == 0)
-    return Status::error("createCanopy: " + what + " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
-  auto* c = new CanopyContext();
+    return Status::error(Result::InvalidModel,
+                         "createCanopy: " + what + " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
+  auto* c = new (std::nothrow) CanopyContext();
+  if (!c) return Status::error(Result::OutOfHostMemory, "createCanopy: out of host memory");
   c->device = &d;
   c->desc = desc;
+  c->desc.shareSimulationWith = nullptr;  // kept through `shared`, never dereferenced later
+  c->params = desc.params;
   c->params.dynamics.cellSize = std::max(c->params.dynamics.cellSize, desc.minCellSize);
   Status s = [&]() -> Status {
     CANOPY_TRY(validateParams(*c, c->params));
@@ -140,6 +220,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     cd.colorFormat = desc.colorFormat;
     cd.depthFormat = desc.depthFormat;
     cd.motionFormat = desc.motionFormat;
+    cd.reverseZ = desc.depthConvention == DepthConvention::Reverse;
     cd.maxLayers = desc.maxLayers;
     CANOPY_TRY(createCompositor(d, cd, &c->compositor));
     LayeredVegetationDesc ld;
@@ -148,7 +229,6 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.colorFormat = desc.layerFormat;
     ld.split = desc.split;
     ld.roots = desc.roots;
-    ld.useRootCache = desc.useRootCache;
     ld.rootCacheDir = desc.rootCacheDir;
     ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
@@ -166,32 +246,39 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
         names += model.materials[i].name;
         names += "'";
       }
-      return Status::error(what + " has no foliage: every material is rigid (" + names +
-                           "); name the leaf materials in CanopyDesc.split.foliage");
+      return Status::error(Result::InvalidModel, what + " has no foliage: every material is rigid (" + names +
+                                                     "); name the leaf materials in CanopyDesc.split.foliage");
     }
     CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
-    CANOPY_TRY(createSimulation(d, desc.simulation, &c->simulation));
+    if (desc.shareSimulationWith) {
+      c->shared = desc.shareSimulationWith->shared;
+    } else {
+      c->shared = std::make_shared<SharedSimulation>();
+      CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim));
+    }
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     return Status();
   }();
   if (!s.ok()) {
-    destroyCanopy(c);
+    destroyNow(c);
     return s.context("createCanopy");
   }
   *out = c;
   return Status();
 }
 
+Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out) {
+  if (!device || !model) {
+    if (out) *out = nullptr;
+    return Status::error("createCanopy: device and model are required");
+  }
+  return createCanopy(*device, model->data, desc, out);
+}
+
 void destroyCanopy(CanopyContext* c) {
   if (!c) return;
-  if (c->device) {
-    if (c->graphReady) c->graph.release(*c->device);
-    destroyCompositor(c->compositor);
-    destroyLayerDynamics(c->dynamics);
-    destroySimulation(c->simulation);
-    destroyLayeredVegetation(c->layers);
-  }
-  delete c;
+  // Frames in flight may still read the context's objects: free them when those frames are done.
+  deferRelease(*c->device, [c] { destroyNow(c); });
 }
 
 Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
@@ -220,22 +307,19 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
   CANOPY_TRY(checkRange("resizeCanopy height", height, 1, 16384));
   if (width == c->desc.width && height == c->desc.height) return Status();
   Device& d = *c->device;
-  vkDeviceWaitIdle(d.device);
-  if (c->graphReady) c->graph.release(d);
-  c->graphReady = false;
+  const CompositorDesc before = c->compositor.desc;
+  retire(*c, true, true);  // no wait: the old objects go once the frames using them completed
   c->desc.width = width;
   c->desc.height = height;
   Status s = [&]() -> Status {
     CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
-    CompositorDesc cd = c->compositor.desc;
+    CompositorDesc cd = before;
     cd.width = width;
     cd.height = height;
-    destroyCompositor(c->compositor);
     CANOPY_TRY(createCompositor(d, cd, &c->compositor));
     // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
     // motion vectors against (beginCanopyFrame sees the grid change).
     c->last = gpu::AnimFrame{};
-    destroyLayerDynamics(c->dynamics);
     return createLayerDynamics(d, width, height, c->desc.minCellSize, c->desc.maxLayers, &c->dynamics);
   }();
   c->generation++;
@@ -246,23 +330,38 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (!c) return Status::error("beginCanopyFrame: null context");
   if (!std::isfinite(f.dt) || f.dt < 0.0f || f.dt > 10.0f)
     return Status::error("CanopyFrame.dt = " + std::to_string(f.dt) + " s is outside [0, 10]");
-  Simulation& sim = c->simulation;
-  sim.paused = f.dt == 0.0f;
-  if (!sim.paused) CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
+  Device& d = *c->device;
+  // 0: the next frame (one context per host frame); otherwise the host's own counter.
+  const uint64_t frameNumber = f.frameNumber ? f.frameNumber : (d.anyFrame ? d.frameNumber + 1 : 1);
+  CANOPY_TRY(beginDeviceFrame(d, frameNumber));
+  SharedSimulation& sh = *c->shared;
+  Simulation& sim = sh.sim;
+  // One step per host frame for a shared simulation, by the first context recorded in it.
+  const bool stepHere = !sh.everStepped || sh.lastStepFrame != frameNumber;
+  c->holdStep = !stepHere || f.dt == 0.0f;
+  sim.paused = c->holdStep;
+  if (stepHere) {
+    sh.everStepped = true;
+    sh.lastStepFrame = frameNumber;
+    if (f.dt > 0.0f) CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
+  }
+  const LayerView view = standardView(*c, f.camera);
+  c->cut = f.cameraCut;
+  if (f.cameraCut) c->layers.forcedReason = "camera cut";
   bool rebuild = false;
-  CANOPY_TRY(updateLayerView(c->layers, f.camera, &rebuild));
+  CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   if (!c->planeFixed) {
     // design.md: the plane of the first view, one tile over the region visible at the
     // vegetation's centre depth.
     const LayeredVegetation& lv = c->layers;
     const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
-    const float depth = glm::dot(centre - viewPosition(f.camera.view), viewForward(f.camera.view));
+    const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
     const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
-    c->plane = simulationPlaneFromView(f.camera, std::max(depth, std::max(radius, 1e-3f)));
+    c->plane = simulationPlaneFromView(view, std::max(depth, std::max(radius, 1e-3f)));
     c->planeFixed = true;
   }
   DynamicsFrameDesc fd;
-  fd.view = f.camera;
+  fd.view = view;
   fd.plane = c->plane;
   for (const LayerInfo& l : c->layers.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
   fd.width = c->desc.width;
@@ -272,7 +371,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.time = float(sim.time);
   CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current));
   const gpu::AnimFrame& a = c->dynamics.current;
-  const bool motionValid = c->frames > 0 && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
+  const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
                            a.layerCount == c->last.layerCount;
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, !c->layers.rigidDraws.empty(), rebuild,
                               motionValid));
@@ -285,7 +384,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
   SimulationResources sr;
-  CANOPY_TRY(addSimulationPasses(c->simulation, g, &sr));
+  CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
   LayerResources lr;
   CANOPY_TRY(addLayerPasses(c->layers, g, &lr));
   rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
@@ -313,14 +412,150 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.layersRebuilt = c->layersRebuilt;
   s.resourceGeneration = c->generation;
   s.internalGraphBuilds = c->graphBuilds;
+  s.pendingReleases = c->device->pending.size();
   s.layers = c->layers.stats;
-  s.simulation = c->simulation.stats;
+  s.simulation = c->shared->sim.stats;
   return s;
 }
 
 LayeredVegetation& canopyLayers(CanopyContext* c) { return c->layers; }
 LayerDynamics& canopyDynamics(CanopyContext* c) { return c->dynamics; }
-Simulation& canopySimulation(CanopyContext* c) { return c->simulation; }
+Simulation& canopySimulation(CanopyContext* c) { return c->shared->sim; }
 Compositor& canopyCompositor(CanopyContext* c) { return c->compositor; }
+Device& canopyDevice(CanopyContext* c) { return *c->device; }
+
+// ---- Models ---------------------------------------------------------------------------------
+
+Status loadModel(const std::string& path, const GltfLoadOptions& options, Model** out) {
+  if (!out) return Status::error("loadModel: out is null");
+  *out = nullptr;
+  auto* m = new (std::nothrow) Model();
+  if (!m) return Status::error(Result::OutOfHostMemory, "loadModel: out of host memory");
+  Status s = loadGltf(path, options, &m->data);
+  if (!s.ok()) {
+    delete m;
+    return s.code() == Result::InvalidArgument ? Status::error(Result::InvalidModel, s.message()) : s;
+  }
+  *out = m;
+  return Status();
+}
+
+Status createModel(const MeshDesc& desc, Model** out) {
+  if (!out) return Status::error("createModel: out is null");
+  *out = nullptr;
+  const std::string what = "MeshDesc '" + desc.name + "'";
+  if (!desc.positions || desc.vertexCount == 0) return Status::error(Result::InvalidModel, what + ": no positions");
+  if (!desc.indices || desc.indexCount == 0 || desc.indexCount % 3 != 0)
+    return Status::error(Result::InvalidModel, what + ": indexCount = " + std::to_string(desc.indexCount) +
+                                                   " is not a positive multiple of 3 (or indices is null)");
+  const uint64_t triangles = desc.indexCount / 3;
+  if (desc.triangleMaterials && (desc.materialCount == 0 || !desc.materials))
+    return Status::error(Result::InvalidModel, what + ": triangleMaterials needs materials (materialCount >= 1)");
+  if (desc.imageCount && !desc.images) return Status::error(Result::InvalidModel, what + ": imageCount without images");
+  auto m = std::unique_ptr<Model>(new (std::nothrow) Model());
+  if (!m) return Status::error(Result::OutOfHostMemory, "createModel: out of host memory");
+  VegetationModel& v = m->data;
+  try {
+    v.positions.resize(desc.vertexCount);
+    for (uint32_t i = 0; i < desc.vertexCount; ++i) {
+      const glm::vec3 p(desc.positions[3 * i], desc.positions[3 * i + 1], desc.positions[3 * i + 2]);
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        return Status::error(Result::InvalidModel, what + ": position " + std::to_string(i) + " is not finite");
+      v.positions[i] = p;
+    }
+    v.indices.assign(desc.indices, desc.indices + desc.indexCount);
+    for (uint64_t i = 0; i < desc.indexCount; ++i)
+      if (v.indices[i] >= desc.vertexCount)
+        return Status::error(Result::InvalidModel, what + ": indices[" + std::to_string(i) + "] = " +
+                                                       std::to_string(v.indices[i]) + " is not below vertexCount " +
+                                                       std::to_string(desc.vertexCount));
+    v.uvs.assign(desc.vertexCount, glm::vec2(0.0f));
+    if (desc.uvs)
+      for (uint32_t i = 0; i < desc.vertexCount; ++i) v.uvs[i] = {desc.uvs[2 * i], desc.uvs[2 * i + 1]};
+    v.normals.assign(desc.vertexCount, glm::vec3(0.0f));
+    if (desc.normals) {
+      for (uint32_t i = 0; i < desc.vertexCount; ++i) {
+        const glm::vec3 n(desc.normals[3 * i], desc.normals[3 * i + 1], desc.normals[3 * i + 2]);
+        const float len = glm::length(n);
+        v.normals[i] = std::isfinite(len) && len > 0 ? n / len : glm::vec3(0, 1, 0);
+      }
+    } else {
+      // Area-weighted face normals, as the glTF loader computes them for files without normals.
+      for (uint64_t t = 0; t < triangles; ++t) {
+        const uint32_t a = v.indices[3 * t], b = v.indices[3 * t + 1], cc = v.indices[3 * t + 2];
+        const glm::vec3 n = glm::cross(v.positions[b] - v.positions[a], v.positions[cc] - v.positions[a]);
+        v.normals[a] += n;
+        v.normals[b] += n;
+        v.normals[cc] += n;
+      }
+      for (glm::vec3& n : v.normals) n = glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 1, 0);
+    }
+    for (uint32_t i = 0; i < desc.imageCount; ++i) {
+      const MeshImage& im = desc.images[i];
+      if (im.width < 1 || im.height < 1 || im.width > 16384 || im.height > 16384 || !im.rgba)
+        return Status::error(Result::InvalidModel, what + ": images[" + std::to_string(i) + "] is " +
+                                                       std::to_string(im.width) + "x" + std::to_string(im.height) +
+                                                       " (1..16384 per side, with texels)");
+      ModelImage mi;
+      mi.name = "image " + std::to_string(i);
+      mi.width = im.width;
+      mi.height = im.height;
+      mi.rgba.assign(im.rgba, im.rgba + size_t(im.width) * im.height * 4);
+      v.images.push_back(std::move(mi));
+    }
+    const uint32_t materialCount = std::max(desc.materialCount, 1u);
+    for (uint32_t i = 0; i < desc.materialCount; ++i) {
+      const MeshMaterial& mm = desc.materials[i];
+      if (mm.image < -1 || mm.image >= int32_t(desc.imageCount))
+        return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) + "].image = " +
+                                                       std::to_string(mm.image) + " is outside -1.." +
+                                                       std::to_string(int32_t(desc.imageCount) - 1));
+      if (!(mm.alphaCutoff >= 0.0f && mm.alphaCutoff <= 1.0f) || uint32_t(mm.alphaMode) > 2)
+        return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
+                                                       "]: alphaCutoff outside [0, 1] or an unknown alphaMode");
+      ModelMaterial mat;
+      mat.name = mm.name;
+      mat.baseColorFactor = {mm.baseColor[0], mm.baseColor[1], mm.baseColor[2], mm.baseColor[3]};
+      mat.baseColorImage = mm.image;
+      mat.alphaMode = mm.alphaMode;
+      mat.alphaCutoff = mm.alphaCutoff;
+      mat.doubleSided = mm.doubleSided;
+      v.materials.push_back(mat);
+    }
+    // The loader's convention: the file's materials, then one default material last.
+    ModelMaterial fallback;
+    fallback.name = "default";
+    v.materials.push_back(fallback);
+    v.triangleMaterial.assign(triangles, desc.triangleMaterials ? 0u : uint32_t(v.materials.size() - 1));
+    if (desc.triangleMaterials) {
+      for (uint64_t t = 0; t < triangles; ++t) {
+        if (desc.triangleMaterials[t] >= materialCount)
+          return Status::error(Result::InvalidModel, what + ": triangleMaterials[" + std::to_string(t) + "] = " +
+                                                         std::to_string(desc.triangleMaterials[t]) +
+                                                         " is not below materialCount " + std::to_string(desc.materialCount));
+        v.triangleMaterial[t] = desc.triangleMaterials[t];
+      }
+    }
+  } catch (const std::bad_alloc&) {
+    return Status::error(Result::OutOfHostMemory, what + ": out of host memory");
+  }
+  v.boundsMin = v.boundsMax = v.positions[0];
+  for (const glm::vec3& p : v.positions) {
+    v.boundsMin = glm::min(v.boundsMin, p);
+    v.boundsMax = glm::max(v.boundsMax, p);
+  }
+  *out = m.release();
+  return Status();
+}
+
+void destroyModel(Model* model) { delete model; }
+
+uint64_t modelTriangleCount(const Model* model) { return model ? model->data.triangleCount() : 0; }
+
+void modelBounds(const Model* model, Float3* min, Float3* max) {
+  if (!model) return;
+  if (min) *min = toFloat3(model->data.boundsMin);
+  if (max) *max = toFloat3(model->data.boundsMax);
+}
 
 }  // namespace canopy

@@ -21,7 +21,7 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
   si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_BORDER;
   si.borderColor = border;
   si.maxLod = 0.0f;
-  CANOPY_VK(vkCreateSampler(d.device, &si, nullptr, out));
+  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, out));
   return Status();
 }
 
@@ -32,6 +32,8 @@ Status validateCompositeParams(const CompositeParams& p) {
     return Status::error("CompositeParams.depthAlpha = " + std::to_string(p.depthAlpha) + " is outside (0, 1]");
   if (uint32_t(p.debugView) > COMPOSITE_DEBUG_GRID)
     return Status::error("CompositeParams.debugView = " + std::to_string(uint32_t(p.debugView)) + " is outside 0..3");
+  if (!(p.exposure >= 0.0f && p.exposure <= 65504.0f))
+    return Status::error("CompositeParams.exposure = " + std::to_string(p.exposure) + " is outside [0, 65504]");
   if (!(p.debugVelocityScale > 0.0f && p.debugVelocityScale < 1e30f))
     return Status::error("CompositeParams.debugVelocityScale = " + std::to_string(p.debugVelocityScale) + " must be > 0");
   return Status();
@@ -45,18 +47,22 @@ Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
     return Status::error("compositor: maxLayers = " + std::to_string(desc.maxLayers) + " is outside 1.." +
                          std::to_string(CANOPY_MAX_LAYERS));
   VkFormatProperties fp{};
-  vkGetPhysicalDeviceFormatProperties(d.physical, desc.colorFormat, &fp);
+  d.vk.GetPhysicalDeviceFormatProperties(d.physical, desc.colorFormat, &fp);
   const VkFormatFeatureFlags blendable = VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT;
   if ((fp.optimalTilingFeatures & blendable) != blendable)
-    return Status::error("compositor: colour format " + std::to_string(int(desc.colorFormat)) +
+    return Status::error(Result::UnsupportedDevice, "compositor: colour format " + std::to_string(int(desc.colorFormat)) +
                          " is not a blendable colour attachment on this device");
-  if (desc.depthFormat != VK_FORMAT_D32_SFLOAT && desc.depthFormat != VK_FORMAT_D16_UNORM)
-    return Status::error("compositor: depth format " + std::to_string(int(desc.depthFormat)) +
-                         " is not supported (D32_SFLOAT or D16_UNORM, with sampled usage)");
-  vkGetPhysicalDeviceFormatProperties(d.physical, desc.depthFormat, &fp);
+  // Depth-stencil formats: only the depth aspect is read (the host's depth-only view) and written
+  // (no stencil attachment), so the stencil stays as the host left it.
+  const VkFormat df = desc.depthFormat;
+  if (df != VK_FORMAT_D32_SFLOAT && df != VK_FORMAT_D16_UNORM && df != VK_FORMAT_D24_UNORM_S8_UINT &&
+      df != VK_FORMAT_D32_SFLOAT_S8_UINT)
+    return Status::error(Result::UnsupportedDevice, "compositor: depth format " + std::to_string(int(df)) +
+                         " is not supported (D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT or D32_SFLOAT_S8_UINT, with sampled usage)");
+  d.vk.GetPhysicalDeviceFormatProperties(d.physical, desc.depthFormat, &fp);
   const VkFormatFeatureFlags depthNeeds = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT;
   if ((fp.optimalTilingFeatures & depthNeeds) != depthNeeds)
-    return Status::error("compositor: depth format " + std::to_string(int(desc.depthFormat)) +
+    return Status::error(Result::UnsupportedDevice, "compositor: depth format " + std::to_string(int(desc.depthFormat)) +
                          " cannot be both sampled and a depth attachment on this device");
   if (desc.motionFormat != VK_FORMAT_UNDEFINED && !isMotionFormat(desc.motionFormat))
     return Status::error("compositor: motion format " + std::to_string(int(desc.motionFormat)) +
@@ -120,7 +126,7 @@ void destroyCompositor(Compositor& c) {
   destroyBuffer(d, c.sceneDepth);
   destroyBuffer(d, c.debugStandIn);
   for (VkSampler s : {c.linear, c.nearest, c.depthSampler})
-    if (s) vkDestroySampler(d.device, s, nullptr);
+    if (s) d.vk.DestroySampler(d.device, s, d.allocationCallbacks);
   c = Compositor{};
 }
 
@@ -148,7 +154,9 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.tilesY = tilesFor(c.desc.height);
   p.debugView = uint32_t(params.debugView);
   p.debugScale = params.debugVelocityScale;
+  p.exposure = params.exposure;
   p.flags = COMPOSITE_SCENE_DEPTH;
+  if (c.desc.reverseZ) p.flags |= COMPOSITE_REVERSE_Z;
   if (params.earlyExit) p.flags |= COMPOSITE_EARLY_EXIT;
   if (params.skipEmptyTiles) p.flags |= COMPOSITE_SKIP_EMPTY;
   if (params.bilinear) p.flags |= COMPOSITE_BILINEAR;
@@ -231,7 +239,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
     ri.pColorAttachments = colors;
     ri.pDepthAttachment = &depthAtt;
     x.device->cmdBeginRendering(x.cmd, &ri);
-    setViewportScissor(x.cmd, cp->desc.width, cp->desc.height);
+    setViewportScissor(*x.device, x.cmd, cp->desc.width, cp->desc.height);
     const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     Status s = bindGraphics(
         *x.device, x.cmd, cp->composite,
@@ -243,7 +251,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
          bindBuffer(debugSources ? x.buffer(debug.animFrame) : cp->debugStandIn.buffer),
          bindBuffer(debugSources ? x.buffer(debug.tiled) : cp->debugStandIn.buffer)},
         p);
-    if (s.ok()) vkCmdDraw(x.cmd, 3, 1, 0, 0);
+    if (s.ok()) x.device->vk.CmdDraw(x.cmd, 3, 1, 0, 0);
     x.device->cmdEndRendering(x.cmd);
     return s;
   });

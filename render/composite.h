@@ -26,24 +26,9 @@ namespace canopy {
 struct Device;
 struct LayerDynamics;
 
-// Debug overlays (the demo's debug views; a host may show them too).
-enum class CompositeDebugView : uint32_t {
-  None = COMPOSITE_DEBUG_NONE,
-  Layers = COMPOSITE_DEBUG_LAYERS,      // each layer in its own false colour (paper Figure 3c)
-  Velocity = COMPOSITE_DEBUG_VELOCITY,  // the tiled simulation field over the simulation plane
-  Grid = COMPOSITE_DEBUG_GRID,          // the nearest layer's warp grid, displaced
-};
-
-// The levers of the composite (defaults: all on). They never change the image beyond 1/1024 of
-// alpha (early exit) or at all (empty-tile skip); nearest sampling does change it.
-struct CompositeParams {
-  bool earlyExit = true;       // front to back, stop at accumulated alpha >= 1 - 1/1024
-  bool skipEmptyTiles = true;  // skip a layer whose occupancy tile under p - d_i(p) is empty
-  bool bilinear = true;        // bilinear layer colour (false: nearest texel; cheaper, blockier motion)
-  float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
-  CompositeDebugView debugView = CompositeDebugView::None;
-  float debugVelocityScale = 1.0f;  // velocity view: speed at full brightness, domain units/s, > 0
-};
+// CompositeDebugView and CompositeParams: <canopy/canopy.h> (values = the shader's constants).
+static_assert(uint32_t(CompositeDebugView::None) == COMPOSITE_DEBUG_NONE && uint32_t(CompositeDebugView::Layers) == COMPOSITE_DEBUG_LAYERS &&
+              uint32_t(CompositeDebugView::Velocity) == COMPOSITE_DEBUG_VELOCITY && uint32_t(CompositeDebugView::Grid) == COMPOSITE_DEBUG_GRID);
 Status validateCompositeParams(const CompositeParams& params);
 
 struct CompositorDesc {
@@ -51,6 +36,7 @@ struct CompositorDesc {
   VkFormat colorFormat = VK_FORMAT_R8G8B8A8_UNORM; // host colour target
   VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;     // host depth target (sampled usage required)
   VkFormat motionFormat = VK_FORMAT_UNDEFINED;     // UNDEFINED: no motion output
+  bool reverseZ = false;                           // the host's depth is reverse-Z (1 = near)
   uint32_t maxLayers = CANOPY_MAX_LAYERS;
 };
 // Checks formats against the device (blendable colour attachment, sampleable depth attachment).

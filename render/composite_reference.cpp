@@ -37,7 +37,8 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
     for (uint32_t x = 0; x < w; ++x) {
       const size_t pix = size_t(y) * w + x;
       const glm::vec2 p(float(x) + 0.5f, float(y) + 0.5f);
-      const float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) ? in.sceneDepth[pix] : 1.0f;
+      const float sceneRaw = (pc.flags & COMPOSITE_SCENE_DEPTH) ? in.sceneDepth[pix] : gpu::compositeStandardDepth(pc.flags, 1.0f);
+      const float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) ? gpu::compositeStandardDepth(pc.flags, sceneRaw) : 1.0f;
       glm::vec4 bg(0.0f);
       float bgZ = 1.0f;
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
@@ -84,8 +85,10 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       }
       acc = gpu::underPremultiplied(acc, bg);
       const glm::vec4 scene = in.sceneColor.empty() ? glm::vec4(0.0f) : in.sceneColor[pix];
-      out->color[pix] = acc + (1.0f - acc.a) * scene;  // the pipeline's premultiplied blend
-      out->depth[pix] = std::min(std::min(frontZ, bgZ), sceneZ);
+      // The pipeline's premultiplied blend of the exposed vegetation colour.
+      out->color[pix] = glm::vec4(glm::vec3(acc) * pc.exposure, acc.a) + (1.0f - acc.a) * scene;
+      const float vegZ = std::min(frontZ, bgZ);
+      out->depth[pix] = vegZ < sceneZ ? gpu::compositeStandardDepth(pc.flags, vegZ) : sceneRaw;
       const bool vegFront = front && frontZ < bgZ;
       out->vegetationFront[pix] = vegFront;
       if (vegFront) out->motion[pix] = motion;

@@ -18,8 +18,7 @@
 
 namespace canopy {
 
-enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
-
+// AlphaMode and GltfLoadOptions: <canopy/canopy.h>.
 struct ModelMaterial {
   std::string name;
   glm::vec4 baseColorFactor{1.0f};
@@ -47,13 +46,6 @@ struct VegetationModel {
   glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};
   std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
   size_t triangleCount() const { return indices.size() / 3; }
-};
-
-struct GltfLoadOptions {
-  uint64_t maxFileBytes = 2ull << 30;      // any single file (the model, a buffer, an image)
-  uint32_t maxImageDimension = 16384;      // per side
-  uint64_t maxTriangles = 200'000'000;
-  bool decodeImages = true;
 };
 
 // Loads `path` (.gltf or .glb, decided by the file's first bytes). On failure `out` is empty and

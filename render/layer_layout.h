@@ -12,28 +12,13 @@
 
 namespace canopy {
 
-inline constexpr uint32_t kMaxLayers = CANOPY_MAX_LAYERS;
-
-struct LayerLayout {
-  uint32_t region[3] = {3, 1, 1};  // layers in the near, mid and far regions
-  uint32_t count() const { return region[0] + region[1] + region[2]; }
-  bool operator==(const LayerLayout&) const = default;
-};
+static_assert(kMaxLayers == CANOPY_MAX_LAYERS);  // kMaxLayers, LayerLayout, RegionSplit: <canopy/canopy.h>
 
 // Parses "N(a-b-c)" (N must equal a+b+c) or a plain "N" (= N(N-0-0): N equal layers over the
 // whole range). 1 <= N <= kMaxLayers. Errors quote the text and say what is expected.
 Status parseLayerLayout(std::string_view text, LayerLayout* out);
 std::string toString(const LayerLayout& layout);  // "5(3-1-1)"
 
-struct RegionSplit {
-  // Where the near region ends and the far region begins. By default fractions of the foliage's
-  // depth range (0 <= nearEnd <= farStart <= 1); with `absolute`, view-space distances from the
-  // camera in world units (clamped into the foliage's range).
-  float nearEnd = 1.0f / 3.0f;
-  float farStart = 2.0f / 3.0f;
-  bool absolute = false;
-  bool operator==(const RegionSplit&) const = default;
-};
 Status validateRegionSplit(const RegionSplit& split);
 
 struct LayerSlab {

@@ -33,13 +33,24 @@ uint32_t packNormal(const glm::vec3& n) {
   return glm::packSnorm4x8(glm::vec4(u, 0.0f));
 }
 
+// Frees the layer images once no host frame in flight can read them (deferRelease), so a new
+// layer count or size never waits for the device.
 void destroyTargets(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  for (auto* views : {&lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews}) {
-    for (VkImageView v : *views) vkDestroyImageView(d.device, v, nullptr);
-    views->clear();
+  Device* d = lv.device;
+  std::vector<VkImageView> views;
+  for (auto* v : {&lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews}) {
+    views.insert(views.end(), v->begin(), v->end());
+    v->clear();
   }
-  for (Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) destroyImage(d, *img);
+  std::vector<Image> images;
+  for (Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) {
+    if (img->image) images.push_back(*img);
+    *img = Image{};
+  }
+  deferRelease(*d, [d, views, images]() mutable {
+    for (VkImageView v : views) d->vk.DestroyImageView(d->device, v, d->allocationCallbacks);
+    for (Image& img : images) destroyImage(*d, img);
+  });
 }
 
 Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) {
@@ -48,7 +59,7 @@ Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) 
   vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
   vi.format = img.format;
   vi.subresourceRange = {img.aspect, 0, 1, layer, 1};
-  CANOPY_VK(vkCreateImageView(d.device, &vi, nullptr, out));
+  CANOPY_VK(d.vk.CreateImageView(d.device, &vi, d.allocationCallbacks, out));
   return Status();
 }
 
@@ -108,10 +119,10 @@ Status createTargets(LayeredVegetation& lv) {
       const VkImageSubresourceRange range{img->aspect, 0, 1, 0, img->layers};
       if (img->aspect & VK_IMAGE_ASPECT_DEPTH_BIT) {
         VkClearDepthStencilValue v{1.0f, 0};
-        vkCmdClearDepthStencilImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
+        ctx.device->vk.CmdClearDepthStencilImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
       } else {
         VkClearColorValue v{};
-        vkCmdClearColorImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
+        ctx.device->vk.CmdClearColorImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
       }
     }
     return Status();
@@ -256,7 +267,7 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
   si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
   si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
   si.maxLod = 0.0f;
-  CANOPY_VK(vkCreateSampler(d.device, &si, nullptr, &lv.sampler));
+  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &lv.sampler));
   return Status();
 }
 
@@ -279,9 +290,10 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   f = gpu::LayerFrame{};
   f.viewProj = view.proj * view.view;
   f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
-  const glm::vec3 l = glm::length(s.lightDirection) > 0 ? glm::normalize(s.lightDirection) : glm::vec3(0, 1, 0);
+  const glm::vec3 dir = toGlm(s.lightDirection);
+  const glm::vec3 l = glm::length(dir) > 0 ? glm::normalize(dir) : glm::vec3(0, 1, 0);
   f.lightDirection = glm::vec4(l, s.ambient);
-  f.lightColor = glm::vec4(s.lightColor, 1.0f);
+  f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
   f.layerCount = s.layout.count();
   f.sliceMode = s.slice == SliceMode::Geometry ? LAYER_SLICE_GEOMETRY : LAYER_SLICE_LEAF_ROOT;
   auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
@@ -356,10 +368,11 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 // vertex shader routes triangles (passKind, targetLayer).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
                      const std::vector<LayerDraw>& draws, uint32_t passKind, uint32_t target) {
+  const Device& d = *lv.device;
   const VkDeviceSize zero = 0;
-  vkCmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
-  vkCmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT32);
-  setViewportScissor(cmd, lv.desc.width, lv.desc.height);
+  d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
+  d.vk.CmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT32);
+  setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   for (const LayerDraw& dr : draws) {
     const ModelMaterial& mat = lv.materials[dr.material];
     const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
@@ -374,7 +387,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                             {bindBuffer(lv.frameBuffer.buffer), bindBuffer(lv.leafRoots.buffer),
                              bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
                             push));
-    vkCmdDrawIndexed(cmd, dr.indexCount, 1, dr.firstIndex, 0, 0);
+    d.vk.CmdDrawIndexed(cmd, dr.indexCount, 1, dr.firstIndex, 0, 0);
   }
   return Status();
 }
@@ -431,6 +444,12 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
 
 }  // namespace
 
+bool operator==(const LayerSettings& a, const LayerSettings& b) {
+  return a.layout == b.layout && a.regions == b.regions && a.slice == b.slice && a.draw == b.draw && a.policy == b.policy &&
+         a.moveThreshold == b.moveThreshold && a.turnThresholdDegrees == b.turnThresholdDegrees &&
+         a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient;
+}
+
 Status validateLayerSettings(const LayerSettings& s) {
   if (s.layout.count() < 1 || s.layout.count() > kMaxLayers)
     return Status::error("layer settings: layout " + toString(s.layout) + " must hold 1.." + std::to_string(kMaxLayers) + " layers");
@@ -442,8 +461,8 @@ Status validateLayerSettings(const LayerSettings& s) {
   if (!(s.ambient >= 0 && s.ambient <= 1))
     return Status::error("layer settings: ambient " + std::to_string(s.ambient) + " is outside [0, 1]");
   for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(s.lightDirection[i])) return Status::error("layer settings: lightDirection must be finite");
-    if (!(s.lightColor[i] >= 0 && std::isfinite(s.lightColor[i])))
+    if (!std::isfinite(toGlm(s.lightDirection)[i])) return Status::error("layer settings: lightDirection must be finite");
+    if (!(toGlm(s.lightColor)[i] >= 0 && std::isfinite(toGlm(s.lightColor)[i])))
       return Status::error("layer settings: lightColor components must be finite and >= 0");
   }
   return Status();
@@ -475,7 +494,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = lv.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
     LeafRoots roots;
     bool cached = false;
-    const bool cacheOn = desc.useRootCache && !m.path.empty();
+    const bool cacheOn = !desc.rootCacheDir.empty() && !m.path.empty();
     const std::string cachePath = cacheOn ? leafRootCachePath(m.path, desc.rootCacheDir) : std::string();
     uint64_t key = 0;
     if (cacheOn) {
@@ -520,11 +539,10 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
 void destroyLayeredVegetation(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
-  vkDeviceWaitIdle(d.device);
   destroyTargets(lv);
   for (GraphicsPipeline* p : {&lv.layered, &lv.perLayer, &lv.background}) destroyGraphicsPipeline(d, *p);
   for (Image& t : lv.textures) destroyImage(d, t);
-  if (lv.sampler) vkDestroySampler(d.device, lv.sampler, nullptr);
+  if (lv.sampler) d.vk.DestroySampler(d.device, lv.sampler, d.allocationCallbacks);
   for (Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots, &lv.frameBuffer}) destroyBuffer(d, *b);
   lv = LayeredVegetation{};
 }
@@ -539,7 +557,6 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s) {
   lv.stats.singlePass = single;
   lv.settingsChanged = true;
   if (recreate) {
-    vkDeviceWaitIdle(lv.device->device);
     destroyTargets(lv);
     CANOPY_TRY(createTargets(lv));
   }
@@ -551,7 +568,6 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
     return Status::error("layers: size " + std::to_string(width) + "x" + std::to_string(height) +
                          " is outside 1..16384 per side");
   if (width == lv.desc.width && height == lv.desc.height) return Status();
-  vkDeviceWaitIdle(lv.device->device);
   destroyTargets(lv);
   lv.desc.width = width;
   lv.desc.height = height;
@@ -565,6 +581,8 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebui
   const LayerSettings& s = lv.settings;
   if (!lv.haveView) {
     reason = "first view";
+  } else if (!lv.forcedReason.empty()) {
+    reason = lv.forcedReason;
   } else if (lv.settingsChanged) {
     reason = "settings changed";
   } else if (s.policy == ReslicePolicy::EveryFrame) {
@@ -588,6 +606,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebui
   CANOPY_TRY(placeForView(lv, view));
   lv.haveView = true;
   lv.settingsChanged = false;
+  lv.forcedReason.clear();
   lv.lastRebuildView = view;
   lv.stats.rebuilds++;
   lv.stats.lastRebuildReason = reason;
@@ -611,7 +630,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   const auto frame = g.importBuffer("layers: frame", lv.frameBuffer.size, kFrameRead, kFrameRead);
   LayeredVegetation* p = &lv;
   g.addPass("layers: frame constants", [p](rg::PassContext& c) {
-     if (p->rebuildPending) vkCmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->frame);
+     if (p->rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->frame);
      return Status();
    }).write(frame, rg::Use::TransferDst);
   auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {

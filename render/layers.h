@@ -18,7 +18,7 @@
 #include "engine/memory.h"
 #include "engine/render_graph.h"
 #include "engine/status.h"
-#include "render/camera.h"
+#include "engine/camera.h"
 #include "render/gltf_loader.h"
 #include "render/layer_layout.h"
 #include "render/leaf_roots.h"
@@ -28,28 +28,7 @@
 namespace canopy {
 struct Device;
 
-enum class SliceMode {
-  LeafRoots,  // a leaf goes whole into the layer of its root (default; needs the preprocessing)
-  Geometry,   // the paper's simple segmentation: near/far planes on each fragment's own depth
-              // (leaves crossing a boundary are cut; always drawn one layer at a time)
-};
-enum class LayerDrawMode { Auto, SinglePass, PerLayer };  // Auto: single pass when shaderOutputLayer
-enum class ReslicePolicy { OnViewChange, EveryFrame };
-
-struct LayerSettings {
-  LayerLayout layout;                    // default 5(3-1-1)
-  RegionSplit regions;                   // default thirds of the depth range
-  SliceMode slice = SliceMode::LeafRoots;
-  LayerDrawMode draw = LayerDrawMode::Auto;
-  ReslicePolicy policy = ReslicePolicy::OnViewChange;
-  float moveThreshold = 0.01f;           // camera travel that triggers a rebuild, as a fraction of
-                                         // the model's bounding radius, [0, 10]
-  float turnThresholdDegrees = 0.5f;     // camera turn (forward or up) that triggers one, [0, 180]
-  glm::vec3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space (normalised here)
-  glm::vec3 lightColor{1.0f};            // linear RGB, each >= 0
-  float ambient = 0.35f;                 // [0, 1]
-  bool operator==(const LayerSettings&) const = default;
-};
+// SliceMode, LayerDrawMode, ReslicePolicy, LayerSettings and LayerStats: <canopy/canopy.h>.
 Status validateLayerSettings(const LayerSettings& settings);
 
 struct LayeredVegetationDesc {
@@ -57,8 +36,9 @@ struct LayeredVegetationDesc {
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // or VK_FORMAT_R8G8B8A8_UNORM
   MaterialSplitOptions split;
   LeafRootOptions roots;
-  bool useRootCache = true;   // read/write leafRootCachePath(model.path, rootCacheDir) (skipped for an empty path)
-  std::string rootCacheDir;   // empty: beside the model
+  // The leaf-root cache folder: leafRootCachePath(model.path, rootCacheDir) is read and written
+  // there. Empty (the default), or a model without a path: no file is touched.
+  std::string rootCacheDir;
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;
@@ -73,19 +53,6 @@ struct LayerInfo {
   float height = 1;           // rootLineY - top, at least 1 pixel (h of eq. 7)
   uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
   uint64_t triangles = 0;
-};
-
-struct LayerStats {
-  double preprocessMs = 0;    // material split + leaf roots (or cache read)
-  bool rootCacheHit = false;
-  std::string rootCacheNote;  // why the cache was not used, or where it was written
-  uint32_t leafCount = 0;
-  uint64_t foliageTriangles = 0, rigidTriangles = 0;
-  bool singlePass = false;    // the draw mode in use
-  uint64_t viewUpdates = 0;   // updateLayerView() calls
-  uint64_t rebuilds = 0;      // of which led to a rebuild
-  std::string lastRebuildReason;
-  double lastPlacementMs = 0; // CPU time of the last placement (depth range, per-layer bounds)
 };
 
 struct LayerDraw {
@@ -120,6 +87,7 @@ struct LayeredVegetation {
   bool rebuildPending = false;
   bool haveView = false;
   bool settingsChanged = false;
+  std::string forcedReason;  // re-slice at the next view update for this reason (a camera cut)
   LayerView lastRebuildView;
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;

@@ -20,10 +20,7 @@ namespace canopy {
 
 inline constexpr uint32_t kNoLeaf = 0xffffffffu;
 
-struct LeafRootOptions {
-  bool weldPositions = true;  // also join vertices with bit-identical positions (-0 == +0)
-};
-
+// LeafRootOptions: <canopy/canopy.h>.
 struct LeafRoots {
   std::vector<uint32_t> rootOfVertex;  // per vertex: its leaf's root vertex; kNoLeaf if no foliage triangle uses it
   std::vector<uint32_t> leafOfVertex;  // per vertex: compact leaf index 0..leafCount-1, or kNoLeaf

@@ -13,13 +13,7 @@ namespace canopy {
 
 enum class MaterialRole : uint8_t { Foliage = 0, Rigid = 1 };
 
-struct MaterialSplitOptions {
-  // Explicit choices, winning over the default rule: material names (case-insensitive, exact) or
-  // "#N" for materials[N]. A name that matches no material, or one listed as both, is an error.
-  std::vector<std::string> rigid;
-  std::vector<std::string> foliage;
-};
-
+// MaterialSplitOptions: <canopy/canopy.h>.
 struct MaterialSplit {
   std::vector<MaterialRole> role;   // per material of the model (the default material included)
   std::vector<std::string> reason;  // per material: why (for logs and the tools' reports)

@@ -63,7 +63,8 @@ void main() {
   ivec2 ip = ivec2(p);
   uint pixel = uint(ip.y) * uint(pc.width) + uint(ip.x);
   vec2 size = vec2(pc.width, pc.height);
-  float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? sceneDepth[pixel] : 1.0;
+  float sceneRaw = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? sceneDepth[pixel] : compositeStandardDepth(pc.flags, 1.0);
+  float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? compositeStandardDepth(pc.flags, sceneRaw) : 1.0;
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
@@ -128,9 +129,11 @@ void main() {
     vec2 dist = min(fract(q), 1.0 - fract(q)) * pc.cellSize;
     if (min(dist.x, dist.y) < 0.75) acc = vec4(1.0, 0.85, 0.1, 1.0);
   }
-  outColor = acc;
-  // Depth output: the nearest layer where its alpha >= depthAlpha, else the trunk, else the scene.
-  gl_FragDepth = min(min(frontZ, bgZ), sceneZ);
+  outColor = vec4(acc.rgb * pc.exposure, acc.a);
+  // Depth output: the nearest layer where its alpha >= depthAlpha, else the trunk, else the scene
+  // (the scene's own value, bit for bit, in the host's convention).
+  float vegZ = min(frontZ, bgZ);
+  gl_FragDepth = vegZ < sceneZ ? compositeStandardDepth(pc.flags, vegZ) : sceneRaw;
   bool vegetationFront = front && frontZ < bgZ;
   outMotion = vegetationFront ? vec4(motion, 0.0, 1.0) : vec4(0.0);
 }

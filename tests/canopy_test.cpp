@@ -12,11 +12,11 @@
 
 #include <glm/gtc/packing.hpp>
 
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 #include "engine/transfer.h"
 #include "render/canopy.h"
 #include "render/composite_reference.h"
-#include "render/leaf_cloud.h"
+#include "tools/leaf_cloud.h"
 #include "tests/gpu_test.h"
 
 using namespace canopy;
@@ -103,7 +103,6 @@ CanopyDesc smallDesc(uint32_t w, uint32_t h, VkFormat color) {
   d.width = w;
   d.height = h;
   d.colorFormat = color;
-  d.useRootCache = false;
   return d;
 }
 
@@ -177,7 +176,7 @@ class CanopyTest : public GpuTest {
     s = setCanopyParams(ctx, p);
     if (s.ok()) s = host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
     CanopyFrame f;
-    f.camera = cameraFor(model, w, h, 20.0f);
+    f.camera = toCamera(cameraFor(model, w, h, 20.0f));
     for (int i = 0; i < frames && s.ok(); ++i) s = host.frame(ctx, f);
     if (s.ok()) s = host.read(&out->color, &out->depth);
     if (s.ok()) s = referenceFrame(dev, ctx, w, h, &out->ref, &out->maxDisplacement);
@@ -285,7 +284,7 @@ TEST_F(CanopyTest, ParameterChangesRebuildOnlyWhatDependsOnThem) {
   Host host;
   ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
   CanopyFrame f;
-  f.camera = cameraFor(model, w, h, 0.0f);
+  f.camera = toCamera(cameraFor(model, w, h, 0.0f));
   ASSERT_TRUE(host.frame(ctx, f).ok());
   ASSERT_TRUE(host.frame(ctx, f).ok());
   CanopyStats st = canopyStats(ctx);
@@ -346,7 +345,7 @@ TEST_F(CanopyTest, ResizeKeepsTheSimulationAndWarpsAtTheNewSize) {
   Host small;
   ASSERT_TRUE(small.create(dev, 96, 64, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
   CanopyFrame f;
-  f.camera = cameraFor(model, 96, 64, 20.0f);
+  f.camera = toCamera(cameraFor(model, 96, 64, 20.0f));
   for (int i = 0; i < 5 && s.ok(); ++i) s = small.frame(ctx, f);
   ASSERT_TRUE(s.ok()) << s.message();
   small.destroy();
@@ -360,7 +359,7 @@ TEST_F(CanopyTest, ResizeKeepsTheSimulationAndWarpsAtTheNewSize) {
   EXPECT_EQ(canopyStats(ctx).simulation.steps, 5u) << "resizing does not touch the simulation";
   Host big;
   ASSERT_TRUE(big.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
-  f.camera = cameraFor(model, w, h, 20.0f);
+  f.camera = toCamera(cameraFor(model, w, h, 20.0f));
   for (int i = 0; i < 10 && s.ok(); ++i) s = big.frame(ctx, f);
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_EQ(canopyStats(ctx).simulation.steps, 15u) << "the simulation goes on from where it was";
@@ -445,7 +444,7 @@ TEST_P(GoldenTest, MatchesTheCheckedInImage) {
   Host host;
   ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
   CanopyFrame f;
-  f.camera = cameraFor(model, w, h, sc.yaw);
+  f.camera = toCamera(cameraFor(model, w, h, sc.yaw));
   for (int i = 0; i < sc.frames && s.ok(); ++i) s = host.frame(ctx, f);
   ASSERT_TRUE(s.ok()) << s.message();
   std::vector<uint8_t> got(size_t(w) * h * 4);

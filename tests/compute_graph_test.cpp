@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstring>
 
-#include "compute/example_passes.h"
+#include "tools/example_passes.h"
 #include "engine/memory.h"
 #include "engine/transfer.h"
 #include "tests/gpu_test.h"

@@ -5,6 +5,7 @@
 #include "engine/memory.h"
 #include "engine/transfer.h"
 #include "tests/gpu_test.h"
+#include "tools/own_device.h"
 
 using namespace canopy;
 

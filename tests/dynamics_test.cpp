@@ -85,7 +85,7 @@ DynamicsParams identityParams(DelayMode mode, float vd) {
   DynamicsParams p;
   p.delay = mode;
   p.vd = vd;
-  p.lambda = glm::vec3(1.0f, 1.0f, 0.0f);
+  p.lambda = {1.0f, 1.0f, 0.0f};
   p.everyPartMoves = true;
   p.depthAttenuation = 0.0f;
   p.dt = 1.0f;

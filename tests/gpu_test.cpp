@@ -1,4 +1,5 @@
 #include "tests/gpu_test.h"
+#include "tools/own_device.h"
 
 #include <cstdlib>
 

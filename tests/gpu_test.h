@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "engine/device.h"
+#include "tools/own_device.h"
 
 namespace canopy::test {
 

@@ -1,18 +1,30 @@
 #!/usr/bin/env bash
-# cmake --install of the build tree into a fresh prefix, then a separate project that does
-# find_package(Canopy) and links Canopy::canopy is configured, built and run.
+# cmake --install of the build tree into a fresh prefix; the installed public header compiles alone
+# with no include path but the prefix; the install holds no internal header and its package needs
+# none of tinygltf, nlohmann-json or GLFW; then a separate C++17 project does find_package(Canopy),
+# links Canopy::canopy, and runs (own device, adoption, refusals, a context).
 #   install_consumer_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$1 src=$2 work=$3
 rm -rf "$work"
 mkdir -p "$work"
 cmake --install "$build" --prefix "$work/prefix" >/dev/null
-test -f "$work/prefix/include/canopy/render/canopy.h"
+inc="$work/prefix/include"
+test -f "$inc/canopy/canopy.h"
 test -f "$work/prefix/lib/cmake/Canopy/CanopyConfig.cmake"
-if find "$work/prefix/include" -name '*_reference.h' | grep -q .; then
-  echo "test-only reference headers were installed" >&2
+extra=$(cd "$inc" && find . -type f ! -path './canopy/*' | head -5)
+if [ -n "$extra" ] || [ -d "$inc/canopy/engine" ] || [ -d "$inc/canopy/render" ] || [ -d "$inc/canopy/compute" ]; then
+  echo "internal headers were installed: $extra" >&2
   exit 1
 fi
+if grep -Eiq 'tinygltf|nlohmann|glfw' "$work/prefix/lib/cmake/Canopy/"*.cmake; then
+  echo "the installed package refers to tinygltf, nlohmann-json or GLFW" >&2
+  exit 1
+fi
+echo '#include <canopy/canopy.h>
+int main() { return canopy::libraryVersion() == CANOPY_HEADER_VERSION ? 0 : 1; }' > "$work/alone.cpp"
+c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/alone.cpp"
+echo "the public header compiles alone (C++17, -I$inc only)"
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
 cmake --build "$work/build" >/dev/null

@@ -12,9 +12,10 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 #include "render/layers.h"
 #include "tests/gpu_test.h"
+#include "tools/own_device.h"
 
 #include "tests/assets.h"
 
@@ -94,7 +95,6 @@ LayeredVegetationDesc smallDesc(const char* layout = "5(3-1-1)") {
   d.width = kW;
   d.height = kH;
   d.writeIds = true;
-  d.useRootCache = false;
   EXPECT_TRUE(parseLayerLayout(layout, &d.settings.layout).ok());
   return d;
 }

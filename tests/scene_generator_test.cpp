@@ -11,10 +11,10 @@
 #include <unistd.h>
 
 #include "render/gltf_loader.h"
-#include "render/gltf_writer.h"
+#include "tools/gltf_writer.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
-#include "render/scene_generator.h"
+#include "tools/scene_generator.h"
 
 using namespace canopy;
 

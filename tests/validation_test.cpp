@@ -2,7 +2,7 @@
 // by synchronization validation, and a plain API misuse by core validation.
 #include <cstring>
 
-#include "compute/example_passes.h"
+#include "tools/example_passes.h"
 #include "engine/memory.h"
 #include "tests/gpu_test.h"
 

@@ -19,6 +19,8 @@
 #define COMPOSITE_MOTION_VALID 16u  // the previous displacement is last frame's (else motion 0)
 #define COMPOSITE_BACKGROUND 32u    // a rigid background was drawn
 #define COMPOSITE_SCENE_DEPTH 64u   // the host's depth was copied (else everything is in front)
+#define COMPOSITE_REVERSE_Z 128u    // the host's depth is reverse-Z (1 = near); layers are standard
+
 
 // CompositePush.debugView: what the demo's and a host's debug overlays show.
 #define COMPOSITE_DEBUG_NONE 0u
@@ -47,8 +49,18 @@ struct CompositePush {
   uint tilesY;
   uint debugView;      // COMPOSITE_DEBUG_*
   float debugScale;    // velocity view: speed shown at full brightness, domain units/s
+  float exposure;      // the vegetation's linear colour is scaled by this (HDR hosts), >= 0
+  uint pad0;
+  uint pad1;
+  uint pad2;
 };
-CANOPY_SIZE_CHECK(CompositePush, 48)
+CANOPY_SIZE_CHECK(CompositePush, 64)
+
+// The host's depth in Canopy's standard convention (0 = near), and back (design: one convention
+// inside, the host's at the edges; the scene's own value is written back untouched).
+CANOPY_INLINE float compositeStandardDepth(uint flags, float hostZ) {
+  return (flags & COMPOSITE_REVERSE_Z) != 0u ? 1.0f - hostZ : hostZ;
+}
 
 // Bilinear position of pixel point p (pixel centres at +0.5, y down) in the warp grid: the four
 // corner indices (row-major, gridX per row) and the weights. Corner (gx, gy) sits at pixel

@@ -1,10 +1,27 @@
-#include "render/camera.h"
+#include "engine/camera.h"
 
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace canopy {
+
+glm::mat4 toGlm(const Float4x4& m) {
+  glm::mat4 r;
+  for (int c = 0; c < 4; ++c)
+    for (int row = 0; row < 4; ++row) r[c][row] = m.m[c * 4 + row];
+  return r;
+}
+
+Float4x4 toFloat4x4(const glm::mat4& m) {
+  Float4x4 r;
+  for (int c = 0; c < 4; ++c)
+    for (int row = 0; row < 4; ++row) r.m[c * 4 + row] = m[c][row];
+  return r;
+}
+
+CanopyCamera toCamera(const LayerView& v) { return {toFloat4x4(v.view), toFloat4x4(v.proj)}; }
+LayerView toLayerView(const CanopyCamera& c) { return {toGlm(c.view), toGlm(c.proj)}; }
 
 glm::mat4 perspectiveVulkan(float fovY, float aspect, float zNear, float zFar) {
   glm::mat4 p = glm::perspectiveRH_ZO(fovY, aspect, zNear, zFar);

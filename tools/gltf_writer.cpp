@@ -1,4 +1,4 @@
-#include "render/gltf_writer.h"
+#include "tools/gltf_writer.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 
 namespace canopy {
 namespace {

@@ -1,4 +1,4 @@
-#include "render/scene_generator.h"
+#include "tools/scene_generator.h"
 
 #include <algorithm>
 #include <atomic>

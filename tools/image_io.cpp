@@ -1,4 +1,4 @@
-#include "engine/image_io.h"
+#include "tools/image_io.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "render/leaf_cloud.h"
+#include "tools/leaf_cloud.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "compute/example_passes.h"
+#include "tools/example_passes.h"
 
 #include <algorithm>
 

@@ -1,0 +1,498 @@
+#pragma once
+// Canopy: real-time animation of dense vegetation in wind with view-dependent 2D layers
+// (docs/design.md). This is the whole public API: C++17, no header of Canopy's source tree, no
+// third-party header but Vulkan's.
+//
+// A host
+//   1. asks queryDeviceRequirements() what its VkDevice needs, enables it (enableDeviceFeatures()),
+//   2. hands its instance, device and queue to adoptDevice() (one canopy::Device per VkDevice),
+//   3. loads or builds a Model and creates one CanopyContext per plant or field (createCanopy),
+//   4. every frame calls recordCanopy() into its own command buffer with its colour and depth.
+// Errors are returned as a Status (a Result code plus a message naming the parameter, file or
+// Vulkan call); nothing throws across this API and nothing is global. Threading: the functions on
+// one Device and its contexts must not run concurrently (the host serialises them); different
+// Devices are independent.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+// The version this header declares. createCanopy() refuses a library of another major version, or
+// an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
+#define CANOPY_VERSION_MAJOR 0
+#define CANOPY_VERSION_MINOR 2
+#define CANOPY_VERSION_PATCH 0
+#define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
+#define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)
+
+namespace canopy {
+
+// ---------------------------------------------------------------------------------------------
+// Results
+
+enum class Result : uint32_t {
+  Success = 0,
+  InvalidArgument,    // a parameter out of range or inconsistent (the message names it and the range)
+  InvalidModel,       // the model file or data is malformed (the message names file and element)
+  FileError,          // a file could not be read or written
+  UnsupportedDevice,  // the device lacks a required version, extension, feature or format
+  OutOfHostMemory,
+  OutOfDeviceMemory,
+  DeviceLost,
+  VersionMismatch,    // header and library versions differ
+  VulkanError,        // any other failing Vulkan call (named in the message)
+};
+const char* toString(Result result);
+
+// Empty on success; else a Result and a message ("CanopyDesc.width = 0 is outside [1, 16384]").
+class [[nodiscard]] Status {
+ public:
+  Status() = default;
+  static Status error(std::string message) { return error(Result::InvalidArgument, std::move(message)); }
+  static Status error(Result code, std::string message) {
+    Status s;
+    s.code_ = code == Result::Success ? Result::InvalidArgument : code;
+    s.message_ = std::move(message);
+    return s;
+  }
+  bool ok() const { return code_ == Result::Success; }
+  explicit operator bool() const { return ok(); }
+  Result code() const { return code_; }
+  const std::string& message() const { return message_; }
+  // Prefixes context ("while creating X: ") so the message reads outermost first; keeps the code.
+  Status context(const std::string& what) const { return ok() ? *this : error(code_, what + ": " + message_); }
+
+ private:
+  Result code_ = Result::Success;
+  std::string message_;
+};
+
+// Progress of long work (leaf roots, mesh upload): (stage, done, total), called on the calling
+// thread now and then, last with done == total.
+using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
+
+// The library's version (CANOPY_MAKE_VERSION form), to compare with CANOPY_HEADER_VERSION.
+uint32_t libraryVersion();
+
+// ---------------------------------------------------------------------------------------------
+// Small math types (column-major, like GLSL and glm: m[column * 4 + row]).
+
+struct Float3 {
+  float x = 0, y = 0, z = 0;
+};
+inline bool operator==(const Float3& a, const Float3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+struct Float4x4 {
+  float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+};
+
+// ---------------------------------------------------------------------------------------------
+// The host's device
+
+struct Device;  // Canopy's view of one host VkDevice (opaque)
+
+// What Canopy needs of a device, and what it uses when present.
+struct DeviceRequirements {
+  uint32_t minApiVersion = VK_API_VERSION_1_2;
+  std::vector<std::string> extensions;          // required (on 1.2 also synchronization2, dynamic rendering)
+  std::vector<std::string> optionalExtensions;  // used when enabled
+  std::vector<std::string> features;            // required, as "VkPhysicalDeviceVulkan12Features.scalarBlockLayout"
+  std::vector<std::string> optionalFeatures;    // used when enabled (single-pass layers, clip-distance fallback)
+  std::string unsupported;  // why this physical device cannot run Canopy; empty when it can
+};
+// Reads the physical device through the host's loader. Works before any VkDevice exists.
+Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
+                               VkPhysicalDevice physicalDevice, DeviceRequirements* out);
+// Sets Canopy's required features, and the optional ones the device supports, in the host's
+// feature chain (head VkPhysicalDeviceFeatures2 with VkPhysicalDeviceVulkan11Features,
+// VkPhysicalDeviceVulkan12Features and either VkPhysicalDeviceVulkan13Features or
+// VkPhysicalDeviceSynchronization2Features + VkPhysicalDeviceDynamicRenderingFeatures in pNext).
+// A struct missing from the chain is an error naming it; nothing is allocated.
+Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
+                            VkPhysicalDevice physicalDevice, VkPhysicalDeviceFeatures2* chain);
+
+// A range of device memory handed out by a host allocator (e.g. VMA's vmaAllocateMemory).
+struct DeviceMemoryRange {
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  VkDeviceSize offset = 0;
+  VkDeviceSize size = 0;
+  void* mapped = nullptr;       // host pointer at `offset` when host-visible and mapped, else null
+  uint32_t memoryTypeIndex = 0;
+  uint64_t hostHandle = 0;      // the host's own handle, given back to free()
+};
+// Optional: all of Canopy's device memory through the host's allocator. Without it Canopy
+// sub-allocates from its own 64 MiB blocks. Called only from Canopy calls on this device.
+struct DeviceMemoryAllocator {
+  void* user = nullptr;
+  // `required` property flags must hold; `preferred` are wished for (DEVICE_LOCAL, or
+  // HOST_VISIBLE | HOST_COHERENT for uploads and readbacks, which must come back mapped).
+  VkResult (*allocate)(void* user, const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
+                       VkMemoryPropertyFlags preferred, DeviceMemoryRange* out) = nullptr;
+  void (*free)(void* user, const DeviceMemoryRange& range) = nullptr;
+};
+
+struct AdoptDeviceDesc {
+  PFN_vkGetInstanceProcAddr getInstanceProcAddr = nullptr;  // every entry point is loaded through it
+  VkInstance instance = VK_NULL_HANDLE;
+  uint32_t instanceApiVersion = VK_API_VERSION_1_2;  // VkApplicationInfo.apiVersion of the instance
+  VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  // What the device was created with (extensions and the pNext feature chain or pEnabledFeatures);
+  // read during adoptDevice() only. Adoption is refused, naming what is missing, when a required
+  // extension or feature is not enabled.
+  const VkDeviceCreateInfo* deviceCreateInfo = nullptr;
+  VkQueue queue = VK_NULL_HANDLE;  // graphics + compute; Canopy submits to it only inside createCanopy
+  uint32_t queueFamily = 0;
+  const VkAllocationCallbacks* allocationCallbacks = nullptr;  // optional, for every Vulkan object
+  VkPipelineCache pipelineCache = VK_NULL_HANDLE;              // optional
+  const DeviceMemoryAllocator* memoryAllocator = nullptr;      // optional (copied)
+  // Frames the host records ahead of the GPU, 1..3: resources Canopy replaces (a new layer count,
+  // a resize, a destroyed context) are released this many frames after their last use.
+  uint32_t framesInFlight = 2;
+  const char* debugName = "canopy";
+};
+// Wraps the host's device. The VkDevice, instance and queue stay the host's; releaseDevice()
+// destroys only what Canopy created (after every context on it was destroyed).
+Status adoptDevice(const AdoptDeviceDesc& desc, Device** out);
+// Waits for no device: the host calls it once its GPU work using Canopy has completed.
+void releaseDevice(Device* device);
+
+// ---------------------------------------------------------------------------------------------
+// Vegetation input
+
+struct Model;  // one vegetation model in host memory (opaque); may be destroyed after createCanopy
+
+enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
+
+struct GltfLoadOptions {
+  uint64_t maxFileBytes = 2ull << 30;      // any single file (the model, a buffer, an image)
+  uint32_t maxImageDimension = 16384;      // per side
+  uint64_t maxTriangles = 200'000'000;
+  bool decodeImages = true;
+};
+// Loads a .gltf or .glb (decided by the file's first bytes). Refusals name the file and element.
+Status loadModel(const std::string& path, const GltfLoadOptions& options, Model** out);
+
+struct MeshMaterial {
+  std::string name;                    // read by the rigid/foliage rule (MaterialSplitOptions)
+  float baseColor[4] = {1, 1, 1, 1};   // linear RGBA factor
+  int32_t image = -1;                  // index into MeshDesc::images, -1: none
+  AlphaMode alphaMode = AlphaMode::Opaque;
+  float alphaCutoff = 0.5f;            // [0, 1]
+  bool doubleSided = false;
+};
+struct MeshImage {
+  uint32_t width = 0, height = 0;      // 1..16384
+  const uint8_t* rgba = nullptr;       // width * height sRGB-encoded RGBA8 texels, rows top to bottom
+};
+// A triangle mesh in world space from the host's own arrays (copied).
+struct MeshDesc {
+  const float* positions = nullptr;    // 3 floats per vertex
+  const float* normals = nullptr;      // 3 per vertex, or null (computed)
+  const float* uvs = nullptr;          // 2 per vertex, or null (0, 0)
+  uint32_t vertexCount = 0;
+  const uint32_t* indices = nullptr;   // triangle list
+  uint64_t indexCount = 0;             // a multiple of 3
+  const uint32_t* triangleMaterials = nullptr;  // per triangle, or null (material 0)
+  const MeshMaterial* materials = nullptr;
+  uint32_t materialCount = 0;          // at least 1 when triangleMaterials is set
+  const MeshImage* images = nullptr;
+  uint32_t imageCount = 0;
+  std::string name = "mesh";           // used in messages
+};
+Status createModel(const MeshDesc& desc, Model** out);
+void destroyModel(Model* model);
+uint64_t modelTriangleCount(const Model* model);
+// Axis-aligned bounds of the model, world units.
+void modelBounds(const Model* model, Float3* min, Float3* max);
+
+// Rigid vs foliage: explicit material names ("#N" for materials[N]) win over the default rule
+// (names with bark/trunk/branch/... are rigid, leaf/grass/... and MASK/BLEND are foliage).
+struct MaterialSplitOptions {
+  std::vector<std::string> rigid;
+  std::vector<std::string> foliage;
+};
+struct LeafRootOptions {
+  bool weldPositions = true;  // also join vertices with bit-identical positions into one leaf
+};
+
+// ---------------------------------------------------------------------------------------------
+// Parameters (all changeable every frame through setCanopyParams unless said otherwise)
+
+inline constexpr uint32_t kMaxLayers = 32;
+inline constexpr uint32_t kMaxMotors = 8;
+
+enum class FluidScheme : uint32_t {
+  MacMultigrid = 0,  // staggered grid + multigrid projection (default)
+  Stam = 1,          // Stam's collocated games-paper solver, closed walls
+};
+enum class FluidBoundary : uint32_t {
+  WindTunnel = 0,  // inflow on source sides, open outflow elsewhere (default)
+  Walls = 1,       // closed box
+};
+// Wind source sides (combinable): a source on the left blows toward +x, on the top toward -y.
+enum WindSide : uint32_t { kWindFromLeft = 1, kWindFromRight = 2, kWindFromBottom = 4, kWindFromTop = 8 };
+
+// Injected wind: speed through a source side = strength * (baseline + modulation sin(2 pi f t))
+// * (1 + gust * noise), the noise travelling along the side.
+struct WindParams {
+  uint32_t sides = kWindFromLeft;  // WindSide mask, 0..15 (0: no boundary wind)
+  float strength = 0.5f;           // domain units/s, [0, 1000]
+  float frequency = 0.25f;         // Hz, [0, 1000]
+  float baseline = 1.0f;           // a, [-10, 10]
+  float modulation = 0.3f;         // b, [-10, 10]
+  float gust = 0.3f;               // relative gust amplitude, [0, 1]
+  float gustScale = 0.25f;         // gust wavelength along a side, domain units, (0, 100]
+  float gustSpeed = 0.3f;          // gust travel speed along a side, domain units/s, [-1000, 1000]
+  uint32_t seed = 1;               // gust noise seed
+};
+// A point "motor" (a character, an explosion): a mass source in the fluid, so air flows outward
+// around it (negative strength: inward). The source density falls linearly to zero at the radius.
+struct Motor {
+  float x = 0.5f, y = 0.5f;  // centre, domain units (may lie outside [0,1])
+  float radius = 0.1f;       // domain units, (0, 100]
+  float strength = 1.0f;     // outward flow speed at the radius, domain units/s, [-1000, 1000]
+};
+struct FluidParams {
+  FluidScheme scheme = FluidScheme::MacMultigrid;
+  FluidBoundary boundary = FluidBoundary::WindTunnel;  // MAC scheme only; Stam's has walls
+  float viscosity = 1e-4f;       // domain units^2/s, [0, 10]
+  uint32_t iterations = 20;      // relaxation sweeps, [1, 10000]
+  uint32_t multigridCycles = 2;  // V-cycles per MAC projection, [1, 64]
+};
+// The oscillator V'' = c^2 lap V - k (V - g V_wind) - zeta V' (docs/design.md).
+struct WaveParams {
+  float stiffness = 40.0f;    // k, 1/s^2, [0, 1e6]
+  float speed = 0.05f;        // c, domain units/s, [0, 100]
+  float damping = 2.0f;       // zeta, 1/s, [0, 1000]
+  float gain = 1.0f;          // g, [-100, 100]
+  uint32_t maxSubsteps = 64;  // [1, 4096]: a longer step is clamped (stats.clampedSeconds)
+};
+struct SimulationParams {
+  WindParams wind;
+  FluidParams fluid;
+  WaveParams wave;
+  std::vector<Motor> motors;  // at most kMaxMotors
+};
+// Fixed at creation. The simulation domain is the unit square of the simulation plane.
+struct SimulationDesc {
+  uint32_t gridSize = 64;        // N: a power of two in [4, 1024]
+  uint32_t historySize = 0;      // H tiled fields kept; 0: enough for historySeconds at nominalDt
+  float historySeconds = 1.0f;   // (0, 3600]
+  float nominalDt = 1.0f / 30.0f;
+};
+
+// Layers per depth region, written like the paper: {3, 1, 1} is "5(3-1-1)".
+struct LayerLayout {
+  uint32_t region[3] = {3, 1, 1};  // near, mid, far
+  uint32_t count() const { return region[0] + region[1] + region[2]; }
+};
+inline bool operator==(const LayerLayout& a, const LayerLayout& b) {
+  return a.region[0] == b.region[0] && a.region[1] == b.region[1] && a.region[2] == b.region[2];
+}
+// Where the near region ends and the far region begins: fractions of the foliage's depth range
+// (0 <= nearEnd <= farStart <= 1), or with `absolute` view distances in world units.
+struct RegionSplit {
+  float nearEnd = 1.0f / 3.0f;
+  float farStart = 2.0f / 3.0f;
+  bool absolute = false;
+};
+inline bool operator==(const RegionSplit& a, const RegionSplit& b) {
+  return a.nearEnd == b.nearEnd && a.farStart == b.farStart && a.absolute == b.absolute;
+}
+enum class SliceMode {
+  LeafRoots,  // a leaf goes whole into the layer of its root (default)
+  Geometry,   // near/far planes on each fragment's depth (leaves crossing a boundary are cut)
+};
+enum class LayerDrawMode { Auto, SinglePass, PerLayer };  // Auto: single pass when the device can
+enum class ReslicePolicy { OnViewChange, EveryFrame };
+
+struct LayerSettings {
+  LayerLayout layout;                    // default 5(3-1-1), at most CanopyDesc.maxLayers layers
+  RegionSplit regions;
+  SliceMode slice = SliceMode::LeafRoots;
+  LayerDrawMode draw = LayerDrawMode::Auto;
+  ReslicePolicy policy = ReslicePolicy::OnViewChange;
+  float moveThreshold = 0.01f;           // camera travel that re-slices, fraction of the model's radius, [0, 10]
+  float turnThresholdDegrees = 0.5f;     // camera turn that re-slices, [0, 180]
+  Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space (normalised)
+  Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each >= 0
+  float ambient = 0.35f;                 // [0, 1]
+};
+bool operator==(const LayerSettings& a, const LayerSettings& b);
+
+enum class DelayMode { Exact, Approximate };  // paper eq. 3-4, or eq. 5
+struct DynamicsParams {
+  DelayMode delay = DelayMode::Exact;
+  float vd = 2.0f;                  // V_D of eq. 4, domain units/s, [-1000, 1000]
+  float propagationSpeed = 1.0f;    // s of eq. 5, [0, 1000]
+  Float3 lambda{300.0f, 300.0f, 150.0f};  // lambda_x,y,z of eq. 6: pixels per domain unit, [0, 1e6]
+  float rigidity = 1.0f;            // r of eq. 7, [0, 10]
+  bool everyPartMoves = false;      // eq. 7: R = 1 everywhere
+  float depthAttenuation = 0.3f;    // m of eq. 6, [0, 1]
+  float dt = 1.0f / 30.0f;          // Delta t of eq. 6, s, (0, 10]
+  uint32_t cellSize = 16;           // warp-grid cell, pixels, [CanopyDesc.minCellSize, 256]
+  float maxDelay = 10.0f;           // |gamma| bound for a vanishing eq. 4 denominator, s, (0, 3600]
+};
+
+enum class CompositeDebugView : uint32_t {
+  None = 0,
+  Layers = 1,    // each layer in its own false colour (paper Figure 3c)
+  Velocity = 2,  // the tiled simulation field over the simulation plane
+  Grid = 3,      // the nearest layer's warp grid, displaced
+};
+struct CompositeParams {
+  bool earlyExit = true;       // front to back, stop at accumulated alpha >= 1 - 1/1024
+  bool skipEmptyTiles = true;  // skip a layer whose occupancy tile under p - d_i(p) is empty
+  bool bilinear = true;        // bilinear layer colour (false: nearest texel)
+  float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
+  // The vegetation's linear colour is multiplied by this before it is blended over the host's
+  // target (HDR hosts: scene-referred intensity), [0, 65504].
+  float exposure = 1.0f;
+  CompositeDebugView debugView = CompositeDebugView::None;
+  float debugVelocityScale = 1.0f;  // velocity view: speed at full brightness, domain units/s, > 0
+};
+
+// The simulation plane in world space: the 2D field is the same on every parallel plane.
+struct SimulationPlane {
+  Float3 origin{0.0f, 0.0f, 0.0f};  // world point at simulation coordinate (0, 0)
+  Float3 right{1.0f, 0.0f, 0.0f};   // unit x axis
+  Float3 up{0.0f, 1.0f, 0.0f};      // unit y axis, orthogonal to right
+  float tileSize = 1.0f;            // world units covered by one tile, > 0
+};
+
+struct CanopyParams {
+  LayerSettings layers;
+  SimulationParams simulation;  // ignored by a context that shares another's simulation
+  DynamicsParams dynamics;
+  CompositeParams composite;
+  // Unset: the plane is fixed from the first frame's camera, one tile over the visible region at
+  // the vegetation's centre depth.
+  bool customPlane = false;
+  SimulationPlane plane;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Contexts
+
+struct CanopyContext;  // one animated plant or field (opaque)
+
+// How the host's depth target is read and written.
+enum class DepthConvention : uint32_t {
+  Standard = 0,  // near = 0, far = 1, compared LESS
+  Reverse = 1,   // near = 1, far = 0, compared GREATER (reverse-Z, also with an infinite far plane)
+};
+
+struct CanopyDesc {
+  uint32_t headerVersion = CANOPY_HEADER_VERSION;  // leave as is: checked against the library
+  uint32_t width = 1024, height = 768;               // host targets, pixels, 1..16384 each
+  // Host colour target: any blendable colour-attachment format (UNORM, SRGB, R16G16B16A16_SFLOAT,
+  // B10G11R11_UFLOAT_PACK32, ...). Canopy blends linear colour; SRGB formats encode on write.
+  VkFormat colorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+  // Host depth: D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT or D32_SFLOAT_S8_UINT with SAMPLED usage.
+  // The stencil aspect is never written. Single-sampled (a multisampled host names its resolved depth).
+  VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;
+  DepthConvention depthConvention = DepthConvention::Standard;
+  VkFormat motionFormat = VK_FORMAT_UNDEFINED;       // R16G16_SFLOAT / R32G32_SFLOAT; UNDEFINED: none
+  VkFormat layerFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // Canopy's layer images (or R8G8B8A8_UNORM)
+  uint32_t maxLayers = 8;     // the most layers CanopyParams may ask for, 1..32
+  uint32_t minCellSize = 4;   // the smallest warp-grid cell CanopyParams may ask for, pixels, 2..256
+  SimulationDesc simulation;
+  // Another context on the same Device whose simulation this one follows (one wind over a whole
+  // scene); it is stepped once per host frame number, whichever context records first.
+  CanopyContext* shareSimulationWith = nullptr;
+  MaterialSplitOptions split;
+  LeafRootOptions roots;
+  // The leaf-root cache (seconds saved on big models) is read and written only in this folder;
+  // empty: no file is read or written.
+  std::string rootCacheDir;
+  Progress progress;          // optional: called during createCanopy ("leaf roots", "vertices")
+  CanopyParams params;        // the initial parameters
+};
+
+// Creates a context: splits materials, finds leaf roots, uploads the mesh and creates the GPU
+// state. Submits its one-time uploads to the adopted queue and waits for that submission's own
+// fence (not for the device). Refuses models with nothing to animate.
+Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out);
+// Releases the context. Its GPU objects are freed framesInFlight host frames later (or at
+// releaseDevice), so the host may destroy it while frames that used it still execute.
+void destroyCanopy(CanopyContext* context);
+
+// Validates and applies parameters from the next frame on. A new layer count recreates the layer
+// images (the old ones are freed once no frame in flight uses them).
+Status setCanopyParams(CanopyContext* context, const CanopyParams& params);
+const CanopyParams& canopyParams(const CanopyContext* context);
+
+// The host's targets changed size: recreates the size-dependent parts (layer images, compositor,
+// warp grid); mesh, leaf roots, simulation and parameters are kept. Waits for nothing: the old
+// objects are freed once no frame in flight uses them. Width and height in [1, 16384].
+Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
+
+// What changes every frame.
+struct CanopyCamera {
+  Float4x4 view;  // world -> view (right-handed, looking down -Z)
+  Float4x4 proj;  // view -> Vulkan clip space (y down), following CanopyDesc.depthConvention
+};
+struct CanopyFrame {
+  CanopyCamera camera;
+  float dt = 1.0f / 30.0f;  // simulation step, s, [0, 10]; 0 holds the simulation (pause)
+  // The host's frame counter: never decreases; several contexts recorded in one host frame give
+  // the same number. Recording frame F promises that frames <= F - framesInFlight have completed.
+  uint64_t frameNumber = 0;
+  // A camera cut: no motion vectors across it and the layers are re-sliced at once.
+  bool cameraCut = false;
+};
+
+// One of the host's images, how it arrives and how to leave it.
+struct ResourceState {
+  VkPipelineStageFlags2 stage = VK_PIPELINE_STAGE_2_NONE;
+  VkAccessFlags2 access = VK_ACCESS_2_NONE;
+  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+};
+struct CanopyImage {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;  // 2D view; for depth, the depth aspect only
+  ResourceState current;              // last stage/access/layout the host used it with
+  ResourceState final;                // the state Canopy must leave it in
+};
+struct CanopyFrameInputs {
+  CanopyFrame frame;
+  CanopyImage color, depth;
+  CanopyImage motion;                 // only with CanopyDesc.motionFormat
+};
+// Records one whole frame (simulation step, re-slicing when the view moved, dynamics, warp and
+// composite, with every barrier) into the host's `cmd`, which the host submits. Nothing is
+// submitted and nothing waits. The host's images are left in their `final` states.
+Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
+
+struct LayerStats {
+  double preprocessMs = 0;    // material split + leaf roots (or cache read)
+  bool rootCacheHit = false;
+  std::string rootCacheNote;  // why the cache was not used, or where it was written
+  uint32_t leafCount = 0;
+  uint64_t foliageTriangles = 0, rigidTriangles = 0;
+  bool singlePass = false;    // the draw mode in use
+  uint64_t viewUpdates = 0;   // frames seen
+  uint64_t rebuilds = 0;      // of which re-sliced the layers
+  std::string lastRebuildReason;
+  double lastPlacementMs = 0; // CPU time of the last placement
+};
+struct SimulationStats {
+  uint64_t steps = 0;
+  uint32_t lastWaveSubsteps = 0;
+  uint32_t lastDiffuseSweeps = 0;
+  uint32_t dispatchesPerStep = 0;
+  double clampedSeconds = 0.0;  // oscillator time dropped by the maxSubsteps clamp (frame hitches)
+};
+struct CanopyStats {
+  uint64_t frames = 0;
+  bool layersRebuilt = false;        // the last frame re-sliced the layers
+  uint64_t resourceGeneration = 0;   // bumps when Canopy's resources were recreated
+  uint64_t internalGraphBuilds = 0;  // recordCanopy() graph (re)compilations
+  uint64_t pendingReleases = 0;      // objects waiting for their frames to complete (device-wide)
+  LayerStats layers;
+  SimulationStats simulation;
+};
+CanopyStats canopyStats(const CanopyContext* context);
+
+}  // namespace canopy

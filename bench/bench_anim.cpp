@@ -4,7 +4,7 @@
 // embedded in a host graph (path 1). Then the compositing levers side by side in the same run.
 //
 // Wall = submit-to-fence of one frame alone (median); GPU = timestamps around each pass (median).
-// On lavapipe timestamps around compute work read near zero once anything was drawn (design.md),
+// On lavapipe timestamps around compute work read near zero once anything was drawn (docs/design.md),
 // so the compute passes' timestamps are printed for reference only and wall clock is the figure.
 #include <algorithm>
 #include <chrono>

@@ -2,7 +2,7 @@
 // design (every pass a compute dispatch, per-pass GPU timestamps) next to the CPU reference of the
 // same step (the paper ran its 64x64 simulation on the CPU), and Stam's scheme beside Canopy's.
 // Wall clock of the submitted step is printed with the timestamps: CPU drivers' timestamps are
-// not trusted alone (design.md).
+// not trusted alone (docs/design.md).
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -92,7 +92,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     gpu::AnimLayer& l = f.layers[i];
     l.depth = d.layers[i].depth;
     l.distance = d.layers[i].distance;
-    // design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer.
+    // docs/design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer.
     const float ratio = (n > 1 && last > 0) ? d.layers[i].distance / last : 0.0f;
     l.attenuation = 1.0f - p.depthAttenuation * ratio * ratio;
     l.rootLineY = d.layers[i].rootLineY;

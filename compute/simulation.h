@@ -1,5 +1,5 @@
 #pragma once
-// The 2D harmonic-motion simulation of paper section 3.3 on the GPU (design.md): wind by stable
+// The 2D harmonic-motion simulation of paper section 3.3 on the GPU (docs/design.md): wind by stable
 // fluids, the wave oscillator driven by it, tiling with seam blending, and a history ring of the
 // tiled field for the exact layer delay. Every step is a handful of compute passes recorded
 // through the render graph (addSimulationPasses), or run standalone (runSimulationSteps).

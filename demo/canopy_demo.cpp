@@ -247,7 +247,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
                   "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
                   "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices\n"
                   "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
-                  "(design.md): the wall-clock line is the figure to trust there.\n",
+                  "(docs/design.md): the wall-clock line is the figure to trust there.\n",
                   label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
                   o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
                   dev.properties.deviceName, uint32_t(st.layers.rebuilds));

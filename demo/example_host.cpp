@@ -194,7 +194,7 @@ bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDev
   canopy::DeviceRequirements req;
   for (VkPhysicalDevice pd : pds) {
     canopy::DeviceRequirements r;
-    canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, pd, &r);
+    canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, *apiVersion, pd, &r);
     VkPhysicalDeviceProperties p;
     vkGetPhysicalDeviceProperties(pd, &p);
     if (!s.ok() || !r.unsupported.empty()) {

@@ -1,7 +1,7 @@
 // canopy-smoke: the foundation's main job. Prints the chosen Vulkan device, runs the example
 // write -> transform -> reduce compute graph, checks it against the CPU reference and prints a
 // per-pass timing table: GPU timestamps (median over frames) next to wall clock, since CPU
-// drivers' timestamps are not trustworthy on their own (design.md).
+// drivers' timestamps are not trustworthy on their own (docs/design.md).
 #include <chrono>
 #include <cmath>
 #include <cstdio>

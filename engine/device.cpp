@@ -140,13 +140,13 @@ void fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t i
 
 }  // namespace
 
-Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd,
-                               DeviceRequirements* out) {
+Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, uint32_t instanceApiVersion,
+                               VkPhysicalDevice pd, DeviceRequirements* out) {
   if (!out || !pd) return Status::error("queryDeviceRequirements: physicalDevice and out are required");
   VulkanFunctions vk;
   const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
   if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
-  fillRequirements(vk, pd, VK_API_VERSION_1_3, out, nullptr);
+  fillRequirements(vk, pd, instanceApiVersion, out, nullptr);
   return Status();
 }
 

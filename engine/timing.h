@@ -1,7 +1,7 @@
 #pragma once
 // GPU timestamp queries around named passes, read back as milliseconds.
 // On CPU drivers (lavapipe) timestamps around non-draw work read near zero once anything was
-// drawn (design.md): callers that publish figures cross-check against wall clock.
+// drawn (docs/design.md): callers that publish figures cross-check against wall clock.
 #include <string>
 #include <vector>
 #include <vulkan/vulkan.h>

@@ -351,7 +351,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   if (!c->planeFixed) {
-    // design.md: the plane of the first view, one tile over the region visible at the
+    // docs/design.md: the plane of the first view, one tile over the region visible at the
     // vegetation's centre depth.
     const LayeredVegetation& lv = c->layers;
     const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Fused inverse warp + compositing (paper 3.2, 3.6; design.md "Compositing"). For every layer, the
+// Fused inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing"). For every layer, the
 // displacement d_i(p) is bilinear between the warp-grid corners; the layer's colour, alpha and
 // depth are all read at p - d_i(p) (one warp for all three, so the alpha never sways apart from
 // the leaves). Layers are composited in layer order with the rigid background and the host's scene
@@ -33,7 +33,7 @@ vec2 displacementAt(uint base, GridSample g, bool previous) {
 }
 
 // The tiled simulation field where the view ray through pixel p meets the simulation plane
-// (design.md: the plane is tiled with the one simulated tile). w = 0 where the ray misses it.
+// (docs/design.md: the plane is tiled with the one simulated tile). w = 0 where the ray misses it.
 vec4 velocityOnPlane(vec2 p) {
   vec2 ndc = p / vec2(pc.width, pc.height) * 2.0 - 1.0;
   vec4 a = anim.invViewProj * vec4(ndc, 0.0, 1.0), b = anim.invViewProj * vec4(ndc, 1.0, 1.0);

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// MAC projection (design.md, "Stable fluids"): A p = -h^2 (div u - q) on the cell-centred grid
+// MAC projection (docs/design.md, "Stable fluids"): A p = -h^2 (div u - q) on the cell-centred grid
 // (q: the motors' mass sources, shared/sim.h), solved
 // by f.mgCycles multigrid V-cycles (red-black Gauss-Seidel smoothing, sum restriction, bilinear
 // prolongation), warm-started from the previous pressure; then u -= grad p. Because the MAC
@@ -78,7 +78,7 @@ void relax(uint po, uint bo, uint m, uint color) {
 }
 
 // Serial tail: levels from `first` down to the coarsest and back, by one invocation. Small levels
-// are mostly barrier cost when spread over the workgroup (design.md: lavapipe runs a workgroup on
+// are mostly barrier cost when spread over the workgroup (docs/design.md: lavapipe runs a workgroup on
 // one core), so below f.mgSerialSize they run here without any barrier. Same operations, same order
 // within each colour, so the result is identical.
 void serialTail(uint first, bool neumann) {

@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 #define SIM_COHERENT
 #define SIM_NO_GROUP_SUM
-// Tiling (paper 3.3, design.md): T(x) = w(x) S(x) + (1 - w(x)) S(x + N/2 mod N) on each axis,
+// Tiling (paper 3.3, docs/design.md): T(x) = w(x) S(x) + (1 - w(x)) S(x + N/2 mod N) on each axis,
 // w linear, 1 at the tile centre and 0 at its edges, so opposite edges of T join without a seam
 // and later passes can sample it with fract(). The result also goes into the history ring slot.
 #include "sim_common.glsl"

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// The wave oscillator (design.md): V'' = c^2 lap V - k (V - g V_wind) - zeta V', integrated with
+// The wave oscillator (docs/design.md): V'' = c^2 lap V - k (V - g V_wind) - zeta V', integrated with
 // position Verlet, V+ = V + (1 - zeta dt)(V - V-) + dt^2 (c^2 lap V - k (V - g V_wind)), in
 // f.waveSubsteps substeps chosen on the host so that every substep is stable. V_wind is the
 // fluid velocity at cell centres (MAC faces averaged, or Stam's collocated interior).

@@ -114,7 +114,7 @@ TEST(DynamicsProjection, Eq1TiltedSimulationPlane) {
 TEST(DynamicsProjection, Eq2YawedView) {
   // The view turned by alpha in the XZ plane. The extracted eq. 2 reads V0z = Wx sin a + Wz cos a;
   // with V0x = Wx cos a + Wz sin a that map is not a rotation (it scales vectors), so the
-  // orthonormal reading V0z = -Wx sin a + Wz cos a is the one reproduced (design.md: eq. 1-2 are
+  // orthonormal reading V0z = -Wx sin a + Wz cos a is the one reproduced (docs/design.md: eq. 1-2 are
   // special cases of the general rotation).
   const float theta = 0.7f;
   for (float alpha : {-1.0f, -0.2f, 0.0f, 0.4f, 1.2f}) {

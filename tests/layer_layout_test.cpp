@@ -1,4 +1,4 @@
-// Layer layout parsing and placement arithmetic (paper 3.2, design.md "Layers").
+// Layer layout parsing and placement arithmetic (paper 3.2, docs/design.md "Layers").
 #include <gtest/gtest.h>
 
 #include "render/layer_layout.h"

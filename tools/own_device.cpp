@@ -142,8 +142,7 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
       continue;
     }
     DeviceRequirements req;
-    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, d.instance, pd, &req));
-    if (p.apiVersion >= VK_API_VERSION_1_3 && app.apiVersion < VK_API_VERSION_1_3) req.unsupported = "needs a 1.3 instance";
+    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, d.instance, app.apiVersion, pd, &req));
     if (!req.unsupported.empty()) {
       rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": " + req.unsupported;
       continue;

@@ -1,4 +1,4 @@
-// Layer dynamics (paper 3.4-3.6, design.md): the simulation-plane velocity projected to the view
+// Layer dynamics (paper 3.4-3.6, docs/design.md): the simulation-plane velocity projected to the view
 // (eq. 1-2 as the general rotation), the layer delay (eq. 3-5) and the displacement of the warp
 // grid's corners (eq. 6-7). The formulas are shared inline functions, compiled into the compute
 // shader and into the C++ reference, so the two cannot drift.
@@ -16,7 +16,7 @@ CANOPY_NAMESPACE_BEGIN
 struct AnimLayer {
   float depth;        // representative view depth, world units
   float distance;     // L_i: depth - depth of layer 0
-  float attenuation;  // A_i = 1 - m (L_i / L_{n-1})^2 (design.md's reading of eq. 6)
+  float attenuation;  // A_i = 1 - m (L_i / L_{n-1})^2 (docs/design.md's reading of eq. 6)
   float rootLineY;    // pixel row of the root line (y down)
   float height;       // h of eq. 7, pixels
   float pad0;
@@ -74,7 +74,7 @@ CANOPY_INLINE float rigidityFactor(AnimFrame f, uint layer, float pixelY) {
   return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
 }
 
-// Eq. 6 (design.md's reading) in pixels, y pointing down the image (view y points up).
+// Eq. 6 (docs/design.md's reading) in pixels, y pointing down the image (view y points up).
 CANOPY_INLINE vec2 displacementPixels(AnimFrame f, uint layer, float pixelY, vec3 vi) {
   float k = rigidityFactor(f, layer, pixelY) * f.layers[layer].attenuation * f.lambda.w;
   float dx = k * f.lambda.x * vi.x;

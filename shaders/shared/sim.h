@@ -1,4 +1,4 @@
-// The 2D harmonic-motion simulation (paper 3.3, design.md): the per-step parameter block, grid
+// The 2D harmonic-motion simulation (paper 3.3, docs/design.md): the per-step parameter block, grid
 // layouts, and the few functions the GPU passes and the CPU reference must compute identically.
 //
 // Units: the simulation domain is the unit square [0,1]^2 of the simulation plane, N x N cells of
@@ -134,7 +134,7 @@ CANOPY_INLINE float motorSource(SimFrame f, vec2 p) {
   }
   return q;
 }
-// Linear seam-blend weight of the tiling (design.md): 1 at the tile centre, 0 at its edges.
+// Linear seam-blend weight of the tiling (docs/design.md): 1 at the tile centre, 0 at its edges.
 CANOPY_INLINE float tileWeight(uint i, uint n) {
   return 1.0f - abs((float(i) + 0.5f) / float(n) - 0.5f) * 2.0f;
 }

@@ -29,7 +29,7 @@ int main() {
   VkPhysicalDevice pd = VK_NULL_HANDLE;
   vkEnumeratePhysicalDevices(instance, &n, &pd);
   canopy::DeviceRequirements req;
-  canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, instance, pd, &req);
+  canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, instance, app.apiVersion, pd, &req);
   if (!s.ok()) return fail("queryDeviceRequirements", s);
   if (!req.unsupported.empty()) return std::fprintf(stderr, "consumer: %s\n", req.unsupported.c_str()), 1;
 

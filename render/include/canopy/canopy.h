@@ -101,8 +101,10 @@ struct DeviceRequirements {
   std::string unsupported;  // why this physical device cannot run Canopy; empty when it can
 };
 // Reads the physical device through the host's loader. Works before any VkDevice exists.
+// `instanceApiVersion` is VkApplicationInfo.apiVersion of the host's instance: on 1.3 (instance and
+// device) synchronization2 and dynamic rendering are core, below it they are extensions.
 Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
-                               VkPhysicalDevice physicalDevice, DeviceRequirements* out);
+                               uint32_t instanceApiVersion, VkPhysicalDevice physicalDevice, DeviceRequirements* out);
 // Sets Canopy's required features, and the optional ones the device supports, in the host's
 // feature chain (head VkPhysicalDeviceFeatures2 with VkPhysicalDeviceVulkan11Features,
 // VkPhysicalDeviceVulkan12Features and either VkPhysicalDeviceVulkan13Features or

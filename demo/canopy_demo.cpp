@@ -169,6 +169,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     return 1;
   }
   Host host;
+  FrameRing ring;
   s = [&]() -> Status {
     std::error_code ec;
     std::filesystem::create_directories(o.outDir, ec);
@@ -202,30 +203,77 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       f.dt = 1.0f / o.fps;
       return f;
     };
-    auto submit = [&](const CanopyFrame& f, bool keep) -> Status {
-      const double w0 = nowMs();
-      CANOPY_TRY(submitAndWait(dev, [&](VkCommandBuffer cmd) { return recordHostFrame(host, cmd, f, nullptr); }));
-      const double wall = nowMs() - w0;
+    struct InFlight {
+      bool pending = false, keep = false;
+      int64_t index = -1;  // the written frame's number, -1 for a warm-up frame
+      double submitted = 0.0;
+    };
+    InFlight inFlight[Host::kFramesInFlight];
+    uint64_t frameNumber = 0;
+    CANOPY_TRY(createFrameRing(dev, &ring));
+    // Frames in flight: frame n is recorded into slot n % 2 while frame n - 1 may still execute;
+    // the loop waits only for the slot's previous frame (its fence), then writes that frame.
+    std::function<Status(uint32_t, const std::vector<uint8_t>&)> written;  // set below
+    double lastDone = -1.0;
+    auto retire = [&](uint32_t slot) -> Status {
+      InFlight& p = inFlight[slot];
+      if (!p.pending) return Status();
+      CANOPY_VK(vkWaitForFences(dev.device, 1, &ring.fences[slot], VK_TRUE, UINT64_MAX));
+      CANOPY_VK(vkResetFences(dev.device, 1, &ring.fences[slot]));
+      p.pending = false;
+      const double done = nowMs();
+      // Wall clock per frame: the interval between frame completions (with two frames in flight the
+      // GPU never idles between them), or submit-to-fence for the very first frame.
+      const double wall = done - (lastDone >= 0.0 ? std::max(lastDone, p.submitted) : p.submitted);
+      lastDone = done;
       std::vector<PassTiming> t;
-      CANOPY_TRY(host.timer.read(dev, &t));
+      CANOPY_TRY(host.timer[slot].read(dev, &t));
       // The first frame slices the layers (and every orbit frame re-slices): kept apart from the steady state.
       if (!firstSubmitted) first.add(t, wall);
-      else if (keep) steady.add(t, wall);
+      else if (p.keep) steady.add(t, wall);
       firstSubmitted = true;
+      if (p.index >= 0) {
+        std::vector<uint8_t> rgba;
+        readPixels(host, slot, &rgba);
+        CANOPY_TRY(written(uint32_t(p.index), rgba));
+      }
       return Status();
+    };
+    auto submit = [&](CanopyFrame f, bool keep, int64_t index) -> Status {
+      const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
+      CANOPY_TRY(retire(slot));
+      f.frameNumber = ++frameNumber;
+      VkCommandBuffer cmd = ring.cmds[slot];
+      CANOPY_VK(vkResetCommandBuffer(cmd, 0));
+      VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+      bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+      CANOPY_VK(vkBeginCommandBuffer(cmd, &bi));
+      const Status rs = recordHostFrame(host, cmd, f, nullptr, slot);
+      CANOPY_VK(vkEndCommandBuffer(cmd));
+      CANOPY_TRY(rs);
+      VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+      si.commandBufferCount = 1;
+      si.pCommandBuffers = &cmd;
+      inFlight[slot] = {true, keep, index, nowMs()};
+      CANOPY_VK(vkQueueSubmit(dev.queue, 1, &si, ring.fences[slot]));
+      return Status();
+    };
+    // Waits for both slots, older frame first (the frames are written in order).
+    auto drain = [&]() -> Status {
+      CANOPY_TRY(retire(uint32_t(frameNumber % Host::kFramesInFlight)));
+      return retire(uint32_t((frameNumber + 1) % Host::kFramesInFlight));
     };
     if (warmup > 0) {
       const double w0 = nowMs();
-      for (uint32_t i = 0; i < warmup; ++i) CANOPY_TRY(submit(frameAt(0), false));
+      for (uint32_t i = 0; i < warmup; ++i) CANOPY_TRY(submit(frameAt(0), false, -1));
+      CANOPY_TRY(drain());
       std::fprintf(stderr, "warm-up: %u frames (%.2f s of simulation) in %.1f s\n", warmup, double(warmup) / o.fps,
                    (nowMs() - w0) / 1000.0);
     }
     const double t0 = nowMs();
     double lastProgress = t0;
-    for (uint32_t i = 0; i < o.frames; ++i) {
-      CANOPY_TRY(submit(frameAt(i), true));
-      std::vector<uint8_t> rgba;
-      readPixels(host, &rgba);
+    written = [&](uint32_t i, const std::vector<uint8_t>& pixels) -> Status {
+      std::vector<uint8_t> rgba = pixels;
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04u.png", i);
       CANOPY_TRY(writePng(o.outDir + name, o.width, o.height, rgba));
@@ -238,7 +286,10 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
         std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", tty ? "\r" : "", i + 1, o.frames,
                      double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), tty && !lastFrame ? "" : "\n");
       }
-    }
+      return Status();
+    };
+    for (uint32_t i = 0; i < o.frames; ++i) CANOPY_TRY(submit(frameAt(i), true, int64_t(i)));
+    CANOPY_TRY(drain());
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
     const CanopyStats st = canopyStats(host.canopy);
@@ -280,6 +331,8 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     return Status();
   }();
   if (!s.ok()) std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
+  if (dev.device) vkDeviceWaitIdle(dev.device);  // shutdown (a failure may leave frames submitted)
+  destroyFrameRing(dev, ring);
   destroyHost(host);
   destroyDevice(dev);
   if (messages > 0) {

@@ -287,12 +287,16 @@ Status buildGraph(Host& h) {
   h.graph = rg::RenderGraph();
   rg::RenderGraph& g = h.graph;
   h.presentTarget = rg::kInvalidResource;
+  h.readbackId = rg::kInvalidResource;
   const rg::State colorAfter = h.wantsReadback || h.presentFormat != VK_FORMAT_UNDEFINED
                                    ? rg::stateOf(rg::Use::TransferSrc)
                                    : rg::stateOf(rg::Use::ColorAttachmentReadWrite);
   CompositeTargets t;
-  t.color = g.importImage("demo colour", descOf(h.color), {}, colorAfter);
-  t.depth = g.importImage("demo depth", descOf(h.depth), {}, rg::stateOf(rg::Use::DepthAttachmentWrite));
+  // They arrive as the previous frame (maybe still executing) left them: its last accesses are
+  // ordered before this frame's clear (createTargets put them in these states once).
+  const rg::State depthAfter = rg::stateOf(rg::Use::DepthAttachmentWrite);
+  t.color = g.importImage("demo colour", descOf(h.color), colorAfter, colorAfter);
+  t.depth = g.importImage("demo depth", descOf(h.depth), depthAfter, depthAfter);
   const glm::vec4 clear = h.clear;
   g.addPass("demo: clear", [t, clear](rg::PassContext& x) {
      const VkClearColorValue cv{{clear.r, clear.g, clear.b, clear.a}};
@@ -333,8 +337,8 @@ Status buildGraph(Host& h) {
   }
   if (h.wantsReadback) {
     const rg::State hostRead = rg::stateOf(rg::Use::HostRead);
-    const auto rb = g.importBuffer("demo readback", h.readback.size, hostRead, hostRead);
-    CANOPY_TRY(g.bindBuffer(rb, h.readback.buffer));
+    const auto rb = g.importBuffer("demo readback", h.readback[0].size, hostRead, hostRead);
+    h.readbackId = rb;  // bound per frame to its slot's buffer
     const uint32_t w = h.width, ht = h.height;
     // From the swapchain image when there is one (the window's screenshot is what was presented).
     const rg::ResourceId src = h.presentTarget != rg::kInvalidResource ? h.presentTarget : t.color;
@@ -373,9 +377,30 @@ Status createTargets(Host& host) {
   c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   CANOPY_TRY(createImage(d, c, &host.depth, "demo depth"));
   if (host.wantsReadback)
-    CANOPY_TRY(createBuffer(d, VkDeviceSize(host.width) * host.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                            MemoryUsage::Readback, &host.readback, "demo readback"));
-  return Status();
+    for (Buffer& b : host.readback)
+      CANOPY_TRY(createBuffer(d, VkDeviceSize(host.width) * host.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                              MemoryUsage::Readback, &b, "demo readback"));
+  // Once, at creation: the targets go into the states every frame's graph imports them in.
+  const bool copies = host.wantsReadback || host.presentFormat != VK_FORMAT_UNDEFINED;
+  rg::RenderGraph g;
+  const auto ci = g.importImage("demo colour", descOf(host.color), {},
+                               rg::stateOf(copies ? rg::Use::TransferSrc : rg::Use::ColorAttachmentReadWrite));
+  const auto zi = g.importImage("demo depth", descOf(host.depth), {}, rg::stateOf(rg::Use::DepthAttachmentWrite));
+  g.addPass("demo: first clear", [ci, zi](rg::PassContext& x) {
+     const VkClearColorValue cv{};
+     const VkClearDepthStencilValue dv{1.0f, 0};
+     const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+     vkCmdClearColorImage(x.cmd, x.image(ci).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+     vkCmdClearDepthStencilImage(x.cmd, x.image(zi).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+     return Status();
+   })
+      .write(ci, rg::Use::TransferDst)
+      .write(zi, rg::Use::TransferDst);
+  CANOPY_TRY(g.bindImage(ci, host.color));
+  CANOPY_TRY(g.bindImage(zi, host.depth));
+  CANOPY_TRY(g.compile());
+  CANOPY_TRY(g.realize(d));
+  return submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); });
 }
 
 void destroyTargets(Host& h) {
@@ -385,7 +410,7 @@ void destroyTargets(Host& h) {
   h.graphGeneration = ~0ull;
   destroyImage(d, h.color);
   destroyImage(d, h.depth);
-  destroyBuffer(d, h.readback);
+  for (Buffer& b : h.readback) destroyBuffer(d, b);
 }
 
 }  // namespace
@@ -404,7 +429,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   host.clear = glm::vec4(linear(sky.r), linear(sky.g), linear(sky.b), 1.0f);
   host.clearSrgb = sky;
   CANOPY_TRY(createTargets(host));
-  CANOPY_TRY(host.timer.init(d, 64));
+  for (GpuTimer& t : host.timer) CANOPY_TRY(t.init(d, 64));
   CanopyDesc desc;
   desc.width = w;
   desc.height = h;
@@ -447,26 +472,57 @@ void destroyHost(Host& h) {
   Device& d = *h.device;
   vkDeviceWaitIdle(d.device);
   destroyTargets(h);
-  h.timer.destroy(d);
+  for (GpuTimer& t : h.timer) t.destroy(d);
   destroyCanopy(h.canopy);
   h.canopy = nullptr;
   h.device = nullptr;
 }
 
-Status recordHostFrame(Host& h, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present) {
+Status recordHostFrame(Host& h, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present, uint32_t slot) {
+  if (slot >= Host::kFramesInFlight) return Status::error("demo: frame slot " + std::to_string(slot) + " out of range");
   CANOPY_TRY(beginCanopyFrame(h.canopy, frame));
   if (h.graphGeneration != canopyResourceGeneration(h.canopy)) CANOPY_TRY(buildGraph(h));
   if (h.presentTarget != rg::kInvalidResource) {
     if (!present) return Status::error("demo: no swapchain image for this frame");
     CANOPY_TRY(h.graph.bindImage(h.presentTarget, *present));
   }
-  h.timer.reset(cmd);
-  return h.graph.record(cmd, &h.timer);
+  if (h.readbackId != rg::kInvalidResource) CANOPY_TRY(h.graph.bindBuffer(h.readbackId, h.readback[slot].buffer));
+  h.timer[slot].reset(cmd);
+  return h.graph.record(cmd, &h.timer[slot]);
 }
 
-void readPixels(const Host& h, std::vector<uint8_t>* rgba) {
+Status createFrameRing(Device& d, FrameRing* r) {
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = d.queueFamily;
+  CANOPY_VK(vkCreateCommandPool(d.device, &pci, nullptr, &r->pool));
+  VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  ai.commandPool = r->pool;
+  ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  ai.commandBufferCount = Host::kFramesInFlight;
+  CANOPY_VK(vkAllocateCommandBuffers(d.device, &ai, r->cmds));
+  for (uint32_t i = 0; i < Host::kFramesInFlight; ++i) {
+    VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    CANOPY_VK(vkCreateFence(d.device, &fi, nullptr, &r->fences[i]));
+    CANOPY_VK(vkCreateSemaphore(d.device, &si, nullptr, &r->acquired[i]));
+  }
+  return Status();
+}
+
+void destroyFrameRing(Device& d, FrameRing& r) {
+  if (!d.device) return;
+  for (uint32_t i = 0; i < Host::kFramesInFlight; ++i) {
+    if (r.fences[i]) vkDestroyFence(d.device, r.fences[i], nullptr);  // the caller waited for its frames
+    if (r.acquired[i]) vkDestroySemaphore(d.device, r.acquired[i], nullptr);
+  }
+  if (r.pool) vkDestroyCommandPool(d.device, r.pool, nullptr);
+  r = FrameRing{};
+}
+
+void readPixels(const Host& h, uint32_t slot, std::vector<uint8_t>* rgba) {
   rgba->resize(size_t(h.width) * h.height * 4);
-  std::memcpy(rgba->data(), h.readback.allocation.mapped, rgba->size());
+  std::memcpy(rgba->data(), h.readback[slot].allocation.mapped, rgba->size());
   const bool bgra = h.presentFormat == VK_FORMAT_B8G8R8A8_UNORM || h.presentFormat == VK_FORMAT_B8G8R8A8_SRGB;
   for (size_t i = 0; i < rgba->size(); i += 4) {
     if (bgra) std::swap((*rgba)[i], (*rgba)[i + 2]);
@@ -495,7 +551,7 @@ std::string TimingLog::summary(const std::string& title) const {
     s += line;
   }
   if (!wallMs.empty()) {
-    std::snprintf(line, sizeof line, "  %-40s %10.3f %10.3f   (%.1f FPS)\n", "whole frame, wall clock (submit to fence)",
+    std::snprintf(line, sizeof line, "  %-40s %10.3f %10.3f   (%.1f FPS)\n", "whole frame, wall clock (completion to completion)",
                   median(wallMs), *std::max_element(wallMs.begin(), wallMs.end()), 1000.0 / std::max(median(wallMs), 1e-6));
     s += line;
   }

@@ -79,13 +79,17 @@ struct Host {
   CanopyContext* canopy = nullptr;
   uint32_t width = 0, height = 0;
   Image color, depth;
-  Buffer readback;                         // width x height RGBA8, host-visible
+  // Frames in flight: frame i uses slot i % kFramesInFlight (its read-back buffer and timer), and
+  // the loops wait only for that slot's previous frame, never for the device.
+  static constexpr uint32_t kFramesInFlight = 2;
+  Buffer readback[kFramesInFlight];        // width x height RGBA8, host-visible
+  GpuTimer timer[kFramesInFlight];
+  rg::ResourceId readbackId = rg::kInvalidResource;
   rg::RenderGraph graph;
   rg::ResourceId presentTarget = rg::kInvalidResource;  // imported swapchain image (window mode)
   uint64_t graphGeneration = ~0ull;
   bool wantsReadback = false;
   VkFormat presentFormat = VK_FORMAT_UNDEFINED;
-  GpuTimer timer;
   glm::vec4 clear{0.0f, 0.0f, 0.0f, 1.0f};  // linear
   glm::vec3 clearSrgb{0.0f};                 // the same colour as the sRGB target stores it
 };
@@ -100,9 +104,22 @@ Status resizeHost(Host& host, uint32_t width, uint32_t height, VkFormat presentF
 void destroyHost(Host& host);
 // Records one frame (Canopy's frame prepared with `frame`) into `cmd`; `present` is the swapchain
 // image for this frame in window mode.
-Status recordHostFrame(Host& host, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present);
-// The frame's pixels after its submission completed (RGBA8, rows top to bottom, alpha = 255).
-void readPixels(const Host& host, std::vector<uint8_t>* rgba);
+// `slot` is the frame-in-flight slot (read-back buffer and timer) the frame uses.
+Status recordHostFrame(Host& host, VkCommandBuffer cmd, const CanopyFrame& frame, const Image* present, uint32_t slot);
+// The pixels of the frame recorded in `slot`, after its submission completed (RGBA8, rows top to
+// bottom, alpha = 255).
+void readPixels(const Host& host, uint32_t slot, std::vector<uint8_t>* rgba);
+
+// The demo's own frames in flight: a command buffer, a fence and an acquire semaphore per slot.
+struct FrameRing {
+  VkCommandPool pool = VK_NULL_HANDLE;
+  VkCommandBuffer cmds[Host::kFramesInFlight] = {};
+  VkFence fences[Host::kFramesInFlight] = {};
+  VkSemaphore acquired[Host::kFramesInFlight] = {};
+};
+Status createFrameRing(Device& device, FrameRing* out);
+// Destroys the ring; its submitted frames must have completed.
+void destroyFrameRing(Device& device, FrameRing& ring);
 
 // Per-pass timing: medians over the frames added.
 struct TimingLog {

@@ -272,10 +272,9 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
   VkSurfaceKHR surface = VK_NULL_HANDLE;
   Swapchain sc;
   Host host;
-  VkCommandPool pool = VK_NULL_HANDLE;
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
-  VkSemaphore acquired = VK_NULL_HANDLE;
-  VkFence fence = VK_NULL_HANDLE;
+  FrameRing ring;  // two frames in flight: the loop waits only for the slot's previous frame
+  bool pending[Host::kFramesInFlight] = {};
+  uint64_t frameNumber = 0;
   Live live;
   live.options = &o;
   live.rig = defaultRig(o);
@@ -287,20 +286,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
     VkBool32 presentable = VK_FALSE;
     vkGetPhysicalDeviceSurfaceSupportKHR(dev.physical, dev.queueFamily, surface, &presentable);
     if (!presentable) return Status::error(std::string(dev.properties.deviceName) + " cannot present to this window");
-    VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-    pci.queueFamilyIndex = dev.queueFamily;
-    if (vkCreateCommandPool(dev.device, &pci, nullptr, &pool) != VK_SUCCESS) return Status::error("vkCreateCommandPool failed");
-    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    ai.commandPool = pool;
-    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-    ai.commandBufferCount = 1;
-    if (vkAllocateCommandBuffers(dev.device, &ai, &cmd) != VK_SUCCESS) return Status::error("vkAllocateCommandBuffers failed");
-    VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-    VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    if (vkCreateSemaphore(dev.device, &si, nullptr, &acquired) != VK_SUCCESS ||
-        vkCreateFence(dev.device, &fi, nullptr, &fence) != VK_SUCCESS)
-      return Status::error("cannot create the frame's semaphore and fence");
+    CANOPY_TRY(createFrameRing(dev, &ring));
 
     glfwSetWindowUserPointer(win, &live);
     glfwSetKeyCallback(win, onKey);
@@ -314,6 +300,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
     bool recreate = true;
     double lastTitle = 0, orbitClock = glfwGetTime();
     std::vector<double> recentWall;
+    auto lastFrameEnd = std::chrono::steady_clock::now();
     std::vector<PassTiming> lastTimings;
     uint32_t screenshots = 0;
     while (!glfwWindowShouldClose(win) && !live.close) {
@@ -374,8 +361,19 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
         live.paramsChanged = false;
       }
 
+      // The slot's previous frame (two frames ago) must be done before its command buffer, fence,
+      // acquire semaphore and read-back buffer are reused; the frame just before may still run.
+      const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
+      auto retire = [&](uint32_t k) -> Status {
+        if (!pending[k]) return Status();
+        CANOPY_VK(vkWaitForFences(dev.device, 1, &ring.fences[k], VK_TRUE, UINT64_MAX));
+        CANOPY_VK(vkResetFences(dev.device, 1, &ring.fences[k]));
+        pending[k] = false;
+        return host.timer[k].read(dev, &lastTimings);
+      };
+      CANOPY_TRY(retire(slot));
       uint32_t index = 0;
-      VkResult r = vkAcquireNextImageKHR(dev.device, sc.swapchain, UINT64_MAX, acquired, VK_NULL_HANDLE, &index);
+      VkResult r = vkAcquireNextImageKHR(dev.device, sc.swapchain, UINT64_MAX, ring.acquired[slot], VK_NULL_HANDLE, &index);
       if (r == VK_ERROR_OUT_OF_DATE_KHR) {
         recreate = true;
         continue;
@@ -384,16 +382,17 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       CanopyFrame f;
       f.camera = toCamera(cameraView(live.rig, model, sc.extent.width, sc.extent.height));
       f.dt = live.paused ? 0.0f : 1.0f / o.fps;
-      const auto w0 = std::chrono::steady_clock::now();
+      f.frameNumber = ++frameNumber;
+      VkCommandBuffer cmd = ring.cmds[slot];
       vkResetCommandBuffer(cmd, 0);
       VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
       bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
       vkBeginCommandBuffer(cmd, &bi);
-      const Status rs = recordHostFrame(host, cmd, f, &sc.images[index]);
+      const Status rs = recordHostFrame(host, cmd, f, &sc.images[index], slot);
       vkEndCommandBuffer(cmd);
       CANOPY_TRY(rs);
       VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO}, signal{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
-      wait.semaphore = acquired;
+      wait.semaphore = ring.acquired[slot];
       wait.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
       signal.semaphore = sc.rendered[index];
       signal.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
@@ -408,7 +407,8 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       submit.pSignalSemaphoreInfos = &signal;
       auto queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2"));
       if (!queueSubmit2) queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2KHR"));
-      if (!queueSubmit2 || queueSubmit2(dev.queue, 1, &submit, fence) != VK_SUCCESS) return Status::error("vkQueueSubmit2 failed");
+      if (!queueSubmit2 || queueSubmit2(dev.queue, 1, &submit, ring.fences[slot]) != VK_SUCCESS) return Status::error("vkQueueSubmit2 failed");
+      pending[slot] = true;
       VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
       pi.waitSemaphoreCount = 1;
       pi.pWaitSemaphores = &sc.rendered[index];
@@ -418,17 +418,17 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       r = vkQueuePresentKHR(dev.queue, &pi);
       if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) recreate = true;
       else if (r != VK_SUCCESS) return Status::error("vkQueuePresentKHR failed (" + std::to_string(int(r)) + ")");
-      // One frame in flight: the next frame's acquire semaphore and command buffer are free again.
-      vkWaitForFences(dev.device, 1, &fence, VK_TRUE, UINT64_MAX);
-      vkResetFences(dev.device, 1, &fence);
-      recentWall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - w0).count());
-      CANOPY_TRY(host.timer.read(dev, &lastTimings));
+      // Frame interval, wall clock (with frames in flight a frame's own submit-to-fence overlaps the next).
+      const auto frameEnd = std::chrono::steady_clock::now();
+      if (frames > 0) recentWall.push_back(std::chrono::duration<double, std::milli>(frameEnd - lastFrameEnd).count());
+      lastFrameEnd = frameEnd;
       frames++;
 
       const bool last = o.frames && frames >= o.frames;
       if (live.screenshotRequested || (last && !o.screenshot.empty())) {
+        CANOPY_TRY(retire(slot));  // this frame's pixels: wait for it alone
         std::vector<uint8_t> rgba;
-        readPixels(host, &rgba);
+        readPixels(host, slot, &rgba);
         std::string path = o.screenshot;
         if (live.screenshotRequested || path.empty()) {
           std::filesystem::create_directories(o.outDir);
@@ -464,9 +464,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
   else std::printf("window closed after %llu frames\n", (unsigned long long)frames);
   destroyHost(host);
   if (dev.device) {
-    if (fence) vkDestroyFence(dev.device, fence, nullptr);
-    if (acquired) vkDestroySemaphore(dev.device, acquired, nullptr);
-    if (pool) vkDestroyCommandPool(dev.device, pool, nullptr);
+    destroyFrameRing(dev, ring);  // after the device idled above (shutdown)
     destroySwapchain(dev, sc);
   }
   if (surface) vkDestroySurfaceKHR(dev.instance, surface, nullptr);

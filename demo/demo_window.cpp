@@ -306,7 +306,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
     while (!glfwWindowShouldClose(win) && !live.close) {
       glfwPollEvents();
       if (recreate) {
-        vkDeviceWaitIdle(dev.device);
+        vkDeviceWaitIdle(dev.device);  // resize path: the swapchain and targets are recreated
         CANOPY_TRY(createSwapchain(dev, surface, win, o.vsync, &sc));
         if (sc.extent.width == 0) {  // minimised: nothing to draw until it comes back
           glfwWaitEvents();

@@ -37,7 +37,7 @@ std::vector<ValidationMessage> GpuTest::takeMessages() {
 }
 
 void GpuTest::waitIdle() {
-  if (dev.device) vkDeviceWaitIdle(dev.device);
+  if (dev.device) vkQueueWaitIdle(dev.queue);  // the test's own queue: its submitted work has reported
 }
 
 std::string describe(const std::vector<ValidationMessage>& messages) {

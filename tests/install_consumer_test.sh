@@ -2,7 +2,8 @@
 # cmake --install of the build tree into a fresh prefix; the installed public header compiles alone
 # with no include path but the prefix; the install holds no internal header and its package needs
 # none of tinygltf, nlohmann-json or GLFW; then a separate C++17 project does find_package(Canopy),
-# links Canopy::canopy, and runs (own device, adoption, refusals, a context).
+# links Canopy::canopy, and runs (own device, adoption, refusals, a context), and the example host
+# built from that prefix alone runs its self-check.
 #   install_consumer_test.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$1 src=$2 work=$3
@@ -26,6 +27,9 @@ int main() { return canopy::libraryVersion() == CANOPY_HEADER_VERSION ? 0 : 1; }
 c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/alone.cpp"
 echo "the public header compiles alone (C++17, -I$inc only)"
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
-  -DCMAKE_PREFIX_PATH="$work/prefix" >/dev/null
+  -DCMAKE_PREFIX_PATH="$work/prefix" -DCANOPY_SOURCE_DIR="$src" >/dev/null
 cmake --build "$work/build" >/dev/null
 "$work/build/canopy_consumer"
+# The example host, compiled against the installed prefix: its own device, 2 frames in flight,
+# reverse-Z, validation on, its self-check.
+"$work/build/installed_example_host" --frames 8 --validate

@@ -47,6 +47,18 @@ int main() {
     dci->ppEnabledExtensionNames = exts.data();
     return vkCreateDevice(pd, dci, nullptr, out);
   };
+  // What the host hands Canopy about a device it made.
+  auto adoptDesc = [&](VkDevice device, const VkDeviceCreateInfo* dci) {
+    canopy::AdoptDeviceDesc ad;
+    ad.getInstanceProcAddr = vkGetInstanceProcAddr;
+    ad.instance = instance;
+    ad.instanceApiVersion = app.apiVersion;
+    ad.physicalDevice = pd;
+    ad.device = device;
+    ad.deviceCreateInfo = dci;
+    vkGetDeviceQueue(device, 0, 0, &ad.queue);
+    return ad;
+  };
 
   // 1. A device without Canopy's features is refused, naming what is missing.
   {
@@ -55,17 +67,8 @@ int main() {
     VkDeviceCreateInfo dci;
     VkDevice bare = VK_NULL_HANDLE;
     if (makeDevice(&f2, &dci, &bare) != VK_SUCCESS) return std::fprintf(stderr, "consumer: no bare device\n"), 1;
-    VkQueue q;
-    vkGetDeviceQueue(bare, 0, 0, &q);
-    canopy::AdoptDeviceDesc ad;
-    ad.getInstanceProcAddr = vkGetInstanceProcAddr;
-    ad.instance = instance;
-    ad.physicalDevice = pd;
-    ad.device = bare;
-    ad.deviceCreateInfo = &dci;
-    ad.queue = q;
     canopy::Device* refused = nullptr;
-    s = canopy::adoptDevice(ad, &refused);
+    s = canopy::adoptDevice(adoptDesc(bare, &dci), &refused);
     vkDestroyDevice(bare, nullptr);
     if (s.ok() || s.code() != canopy::Result::UnsupportedDevice || s.message().find("scalarBlockLayout") == std::string::npos)
       return std::fprintf(stderr, "consumer: a device without scalarBlockLayout was not refused as expected (%s)\n",
@@ -83,17 +86,8 @@ int main() {
   VkDeviceCreateInfo dci;
   VkDevice device = VK_NULL_HANDLE;
   if (makeDevice(&f2, &dci, &device) != VK_SUCCESS) return std::fprintf(stderr, "consumer: no device\n"), 1;
-  VkQueue queue;
-  vkGetDeviceQueue(device, 0, 0, &queue);
-  canopy::AdoptDeviceDesc ad;
-  ad.getInstanceProcAddr = vkGetInstanceProcAddr;
-  ad.instance = instance;
-  ad.physicalDevice = pd;
-  ad.device = device;
-  ad.deviceCreateInfo = &dci;
-  ad.queue = queue;
   canopy::Device* dev = nullptr;
-  s = canopy::adoptDevice(ad, &dev);
+  s = canopy::adoptDevice(adoptDesc(device, &dci), &dev);
   if (!s.ok()) return fail("adoptDevice", s);
 
   // A small plant from the host's arrays: 200 leaf quads on a ring.

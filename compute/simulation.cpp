@@ -242,11 +242,13 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   CANOPY_TRY(createComputePipeline(d, {"sim_tile.comp", b, push}, &s.tile));
 
   // Zero all state once (a one-pass graph: the fills' barriers come from the graph too).
-  rg::RenderGraph g;
+  PreparedWork work;
+  work.graph = std::make_shared<rg::RenderGraph>();
+  rg::RenderGraph& g = *work.graph;
   Buffer* bufs[] = {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes};
   std::vector<rg::ResourceId> ids;
   for (Buffer* x : bufs) ids.push_back(g.importBuffer("sim state", x->size, {}, x == &s.frame ? kFrameRest : kPersistent));
-  auto pass = g.addPass("sim: clear", [&](rg::PassContext& c) {
+  auto pass = g.addPass("sim: clear", [ids](rg::PassContext& c) {
     for (rg::ResourceId id : ids) c.device->vk.CmdFillBuffer(c.cmd, c.buffer(id), 0, VK_WHOLE_SIZE, 0);
     return Status();
   });
@@ -254,9 +256,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
     pass.write(ids[i], rg::Use::TransferDst);
     CANOPY_TRY(g.bindBuffer(ids[i], bufs[i]->buffer));
   }
-  CANOPY_TRY(g.compile());
-  CANOPY_TRY(g.realize(d));
-  CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); }));
+  CANOPY_TRY(submitOrDefer(d, std::move(work)));  // recorded into the host's first frame on its device
 
   CANOPY_TRY(addSimulationPasses(s, s.graph, &s.graphIds));
   CANOPY_TRY(s.graph.compile());

@@ -10,7 +10,7 @@
 // depth Canopy wrote. It checks its own result: the post-vegetation box must be hidden exactly
 // where the vegetation is in front of it.
 //
-//   canopy-example-host [--frames N] [--out DIR] [--validate]
+//   canopy-example-host [--frames N] [--frames-in-flight N] [--out DIR] [--validate]
 // Exit 0 when the check passes, 1 on a failure, 2 on bad arguments.
 #include <canopy/canopy.h>
 
@@ -33,7 +33,7 @@
 namespace {
 
 constexpr uint32_t kW = 320, kH = 240;
-constexpr uint32_t kFramesInFlight = 2;
+constexpr uint32_t kMaxFramesInFlight = 3;
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
 
@@ -127,7 +127,8 @@ struct Host {
   HostMemory memory;
   Target color, depth;
   VkCommandPool pool = VK_NULL_HANDLE;
-  Frame frames[kFramesInFlight];
+  Frame frames[kMaxFramesInFlight];
+  uint32_t framesInFlight = 2;  // frames recorded ahead of the GPU (--frames-in-flight)
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VkPipeline boxes = VK_NULL_HANDLE;
   glm::mat4 view{1.0f}, proj{1.0f};
@@ -615,7 +616,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     ad.queue = h.queue;
     ad.queueFamily = h.family;
     ad.memoryAllocator = &alloc;
-    ad.framesInFlight = kFramesInFlight;
+    ad.framesInFlight = h.framesInFlight;
     canopy::Status s = canopy::adoptDevice(ad, adopted);
     canopy::Model* plant = s.ok() ? makePlant() : nullptr;
     if (s.ok() && !plant) return false;
@@ -640,7 +641,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     uint64_t frameNumber = 0;
     auto submit = [&](const Variant& v) -> Frame* {
       ++frameNumber;
-      Frame& f = h.frames[frameNumber % kFramesInFlight];
+      Frame& f = h.frames[frameNumber % h.framesInFlight];
       if (!acquire(h, f) || !recordFrame(h, *ctx, f, frameNumber, v)) return nullptr;
       return &f;
     };
@@ -677,7 +678,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     std::printf("canopy-example-host: own VkDevice '%s' (Canopy adopted it; %llu device allocations through the host's "
                 "allocator), %u frames in flight, reverse-Z depth (cleared to 0, GREATER), %ux%u, %d frames + 4 check "
                 "frames, layers re-sliced %llu times\n",
-                h.deviceName.c_str(), (unsigned long long)h.memory.total, kFramesInFlight, kW, kH, frames,
+                h.deviceName.c_str(), (unsigned long long)h.memory.total, h.framesInFlight, kW, kH, frames,
                 (unsigned long long)st.layers.rebuilds);
     std::printf("self-check: post-vegetation box %zu px behind vegetation (hidden), %zu px in front (shown), %zu px wrong: %s\n",
                 hidden, shown, wrong, (hidden && shown && wrong <= (hidden + shown) / 100) ? "PASS" : "FAIL");
@@ -728,10 +729,12 @@ int main(int argc, char** argv) {
   int frames = 10;
   std::string out;
   bool validate = false;
+  Host h;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
-      std::printf("usage: canopy-example-host [--frames N (1..1000, default 10)] [--out DIR] [--validate]\n");
+      std::printf("usage: canopy-example-host [--frames N (1..1000, default 10)] [--frames-in-flight N (1..3, default 2)] "
+                  "[--out DIR] [--validate]\n");
       return 0;
     }
     if (a == "--frames" && i + 1 < argc) {
@@ -742,6 +745,13 @@ int main(int argc, char** argv) {
         return 2;
       }
       frames = int(v);
+    } else if (a == "--frames-in-flight" && i + 1 < argc) {
+      const std::string v = argv[++i];
+      if (v != "1" && v != "2" && v != "3") {
+        std::fprintf(stderr, "canopy-example-host: --frames-in-flight needs 1, 2 or 3\n");
+        return 2;
+      }
+      h.framesInFlight = uint32_t(v[0] - '0');
     } else if (a == "--out" && i + 1 < argc) {
       out = argv[++i];
     } else if (a == "--validate") {
@@ -751,7 +761,6 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  Host h;
   canopy::Device* adopted = nullptr;
   canopy::CanopyContext* ctx = nullptr;
   const bool ok = run(h, frames, out, validate, &adopted, &ctx);

@@ -295,6 +295,7 @@ Status adoptDevice(const AdoptDeviceDesc& desc, Device** out) {
     delete d;
     return s;
   }
+  d->deferUploads = true;  // a host's device: Canopy submits nothing behind its back
   *out = d;
   return Status();
 }

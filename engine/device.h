@@ -14,6 +14,7 @@
 namespace canopy {
 
 struct Allocator;
+struct PreparedWork;
 
 // Receives every validation-layer message of severity warning or error (the test helper turns
 // them into test failures). messageId is e.g. "SYNC-HAZARD-READ-AFTER-WRITE" or "VUID-...".
@@ -59,6 +60,11 @@ struct Device {
   uint64_t frameNumber = 0;     // the newest host frame number recorded
   bool anyFrame = false;        // a frame was recorded on this device
   std::vector<PendingRelease> pending;
+  // Work prepared outside a frame is recorded into the host's next command buffer instead of being
+  // submitted (engine/transfer.h, submitOrDefer); deferTarget is the list it goes to while a
+  // context creates or recreates its parts (null: submitted at once).
+  bool deferUploads = false;
+  std::vector<PreparedWork>* deferTarget = nullptr;
 
   // Only for a device made by createDevice(): what it created beside the adopted objects.
   bool ownsVulkanObjects = false;

@@ -20,6 +20,43 @@ Status runGraph(Device& d, rg::RenderGraph& g) {
 
 }  // namespace
 
+Status submitOrDefer(Device& d, PreparedWork work) {
+  CANOPY_TRY(work.graph->compile());
+  CANOPY_TRY(work.graph->realize(d));
+  if (d.deferUploads && d.deferTarget) {
+    d.deferTarget->push_back(std::move(work));
+    return Status();
+  }
+  Status s = submitAndWait(d, [&](VkCommandBuffer cmd) { return work.graph->record(cmd); });
+  work.graph->release(d);
+  for (Buffer& b : work.staging) destroyBuffer(d, b);
+  return s;
+}
+
+Status flushPreparedWork(Device& d, std::vector<PreparedWork>& list, VkCommandBuffer cmd) {
+  Status s;
+  for (PreparedWork& w : list) {
+    if (s.ok()) s = w.graph->record(cmd);
+    Device* dev = &d;
+    auto graph = w.graph;
+    auto staging = std::make_shared<std::vector<Buffer>>(std::move(w.staging));
+    deferRelease(d, [dev, graph, staging] {
+      graph->release(*dev);
+      for (Buffer& b : *staging) destroyBuffer(*dev, b);
+    });
+  }
+  list.clear();
+  return s.context("recording prepared uploads");
+}
+
+void dropPreparedWork(Device& d, std::vector<PreparedWork>& list) {
+  for (PreparedWork& w : list) {
+    w.graph->release(d);
+    for (Buffer& b : w.staging) destroyBuffer(d, b);
+  }
+  list.clear();
+}
+
 Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
                     VkDeviceSize offset) {
   if (offset + size > dst.size || offset + size < offset)
@@ -28,10 +65,13 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
   Buffer staging;
   CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
   std::memcpy(staging.allocation.mapped, data, size);
-  rg::RenderGraph g;
+  PreparedWork w;
+  w.graph = std::make_shared<rg::RenderGraph>();
+  w.staging.push_back(staging);
+  rg::RenderGraph& g = *w.graph;
   auto src = g.importBuffer("staging", size, kHostWritten, rg::stateOf(rg::Use::TransferSrc));
   auto dstId = g.importBuffer("destination", dst.size, state, state);
-  g.addPass("upload", [&](rg::PassContext& c) {
+  g.addPass("upload", [src, dstId, offset, size](rg::PassContext& c) {
      VkBufferCopy region{0, offset, size};
      c.device->vk.CmdCopyBuffer(c.cmd, c.buffer(src), c.buffer(dstId), 1, &region);
      return Status();
@@ -40,8 +80,8 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
       .write(dstId, rg::Use::TransferDst);
   Status s = g.bindBuffer(src, staging.buffer);
   if (s.ok()) s = g.bindBuffer(dstId, dst.buffer);
-  if (s.ok()) s = runGraph(d, g);
-  destroyBuffer(d, staging);
+  if (s.ok()) s = submitOrDefer(d, std::move(w));
+  else destroyBuffer(d, staging);
   return s.context("uploadBuffer");
 }
 
@@ -55,14 +95,20 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
   Buffer staging;
   CANOPY_TRY(createBuffer(d, size, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::Upload, &staging, "upload staging"));
   std::memcpy(staging.allocation.mapped, texels, size);
-  rg::RenderGraph g;
+  PreparedWork w;
+  w.graph = std::make_shared<rg::RenderGraph>();
+  w.staging.push_back(staging);
+  rg::RenderGraph& g = *w.graph;
   const ImageDesc desc = descOf(img);
   auto src = g.importBuffer("staging", size, kHostWritten, rg::stateOf(rg::Use::TransferSrc));
   auto dst = g.importImage("destination", desc, {}, final);
-  g.addPass("upload image", [&](rg::PassContext& c) {
+  const VkImageAspectFlags aspect = img.aspect;
+  const uint32_t layers = img.layers;
+  const VkExtent3D extent = img.extent;
+  g.addPass("upload image", [src, dst, aspect, layers, extent](rg::PassContext& c) {
      VkBufferImageCopy region{};
-     region.imageSubresource = {img.aspect, 0, 0, img.layers};
-     region.imageExtent = img.extent;
+     region.imageSubresource = {aspect, 0, 0, layers};
+     region.imageExtent = extent;
      c.device->vk.CmdCopyBufferToImage(c.cmd, c.buffer(src), c.image(dst).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
      return Status();
    })
@@ -70,8 +116,8 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
       .write(dst, rg::Use::TransferDst);
   Status s = g.bindBuffer(src, staging.buffer);
   if (s.ok()) s = g.bindImage(dst, img);
-  if (s.ok()) s = runGraph(d, g);
-  destroyBuffer(d, staging);
+  if (s.ok()) s = submitOrDefer(d, std::move(w));
+  else destroyBuffer(d, staging);
   return s.context("uploadImage");
 }
 

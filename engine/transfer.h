@@ -1,6 +1,8 @@
 #pragma once
 // Staging upload and readback, outside the per-frame path. Each copy is a one-pass render graph
 // over the imported resource, so its barriers come from the graph like every other pass.
+#include <memory>
+#include <vector>
 #include <vulkan/vulkan.h>
 
 #include "engine/memory.h"
@@ -10,12 +12,29 @@
 namespace canopy {
 struct Device;
 
+// Work prepared outside a frame (uploads while a context is created, the clear of new layer
+// images): a one-pass graph and the staging buffers it reads. On a device that records such work
+// into the host's command buffer (Device::deferUploads, what adoptDevice() sets) it is kept in
+// Device::deferTarget's list until recordCanopy() flushes it at the start of the next frame;
+// otherwise it is submitted at once and waited for on its own fence (docs/design.md, "Embedding
+// contract").
+struct PreparedWork {
+  std::shared_ptr<rg::RenderGraph> graph;  // compiled and realized
+  std::vector<Buffer> staging;
+};
+Status submitOrDefer(Device& device, PreparedWork work);
+// Records every kept graph into `cmd`; their objects are released framesInFlight frames later.
+Status flushPreparedWork(Device& device, std::vector<PreparedWork>& list, VkCommandBuffer cmd);
+// Frees kept work that was never recorded (a context destroyed before its first frame).
+void dropPreparedWork(Device& device, std::vector<PreparedWork>& list);
+
 // Copies `size` bytes into `dst` at `offset`. `state` is how the buffer is used before and after
-// (the graph makes the copy visible to that use). Waits for completion.
+// (the graph makes the copy visible to that use). Submitted or deferred (submitOrDefer).
 Status uploadBuffer(Device& device, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
                     VkDeviceSize offset = 0);
 // Fills mip 0 of every layer of a freshly created image (colour or depth) with tightly packed
-// texels, layer after layer (previous contents discarded), and leaves it in `final`. Waits.
+// texels, layer after layer (previous contents discarded), and leaves it in `final`. Submitted or
+// deferred (submitOrDefer).
 Status uploadImage(Device& device, const Image& dst, const void* texels, VkDeviceSize size, rg::State final);
 // Copies `size` bytes from `src` at `offset` into `out`. Waits for completion.
 Status readbackBuffer(Device& device, const Buffer& src, void* out, VkDeviceSize size, rg::State state,

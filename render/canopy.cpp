@@ -15,9 +15,22 @@ namespace canopy {
 // last context that follows it.
 struct SharedSimulation {
   Simulation sim;
+  std::vector<PreparedWork> pending;  // its first clear, recorded by whichever context records first
   uint64_t lastStepFrame = 0;
   bool everStepped = false;
-  ~SharedSimulation() { destroySimulation(sim); }
+  ~SharedSimulation() {
+    if (sim.device) dropPreparedWork(*sim.device, pending);
+    destroySimulation(sim);
+  }
+};
+
+// While a context creates or recreates parts, work prepared on a host's device goes to `list`
+// (recorded by the next recordCanopy) instead of being submitted.
+struct DeferInto {
+  Device& d;
+  std::vector<PreparedWork>* before;
+  DeferInto(Device& device, std::vector<PreparedWork>* list) : d(device), before(device.deferTarget) { d.deferTarget = list; }
+  ~DeferInto() { d.deferTarget = before; }
 };
 
 struct CanopyContext {
@@ -42,6 +55,7 @@ struct CanopyContext {
   CanopyFrameInputs graphInputs;
   uint64_t graphGeneration = 0;
   uint64_t graphBuilds = 0;
+  std::vector<PreparedWork> pending;  // uploads not yet recorded (host devices: the first frame records them)
 };
 
 namespace {
@@ -163,6 +177,7 @@ Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in) {
 
 void destroyNow(CanopyContext* c) {
   if (c->device) {
+    dropPreparedWork(*c->device, c->pending);
     if (c->graphReady) c->graph.release(*c->device);
     destroyCompositor(c->compositor);
     destroyLayerDynamics(c->dynamics);
@@ -249,11 +264,15 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       return Status::error(Result::InvalidModel, what + " has no foliage: every material is rigid (" + names +
                                                      "); name the leaf materials in CanopyDesc.split.foliage");
     }
-    CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    {
+      DeferInto defer(d, &c->pending);
+      CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    }
     if (desc.shareSimulationWith) {
       c->shared = desc.shareSimulationWith->shared;
     } else {
       c->shared = std::make_shared<SharedSimulation>();
+      DeferInto defer(d, &c->shared->pending);
       CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim));
     }
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
@@ -383,6 +402,9 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
+  if (!c->pending.empty() || !c->shared->pending.empty() || !c->layers.pendingClear.empty())
+    return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
+                         "uploads is embedded through recordCanopy only)");
   SimulationResources sr;
   CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
   LayerResources lr;
@@ -399,6 +421,10 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
   if (!c) return Status::error("recordCanopy: null context");
   if (!cmd) return Status::error("recordCanopy: null command buffer");
   CANOPY_TRY(beginCanopyFrame(c, in.frame));
+  // Uploads and clears prepared since the last frame, before anything reads them.
+  CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
+  CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
+  CANOPY_TRY(flushPreparedWork(*c->device, c->layers.pendingClear, cmd));
   const bool same = c->graphReady && c->graphGeneration == c->generation && sameImage(c->graphInputs.color, in.color) &&
                     sameImage(c->graphInputs.depth, in.depth) && sameImage(c->graphInputs.motion, in.motion);
   if (!same) CANOPY_TRY(buildRecordGraph(*c, in));

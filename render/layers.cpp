@@ -37,6 +37,7 @@ uint32_t packNormal(const glm::vec3& n) {
 // layer count or size never waits for the device.
 void destroyTargets(LayeredVegetation& lv) {
   Device* d = lv.device;
+  dropPreparedWork(*d, lv.pendingClear);  // a clear of these images never recorded: nothing to wait for
   std::vector<VkImageView> views;
   for (auto* v : {&lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews}) {
     views.insert(views.end(), v->begin(), v->end());
@@ -107,22 +108,28 @@ Status createTargets(LayeredVegetation& lv) {
     }
   }
   // Clear once (empty layers until the first rebuild) into the rest state.
-  rg::RenderGraph g;
+  PreparedWork work;
+  work.graph = std::make_shared<rg::RenderGraph>();
+  rg::RenderGraph& g = *work.graph;
   const rg::State rest = rg::stateOf(lv.desc.restUse);
   std::vector<std::pair<rg::ResourceId, const Image*>> imgs;
   for (const Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) {
     if (!img->image) continue;
     imgs.push_back({g.importImage("layer target", descOf(*img), {}, rest), img});
   }
-  auto pass = g.addPass("layers: initial clear", [imgs](rg::PassContext& ctx) {
-    for (auto& [id, img] : imgs) {
-      const VkImageSubresourceRange range{img->aspect, 0, 1, 0, img->layers};
-      if (img->aspect & VK_IMAGE_ASPECT_DEPTH_BIT) {
+  std::vector<rg::ResourceId> ids;
+  for (auto& [id, img] : imgs) ids.push_back(id);
+  // The images as bound to this graph (by value: the clear may be recorded frames later).
+  auto pass = g.addPass("layers: initial clear", [ids](rg::PassContext& ctx) {
+    for (rg::ResourceId id : ids) {
+      const Image& img = ctx.image(id);
+      const VkImageSubresourceRange range{img.aspect, 0, 1, 0, img.layers};
+      if (img.aspect & VK_IMAGE_ASPECT_DEPTH_BIT) {
         VkClearDepthStencilValue v{1.0f, 0};
-        ctx.device->vk.CmdClearDepthStencilImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
+        ctx.device->vk.CmdClearDepthStencilImage(ctx.cmd, img.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
       } else {
         VkClearColorValue v{};
-        ctx.device->vk.CmdClearColorImage(ctx.cmd, img->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
+        ctx.device->vk.CmdClearColorImage(ctx.cmd, img.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &v, 1, &range);
       }
     }
     return Status();
@@ -131,10 +138,11 @@ Status createTargets(LayeredVegetation& lv) {
     pass.write(id, rg::Use::TransferDst);
     CANOPY_TRY(g.bindImage(id, *img));
   }
-  CANOPY_TRY(g.compile());
-  CANOPY_TRY(g.realize(d));
-  Status s = submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-  g.release(d);
+  // On a host's device the clear is recorded into its next frame (lv.pendingClear), else now.
+  std::vector<PreparedWork>* before = d.deferTarget;
+  d.deferTarget = &lv.pendingClear;
+  Status s = submitOrDefer(d, std::move(work));
+  d.deferTarget = before;
   return s;
 }
 

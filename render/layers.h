@@ -18,6 +18,7 @@
 #include "engine/memory.h"
 #include "engine/render_graph.h"
 #include "engine/status.h"
+#include "engine/transfer.h"
 #include "engine/camera.h"
 #include "render/gltf_loader.h"
 #include "render/layer_layout.h"
@@ -88,6 +89,7 @@ struct LayeredVegetation {
   bool haveView = false;
   bool settingsChanged = false;
   std::string forcedReason;  // re-slice at the next view update for this reason (a camera cut)
+  std::vector<PreparedWork> pendingClear;  // the targets' first clear, not yet recorded (host devices)
   LayerView lastRebuildView;
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;

@@ -94,7 +94,8 @@ struct Host {
     return Status();
   }
   // One host frame: clear colour, depth (far) and stencil, then every context, no wait.
-  Status frame(uint64_t number, const std::vector<CanopyContext*>& contexts, const LayerView& view, float dt) {
+  Status frame(uint64_t number, const std::vector<CanopyContext*>& contexts, const LayerView& view, float dt,
+               bool cut = false) {
     const size_t slot = number % cmds.size();
     CANOPY_TRY(wait(slot));
     VkCommandBuffer cmd = cmds[slot];
@@ -127,6 +128,7 @@ struct Host {
     for (size_t i = 0; i < contexts.size(); ++i) {
       CanopyFrameInputs in;
       in.frame = makeCanopyFrame(view, dt, number);
+      in.frame.cameraCut = cut;
       if (reverse) {
         glm::mat4 mirror(1.0f);  // the same camera as a reverse-Z host writes it
         mirror[2][2] = -1.0f;
@@ -199,7 +201,11 @@ double differing(const std::vector<glm::vec4>& a, const std::vector<glm::vec4>& 
 
 class EmbeddingTest : public GpuTest {
  protected:
-  void configure(DeviceDesc& d) override { d.framesInFlight = 3; }
+  // As a host's device: 3 frames in flight, uploads recorded into the first frame, not submitted.
+  void configure(DeviceDesc& d) override {
+    d.framesInFlight = 3;
+    d.deferUploads = true;
+  }
   VegetationModel model = makeLeafCloud(3000, 5, true);
   uint64_t frameNumber = 0;  // the host's counter: never decreases over the whole device
   LayerView view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 64.0f, 1.05f);
@@ -402,6 +408,34 @@ TEST_F(EmbeddingTest, ADeviceWithoutTheRequiredFeaturesIsRefusedNamingThem) {
   ad.framesInFlight = 4;
   s = adoptDevice(ad, &adopted);
   EXPECT_NE(s.message().find("framesInFlight = 4 is outside [1, 3]"), std::string::npos) << s.message();
+}
+
+}  // namespace
+
+namespace {
+
+TEST_F(EmbeddingTest, ACameraCutReslicesAtOnceAndDropsMotionVectors) {
+  Host host;
+  ASSERT_TRUE(host.create(dev, 2).ok());
+  CanopyContext* ctx = make(host, 1.5f);
+  ASSERT_NE(ctx, nullptr);
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
+  EXPECT_FALSE(canopyStats(ctx).layersRebuilt) << "a still camera does not re-slice";
+  EXPECT_NE(canopyCompositor(ctx).push.flags & COMPOSITE_MOTION_VALID, 0u);
+  const uint64_t rebuilds = canopyStats(ctx).layers.rebuilds;
+  // The same view, flagged as a cut: re-sliced now, no motion across it.
+  ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f, true).ok());
+  EXPECT_TRUE(canopyStats(ctx).layersRebuilt);
+  EXPECT_EQ(canopyStats(ctx).layers.rebuilds, rebuilds + 1);
+  EXPECT_EQ(canopyStats(ctx).layers.lastRebuildReason, "camera cut");
+  EXPECT_EQ(canopyCompositor(ctx).push.flags & COMPOSITE_MOTION_VALID, 0u);
+  // The next frame is ordinary again.
+  ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
+  EXPECT_FALSE(canopyStats(ctx).layersRebuilt);
+  EXPECT_NE(canopyCompositor(ctx).push.flags & COMPOSITE_MOTION_VALID, 0u);
+  ASSERT_TRUE(host.finish().ok());
+  destroyCanopy(ctx);
+  host.destroy();
 }
 
 }  // namespace

@@ -215,6 +215,7 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   d.sink = sink;
   d.ownsVulkanObjects = true;
   d.validationEnabled = validation;
+  d.deferUploads = desc.deferUploads;
   return s.context("createDevice");
 }
 

@@ -28,6 +28,9 @@ struct DeviceDesc {
   // Behave as a device without shaderOutputLayer (tests and benchmarks of the per-layer fallback).
   bool disableShaderOutputLayer = false;
   uint32_t framesInFlight = 2;
+  // Record uploads into the next recordCanopy() command buffer as on a host's device (adoptDevice),
+  // instead of submitting them at once (Canopy's own tools, the render-graph path).
+  bool deferUploads = false;
 };
 
 // Creates instance, picks the physical device, creates the logical device with one queue and the

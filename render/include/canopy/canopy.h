@@ -143,7 +143,7 @@ struct AdoptDeviceDesc {
   // read during adoptDevice() only. Adoption is refused, naming what is missing, when a required
   // extension or feature is not enabled.
   const VkDeviceCreateInfo* deviceCreateInfo = nullptr;
-  VkQueue queue = VK_NULL_HANDLE;  // graphics + compute; Canopy submits to it only inside createCanopy
+  VkQueue queue = VK_NULL_HANDLE;  // graphics + compute, the queue the host submits Canopy's work to
   uint32_t queueFamily = 0;
   const VkAllocationCallbacks* allocationCallbacks = nullptr;  // optional, for every Vulkan object
   VkPipelineCache pipelineCache = VK_NULL_HANDLE;              // optional
@@ -412,9 +412,9 @@ struct CanopyDesc {
   CanopyParams params;        // the initial parameters
 };
 
-// Creates a context: splits materials, finds leaf roots, uploads the mesh and creates the GPU
-// state. Submits its one-time uploads to the adopted queue and waits for that submission's own
-// fence (not for the device). Refuses models with nothing to animate.
+// Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh
+// and textures. Submits nothing: the uploads are recorded at the start of the context's first
+// recordCanopy(). Refuses models with nothing to animate.
 Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out);
 // Releases the context. Its GPU objects are freed framesInFlight host frames later (or at
 // releaseDevice), so the host may destroy it while frames that used it still execute.
@@ -462,9 +462,10 @@ struct CanopyFrameInputs {
   CanopyImage color, depth;
   CanopyImage motion;                 // only with CanopyDesc.motionFormat
 };
-// Records one whole frame (simulation step, re-slicing when the view moved, dynamics, warp and
-// composite, with every barrier) into the host's `cmd`, which the host submits. Nothing is
-// submitted and nothing waits. The host's images are left in their `final` states.
+// Records one whole frame (uploads prepared since the last frame, simulation step, re-slicing when
+// the view moved, dynamics, warp and composite, with every barrier) into the host's `cmd`, which
+// the host submits. Nothing is submitted and nothing waits. The host's images are left in their
+// `final` states.
 Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
 struct LayerStats {

@@ -43,6 +43,7 @@ enum class Result : uint32_t {
   VersionMismatch,    // header and library versions differ
   VulkanError,        // any other failing Vulkan call (named in the message)
 };
+// The code's name ("UnsupportedDevice"), for logs.
 const char* toString(Result result);
 
 // Empty on success; else a Result and a message ("CanopyDesc.width = 0 is outside [1, 16384]").
@@ -203,7 +204,9 @@ struct MeshDesc {
   std::string name = "mesh";           // used in messages
 };
 Status createModel(const MeshDesc& desc, Model** out);
+// Frees the model's host memory (null is ignored).
 void destroyModel(Model* model);
+// Triangles of the model (0 for null).
 uint64_t modelTriangleCount(const Model* model);
 // Axis-aligned bounds of the model, world units.
 void modelBounds(const Model* model, Float3* min, Float3* max);
@@ -423,6 +426,7 @@ void destroyCanopy(CanopyContext* context);
 // Validates and applies parameters from the next frame on. A new layer count recreates the layer
 // images (the old ones are freed once no frame in flight uses them).
 Status setCanopyParams(CanopyContext* context, const CanopyParams& params);
+// The parameters in force (the last accepted by setCanopyParams, or CanopyDesc.params).
 const CanopyParams& canopyParams(const CanopyContext* context);
 
 // The host's targets changed size: recreates the size-dependent parts (layer images, compositor,
@@ -496,6 +500,7 @@ struct CanopyStats {
   LayerStats layers;
   SimulationStats simulation;
 };
+// Counters of the context (and of the device's release queue); CPU only, any time.
 CanopyStats canopyStats(const CanopyContext* context);
 
 }  // namespace canopy

@@ -67,7 +67,6 @@ struct Device {
   std::vector<PreparedWork>* deferTarget = nullptr;
 
   // Only for a device made by createDevice(): what it created beside the adopted objects.
-  bool ownsVulkanObjects = false;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
   ValidationSink* sink = nullptr;  // the messenger's user data
 };

@@ -448,7 +448,6 @@ LayeredVegetation& canopyLayers(CanopyContext* c) { return c->layers; }
 LayerDynamics& canopyDynamics(CanopyContext* c) { return c->dynamics; }
 Simulation& canopySimulation(CanopyContext* c) { return c->shared->sim; }
 Compositor& canopyCompositor(CanopyContext* c) { return c->compositor; }
-Device& canopyDevice(CanopyContext* c) { return *c->device; }
 
 // ---- Models ---------------------------------------------------------------------------------
 

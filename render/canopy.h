@@ -35,7 +35,6 @@ LayeredVegetation& canopyLayers(CanopyContext* context);
 LayerDynamics& canopyDynamics(CanopyContext* context);
 Simulation& canopySimulation(CanopyContext* context);
 Compositor& canopyCompositor(CanopyContext* context);
-Device& canopyDevice(CanopyContext* context);
 
 // A CanopyFrame from a layer view (tools and tests work in glm).
 inline CanopyFrame makeCanopyFrame(const LayerView& view, float dt, uint64_t frameNumber = 0) {

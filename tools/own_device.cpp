@@ -83,7 +83,6 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
     if (validation && !desc.validationSink) return Status::error("DeviceDesc.validationSink is required with validation");
   }
   d.sink = new ValidationSink(desc.validationSink);
-  d.ownsVulkanObjects = true;
 
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
   app.pApplicationName = desc.applicationName;
@@ -213,7 +212,6 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   d.device = device;
   d.messenger = messenger;
   d.sink = sink;
-  d.ownsVulkanObjects = true;
   d.validationEnabled = validation;
   d.deferUploads = desc.deferUploads;
   return s.context("createDevice");

@@ -219,6 +219,20 @@ void RenderGraph::markOutput(ResourceId id) {
   compiled_ = false;
 }
 
+State RenderGraph::combinedUse(ResourceId id) const {
+  State u;
+  u.layout = id < resources_.size() ? resources_[id].initial.layout : VK_IMAGE_LAYOUT_UNDEFINED;
+  for (const Step& s : steps_)
+    for (uint32_t pi : s.passes)
+      for (const AccessDecl& a : passes_[pi].accesses)
+        if (a.id == id) {
+          u.stage |= a.state.stage;
+          u.access |= a.state.access;
+          u.layout = a.state.layout;
+        }
+  return u;
+}
+
 ResourceId RenderGraph::findResource(const std::string& name) const {
   for (size_t i = 0; i < resources_.size(); ++i)
     if (resources_[i].name == name) return ResourceId(i);
@@ -394,7 +408,9 @@ Status RenderGraph::compile() {
       const VkImageLayout finalLayout = res.isImage ? res.final.layout : VK_IMAGE_LAYOUT_UNDEFINED;
       const bool layoutChange = res.isImage && finalLayout != t.layout;
       const bool pending = t.writeAccess != 0 || (t.readStages && isWriteAccess(res.final.access));
-      if (layoutChange || (t.touched && pending) || (t.touched && t.writeStage && res.final.stage)) {
+      const bool callerSynchronizes = res.isImage && res.final.stage == 0 && !layoutChange;
+      if (!callerSynchronizes &&
+          (layoutChange || (t.touched && pending) || (t.touched && t.writeStage && res.final.stage))) {
         if (fin)
           fin->push_back({ResourceId(r), t.writeStage | t.readStages, t.writeAccess, res.final.stage, res.final.access,
                           res.isImage ? t.layout : VK_IMAGE_LAYOUT_UNDEFINED, finalLayout});

@@ -112,7 +112,9 @@ class RenderGraph {
   ResourceId createImage(std::string name, const ImageDesc& desc);
   // Imported resources: owned by the caller, bound with bindBuffer/bindImage before record().
   // `initial` is how the caller last used it (pending writes are made visible to the first pass);
-  // `final` is how the caller will use it next (the graph leaves it in that state).
+  // `final` is how the caller will use it next (the graph leaves it in that state). An image's
+  // `final` with no stage and the layout the last pass leaves means the caller synchronizes after
+  // the graph itself (a host graph around Canopy's pass group): no final barrier is recorded.
   ResourceId importBuffer(std::string name, VkDeviceSize size, State initial, State final);
   ResourceId importImage(std::string name, const ImageDesc& desc, State initial, State final);
 
@@ -129,6 +131,9 @@ class RenderGraph {
   const std::string& passName(uint32_t pass) const { return passes_.at(pass).name; }
   const std::string& resourceName(ResourceId id) const { return resources_.at(id).name; }
   ResourceId findResource(const std::string& name) const;
+  // After compile(): every stage and access the passes make to `id`, with the layout the last of
+  // them leaves it in (how a host's graph declares this whole graph as one pass).
+  State combinedUse(ResourceId id) const;
   // The Vulkan objects behind a resource (after realize()/bind*()).
   VkBuffer buffer(ResourceId id) const { return resources_.at(id).buffer; }
   const Image& image(ResourceId id) const { return resources_.at(id).image; }

@@ -1,5 +1,8 @@
 #include "render/canopy.h"
 
+#include <canopy/canopy_graph.h>
+
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <new>
@@ -33,6 +36,14 @@ struct DeferInto {
   ~DeferInto() { d.deferTarget = before; }
 };
 
+struct RecordGraph {
+  std::shared_ptr<rg::RenderGraph> graph;  // compiled and realized
+  CanopyFrameInputs inputs;                // the host images and states it was built for
+  uint64_t generation = 0;                 // CanopyContext::generation at build
+  uint64_t lastUse = 0;
+};
+constexpr size_t kMaxRecordGraphs = 4;
+
 struct CanopyContext {
   Device* device = nullptr;
   CanopyDesc desc;
@@ -49,13 +60,13 @@ struct CanopyContext {
   bool layersRebuilt = false;
   bool cut = false;       // the last frame was a camera cut
   gpu::AnimFrame last{};  // the previous frame's dynamics constants (motion-vector validity)
-  // recordCanopy(): the graph holding the host's images, and what it was built for.
-  rg::RenderGraph graph;
-  bool graphReady = false;
-  CanopyFrameInputs graphInputs;
-  uint64_t graphGeneration = 0;
+  // recordCanopy(): one compiled graph per set of host images it has seen recently (a host that
+  // renders into its swapchain images cycles through 2-4 of them), least recently used first out.
+  std::vector<RecordGraph> graphs;
+  uint64_t graphUses = 0;
   uint64_t graphBuilds = 0;
   std::vector<PreparedWork> pending;  // uploads not yet recorded (host devices: the first frame records them)
+  std::vector<CanopyTargetUse> groupUses;  // <canopy/canopy_graph.h>: how the passes use the host's images
 };
 
 namespace {
@@ -124,67 +135,134 @@ LayerView standardView(const CanopyContext& c, const CanopyCamera& cam) {
   return v;
 }
 
+// recordCanopy() graphs, freed once no frame in flight records from them.
+void retireGraphs(CanopyContext& c, std::vector<RecordGraph> graphs) {
+  if (graphs.empty()) return;
+  Device* d = c.device;
+  auto old = std::make_shared<std::vector<RecordGraph>>(std::move(graphs));
+  deferRelease(*d, [d, old] {
+    for (RecordGraph& g : *old) g.graph->release(*d);
+  });
+}
+
 // Objects of the size-dependent parts, freed once no frame in flight reads them.
 void retire(CanopyContext& c, bool compositor, bool dynamics) {
   Device* d = c.device;
-  auto graph = std::make_shared<rg::RenderGraph>(std::move(c.graph));
-  const bool graphReady = c.graphReady;
-  c.graph = rg::RenderGraph();
-  c.graphReady = false;
+  retireGraphs(c, std::move(c.graphs));
+  c.graphs.clear();
   auto comp = std::make_shared<Compositor>();
   auto dyn = std::make_shared<LayerDynamics>();
   if (compositor) std::swap(*comp, c.compositor);
   if (dynamics) std::swap(*dyn, c.dynamics);
-  deferRelease(*d, [d, graph, graphReady, comp, dyn] {
-    if (graphReady) graph->release(*d);
+  deferRelease(*d, [comp, dyn] {
     destroyCompositor(*comp);
     destroyLayerDynamics(*dyn);
   });
 }
 
-Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in) {
+Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGraph** out) {
   const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   if (!in.color.image || !in.color.view || !in.depth.image || !in.depth.view)
     return Status::error("recordCanopy: the colour and depth images and views are required");
   if (motion != (in.motion.image != VK_NULL_HANDLE) || (motion && !in.motion.view))
     return Status::error(motion ? "recordCanopy: CanopyDesc.motionFormat is set but no motion image (and view) was given"
                                 : "recordCanopy: a motion image was given but CanopyDesc.motionFormat is UNDEFINED");
-  if (c.graphReady) retire(c, false, false);  // the old graph may still be executing
-  c.graph = rg::RenderGraph();
-  c.graphReady = false;
+  // Graphs of replaced resources, and the least recently used beyond the cache size, may still be
+  // executing: they are released frames later.
+  std::vector<RecordGraph> keep, drop;
+  for (RecordGraph& g : c.graphs) (g.generation == c.generation ? keep : drop).push_back(std::move(g));
+  if (keep.size() >= kMaxRecordGraphs) {
+    auto lru = std::min_element(keep.begin(), keep.end(),
+                                [](const RecordGraph& a, const RecordGraph& b) { return a.lastUse < b.lastUse; });
+    drop.push_back(std::move(*lru));
+    keep.erase(lru);
+  }
+  c.graphs = std::move(keep);
+  retireGraphs(c, std::move(drop));
+  auto graph = std::make_shared<rg::RenderGraph>();
   const uint32_t w = c.desc.width, h = c.desc.height;
   auto import = [&](const char* name, const CanopyImage& img, VkFormat format, rg::ResourceId* id) -> Status {
     ImageDesc d;
     d.format = format;
     d.width = w;
     d.height = h;
-    *id = c.graph.importImage(name, d, img.current, img.final);
-    return c.graph.bindImage(*id, hostImage(img, format, w, h));
+    *id = graph->importImage(name, d, img.current, img.final);
+    return graph->bindImage(*id, hostImage(img, format, w, h));
   };
   CompositeTargets t;
   CANOPY_TRY(import("host: colour", in.color, c.desc.colorFormat, &t.color));
   CANOPY_TRY(import("host: depth", in.depth, c.desc.depthFormat, &t.depth));
   if (motion) CANOPY_TRY(import("host: motion", in.motion, c.desc.motionFormat, &t.motion));
-  CANOPY_TRY(addCanopyPasses(&c, c.graph, t));
-  CANOPY_TRY(c.graph.compile());
-  CANOPY_TRY(c.graph.realize(*c.device));
-  c.graphReady = true;
-  c.graphInputs = in;
-  c.graphGeneration = c.generation;
+  CANOPY_TRY(addCanopyPasses(&c, *graph, t));
+  CANOPY_TRY(graph->compile());
+  CANOPY_TRY(graph->realize(*c.device));
+  RecordGraph r;
+  r.graph = std::move(graph);
+  r.inputs = in;
+  r.generation = c.generation;
+  c.graphs.push_back(std::move(r));
   c.graphBuilds++;
+  *out = &c.graphs.back();
   return Status();
 }
 
 void destroyNow(CanopyContext* c) {
   if (c->device) {
     dropPreparedWork(*c->device, c->pending);
-    if (c->graphReady) c->graph.release(*c->device);
+    for (RecordGraph& g : c->graphs) g.graph->release(*c->device);
     destroyCompositor(c->compositor);
     destroyLayerDynamics(c->dynamics);
     destroyLayeredVegetation(c->layers);
   }
   c->shared.reset();  // the simulation goes with the last context that follows it
   delete c;
+}
+
+// Canopy's passes in `g`, around the host's imported images (one declaration for recordCanopy, the
+// render-graph path and canopyPassGroupUses).
+Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTargets& targets) {
+  CanopyContext* c = &ctx;
+  SimulationResources sr;
+  CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
+  LayerResources lr;
+  CANOPY_TRY(addLayerPasses(c->layers, g, &lr));
+  rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
+  rg::ResourceId animFrame = rg::kInvalidResource;
+  CANOPY_TRY(addDynamicsPasses(c->dynamics, g, sr.tiled, sr.ring, sr.ringTimes, &disp, &prev, &animFrame));
+  return addCompositePasses(c->compositor, g, lr, disp, prev, targets, {animFrame, sr.tiled});
+}
+
+// How the passes use the host's images, from a graph declared with placeholder imports (never
+// realized): the union of each image's uses and the layout the last one leaves.
+Status computeGroupUses(CanopyContext& c) {
+  rg::RenderGraph probe;
+  ImageDesc d;
+  d.width = c.desc.width;
+  d.height = c.desc.height;
+  const rg::State any = rg::stateOf(rg::Use::TransferSrc);
+  CompositeTargets t;
+  d.format = c.desc.colorFormat;
+  t.color = probe.importImage("host: colour", d, {}, any);
+  d.format = c.desc.depthFormat;
+  t.depth = probe.importImage("host: depth", d, {}, any);
+  if (c.desc.motionFormat != VK_FORMAT_UNDEFINED) {
+    d.format = c.desc.motionFormat;
+    t.motion = probe.importImage("host: motion", d, {}, any);
+  }
+  CANOPY_TRY(declarePasses(c, probe, t));
+  CANOPY_TRY(probe.compile());
+  c.groupUses.clear();
+  const std::pair<CanopyTarget, rg::ResourceId> targets[] = {
+      {CanopyTarget::Color, t.color}, {CanopyTarget::Depth, t.depth}, {CanopyTarget::Motion, t.motion}};
+  for (const auto& [which, id] : targets) {
+    if (id == rg::kInvalidResource) continue;
+    CanopyTargetUse u;
+    u.target = which;
+    u.state = probe.combinedUse(id);
+    u.writes = rg::isWriteAccess(u.state.access);
+    c.groupUses.push_back(u);
+  }
+  return Status();
 }
 
 Status checkVersion(uint32_t header) {
@@ -276,7 +354,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim));
     }
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
-    return Status();
+    return computeGroupUses(*c);
   }();
   if (!s.ok()) {
     destroyNow(c);
@@ -405,14 +483,7 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
   if (!c->pending.empty() || !c->shared->pending.empty() || !c->layers.pendingClear.empty())
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
-  SimulationResources sr;
-  CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
-  LayerResources lr;
-  CANOPY_TRY(addLayerPasses(c->layers, g, &lr));
-  rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
-  rg::ResourceId animFrame = rg::kInvalidResource;
-  CANOPY_TRY(addDynamicsPasses(c->dynamics, g, sr.tiled, sr.ring, sr.ringTimes, &disp, &prev, &animFrame));
-  return addCompositePasses(c->compositor, g, lr, disp, prev, targets, {animFrame, sr.tiled});
+  return declarePasses(*c, g, targets);
 }
 
 uint64_t canopyResourceGeneration(const CanopyContext* c) { return c ? c->generation : 0; }
@@ -425,10 +496,33 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
   CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
   CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
   CANOPY_TRY(flushPreparedWork(*c->device, c->layers.pendingClear, cmd));
-  const bool same = c->graphReady && c->graphGeneration == c->generation && sameImage(c->graphInputs.color, in.color) &&
-                    sameImage(c->graphInputs.depth, in.depth) && sameImage(c->graphInputs.motion, in.motion);
-  if (!same) CANOPY_TRY(buildRecordGraph(*c, in));
-  return c->graph.record(cmd);
+  RecordGraph* graph = nullptr;
+  for (RecordGraph& g : c->graphs)
+    if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&
+        sameImage(g.inputs.motion, in.motion))
+      graph = &g;
+  if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
+  graph->lastUse = ++c->graphUses;
+  return graph->graph->record(cmd);
+}
+
+Status canopyPassGroupUses(const CanopyContext* c, std::vector<CanopyTargetUse>* uses) {
+  if (!c || !uses) return Status::error("canopyPassGroupUses: null context or output");
+  *uses = c->groupUses;
+  return Status();
+}
+
+Status recordCanopyPassGroup(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInputs& inputs) {
+  if (!c) return Status::error("recordCanopyPassGroup: null context");
+  // The host's graph has put each image in its declared use: Canopy's first barrier on it chains
+  // from those stages (a layout change inside the group), and no closing barrier is recorded.
+  CanopyFrameInputs in = inputs;
+  for (const CanopyTargetUse& u : c->groupUses) {
+    CanopyImage& img = u.target == CanopyTarget::Color ? in.color : u.target == CanopyTarget::Depth ? in.depth : in.motion;
+    img.current = {u.state.stage, VK_ACCESS_2_NONE, u.state.layout};
+    img.final = {VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, u.state.layout};
+  }
+  return recordCanopy(c, cmd, in).context("recordCanopyPassGroup");
 }
 
 CanopyStats canopyStats(const CanopyContext* c) {

@@ -24,8 +24,9 @@ struct Model {
 // createCanopy from a VegetationModel held by the caller (no copy into a Model).
 Status createCanopy(Device& device, const VegetationModel& model, const CanopyDesc& desc, CanopyContext** out);
 
-// The render-graph path (also declared by <canopy/canopy_graph.h>): prepares the next recorded
-// frame (CPU work only), then adds Canopy's passes to a graph holding the host's imported images.
+// Canopy's own render-graph path (the demo, the benchmark; a host's graph uses
+// <canopy/canopy_graph.h>): prepares the next recorded frame (CPU work only), then adds Canopy's
+// passes to a graph holding the host's imported images.
 Status beginCanopyFrame(CanopyContext* context, const CanopyFrame& frame);
 Status addCanopyPasses(CanopyContext* context, rg::RenderGraph& graph, const CompositeTargets& targets);
 uint64_t canopyResourceGeneration(const CanopyContext* context);

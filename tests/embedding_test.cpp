@@ -10,10 +10,13 @@
 
 #include <glm/gtc/packing.hpp>
 
+#include <canopy/canopy_graph.h>
+
 #include "engine/transfer.h"
 #include "render/canopy.h"
 #include "render/composite_reference.h"
 #include "tests/gpu_test.h"
+#include "tests/host_device.h"
 #include "tools/leaf_cloud.h"
 
 using namespace canopy;
@@ -38,6 +41,8 @@ struct Host {
   std::vector<VkFence> fences;
   std::vector<bool> pending;
   bool first = true;  // the targets hold nothing yet (UNDEFINED)
+  // Canopy as one pass of the host's graph (<canopy/canopy_graph.h>) instead of recordCanopy.
+  bool passGroup = false;
 
   Status create(Device& d, uint32_t inFlight) {
     dev = &d;
@@ -75,7 +80,7 @@ struct Host {
     return Status();
   }
   void destroy() {
-    finish();
+    (void)finish();  // best effort: destroy() runs after failures too
     for (VkFence f : fences) vkDestroyFence(dev->device, f, nullptr);
     if (pool) vkDestroyCommandPool(dev->device, pool, nullptr);
     if (depthOnly) vkDestroyImageView(dev->device, depthOnly, nullptr);
@@ -106,8 +111,23 @@ struct Host {
     rg::RenderGraph g;  // the host's own clear, its barriers from a graph too
     const rg::State before = first ? rg::State{} : src;  // as the previous frame left them
     first = false;
-    const auto c = g.importImage("host colour", descOf(color), before, dst);
-    const auto d = g.importImage("host depth", descOf(depth), before, dst);
+    std::vector<CanopyFrameInputs> inputs(contexts.size());
+    for (size_t i = 0; i < contexts.size(); ++i) {
+      CanopyFrameInputs& in = inputs[i];
+      in.frame = makeCanopyFrame(view, dt, number);
+      in.frame.cameraCut = cut;
+      if (reverse) {
+        glm::mat4 mirror(1.0f);  // the same camera as a reverse-Z host writes it
+        mirror[2][2] = -1.0f;
+        mirror[3][2] = 1.0f;
+        in.frame.camera.proj = toFloat4x4(mirror * view.proj);
+      }
+      const bool last = i + 1 == contexts.size();
+      in.color = {color.image, color.view, i ? colorRW : dst, last ? src : colorRW};
+      in.depth = {depth.image, depthOnly, i ? depthW : dst, last ? src : depthW};
+    }
+    const auto c = g.importImage("host colour", descOf(color), before, passGroup ? src : dst);
+    const auto d = g.importImage("host depth", descOf(depth), before, passGroup ? src : dst);
     g.addPass("host clear", [&](rg::PassContext& x) {
        VkClearColorValue cv{};
        std::memcpy(cv.float32, &kSky, sizeof kSky);
@@ -120,26 +140,24 @@ struct Host {
      })
         .write(c, rg::Use::TransferDst)
         .write(d, rg::Use::TransferDst);
+    for (size_t i = 0; passGroup && i < contexts.size(); ++i) {
+      // Each context one pass of the host's graph, declared with the uses Canopy reports.
+      std::vector<CanopyTargetUse> uses;
+      CANOPY_TRY(canopyPassGroupUses(contexts[i], &uses));
+      CanopyContext* ctx = contexts[i];
+      const CanopyFrameInputs* in = &inputs[i];
+      auto pass = g.addPass("canopy", [ctx, in](rg::PassContext& x) { return recordCanopyPassGroup(ctx, x.cmd, *in); });
+      for (const CanopyTargetUse& u : uses) {
+        if (u.target == CanopyTarget::Motion) return Status::error("the test host has no motion target");
+        pass.access(u.target == CanopyTarget::Color ? c : d, u.state);
+      }
+    }
     CANOPY_TRY(g.bindImage(c, color));
     CANOPY_TRY(g.bindImage(d, depth));
     CANOPY_TRY(g.compile());
     CANOPY_TRY(g.realize(*dev));  // no transients: nothing to release
     CANOPY_TRY(g.record(cmd));
-    for (size_t i = 0; i < contexts.size(); ++i) {
-      CanopyFrameInputs in;
-      in.frame = makeCanopyFrame(view, dt, number);
-      in.frame.cameraCut = cut;
-      if (reverse) {
-        glm::mat4 mirror(1.0f);  // the same camera as a reverse-Z host writes it
-        mirror[2][2] = -1.0f;
-        mirror[3][2] = 1.0f;
-        in.frame.camera.proj = toFloat4x4(mirror * view.proj);
-      }
-      const bool last = i + 1 == contexts.size();
-      in.color = {color.image, color.view, i ? colorRW : dst, last ? src : colorRW};
-      in.depth = {depth.image, depthOnly, i ? depthW : dst, last ? src : depthW};
-      CANOPY_TRY(recordCanopy(contexts[i], cmd, in));
-    }
+    for (size_t i = 0; !passGroup && i < contexts.size(); ++i) CANOPY_TRY(recordCanopy(contexts[i], cmd, inputs[i]));
     CANOPY_VK(vkEndCommandBuffer(cmd));
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
@@ -212,6 +230,7 @@ class EmbeddingTest : public GpuTest {
   }
   VegetationModel model = makeLeafCloud(3000, 5, true);
   uint64_t frameNumber = 0;  // the host's counter: never decreases over the whole device
+  Device* target = &dev;     // the device render() uses: Canopy's own, or one the test made
   LayerView view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 64.0f, 1.05f);
 
   CanopyContext* make(const Host& host, float wind, CanopyContext* share = nullptr, float exposure = 1.0f) {
@@ -225,14 +244,14 @@ class EmbeddingTest : public GpuTest {
     d.params.composite.exposure = exposure;
     d.shareSimulationWith = share;
     CanopyContext* ctx = nullptr;
-    Status s = createCanopy(dev, model, d, &ctx);
+    Status s = createCanopy(*target, model, d, &ctx);
     EXPECT_TRUE(s.ok()) << s.message();
     return ctx;
   }
   // `frames` frames of one context, with `inFlight` submissions outstanding; the last one read back.
   void render(Host& host, uint32_t inFlight, int frames, std::vector<glm::vec4>* rgba, std::vector<float>* z,
               std::vector<uint8_t>* stencil = nullptr, float exposure = 1.0f, CanopyContext** keep = nullptr) {
-    Status made = host.create(dev, inFlight);
+    Status made = host.create(*target, inFlight);
     ASSERT_TRUE(made.ok()) << made.message();
     CanopyContext* ctx = make(host, 1.5f, nullptr, exposure);
     ASSERT_NE(ctx, nullptr);
@@ -260,6 +279,83 @@ TEST_F(EmbeddingTest, ThreeFramesInFlightGiveTheImageOfSerialFrames) {
   size_t vegetation = 0;
   for (float z : zs) vegetation += z < 1.0f;
   EXPECT_GT(vegetation, serial.size() / 20) << "the crown must cover part of the frame";
+}
+
+// The host owns the device: the test creates instance and device itself (not Canopy's
+// createDevice), with its own validation and synchronization validation reporting into this
+// test, and adopts it. 32 frames with 3 in flight must give the image of today's path (Canopy's
+// own device, serial frames) within the golden tolerance.
+TEST_F(EmbeddingTest, AHostOwnedDeviceWithThreeFramesInFlightGivesTheImageOfCanopysOwnDevice) {
+  std::vector<glm::vec4> own, hosted;
+  std::vector<float> zo, zh;
+  Host a, b;
+  render(a, 1, 32, &own, &zo);
+  canopy::test::HostDevice hd;
+  hd.sink = [this](bool error, const char* id, const char* msg) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    messages_.push_back({id, msg, error});
+  };
+  Status s = createHostDevice(3, &hd);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_NE(hd.device, dev.device);
+  target = hd.adopted;
+  render(b, 3, 32, &hosted, &zh);
+  target = &dev;
+  destroyHostDevice(hd);
+  EXPECT_LE(differing(own, hosted, 3.0f / 255.0f), 0.005);
+  size_t off = 0;
+  for (size_t i = 0; i < zo.size(); ++i) off += std::abs(zo[i] - zh[i]) > 1e-4f;
+  EXPECT_LE(double(off) / double(zo.size()), 0.005);
+}
+
+// Canopy as one pass of the host's render graph (<canopy/canopy_graph.h>): the host's graph places
+// the barriers into and out of the declared uses; the frame equals recordCanopy's, sync-clean.
+TEST_F(EmbeddingTest, APassGroupInTheHostsGraphGivesTheImageOfRecordCanopy) {
+  std::vector<glm::vec4> direct, grouped;
+  std::vector<float> zd, zg;
+  Host a, b;
+  b.passGroup = true;
+  render(a, 3, 12, &direct, &zd);
+  render(b, 3, 12, &grouped, &zg);
+  EXPECT_LE(differing(direct, grouped, 3.0f / 255.0f), 0.005);
+  size_t vegetation = 0;
+  for (float z : zg) vegetation += z < 1.0f;
+  EXPECT_GT(vegetation, grouped.size() / 20);
+
+  Host h;
+  CanopyContext* ctx = make(h, 1.0f);
+  ASSERT_NE(ctx, nullptr);
+  std::vector<CanopyTargetUse> uses;
+  ASSERT_TRUE(canopyPassGroupUses(ctx, &uses).ok());
+  ASSERT_EQ(uses.size(), 2u);  // colour and depth; no motion target
+  EXPECT_EQ(uses[0].target, CanopyTarget::Color);
+  EXPECT_EQ(uses[0].state.layout, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL);
+  EXPECT_TRUE(uses[1].writes);
+  EXPECT_TRUE(uses[1].state.stage & VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT) << "the scene depth is sampled by compute";
+  destroyCanopy(ctx);
+}
+
+// A host rendering into its swapchain images hands Canopy a different target each frame: the
+// compiled graphs are kept per set of images, so three images cost three builds, not one a frame.
+TEST_F(EmbeddingTest, CyclingThroughThreeTargetsBuildsThreeGraphs) {
+  Host hosts[3];
+  for (Host& h : hosts) ASSERT_TRUE(h.create(dev, 1).ok());
+  CanopyContext* ctx = make(hosts[0], 1.0f);
+  ASSERT_NE(ctx, nullptr);
+  for (int i = 0; i < 12; ++i) {
+    Status s = hosts[i % 3].frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
+    ASSERT_TRUE(s.ok()) << s.message();
+  }
+  EXPECT_EQ(canopyStats(ctx).internalGraphBuilds, 3u);
+  std::vector<glm::vec4> last;
+  std::vector<float> z;
+  ASSERT_TRUE(hosts[2].read(&last, &z).ok());
+  size_t vegetation = 0;
+  for (float d : z) vegetation += d < 1.0f;
+  EXPECT_GT(vegetation, z.size() / 20);
+  for (Host& h : hosts) ASSERT_TRUE(h.finish().ok());
+  destroyCanopy(ctx);
+  for (Host& h : hosts) h.destroy();
 }
 
 TEST_F(EmbeddingTest, ReverseZAndStandardZGiveTheSameCompositeAndMirroredDepth) {

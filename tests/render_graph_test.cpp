@@ -125,6 +125,34 @@ TEST(RenderGraphBarriers, UntouchedImportGetsFinalTransition) {
   EXPECT_BARRIERS(g.finalBarriers(), B(img, COLOR, CW, FS, SAMPLED, CAO, SRO), B(out, CS, SW, HOST, HR));
 }
 
+// A graph used as one pass of a host's graph (Canopy's pass group, <canopy/canopy_graph.h>): the
+// image arrives in the combined state of all its uses (the host's barrier made it so) and leaves
+// in the same layout with no final barrier, the host's next barrier starting from that state. The
+// internal transition to the sampled layout chains from the combined stages.
+TEST(RenderGraphBarriers, CallerSynchronizedImportAndCombinedUse) {
+  auto declare = [](RenderGraph& g, State initial, State final) {
+    auto img = g.importImage("host colour", image64(), initial, final);
+    auto out = g.importBuffer("out", 64, {}, stateOf(Use::HostRead));
+    g.addPass("sample", noop()).read(img, Use::ComputeSampled).write(out, Use::ComputeStorageWrite);
+    g.addPass("draw", noop()).read(out, Use::FragmentStorageRead).write(img, Use::ColorAttachmentWrite);
+    return img;
+  };
+  RenderGraph probe;
+  auto id = declare(probe, {}, stateOf(Use::ColorAttachmentWrite));
+  ASSERT_TRUE(probe.compile().ok());
+  const State use = probe.combinedUse(id);
+  EXPECT_EQ(use.stage, CS | COLOR);
+  EXPECT_EQ(use.access, SAMPLED | CW);
+  EXPECT_EQ(use.layout, CAO);
+
+  RenderGraph g;
+  auto img = declare(g, {use.stage, 0, use.layout}, {0, 0, use.layout});
+  ASSERT_TRUE(g.compile().ok());
+  ASSERT_EQ(g.steps().size(), 2u);
+  EXPECT_BARRIERS(g.steps()[0].barriers, B(img, CS | COLOR, 0, CS, SAMPLED, CAO, SRO));
+  for (const Barrier& b : g.finalBarriers()) EXPECT_NE(b.resource, img) << toString(b);
+}
+
 // Two readers of one write in different stages share one level and one merged barrier.
 TEST(RenderGraphBarriers, ReadersMergeIntoOneBarrier) {
   RenderGraph g;

@@ -17,5 +17,8 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
 // the given layouts, then the compositing levers side by side.
 int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::vector<std::string>& layouts,
                  int frames, uint32_t width, uint32_t height, const std::string& scene);
+// Soak: `frames` frames with random parameters and periodic re-slicing; prints NaN/Inf counts,
+// RSS, device-allocation and frame-time growth. With `check`, returns 1 when any of them is bad.
+int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check);
 }
 }  // namespace canopy

@@ -1,6 +1,7 @@
 // canopy-bench: Canopy's benchmark (speed is measured here, never asserted in tests).
 //   canopy-bench [sim] [layers] [anim] [--sizes 64,128,256] [--frames N] [--detail]
 //                [--faces 80000,10000000] [--rebuilds N] [--layers 5(3-1-1)] [--device NAME]
+//   canopy-bench soak [--frames N] [--rebuild-every N] [--check]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -22,6 +23,10 @@ static int usage(const char* why) {
                "  sim            simulation step per grid size, GPU vs CPU reference (default section)\n"
                "  layers         leaf-root preprocessing and layer rebuilds, one draw vs n draws\n"
                "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
+               "  soak           long run: random parameters every frame, re-slicing every --rebuild-every frames;\n"
+               "                 NaN/Inf, RSS, device allocations, frame time (--frames default 100000)\n"
+               "  --rebuild-every N  soak: frames between re-slicings, 1..100000 (default 100)\n"
+               "  --check        soak: exit 1 on NaN/Inf, device-allocation growth or RSS growth over 64 MiB\n"
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
                "  --scene NAME   anim: a generated scene (shrub, tree, grass, kelp, field) instead of leaf clouds\n"
                "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
@@ -37,7 +42,8 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 0;  // 0: the section's default
   bool detail = false;
-  bool runSim = false, runLayers = false, runAnim = false;
+  bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false;
+  uint32_t rebuildEvery = 100;
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
@@ -51,6 +57,11 @@ int main(int argc, char** argv) {
     if (a == "sim") runSim = true;
     else if (a == "layers") runLayers = true;
     else if (a == "anim") runAnim = true;
+    else if (a == "soak") runSoak = true;
+    else if (a == "--check") check = true;
+    else if (a == "--rebuild-every") {
+      if (!cli::parseUint(next(), 1, 100000, &rebuildEvery)) return usage("--rebuild-every needs an integer in [1, 100000]");
+    }
     else if (a == "--detail") detail = true;
     else if (a == "--faces") {
       const char* v = next();
@@ -87,7 +98,7 @@ int main(int argc, char** argv) {
       }
     } else if (a == "--frames") {
       uint32_t n;
-      if (!cli::parseUint(next(), 3, 100000, &n)) return usage("--frames needs an integer in [3, 100000]");
+      if (!cli::parseUint(next(), 3, 10000000, &n)) return usage("--frames needs an integer in [3, 10000000]");
       frames = int(n);
     } else if (a == "--device") {
       const char* v = next();
@@ -104,12 +115,13 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak) runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
   if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768,
                                              scene);
+  if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;
 }

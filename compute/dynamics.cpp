@@ -34,6 +34,8 @@ Status validateDynamicsParams(const DynamicsParams& p) {
                            std::to_string(lo) + ", " + std::to_string(hi) + "]");
     return Status();
   };
+  if (p.delay != DelayMode::Exact && p.delay != DelayMode::Approximate)
+    return Status::error("dynamics: delay = " + std::to_string(uint32_t(p.delay)) + " is outside Exact (0)..Approximate (1)");
   CANOPY_TRY(range("vd (V_D)", p.vd, -1000, 1000));
   CANOPY_TRY(range("propagationSpeed (s)", p.propagationSpeed, 0, 1000));
   CANOPY_TRY(range("lambda.x", p.lambda.x, 0, 1e6f));

@@ -18,6 +18,7 @@
 extern char** environ;
 
 #include "demo/demo_app.h"
+#include "tools/fault_loader.h"
 #include "tools/image_io.h"
 
 using namespace canopy;
@@ -162,10 +163,18 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       std::fprintf(stderr, "validation: %s: %s\n", id ? id : "", text);
     };
   }
+  if (!o.injectFault.empty()) {
+    fault::Mode mode = fault::Mode::Off;
+    int64_t n = 0;
+    fault::parse(o.injectFault, &mode, &n);  // checked by parseOptions
+    fault::arm(mode, n);
+    dd.getInstanceProcAddr = fault::loader(vkGetInstanceProcAddr);
+  }
   Device dev;
   Status s = createDevice(dd, &dev);
   if (!s.ok()) {
     std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
+    destroyDevice(dev);
     return 1;
   }
   Host host;

@@ -1,5 +1,7 @@
 #include "demo/demo_app.h"
 
+#include "tools/fault_loader.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -60,6 +62,8 @@ void printHelp() {
       "Both:\n"
       "  --validate          Vulkan validation + synchronization validation; any message fails the run\n"
       "  --device NAME       substring of the Vulkan device name (default: best device, or $CANOPY_DEVICE)\n"
+      "  --inject-fault oom:N|lost:N  Canopy's Vulkan calls fail (out of device memory, device lost) after N\n"
+      "                      successful object creations (tools/fault_loader.h; reliability tests)\n"
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
       (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust, d.width,
@@ -200,6 +204,11 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--device") {
       if (!takes()) return bad("needs a device name");
       o->device = v;
+    } else if (a == "--inject-fault") {
+      fault::Mode mode;
+      int64_t n;
+      if (!takes() || !fault::parse(v, &mode, &n)) return bad("needs oom:N or lost:N (N a count of successful creations)");
+      o->injectFault = v;
     } else {
       *err = "unknown option '" + a + "' (see --help)";
       return 2;

@@ -54,6 +54,7 @@ struct Options {
   // Both
   bool validate = false;
   std::string device;
+  std::string injectFault;  // "oom:N" / "lost:N" (tools/fault_loader.h), empty: none
 };
 
 // Parses the command line. Returns 0 to run, 1 when --help was printed, 2 on an error (the

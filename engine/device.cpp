@@ -142,52 +142,56 @@ void fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t i
 
 Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, uint32_t instanceApiVersion,
                                VkPhysicalDevice pd, DeviceRequirements* out) {
-  if (!out || !pd) return Status::error("queryDeviceRequirements: physicalDevice and out are required");
-  VulkanFunctions vk;
-  const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
-  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
-  fillRequirements(vk, pd, instanceApiVersion, out, nullptr);
-  return Status();
+  return guardApi("queryDeviceRequirements", [&]() -> Status {
+    if (!out || !pd) return Status::error("queryDeviceRequirements: physicalDevice and out are required");
+    VulkanFunctions vk;
+    const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
+    if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
+    fillRequirements(vk, pd, instanceApiVersion, out, nullptr);
+    return Status();
+  });
 }
 
 Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd,
                             VkPhysicalDeviceFeatures2* chain) {
-  if (!chain || chain->sType != VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2)
-    return Status::error("enableDeviceFeatures: chain must start with a VkPhysicalDeviceFeatures2");
-  VulkanFunctions vk;
-  const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
-  if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "enableDeviceFeatures: " + missing + " is unavailable");
-  VkPhysicalDeviceProperties props;
-  vk.GetPhysicalDeviceProperties(pd, &props);
-  const FeatureView have = supported(vk, pd, props.apiVersion);
-  VkPhysicalDeviceVulkan12Features* f12 = nullptr;
-  VkPhysicalDeviceVulkan13Features* f13 = nullptr;
-  VkPhysicalDeviceSynchronization2Features* fs2 = nullptr;
-  VkPhysicalDeviceDynamicRenderingFeatures* fdr = nullptr;
-  for (auto* s = reinterpret_cast<VkBaseOutStructure*>(chain); s; s = s->pNext) {
-    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES) f12 = reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(s);
-    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES) f13 = reinterpret_cast<VkPhysicalDeviceVulkan13Features*>(s);
-    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES) fs2 = reinterpret_cast<VkPhysicalDeviceSynchronization2Features*>(s);
-    if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES) fdr = reinterpret_cast<VkPhysicalDeviceDynamicRenderingFeatures*>(s);
-  }
-  if (!f12) return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain has no VkPhysicalDeviceVulkan12Features");
-  if (!f13 && (!fs2 || !fdr))
-    return Status::error(Result::InvalidArgument,
-                         "enableDeviceFeatures: the chain needs VkPhysicalDeviceVulkan13Features, or "
-                         "VkPhysicalDeviceSynchronization2Features and VkPhysicalDeviceDynamicRenderingFeatures");
-  f12->scalarBlockLayout = VK_TRUE;
-  f12->shaderOutputLayer = have.shaderOutputLayer ? VK_TRUE : f12->shaderOutputLayer;
-  if (f13) {
-    f13->synchronization2 = VK_TRUE;
-    f13->dynamicRendering = VK_TRUE;
-  } else {
-    fs2->synchronization2 = VK_TRUE;
-    fdr->dynamicRendering = VK_TRUE;
-  }
-  if (have.core.shaderClipDistance) chain->features.shaderClipDistance = VK_TRUE;
-  if (have.core.geometryShader) chain->features.geometryShader = VK_TRUE;
-  if (have.core.independentBlend) chain->features.independentBlend = VK_TRUE;
-  return Status();
+  return guardApi("enableDeviceFeatures", [&]() -> Status {
+    if (!chain || chain->sType != VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2)
+      return Status::error("enableDeviceFeatures: chain must start with a VkPhysicalDeviceFeatures2");
+    VulkanFunctions vk;
+    const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
+    if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "enableDeviceFeatures: " + missing + " is unavailable");
+    VkPhysicalDeviceProperties props;
+    vk.GetPhysicalDeviceProperties(pd, &props);
+    const FeatureView have = supported(vk, pd, props.apiVersion);
+    VkPhysicalDeviceVulkan12Features* f12 = nullptr;
+    VkPhysicalDeviceVulkan13Features* f13 = nullptr;
+    VkPhysicalDeviceSynchronization2Features* fs2 = nullptr;
+    VkPhysicalDeviceDynamicRenderingFeatures* fdr = nullptr;
+    for (auto* s = reinterpret_cast<VkBaseOutStructure*>(chain); s; s = s->pNext) {
+      if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES) f12 = reinterpret_cast<VkPhysicalDeviceVulkan12Features*>(s);
+      if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES) f13 = reinterpret_cast<VkPhysicalDeviceVulkan13Features*>(s);
+      if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES) fs2 = reinterpret_cast<VkPhysicalDeviceSynchronization2Features*>(s);
+      if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES) fdr = reinterpret_cast<VkPhysicalDeviceDynamicRenderingFeatures*>(s);
+    }
+    if (!f12) return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain has no VkPhysicalDeviceVulkan12Features");
+    if (!f13 && (!fs2 || !fdr))
+      return Status::error(Result::InvalidArgument,
+                           "enableDeviceFeatures: the chain needs VkPhysicalDeviceVulkan13Features, or "
+                           "VkPhysicalDeviceSynchronization2Features and VkPhysicalDeviceDynamicRenderingFeatures");
+    f12->scalarBlockLayout = VK_TRUE;
+    f12->shaderOutputLayer = have.shaderOutputLayer ? VK_TRUE : f12->shaderOutputLayer;
+    if (f13) {
+      f13->synchronization2 = VK_TRUE;
+      f13->dynamicRendering = VK_TRUE;
+    } else {
+      fs2->synchronization2 = VK_TRUE;
+      fdr->dynamicRendering = VK_TRUE;
+    }
+    if (have.core.shaderClipDistance) chain->features.shaderClipDistance = VK_TRUE;
+    if (have.core.geometryShader) chain->features.geometryShader = VK_TRUE;
+    if (have.core.independentBlend) chain->features.independentBlend = VK_TRUE;
+    return Status();
+  });
 }
 
 Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out) {
@@ -285,19 +289,21 @@ void releaseAdoptedDevice(Device& d) {
 }
 
 Status adoptDevice(const AdoptDeviceDesc& desc, Device** out) {
-  if (!out) return Status::error("adoptDevice: out is null");
-  *out = nullptr;
-  auto* d = new (std::nothrow) Device();
-  if (!d) return Status::error(Result::OutOfHostMemory, "adoptDevice: out of host memory");
-  Status s = adoptDeviceInto(desc, d);
-  if (!s.ok()) {
-    releaseAdoptedDevice(*d);
-    delete d;
-    return s;
-  }
-  d->deferUploads = true;  // a host's device: Canopy submits nothing behind its back
-  *out = d;
-  return Status();
+  return guardApi("adoptDevice", [&]() -> Status {
+    if (!out) return Status::error("adoptDevice: out is null");
+    *out = nullptr;
+    auto* d = new (std::nothrow) Device();
+    if (!d) return Status::error(Result::OutOfHostMemory, "adoptDevice: out of host memory");
+    Status s = adoptDeviceInto(desc, d);
+    if (!s.ok()) {
+      releaseAdoptedDevice(*d);
+      delete d;
+      return s;
+    }
+    d->deferUploads = true;  // a host's device: Canopy submits nothing behind its back
+    *out = d;
+    return Status();
+  });
 }
 
 void releaseDevice(Device* d) {

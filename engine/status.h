@@ -2,7 +2,9 @@
 // Errors are returned, never thrown across the API and never swallowed (VMA style): a Status is
 // empty on success and carries a message naming what failed otherwise.
 #include <cstdint>
+#include <exception>
 #include <functional>
+#include <new>
 #include <string>
 #include <utility>
 #include <vulkan/vulkan.h>
@@ -17,6 +19,22 @@ const char* vkResultName(VkResult r);
 // (out of host/device memory, device lost, else VulkanError).
 Result resultOf(VkResult r);
 Status vkError(const char* call, VkResult r);
+
+// The public API's boundary (docs/design.md, "Errors"): whatever the standard library,
+// nlohmann-json or tinygltf throws below a public function comes back as a Status naming the
+// function, never as an exception in the host.
+template <class F>
+Status guardApi(const char* function, F&& body) noexcept {
+  try {
+    return body();
+  } catch (const std::bad_alloc&) {
+    return Status::error(Result::OutOfHostMemory, std::string(function) + ": out of host memory");
+  } catch (const std::exception& e) {
+    return Status::error(Result::InvalidArgument, std::string(function) + ": " + e.what());
+  } catch (...) {
+    return Status::error(Result::InvalidArgument, std::string(function) + ": unknown exception");
+  }
+}
 
 }  // namespace canopy
 

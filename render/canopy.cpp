@@ -365,68 +365,88 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
 }
 
 Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out) {
-  if (!device || !model) {
-    if (out) *out = nullptr;
-    return Status::error("createCanopy: device and model are required");
-  }
-  return createCanopy(*device, model->data, desc, out);
+  return guardApi("createCanopy", [&]() -> Status {
+    if (!device || !model) {
+      if (out) *out = nullptr;
+      return Status::error("createCanopy: device and model are required");
+    }
+    return createCanopy(*device, model->data, desc, out);
+  });
 }
 
 void destroyCanopy(CanopyContext* c) {
   if (!c) return;
   // Frames in flight may still read the context's objects: free them when those frames are done.
-  deferRelease(*c->device, [c] { destroyNow(c); });
+  // Queueing can only fail for host memory; the objects are then left alive (a leak) rather than
+  // freed under frames that may still read them.
+  try {
+    deferRelease(*c->device, [c] { destroyNow(c); });
+  } catch (...) {
+  }
 }
 
 Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
-  if (!c) return Status::error("setCanopyParams: null context");
-  CANOPY_TRY(validateParams(*c, p));
-  if (!(p.layers == c->params.layers)) {
-    const uint32_t before = c->layers.settings.layout.count();
-    CANOPY_TRY(setLayerSettings(c->layers, p.layers));
-    if (p.layers.layout.count() != before) c->generation++;  // new layer images
-  }
-  if (p.customPlane) {
-    c->plane = p.plane;
-    c->planeFixed = true;
-  } else if (c->params.customPlane) {
-    c->planeFixed = false;  // back to the default: taken from the next frame's camera
-  }
-  c->params = p;
-  return Status();
+  return guardApi("setCanopyParams", [&]() -> Status {
+    if (!c) return Status::error("setCanopyParams: null context");
+    CANOPY_TRY(validateParams(*c, p));
+    if (!(p.layers == c->params.layers)) {
+      const uint32_t before = c->layers.settings.layout.count();
+      CANOPY_TRY(setLayerSettings(c->layers, p.layers));
+      if (p.layers.layout.count() != before) c->generation++;  // new layer images
+    }
+    if (p.customPlane) {
+      c->plane = p.plane;
+      c->planeFixed = true;
+    } else if (c->params.customPlane) {
+      c->planeFixed = false;  // back to the default: taken from the next frame's camera
+    }
+    c->params = p;
+    return Status();
+  });
 }
 
 const CanopyParams& canopyParams(const CanopyContext* c) { return c->params; }
 
 Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
-  if (!c) return Status::error("resizeCanopy: null context");
-  CANOPY_TRY(checkRange("resizeCanopy width", width, 1, 16384));
-  CANOPY_TRY(checkRange("resizeCanopy height", height, 1, 16384));
-  if (width == c->desc.width && height == c->desc.height) return Status();
-  Device& d = *c->device;
-  const CompositorDesc before = c->compositor.desc;
-  retire(*c, true, true);  // no wait: the old objects go once the frames using them completed
-  c->desc.width = width;
-  c->desc.height = height;
-  Status s = [&]() -> Status {
-    CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
-    CompositorDesc cd = before;
-    cd.width = width;
-    cd.height = height;
-    CANOPY_TRY(createCompositor(d, cd, &c->compositor));
-    // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
-    // motion vectors against (beginCanopyFrame sees the grid change).
-    c->last = gpu::AnimFrame{};
-    return createLayerDynamics(d, width, height, c->desc.minCellSize, c->desc.maxLayers, &c->dynamics);
-  }();
-  c->generation++;
-  return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
+  return guardApi("resizeCanopy", [&]() -> Status {
+    if (!c) return Status::error("resizeCanopy: null context");
+    CANOPY_TRY(checkRange("resizeCanopy width", width, 1, 16384));
+    CANOPY_TRY(checkRange("resizeCanopy height", height, 1, 16384));
+    if (width == c->desc.width && height == c->desc.height) return Status();
+    Device& d = *c->device;
+    const CompositorDesc before = c->compositor.desc;
+    retire(*c, true, true);  // no wait: the old objects go once the frames using them completed
+    c->desc.width = width;
+    c->desc.height = height;
+    Status s = [&]() -> Status {
+      CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
+      CompositorDesc cd = before;
+      cd.width = width;
+      cd.height = height;
+      CANOPY_TRY(createCompositor(d, cd, &c->compositor));
+      // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
+      // motion vectors against (beginCanopyFrame sees the grid change).
+      c->last = gpu::AnimFrame{};
+      return createLayerDynamics(d, width, height, c->desc.minCellSize, c->desc.maxLayers, &c->dynamics);
+    }();
+    c->generation++;
+    return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
+  });
 }
 
 Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (!c) return Status::error("beginCanopyFrame: null context");
   if (!std::isfinite(f.dt) || f.dt < 0.0f || f.dt > 10.0f)
     return Status::error("CanopyFrame.dt = " + std::to_string(f.dt) + " s is outside [0, 10]");
+  // Everything downstream inverts these (eye position, slab planes, the simulation plane).
+  for (const auto& [name, m] : {std::pair<const char*, const Float4x4*>{"view", &f.camera.view}, {"proj", &f.camera.proj}}) {
+    const glm::mat4 g = toGlm(*m);
+    for (int i = 0; i < 16; ++i)
+      if (!std::isfinite(m->m[i])) return Status::error(std::string("CanopyFrame.camera.") + name + " has a non-finite element");
+    const float det = glm::determinant(g);
+    if (!std::isfinite(det) || std::abs(det) < 1e-30f)
+      return Status::error(std::string("CanopyFrame.camera.") + name + " is singular (determinant " + std::to_string(det) + ")");
+  }
   Device& d = *c->device;
   // 0: the next frame (one context per host frame); otherwise the host's own counter.
   const uint64_t frameNumber = f.frameNumber ? f.frameNumber : (d.anyFrame ? d.frameNumber + 1 : 1);
@@ -489,27 +509,31 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
 uint64_t canopyResourceGeneration(const CanopyContext* c) { return c ? c->generation : 0; }
 
 Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInputs& in) {
-  if (!c) return Status::error("recordCanopy: null context");
-  if (!cmd) return Status::error("recordCanopy: null command buffer");
-  CANOPY_TRY(beginCanopyFrame(c, in.frame));
-  // Uploads and clears prepared since the last frame, before anything reads them.
-  CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
-  CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
-  CANOPY_TRY(flushPreparedWork(*c->device, c->layers.pendingClear, cmd));
-  RecordGraph* graph = nullptr;
-  for (RecordGraph& g : c->graphs)
-    if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&
-        sameImage(g.inputs.motion, in.motion))
-      graph = &g;
-  if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
-  graph->lastUse = ++c->graphUses;
-  return graph->graph->record(cmd);
+  return guardApi("recordCanopy", [&]() -> Status {
+    if (!c) return Status::error("recordCanopy: null context");
+    if (!cmd) return Status::error("recordCanopy: null command buffer");
+    CANOPY_TRY(beginCanopyFrame(c, in.frame));
+    // Uploads and clears prepared since the last frame, before anything reads them.
+    CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
+    CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
+    CANOPY_TRY(flushPreparedWork(*c->device, c->layers.pendingClear, cmd));
+    RecordGraph* graph = nullptr;
+    for (RecordGraph& g : c->graphs)
+      if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&
+          sameImage(g.inputs.motion, in.motion))
+        graph = &g;
+    if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
+    graph->lastUse = ++c->graphUses;
+    return graph->graph->record(cmd);
+  });
 }
 
 Status canopyPassGroupUses(const CanopyContext* c, std::vector<CanopyTargetUse>* uses) {
-  if (!c || !uses) return Status::error("canopyPassGroupUses: null context or output");
-  *uses = c->groupUses;
-  return Status();
+  return guardApi("canopyPassGroupUses", [&]() -> Status {
+    if (!c || !uses) return Status::error("canopyPassGroupUses: null context or output");
+    *uses = c->groupUses;
+    return Status();
+  });
 }
 
 Status recordCanopyPassGroup(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInputs& inputs) {
@@ -546,125 +570,129 @@ Compositor& canopyCompositor(CanopyContext* c) { return c->compositor; }
 // ---- Models ---------------------------------------------------------------------------------
 
 Status loadModel(const std::string& path, const GltfLoadOptions& options, Model** out) {
-  if (!out) return Status::error("loadModel: out is null");
-  *out = nullptr;
-  auto* m = new (std::nothrow) Model();
-  if (!m) return Status::error(Result::OutOfHostMemory, "loadModel: out of host memory");
-  Status s = loadGltf(path, options, &m->data);
-  if (!s.ok()) {
-    delete m;
-    return s.code() == Result::InvalidArgument ? Status::error(Result::InvalidModel, s.message()) : s;
-  }
-  *out = m;
-  return Status();
+  return guardApi("loadModel", [&]() -> Status {
+    if (!out) return Status::error("loadModel: out is null");
+    *out = nullptr;
+    auto* m = new (std::nothrow) Model();
+    if (!m) return Status::error(Result::OutOfHostMemory, "loadModel: out of host memory");
+    Status s = loadGltf(path, options, &m->data);
+    if (!s.ok()) {
+      delete m;
+      return s.code() == Result::InvalidArgument ? Status::error(Result::InvalidModel, s.message()) : s;
+    }
+    *out = m;
+    return Status();
+  });
 }
 
 Status createModel(const MeshDesc& desc, Model** out) {
-  if (!out) return Status::error("createModel: out is null");
-  *out = nullptr;
-  const std::string what = "MeshDesc '" + desc.name + "'";
-  if (!desc.positions || desc.vertexCount == 0) return Status::error(Result::InvalidModel, what + ": no positions");
-  if (!desc.indices || desc.indexCount == 0 || desc.indexCount % 3 != 0)
-    return Status::error(Result::InvalidModel, what + ": indexCount = " + std::to_string(desc.indexCount) +
-                                                   " is not a positive multiple of 3 (or indices is null)");
-  const uint64_t triangles = desc.indexCount / 3;
-  if (desc.triangleMaterials && (desc.materialCount == 0 || !desc.materials))
-    return Status::error(Result::InvalidModel, what + ": triangleMaterials needs materials (materialCount >= 1)");
-  if (desc.imageCount && !desc.images) return Status::error(Result::InvalidModel, what + ": imageCount without images");
-  auto m = std::unique_ptr<Model>(new (std::nothrow) Model());
-  if (!m) return Status::error(Result::OutOfHostMemory, "createModel: out of host memory");
-  VegetationModel& v = m->data;
-  try {
-    v.positions.resize(desc.vertexCount);
-    for (uint32_t i = 0; i < desc.vertexCount; ++i) {
-      const glm::vec3 p(desc.positions[3 * i], desc.positions[3 * i + 1], desc.positions[3 * i + 2]);
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-        return Status::error(Result::InvalidModel, what + ": position " + std::to_string(i) + " is not finite");
-      v.positions[i] = p;
-    }
-    v.indices.assign(desc.indices, desc.indices + desc.indexCount);
-    for (uint64_t i = 0; i < desc.indexCount; ++i)
-      if (v.indices[i] >= desc.vertexCount)
-        return Status::error(Result::InvalidModel, what + ": indices[" + std::to_string(i) + "] = " +
-                                                       std::to_string(v.indices[i]) + " is not below vertexCount " +
-                                                       std::to_string(desc.vertexCount));
-    v.uvs.assign(desc.vertexCount, glm::vec2(0.0f));
-    if (desc.uvs)
-      for (uint32_t i = 0; i < desc.vertexCount; ++i) v.uvs[i] = {desc.uvs[2 * i], desc.uvs[2 * i + 1]};
-    v.normals.assign(desc.vertexCount, glm::vec3(0.0f));
-    if (desc.normals) {
+  return guardApi("createModel", [&]() -> Status {
+    if (!out) return Status::error("createModel: out is null");
+    *out = nullptr;
+    const std::string what = "MeshDesc '" + desc.name + "'";
+    if (!desc.positions || desc.vertexCount == 0) return Status::error(Result::InvalidModel, what + ": no positions");
+    if (!desc.indices || desc.indexCount == 0 || desc.indexCount % 3 != 0)
+      return Status::error(Result::InvalidModel, what + ": indexCount = " + std::to_string(desc.indexCount) +
+                                                     " is not a positive multiple of 3 (or indices is null)");
+    const uint64_t triangles = desc.indexCount / 3;
+    if (desc.triangleMaterials && (desc.materialCount == 0 || !desc.materials))
+      return Status::error(Result::InvalidModel, what + ": triangleMaterials needs materials (materialCount >= 1)");
+    if (desc.imageCount && !desc.images) return Status::error(Result::InvalidModel, what + ": imageCount without images");
+    auto m = std::unique_ptr<Model>(new (std::nothrow) Model());
+    if (!m) return Status::error(Result::OutOfHostMemory, "createModel: out of host memory");
+    VegetationModel& v = m->data;
+    try {
+      v.positions.resize(desc.vertexCount);
       for (uint32_t i = 0; i < desc.vertexCount; ++i) {
-        const glm::vec3 n(desc.normals[3 * i], desc.normals[3 * i + 1], desc.normals[3 * i + 2]);
-        const float len = glm::length(n);
-        v.normals[i] = std::isfinite(len) && len > 0 ? n / len : glm::vec3(0, 1, 0);
+        const glm::vec3 p(desc.positions[3 * i], desc.positions[3 * i + 1], desc.positions[3 * i + 2]);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+          return Status::error(Result::InvalidModel, what + ": position " + std::to_string(i) + " is not finite");
+        v.positions[i] = p;
       }
-    } else {
-      // Area-weighted face normals, as the glTF loader computes them for files without normals.
-      for (uint64_t t = 0; t < triangles; ++t) {
-        const uint32_t a = v.indices[3 * t], b = v.indices[3 * t + 1], cc = v.indices[3 * t + 2];
-        const glm::vec3 n = glm::cross(v.positions[b] - v.positions[a], v.positions[cc] - v.positions[a]);
-        v.normals[a] += n;
-        v.normals[b] += n;
-        v.normals[cc] += n;
+      v.indices.assign(desc.indices, desc.indices + desc.indexCount);
+      for (uint64_t i = 0; i < desc.indexCount; ++i)
+        if (v.indices[i] >= desc.vertexCount)
+          return Status::error(Result::InvalidModel, what + ": indices[" + std::to_string(i) + "] = " +
+                                                         std::to_string(v.indices[i]) + " is not below vertexCount " +
+                                                         std::to_string(desc.vertexCount));
+      v.uvs.assign(desc.vertexCount, glm::vec2(0.0f));
+      if (desc.uvs)
+        for (uint32_t i = 0; i < desc.vertexCount; ++i) v.uvs[i] = {desc.uvs[2 * i], desc.uvs[2 * i + 1]};
+      v.normals.assign(desc.vertexCount, glm::vec3(0.0f));
+      if (desc.normals) {
+        for (uint32_t i = 0; i < desc.vertexCount; ++i) {
+          const glm::vec3 n(desc.normals[3 * i], desc.normals[3 * i + 1], desc.normals[3 * i + 2]);
+          const float len = glm::length(n);
+          v.normals[i] = std::isfinite(len) && len > 0 ? n / len : glm::vec3(0, 1, 0);
+        }
+      } else {
+        // Area-weighted face normals, as the glTF loader computes them for files without normals.
+        for (uint64_t t = 0; t < triangles; ++t) {
+          const uint32_t a = v.indices[3 * t], b = v.indices[3 * t + 1], cc = v.indices[3 * t + 2];
+          const glm::vec3 n = glm::cross(v.positions[b] - v.positions[a], v.positions[cc] - v.positions[a]);
+          v.normals[a] += n;
+          v.normals[b] += n;
+          v.normals[cc] += n;
+        }
+        for (glm::vec3& n : v.normals) n = glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 1, 0);
       }
-      for (glm::vec3& n : v.normals) n = glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 1, 0);
-    }
-    for (uint32_t i = 0; i < desc.imageCount; ++i) {
-      const MeshImage& im = desc.images[i];
-      if (im.width < 1 || im.height < 1 || im.width > 16384 || im.height > 16384 || !im.rgba)
-        return Status::error(Result::InvalidModel, what + ": images[" + std::to_string(i) + "] is " +
-                                                       std::to_string(im.width) + "x" + std::to_string(im.height) +
-                                                       " (1..16384 per side, with texels)");
-      ModelImage mi;
-      mi.name = "image " + std::to_string(i);
-      mi.width = im.width;
-      mi.height = im.height;
-      mi.rgba.assign(im.rgba, im.rgba + size_t(im.width) * im.height * 4);
-      v.images.push_back(std::move(mi));
-    }
-    const uint32_t materialCount = std::max(desc.materialCount, 1u);
-    for (uint32_t i = 0; i < desc.materialCount; ++i) {
-      const MeshMaterial& mm = desc.materials[i];
-      if (mm.image < -1 || mm.image >= int32_t(desc.imageCount))
-        return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) + "].image = " +
-                                                       std::to_string(mm.image) + " is outside -1.." +
-                                                       std::to_string(int32_t(desc.imageCount) - 1));
-      if (!(mm.alphaCutoff >= 0.0f && mm.alphaCutoff <= 1.0f) || uint32_t(mm.alphaMode) > 2)
-        return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
-                                                       "]: alphaCutoff outside [0, 1] or an unknown alphaMode");
-      ModelMaterial mat;
-      mat.name = mm.name;
-      mat.baseColorFactor = {mm.baseColor[0], mm.baseColor[1], mm.baseColor[2], mm.baseColor[3]};
-      mat.baseColorImage = mm.image;
-      mat.alphaMode = mm.alphaMode;
-      mat.alphaCutoff = mm.alphaCutoff;
-      mat.doubleSided = mm.doubleSided;
-      v.materials.push_back(mat);
-    }
-    // The loader's convention: the file's materials, then one default material last.
-    ModelMaterial fallback;
-    fallback.name = "default";
-    v.materials.push_back(fallback);
-    v.triangleMaterial.assign(triangles, desc.triangleMaterials ? 0u : uint32_t(v.materials.size() - 1));
-    if (desc.triangleMaterials) {
-      for (uint64_t t = 0; t < triangles; ++t) {
-        if (desc.triangleMaterials[t] >= materialCount)
-          return Status::error(Result::InvalidModel, what + ": triangleMaterials[" + std::to_string(t) + "] = " +
-                                                         std::to_string(desc.triangleMaterials[t]) +
-                                                         " is not below materialCount " + std::to_string(desc.materialCount));
-        v.triangleMaterial[t] = desc.triangleMaterials[t];
+      for (uint32_t i = 0; i < desc.imageCount; ++i) {
+        const MeshImage& im = desc.images[i];
+        if (im.width < 1 || im.height < 1 || im.width > 16384 || im.height > 16384 || !im.rgba)
+          return Status::error(Result::InvalidModel, what + ": images[" + std::to_string(i) + "] is " +
+                                                         std::to_string(im.width) + "x" + std::to_string(im.height) +
+                                                         " (1..16384 per side, with texels)");
+        ModelImage mi;
+        mi.name = "image " + std::to_string(i);
+        mi.width = im.width;
+        mi.height = im.height;
+        mi.rgba.assign(im.rgba, im.rgba + size_t(im.width) * im.height * 4);
+        v.images.push_back(std::move(mi));
       }
+      const uint32_t materialCount = std::max(desc.materialCount, 1u);
+      for (uint32_t i = 0; i < desc.materialCount; ++i) {
+        const MeshMaterial& mm = desc.materials[i];
+        if (mm.image < -1 || mm.image >= int32_t(desc.imageCount))
+          return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) + "].image = " +
+                                                         std::to_string(mm.image) + " is outside -1.." +
+                                                         std::to_string(int32_t(desc.imageCount) - 1));
+        if (!(mm.alphaCutoff >= 0.0f && mm.alphaCutoff <= 1.0f) || uint32_t(mm.alphaMode) > 2)
+          return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
+                                                         "]: alphaCutoff outside [0, 1] or an unknown alphaMode");
+        ModelMaterial mat;
+        mat.name = mm.name;
+        mat.baseColorFactor = {mm.baseColor[0], mm.baseColor[1], mm.baseColor[2], mm.baseColor[3]};
+        mat.baseColorImage = mm.image;
+        mat.alphaMode = mm.alphaMode;
+        mat.alphaCutoff = mm.alphaCutoff;
+        mat.doubleSided = mm.doubleSided;
+        v.materials.push_back(mat);
+      }
+      // The loader's convention: the file's materials, then one default material last.
+      ModelMaterial fallback;
+      fallback.name = "default";
+      v.materials.push_back(fallback);
+      v.triangleMaterial.assign(triangles, desc.triangleMaterials ? 0u : uint32_t(v.materials.size() - 1));
+      if (desc.triangleMaterials) {
+        for (uint64_t t = 0; t < triangles; ++t) {
+          if (desc.triangleMaterials[t] >= materialCount)
+            return Status::error(Result::InvalidModel, what + ": triangleMaterials[" + std::to_string(t) + "] = " +
+                                                           std::to_string(desc.triangleMaterials[t]) +
+                                                           " is not below materialCount " + std::to_string(desc.materialCount));
+          v.triangleMaterial[t] = desc.triangleMaterials[t];
+        }
+      }
+    } catch (const std::bad_alloc&) {
+      return Status::error(Result::OutOfHostMemory, what + ": out of host memory");
     }
-  } catch (const std::bad_alloc&) {
-    return Status::error(Result::OutOfHostMemory, what + ": out of host memory");
-  }
-  v.boundsMin = v.boundsMax = v.positions[0];
-  for (const glm::vec3& p : v.positions) {
-    v.boundsMin = glm::min(v.boundsMin, p);
-    v.boundsMax = glm::max(v.boundsMax, p);
-  }
-  *out = m.release();
-  return Status();
+    v.boundsMin = v.boundsMax = v.positions[0];
+    for (const glm::vec3& p : v.positions) {
+      v.boundsMin = glm::min(v.boundsMin, p);
+      v.boundsMax = glm::max(v.boundsMax, p);
+    }
+    *out = m.release();
+    return Status();
+  });
 }
 
 void destroyModel(Model* model) { delete model; }

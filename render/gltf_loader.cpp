@@ -10,11 +10,13 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <map>
 #include <memory>
 
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 // Our own decoder, private to this file (the tinygltf library carries its own copy).
@@ -27,13 +29,15 @@ namespace canopy {
 namespace {
 
 // ---- files ---------------------------------------------------------------------------------------
+// Opened non-blocking so that a FIFO or a device (also behind a symbolic link) is refused by the
+// regular-file check instead of blocking open() or read(); regular files ignore O_NONBLOCK.
 Status readFile(const std::string& path, uint64_t maxBytes, std::vector<unsigned char>* out) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Status::error("cannot open: " + std::string(std::strerror(errno)));
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) return Status::error(Result::FileError, "cannot open: " + std::string(std::strerror(errno)));
   struct stat st;
   if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
     ::close(fd);
-    return Status::error("not a regular file");
+    return Status::error(Result::FileError, "not a regular file");
   }
   if (uint64_t(st.st_size) > maxBytes) {
     ::close(fd);
@@ -43,9 +47,10 @@ Status readFile(const std::string& path, uint64_t maxBytes, std::vector<unsigned
   size_t got = 0;
   while (got < out->size()) {
     ssize_t r = ::read(fd, out->data() + got, out->size() - got);
+    if (r < 0 && errno == EINTR) continue;
     if (r <= 0) {
       ::close(fd);
-      return Status::error("read error");
+      return Status::error(Result::FileError, r == 0 ? "the file shrank while being read" : "read error: " + std::string(std::strerror(errno)));
     }
     got += size_t(r);
   }
@@ -61,6 +66,8 @@ struct FsContext {
   std::string realBase;     // realpath of it
   uint64_t maxBytes = 0;
   std::string lastError;    // why the last path was refused
+  // Files held in memory, by path relative to the model (loadGltfFromMemory): no disk access.
+  const std::map<std::string, std::vector<unsigned char>>* memory = nullptr;
 };
 
 bool checkPath(FsContext& c, const std::string& path) {
@@ -95,6 +102,11 @@ bool checkPath(FsContext& c, const std::string& path) {
     }
     start = end + 1;
   }
+  if (c.memory) {
+    if (c.memory->count(rel)) return true;
+    c.lastError = "URI '" + rel + "': no such file";
+    return false;
+  }
   char resolved[PATH_MAX];
   if (!realpath(path.c_str(), resolved)) {
     c.lastError = "URI '" + rel + "': " + std::strerror(errno);
@@ -121,7 +133,14 @@ bool fsRead(std::vector<unsigned char>* out, std::string* err, const std::string
     if (err) *err += c.lastError + "\n";
     return false;
   }
-  Status s = readFile(path, c.maxBytes, out);
+  Status s;
+  if (c.memory) {
+    const std::vector<unsigned char>& bytes = c.memory->at(c.baseDir.empty() ? path : path.substr(c.baseDir.size() + 1));
+    if (bytes.size() > c.maxBytes) s = Status::error("file of " + std::to_string(bytes.size()) + " bytes exceeds the limit of " + std::to_string(c.maxBytes));
+    else *out = bytes;
+  } else {
+    s = readFile(path, c.maxBytes, out);
+  }
   if (!s.ok()) {
     c.lastError = "'" + path + "': " + s.message();
     if (err) *err += c.lastError + "\n";
@@ -178,6 +197,182 @@ Status checkGlb(const std::vector<unsigned char>& d) {
   return Status();
 }
 
+// tinygltf converts `extras` and `extensions` into its Value type recursively: a file nested
+// thousands deep overflows the stack. The nesting is measured on the bytes first (strings and
+// their escapes skipped), without recursion.
+Status checkJsonDepth(const unsigned char* p, size_t n, uint32_t maxDepth) {
+  uint64_t depth = 0;
+  bool inString = false;
+  for (size_t i = 0; i < n; ++i) {
+    const unsigned char c = p[i];
+    if (inString) {
+      if (c == '\\') ++i;
+      else if (c == '"') inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > maxDepth)
+        return Status::error("JSON nesting deeper than " + std::to_string(maxDepth) + " levels at byte " + std::to_string(i) +
+                             " (GltfLoadOptions.maxJsonDepth)");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return Status();
+}
+
+// ---- checked arithmetic on numbers read from the file ------------------------------------------
+// Offsets, counts and lengths are combined only through these: a sum or product that does not fit
+// in 64 bits is a refusal, never a wrapped value.
+bool addTo(uint64_t* acc, uint64_t v) { return !__builtin_add_overflow(*acc, v, acc); }
+bool mulTo(uint64_t* acc, uint64_t v) { return !__builtin_mul_overflow(*acc, v, acc); }
+// [offset, offset + length) inside [0, size)
+bool rangeFits(uint64_t offset, uint64_t length, uint64_t size) { return offset <= size && length <= size - offset; }
+
+// tinygltf reads indices, counts and offsets into int and size_t without a range check: 2^64-4
+// becomes the index -4 (read as "no bufferView": silent zeros) and an image's bufferView offset
+// past its buffer becomes an out-of-range pointer. Every such field Canopy depends on is checked
+// on the JSON first: a non-negative integer in its range, and an image's bufferView inside the
+// byteLength its buffer declares (which tinygltf then enforces on the loaded bytes).
+class JsonCheck {
+ public:
+  Status run(const nlohmann::json& doc) {
+    if (!doc.is_object()) return Status();  // tinygltf reports what is wrong with the document
+    const int64_t kIndex = 0x7fffffff;
+    const int64_t kSize = int64_t(1) << 53;  // exact in a double; far beyond any file
+    each(doc, "accessors", [&](const nlohmann::json& a) {
+      field(a, "bufferView", kIndex);
+      field(a, "byteOffset", kSize);
+      field(a, "count", kSize, 1);
+      field(a, "componentType", kIndex);
+      if (const nlohmann::json* sp = child(a, "sparse")) {
+        path_.push_back(".sparse");
+        field(*sp, "count", kIndex, 1);
+        for (const char* part : {"indices", "values"})
+          if (const nlohmann::json* x = child(*sp, part)) {
+            path_.push_back(std::string(".") + part);
+            field(*x, "bufferView", kIndex);
+            field(*x, "byteOffset", kSize);
+            field(*x, "componentType", kIndex);
+            path_.pop_back();
+          }
+        path_.pop_back();
+      }
+    });
+    each(doc, "bufferViews", [&](const nlohmann::json& v) {
+      field(v, "buffer", kIndex);
+      field(v, "byteOffset", kSize);
+      field(v, "byteLength", kSize, 1);
+      field(v, "byteStride", 252, 4);
+    });
+    each(doc, "buffers", [&](const nlohmann::json& b) { field(b, "byteLength", kSize, 1); });
+    each(doc, "images", [&](const nlohmann::json& im) { field(im, "bufferView", kIndex); });
+    each(doc, "textures", [&](const nlohmann::json& t) {
+      field(t, "source", kIndex);
+      field(t, "sampler", kIndex);
+    });
+    each(doc, "materials", [&](const nlohmann::json& m) {
+      const nlohmann::json* pbr = child(m, "pbrMetallicRoughness");
+      const nlohmann::json* tex = pbr ? child(*pbr, "baseColorTexture") : nullptr;
+      if (tex) {
+        path_.push_back(".pbrMetallicRoughness.baseColorTexture");
+        field(*tex, "index", kIndex);
+        field(*tex, "texCoord", kIndex);
+        path_.pop_back();
+      }
+    });
+    each(doc, "meshes", [&](const nlohmann::json& mesh) {
+      const nlohmann::json* prims = child(mesh, "primitives");
+      if (!prims || !prims->is_array()) return;
+      for (size_t j = 0; j < prims->size(); ++j) {
+        path_.push_back(".primitives[" + std::to_string(j) + "]");
+        const nlohmann::json& pr = (*prims)[j];
+        field(pr, "indices", kIndex);
+        field(pr, "material", kIndex);
+        field(pr, "mode", 6);
+        if (const nlohmann::json* attrs = child(pr, "attributes"); attrs && attrs->is_object())
+          for (auto it = attrs->begin(); it != attrs->end(); ++it) field(*attrs, it.key().c_str(), kIndex);
+        path_.pop_back();
+      }
+    });
+    each(doc, "nodes", [&](const nlohmann::json& n) {
+      field(n, "mesh", kIndex);
+      elements(n, "children", kIndex);
+    });
+    each(doc, "scenes", [&](const nlohmann::json& sc) { elements(sc, "nodes", kIndex); });
+    field(doc, "scene", kIndex);
+    if (!error_.empty()) return Status::error(error_);
+    // An image's bytes inside the byteLength its buffer declares.
+    const nlohmann::json* images = child(doc, "images");
+    const nlohmann::json* views = child(doc, "bufferViews");
+    const nlohmann::json* buffers = child(doc, "buffers");
+    if (images && images->is_array() && views && views->is_array() && buffers && buffers->is_array())
+      for (size_t i = 0; i < images->size(); ++i) {
+        const nlohmann::json* bv = child((*images)[i], "bufferView");
+        if (!bv || bv->get<int64_t>() >= int64_t(views->size())) continue;  // tinygltf names a missing view
+        const nlohmann::json& view = (*views)[size_t(bv->get<int64_t>())];
+        const nlohmann::json* b = child(view, "buffer");
+        if (!b || b->get<int64_t>() >= int64_t(buffers->size())) continue;
+        const nlohmann::json* declared = child((*buffers)[size_t(b->get<int64_t>())], "byteLength");
+        const nlohmann::json* off = child(view, "byteOffset");
+        const nlohmann::json* len = child(view, "byteLength");
+        const uint64_t o = off ? off->get<uint64_t>() : 0, l = len ? len->get<uint64_t>() : 0;
+        const uint64_t size = declared ? declared->get<uint64_t>() : 0;
+        if (!rangeFits(o, l, size))
+          return Status::error("images[" + std::to_string(i) + "]: bufferViews[" + std::to_string(bv->get<int64_t>()) +
+                               "] (byteOffset " + std::to_string(o) + ", byteLength " + std::to_string(l) +
+                               ") does not fit the " + std::to_string(size) + " bytes its buffer declares");
+      }
+    return Status();
+  }
+
+ private:
+  static const nlohmann::json* child(const nlohmann::json& o, const char* key) {
+    if (!o.is_object()) return nullptr;
+    auto it = o.find(key);
+    return it == o.end() ? nullptr : &*it;
+  }
+  template <class F>
+  void each(const nlohmann::json& doc, const char* key, F&& f) {
+    const nlohmann::json* arr = child(doc, key);
+    if (!arr || !arr->is_array()) return;
+    for (size_t i = 0; i < arr->size() && error_.empty(); ++i) {
+      path_ = {std::string(key) + "[" + std::to_string(i) + "]"};
+      f((*arr)[i]);
+    }
+    path_.clear();
+  }
+  std::string where(const char* key) const {
+    std::string p;
+    for (const std::string& s : path_) p += s;
+    return p.empty() ? key : p + "." + key;
+  }
+  bool check(const nlohmann::json& v, const std::string& name, int64_t hi, int64_t lo) {
+    if (!error_.empty()) return false;
+    bool ok = false;
+    if (v.is_number_unsigned()) ok = v.get<uint64_t>() <= uint64_t(hi) && int64_t(v.get<uint64_t>()) >= lo;
+    else if (v.is_number_integer()) ok = v.get<int64_t>() >= lo && v.get<int64_t>() <= hi;
+    else if (v.is_number_float()) {
+      const double d = v.get<double>();
+      ok = std::isfinite(d) && d == std::floor(d) && d >= double(lo) && d <= double(hi);
+    }
+    if (!ok)
+      error_ = name + " = " + v.dump() + " is not an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    return ok;
+  }
+  void field(const nlohmann::json& o, const char* key, int64_t hi, int64_t lo = 0) {
+    if (const nlohmann::json* v = child(o, key)) check(*v, where(key), hi, lo);
+  }
+  void elements(const nlohmann::json& o, const char* key, int64_t hi) {
+    const nlohmann::json* arr = child(o, key);
+    if (!arr || !arr->is_array()) return;
+    for (size_t i = 0; i < arr->size() && error_.empty(); ++i)
+      check((*arr)[i], where(key) + "[" + std::to_string(i) + "]", hi, 0);
+  }
+  std::vector<std::string> path_;
+  std::string error_;
+};
+
 // ---- accessors -------------------------------------------------------------------------------------
 uint32_t componentSize(int type) {
   switch (type) {
@@ -228,8 +423,8 @@ class Reader {
       return Status::error(what + ": buffer " + std::to_string(v.buffer) + " does not exist");
     const tinygltf::Buffer& b = m_.buffers[size_t(v.buffer)];
     const uint64_t off = v.byteOffset, len = v.byteLength;
-    if (len == 0 || off > b.data.size() || len > b.data.size() - off)
-      return Status::error(what + ": bytes [" + std::to_string(off) + ", " + std::to_string(off + len) + ") do not fit buffers[" +
+    if (len == 0 || !rangeFits(off, len, b.data.size()))
+      return Status::error(what + ": byteLength " + std::to_string(len) + " at byteOffset " + std::to_string(off) + " does not fit buffers[" +
                            std::to_string(v.buffer) + "] (" + std::to_string(b.data.size()) + " bytes loaded)");
     if (v.byteStride != 0 && (v.byteStride < 4 || v.byteStride > 252 || v.byteStride % 4 != 0))
       return Status::error(what + ": byteStride " + std::to_string(v.byteStride) + " is not a multiple of 4 in [4, 252]");
@@ -240,9 +435,11 @@ class Reader {
   }
 
   // Reads accessor `index` as doubles (count x components), with every byte range checked,
-  // sparse substitution applied, and the allowed component types enforced.
-  Status read(int index, const std::vector<int>& types, std::vector<uint32_t> componentTypes, std::vector<double>* out,
-              uint32_t* outComponents, uint64_t* outCount) const {
+  // sparse substitution applied, and the allowed component types enforced. Nothing is allocated
+  // before the count is checked against the bytes behind it (or, for an accessor with no
+  // bufferView, against `maxCount`).
+  Status read(int index, const std::vector<int>& types, std::vector<uint32_t> componentTypes, uint64_t maxCount,
+              std::vector<double>* out, uint32_t* outComponents, uint64_t* outCount) const {
     const std::string what = "accessors[" + std::to_string(index) + "]";
     if (index < 0 || size_t(index) >= m_.accessors.size()) return Status::error(what + " does not exist");
     const tinygltf::Accessor& a = m_.accessors[size_t(index)];
@@ -251,51 +448,75 @@ class Reader {
     if (std::find(componentTypes.begin(), componentTypes.end(), uint32_t(a.componentType)) == componentTypes.end())
       return Status::error(what + ": componentType " + std::to_string(a.componentType) + " is not allowed here");
     const uint32_t cs = componentSize(a.componentType), nc = componentCount(a.type), elem = cs * nc;
-    if (a.count == 0 || a.count > (1ull << 32)) return Status::error(what + ": count " + std::to_string(a.count) + " is out of range");
-    out->assign(size_t(a.count) * nc, 0.0);
+    const uint64_t count = a.count;
+    if (count == 0) return Status::error(what + ": count 0 (glTF requires at least 1)");
+    const unsigned char* data = nullptr;
+    uint32_t stride = elem;
+    const uint64_t offset = a.byteOffset;
     if (a.bufferView >= 0) {
-      const unsigned char* data;
       uint64_t size;
-      uint32_t stride;
       CANOPY_TRY(view(a.bufferView, &data, &size, &stride).context(what));
       if (stride == 0) stride = elem;
       if (stride < elem) return Status::error(what + ": byteStride " + std::to_string(stride) + " is smaller than an element (" + std::to_string(elem) + ")");
-      if (a.byteOffset % cs != 0) return Status::error(what + ": byteOffset " + std::to_string(a.byteOffset) + " is not a multiple of the component size");
-      const uint64_t need = uint64_t(a.byteOffset) + uint64_t(stride) * (a.count - 1) + elem;
-      if (need > size)
-        return Status::error(what + ": needs " + std::to_string(need) + " bytes of bufferViews[" + std::to_string(a.bufferView) +
-                             "], which has " + std::to_string(size));
-      for (uint64_t i = 0; i < a.count; ++i)
-        for (uint32_t c = 0; c < nc; ++c)
-          (*out)[i * nc + c] = readComponent(data + a.byteOffset + stride * i + cs * c, a.componentType, a.normalized);
-    } else if (a.byteOffset != 0) {
-      return Status::error(what + ": byteOffset without a bufferView");
+      if (offset % cs != 0) return Status::error(what + ": byteOffset " + std::to_string(offset) + " is not a multiple of the component size");
+      uint64_t need = count - 1;  // offset + stride * (count - 1) + elem, checked
+      const bool fits = mulTo(&need, stride) && addTo(&need, offset) && addTo(&need, elem) && need <= size;
+      if (!fits)
+        return Status::error(what + ": byteOffset " + std::to_string(offset) + " + " + std::to_string(count) + " elements of stride " +
+                             std::to_string(stride) + " do not fit bufferViews[" + std::to_string(a.bufferView) + "] (" +
+                             std::to_string(size) + " bytes)");
+    } else {
+      if (offset != 0) return Status::error(what + ": byteOffset without a bufferView");
+      if (count > maxCount)
+        return Status::error(what + ": count " + std::to_string(count) + " without a bufferView exceeds the model's limit of " +
+                             std::to_string(maxCount) + " (GltfLoadOptions.maxVertices / maxTriangles)");
     }
+    // The sparse part, checked before any allocation too.
+    const unsigned char *idata = nullptr, *vdata = nullptr;
+    uint64_t n = 0;
+    uint32_t ics = 0;
+    uint64_t ioff = 0, voff = 0;
     if (a.sparse.isSparse) {
-      const uint64_t n = uint64_t(a.sparse.count);
-      if (n == 0 || n > a.count) return Status::error(what + ": sparse count " + std::to_string(a.sparse.count) + " is out of range");
-      const uint32_t ics = componentSize(a.sparse.indices.componentType);
+      if (a.sparse.count <= 0 || uint64_t(a.sparse.count) > count)
+        return Status::error(what + ": sparse count " + std::to_string(a.sparse.count) + " is outside [1, count = " + std::to_string(count) + "]");
+      n = uint64_t(a.sparse.count);
+      ics = componentSize(a.sparse.indices.componentType);
       if (ics == 0 || a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
           a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_SHORT || a.sparse.indices.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT)
         return Status::error(what + ": sparse indices componentType " + std::to_string(a.sparse.indices.componentType) + " is invalid");
-      const unsigned char *idata, *vdata;
+      if (a.sparse.indices.byteOffset < 0)
+        return Status::error(what + ".sparse.indices: byteOffset " + std::to_string(a.sparse.indices.byteOffset) + " is negative");
+      if (a.sparse.values.byteOffset < 0)
+        return Status::error(what + ".sparse.values: byteOffset " + std::to_string(a.sparse.values.byteOffset) + " is negative");
+      ioff = uint64_t(a.sparse.indices.byteOffset);
+      voff = uint64_t(a.sparse.values.byteOffset);
       uint64_t isize, vsize;
       uint32_t istride, vstride;
       CANOPY_TRY(view(a.sparse.indices.bufferView, &idata, &isize, &istride).context(what + ".sparse.indices"));
       CANOPY_TRY(view(a.sparse.values.bufferView, &vdata, &vsize, &vstride).context(what + ".sparse.values"));
-      if (uint64_t(a.sparse.indices.byteOffset) + n * ics > isize) return Status::error(what + ".sparse.indices: do not fit their bufferView");
-      if (uint64_t(a.sparse.values.byteOffset) + n * elem > vsize) return Status::error(what + ".sparse.values: do not fit their bufferView");
-      for (uint64_t k = 0; k < n; ++k) {
-        const uint64_t target = uint64_t(readComponent(idata + a.sparse.indices.byteOffset + k * ics, a.sparse.indices.componentType, false));
-        if (target >= a.count) return Status::error(what + ".sparse.indices[" + std::to_string(k) + "] = " + std::to_string(target) + " is past count " + std::to_string(a.count));
+      uint64_t ibytes = n, vbytes = n;
+      if (!mulTo(&ibytes, ics) || !rangeFits(ioff, ibytes, isize))
+        return Status::error(what + ".sparse.indices: " + std::to_string(n) + " indices at byteOffset " + std::to_string(ioff) +
+                             " do not fit their bufferView (" + std::to_string(isize) + " bytes)");
+      if (!mulTo(&vbytes, elem) || !rangeFits(voff, vbytes, vsize))
+        return Status::error(what + ".sparse.values: " + std::to_string(n) + " values at byteOffset " + std::to_string(voff) +
+                             " do not fit their bufferView (" + std::to_string(vsize) + " bytes)");
+    }
+    out->assign(size_t(count) * nc, 0.0);
+    if (data)
+      for (uint64_t i = 0; i < count; ++i)
         for (uint32_t c = 0; c < nc; ++c)
-          (*out)[target * nc + c] = readComponent(vdata + a.sparse.values.byteOffset + k * elem + cs * c, a.componentType, a.normalized);
-      }
+          (*out)[i * nc + c] = readComponent(data + offset + stride * i + cs * c, a.componentType, a.normalized);
+    for (uint64_t k = 0; k < n; ++k) {
+      const uint64_t target = uint64_t(readComponent(idata + ioff + k * ics, a.sparse.indices.componentType, false));
+      if (target >= count) return Status::error(what + ".sparse.indices[" + std::to_string(k) + "] = " + std::to_string(target) + " is past count " + std::to_string(count));
+      for (uint32_t c = 0; c < nc; ++c)
+        (*out)[target * nc + c] = readComponent(vdata + voff + k * elem + cs * c, a.componentType, a.normalized);
     }
     for (double v : *out)
       if (!std::isfinite(v)) return Status::error(what + ": contains NaN or infinity");
     *outComponents = nc;
-    *outCount = a.count;
+    *outCount = count;
     return Status();
   }
 
@@ -319,17 +540,18 @@ glm::mat4 nodeMatrix(const tinygltf::Node& n) {
 
 }  // namespace
 
-Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationModel* out) {
-  *out = VegetationModel{};
+// The loader behind loadGltf and loadGltfFromMemory: `bytes` is the model file, `fs` resolves
+// its external files.
+static Status loadBytes(const std::string& path, const std::vector<unsigned char>& bytes, FsContext& fs,
+                 const GltfLoadOptions& opt, VegetationModel* out) {
   const std::string file = "'" + path + "'";
   auto fail = [&](const std::string& what) {
     *out = VegetationModel{};
     return Status::error(file + ": " + what);
   };
-
-  std::vector<unsigned char> bytes;
-  Status s = readFile(path, opt.maxFileBytes, &bytes);
-  if (!s.ok()) return fail(s.message());
+  Status s;
+  if (bytes.size() > std::numeric_limits<uint32_t>::max())
+    return fail(std::to_string(bytes.size()) + " bytes: glTF files are limited to 4 GiB");
   const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
   if (glb && !(s = checkGlb(bytes)).ok()) return fail(s.message());
   {
@@ -337,17 +559,13 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
     const size_t json = glb ? 20 : 0;
     if (bytes.size() >= json + 3 && bytes[json] == 0xEF && bytes[json + 1] == 0xBB && bytes[json + 2] == 0xBF)
       return fail("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
+    uint32_t jsonLength = uint32_t(bytes.size());
+    if (glb) std::memcpy(&jsonLength, bytes.data() + 12, 4);  // checkGlb: inside the file
+    if (!(s = checkJsonDepth(bytes.data() + json, jsonLength, opt.maxJsonDepth)).ok()) return fail(s.message());
+    const nlohmann::json doc = nlohmann::json::parse(bytes.data() + json, bytes.data() + json + jsonLength, nullptr, false);
+    if (!doc.is_discarded() && !(s = JsonCheck().run(doc)).ok()) return fail(s.message());
   }
 
-  FsContext fs;
-  const size_t slash = path.find_last_of('/');
-  fs.baseDir = slash == std::string::npos ? "" : path.substr(0, slash);
-  fs.maxBytes = opt.maxFileBytes;
-  {
-    char resolved[PATH_MAX];
-    if (!realpath(fs.baseDir.empty() ? "." : fs.baseDir.c_str(), resolved)) return fail("cannot resolve its folder");
-    fs.realBase = resolved;
-  }
   ImageContext images;
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks({&fsFileExists, &fsExpand, &fsRead, &fsWrite, &fs});
@@ -359,6 +577,8 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
     parsed = glb ? loader.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), unsigned(bytes.size()), fs.baseDir)
                  : loader.LoadASCIIFromString(&m, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
                                               unsigned(bytes.size()), fs.baseDir);
+  } catch (const std::bad_alloc&) {
+    return Status::error(Result::OutOfHostMemory, file + ": out of host memory while parsing the JSON");
   } catch (const std::exception& e) {
     return fail(std::string("the glTF parser failed: ") + e.what());
   }
@@ -396,10 +616,20 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
           return fail("nodes[" + std::to_string(c) + "] has two parents or is its own child (node hierarchy is not a tree)");
         parent[size_t(c)] = int(i);
       }
+    // Every node has at most one parent, so a loop is a parent chain that comes back to itself:
+    // walk each chain once (state 1 = on the current walk, 2 = known to reach a root), O(nodes).
+    std::vector<uint8_t> state(m.nodes.size(), 0);
+    std::vector<size_t> walk;
     for (size_t i = 0; i < m.nodes.size(); ++i) {
-      size_t steps = 0;
-      for (int p = parent[i]; p >= 0; p = parent[size_t(p)])
-        if (++steps > m.nodes.size()) return fail("nodes[" + std::to_string(i) + "] is part of a loop in the node hierarchy");
+      walk.clear();
+      int p = int(i);
+      while (p >= 0 && state[size_t(p)] == 0) {
+        state[size_t(p)] = 1;
+        walk.push_back(size_t(p));
+        p = parent[size_t(p)];
+      }
+      if (p >= 0 && state[size_t(p)] == 1) return fail("nodes[" + std::to_string(p) + "] is part of a loop in the node hierarchy");
+      for (size_t w : walk) state[w] = 2;
     }
   }
   if (m.defaultScene >= 0 && size_t(m.defaultScene) >= m.scenes.size())
@@ -430,10 +660,12 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
   }
 
   Reader reader(m);
-  std::vector<int> materialUsed;
   const uint32_t defaultMaterial = uint32_t(m.materials.size());
   std::vector<uint8_t> visiting(m.nodes.size(), 0);
-  std::function<Status(int, const glm::mat4&)> visit = [&](int ni, const glm::mat4& parent) -> Status {
+  // The hierarchy is walked with an explicit stack: a chain of a million nodes is a valid tree
+  // and must not exhaust the call stack.
+  std::vector<std::pair<int, glm::mat4>> pending;
+  auto visit = [&](int ni, const glm::mat4& parent) -> Status {
     const std::string what = "nodes[" + std::to_string(ni) + "]";
     if (ni < 0 || size_t(ni) >= m.nodes.size()) return Status::error(what + " does not exist");
     if (visiting[size_t(ni)]) return Status::error(what + " appears twice in the scene's hierarchy (cycle or shared child)");
@@ -460,22 +692,26 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
         std::vector<double> P, N, T, I;
         uint32_t nc;
         uint64_t vcount, count;
-        CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, &P, &nc, &vcount).context(pw + ".POSITION"));
+        // Budgets left for this primitive (instancing a mesh by many nodes counts every instance).
+        const uint64_t vertexBudget = opt.maxVertices > out->positions.size() ? opt.maxVertices - out->positions.size() : 0;
+        const uint64_t triangleBudget = opt.maxTriangles > out->triangleCount() ? opt.maxTriangles - out->triangleCount() : 0;
+        const uint64_t indexBudget = triangleBudget > (UINT64_MAX - 2) / 3 ? UINT64_MAX : triangleBudget * 3 + 2;
+        CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &P, &nc, &vcount).context(pw + ".POSITION"));
         if (auto it = pr.attributes.find("NORMAL"); it != pr.attributes.end()) {
-          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, &N, &nc, &count).context(pw + ".NORMAL"));
+          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &N, &nc, &count).context(pw + ".NORMAL"));
           if (count != vcount) return Status::error(pw + ".NORMAL: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
         }
         if (auto it = pr.attributes.find("TEXCOORD_0"); it != pr.attributes.end()) {
           CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2},
                                  {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-                                 &T, &nc, &count).context(pw + ".TEXCOORD_0"));
+                                 vertexBudget, &T, &nc, &count).context(pw + ".TEXCOORD_0"));
           if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
         }
         std::vector<uint32_t> idx;
         if (pr.indices >= 0) {
           CANOPY_TRY(reader.read(pr.indices, {TINYGLTF_TYPE_SCALAR},
                                  {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
-                                 &I, &nc, &count).context(pw + ".indices"));
+                                 indexBudget, &I, &nc, &count).context(pw + ".indices"));
           idx.resize(I.size());
           for (size_t k = 0; k < I.size(); ++k) {
             if (I[k] >= double(vcount))
@@ -504,13 +740,17 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
           if (size_t(pr.material) >= m.materials.size()) return Status::error(pw + ": material " + std::to_string(pr.material) + " does not exist");
           mat = uint32_t(pr.material);
         }
+        if (vcount > vertexBudget)
+          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxVertices) + " vertices (GltfLoadOptions.maxVertices)");
         if (out->positions.size() + vcount > std::numeric_limits<uint32_t>::max())
           return Status::error(pw + ": the model exceeds 2^32 vertices");
         if (out->triangleCount() + tri.size() / 3 > opt.maxTriangles)
-          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxTriangles) + " triangles");
+          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxTriangles) + " triangles (GltfLoadOptions.maxTriangles)");
         const uint32_t base = uint32_t(out->positions.size());
         for (uint64_t v = 0; v < vcount; ++v) {
           glm::vec4 p = world * glm::vec4(float(P[v * 3]), float(P[v * 3 + 1]), float(P[v * 3 + 2]), 1.0f);
+          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return Status::error(pw + ".POSITION[" + std::to_string(v) + "] is not finite after the node transforms");
           out->positions.push_back(glm::vec3(p));
           glm::vec3 nrm(0.0f);
           if (!N.empty()) {
@@ -539,16 +779,22 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
           }
       }
     }
-    for (int c : node.children) CANOPY_TRY(visit(c, world));
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) pending.push_back({*c, world});
     return Status();
   };
-  for (int r : roots) {
-    s = visit(r, glm::mat4(1.0f));
+  for (auto r = roots.rbegin(); r != roots.rend(); ++r) pending.push_back({*r, glm::mat4(1.0f)});
+  while (!pending.empty()) {
+    const auto [ni, parentWorld] = pending.back();
+    pending.pop_back();
+    s = visit(ni, parentWorld);
     if (!s.ok()) return fail(s.message());
   }
 
   // Materials (all of them keep their index; a default one is appended) and the images they use.
   std::vector<int32_t> imageSlot(m.images.size(), -1);
+  std::vector<bool> materialUsedByTriangle(m.materials.size() + 1, false);
+  for (uint32_t t : out->triangleMaterial) materialUsedByTriangle[t] = true;
+  uint64_t pixelsLeft = opt.maxImagePixels;
   for (size_t i = 0; i <= m.materials.size(); ++i) {
     ModelMaterial mm;
     if (i == m.materials.size()) {
@@ -564,7 +810,7 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
     mm.alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
     mm.alphaCutoff = float(src.alphaCutoff);
     mm.doubleSided = src.doubleSided;
-    const bool used = std::find(out->triangleMaterial.begin(), out->triangleMaterial.end(), uint32_t(i)) != out->triangleMaterial.end();
+    const bool used = materialUsedByTriangle[i];
     const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
     if (tex >= 0 && used) {
       if (size_t(tex) >= m.textures.size()) return fail(what + ": texture " + std::to_string(tex) + " does not exist");
@@ -594,6 +840,11 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
             return fail(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
           if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
             return fail(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
+          const uint64_t pixels = uint64_t(w) * uint64_t(h);
+          if (pixels > pixelsLeft)
+            return fail(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
+                        std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
+          pixelsLeft -= pixels;
           unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
           if (!px) return fail(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
           ModelImage mi;
@@ -620,6 +871,55 @@ Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationM
   }
   out->path = path;
   return Status();
+}
+
+// Everything the loader calls that can throw (the standard library's allocations, nlohmann-json,
+// tinygltf) stops here: the caller gets a Status, never an exception.
+template <class F>
+static Status guarded(const std::string& path, VegetationModel* out, F&& load) {
+  Status s;
+  try {
+    s = load();
+  } catch (const std::bad_alloc&) {
+    s = Status::error(Result::OutOfHostMemory, "'" + path + "': out of host memory while loading");
+  } catch (const std::exception& e) {
+    s = Status::error(Result::InvalidModel, "'" + path + "': " + e.what());
+  }
+  if (!s.ok()) *out = VegetationModel{};
+  return s;
+}
+
+Status loadGltf(const std::string& path, const GltfLoadOptions& opt, VegetationModel* out) {
+  *out = VegetationModel{};
+  return guarded(path, out, [&]() -> Status {
+    std::vector<unsigned char> bytes;
+    Status s = readFile(path, opt.maxFileBytes, &bytes);
+    if (!s.ok()) return Status::error(s.code(), "'" + path + "': " + s.message());
+    FsContext fs;
+    const size_t slash = path.find_last_of('/');
+    fs.baseDir = slash == std::string::npos ? "" : path.substr(0, slash);
+    fs.maxBytes = opt.maxFileBytes;
+    char resolved[PATH_MAX];
+    if (!realpath(fs.baseDir.empty() ? "." : fs.baseDir.c_str(), resolved))
+      return Status::error(Result::FileError, "'" + path + "': cannot resolve its folder");
+    fs.realBase = resolved;
+    return loadBytes(path, bytes, fs, opt, out);
+  });
+}
+
+Status loadGltfFromMemory(const std::string& name, const std::vector<unsigned char>& bytes,
+                          const std::map<std::string, std::vector<unsigned char>>& files, const GltfLoadOptions& opt,
+                          VegetationModel* out) {
+  *out = VegetationModel{};
+  return guarded(name, out, [&]() -> Status {
+    FsContext fs;
+    fs.maxBytes = opt.maxFileBytes;
+    fs.memory = &files;
+    if (bytes.size() > opt.maxFileBytes)
+      return Status::error("'" + name + "': file of " + std::to_string(bytes.size()) + " bytes exceeds the limit of " +
+                           std::to_string(opt.maxFileBytes));
+    return loadBytes(name, bytes, fs, opt, out);
+  });
 }
 
 }  // namespace canopy

@@ -9,6 +9,7 @@
 // relative and inside the model's folder). A refusal is a Status naming the file and the glTF
 // element; nothing is read out of bounds.
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,14 @@ struct VegetationModel {
 
 // Loads `path` (.gltf or .glb, decided by the file's first bytes). On failure `out` is empty and
 // the Status names the file and the element ("meshes[2].primitives[0]: accessor 7 ...").
+// Never throws; a file that is not a regular file (FIFO, device, folder) is refused without
+// blocking; every limit of `options` holds before anything is allocated from the file's numbers.
 Status loadGltf(const std::string& path, const GltfLoadOptions& options, VegetationModel* out);
+
+// The same from memory (the fuzz target): `bytes` is the model, `files` its external files by URI
+// relative to the model (the same path rules as on disk: no absolute paths, no "..").
+Status loadGltfFromMemory(const std::string& name, const std::vector<unsigned char>& bytes,
+                          const std::map<std::string, std::vector<unsigned char>>& files, const GltfLoadOptions& options,
+                          VegetationModel* out);
 
 }  // namespace canopy

@@ -459,6 +459,17 @@ bool operator==(const LayerSettings& a, const LayerSettings& b) {
 }
 
 Status validateLayerSettings(const LayerSettings& s) {
+  // Each region first: their sum could wrap around 2^32.
+  for (int i = 0; i < 3; ++i)
+    if (s.layout.region[i] > kMaxLayers)
+      return Status::error("layer settings: layout.region[" + std::to_string(i) + "] = " + std::to_string(s.layout.region[i]) +
+                           " is outside [0, " + std::to_string(kMaxLayers) + "]");
+  if (uint32_t(s.slice) > uint32_t(SliceMode::Geometry))
+    return Status::error("layer settings: slice = " + std::to_string(uint32_t(s.slice)) + " is outside LeafRoots (0)..Geometry (1)");
+  if (uint32_t(s.draw) > uint32_t(LayerDrawMode::PerLayer))
+    return Status::error("layer settings: draw = " + std::to_string(uint32_t(s.draw)) + " is outside Auto (0)..PerLayer (2)");
+  if (uint32_t(s.policy) > uint32_t(ReslicePolicy::EveryFrame))
+    return Status::error("layer settings: policy = " + std::to_string(uint32_t(s.policy)) + " is outside OnViewChange (0)..EveryFrame (1)");
   if (s.layout.count() < 1 || s.layout.count() > kMaxLayers)
     return Status::error("layer settings: layout " + toString(s.layout) + " must hold 1.." + std::to_string(kMaxLayers) + " layers");
   CANOPY_TRY(validateRegionSplit(s.regions));
@@ -470,8 +481,9 @@ Status validateLayerSettings(const LayerSettings& s) {
     return Status::error("layer settings: ambient " + std::to_string(s.ambient) + " is outside [0, 1]");
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(toGlm(s.lightDirection)[i])) return Status::error("layer settings: lightDirection must be finite");
-    if (!(toGlm(s.lightColor)[i] >= 0 && std::isfinite(toGlm(s.lightColor)[i])))
-      return Status::error("layer settings: lightColor components must be finite and >= 0");
+    if (!(toGlm(s.lightColor)[i] >= 0 && toGlm(s.lightColor)[i] <= 1000))
+      return Status::error("layer settings: lightColor[" + std::to_string(i) + "] = " + std::to_string(toGlm(s.lightColor)[i]) +
+                           " is outside [0, 1000]");
   }
   return Status();
 }

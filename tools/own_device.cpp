@@ -194,7 +194,7 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   vkGetDeviceQueue(device, family, 0, &queue);
 
   AdoptDeviceDesc ad;
-  ad.getInstanceProcAddr = vkGetInstanceProcAddr;
+  ad.getInstanceProcAddr = desc.getInstanceProcAddr ? desc.getInstanceProcAddr : vkGetInstanceProcAddr;
   ad.instance = d.instance;
   ad.instanceApiVersion = app.apiVersion;
   ad.physicalDevice = physical;

@@ -31,6 +31,9 @@ struct DeviceDesc {
   // Record uploads into the next recordCanopy() command buffer as on a host's device (adoptDevice),
   // instead of submitting them at once (Canopy's own tools, the render-graph path).
   bool deferUploads = false;
+  // The loader Canopy's entry points come from (null: the system loader's vkGetInstanceProcAddr);
+  // e.g. tools/fault_loader.h for fault injection.
+  PFN_vkGetInstanceProcAddr getInstanceProcAddr = nullptr;
 };
 
 // Creates instance, picks the physical device, creates the logical device with one queue and the

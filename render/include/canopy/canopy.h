@@ -21,7 +21,7 @@
 // The version this header declares. createCanopy() refuses a library of another major version, or
 // an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
 #define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 2
+#define CANOPY_VERSION_MINOR 3
 #define CANOPY_VERSION_PATCH 0
 #define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
 #define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)
@@ -167,10 +167,15 @@ struct Model;  // one vegetation model in host memory (opaque); may be destroyed
 
 enum class AlphaMode : uint32_t { Opaque = 0, Mask = 1, Blend = 2 };
 
+// Limits a hostile file cannot get past: nothing is allocated from a number in the file before it
+// is checked against the bytes behind it or against these.
 struct GltfLoadOptions {
-  uint64_t maxFileBytes = 2ull << 30;      // any single file (the model, a buffer, an image)
+  uint64_t maxFileBytes = 2ull << 30;      // any single file (the model, a buffer, an image), <= 4 GiB
   uint32_t maxImageDimension = 16384;      // per side
-  uint64_t maxTriangles = 200'000'000;
+  uint64_t maxImagePixels = 1ull << 28;    // all decoded images together (4 bytes each)
+  uint64_t maxTriangles = 200'000'000;     // the whole model, after instancing by nodes
+  uint64_t maxVertices = 150'000'000;      // the whole model, after instancing by nodes (32 bytes each)
+  uint32_t maxJsonDepth = 64;              // nesting of JSON arrays and objects, checked before parsing
   bool decodeImages = true;
 };
 // Loads a .gltf or .glb (decided by the file's first bytes). Refusals name the file and element.
@@ -320,8 +325,8 @@ struct LayerSettings {
   ReslicePolicy policy = ReslicePolicy::OnViewChange;
   float moveThreshold = 0.01f;           // camera travel that re-slices, fraction of the model's radius, [0, 10]
   float turnThresholdDegrees = 0.5f;     // camera turn that re-slices, [0, 180]
-  Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space (normalised)
-  Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each >= 0
+  Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space, finite (normalised; zero: straight up)
+  Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each in [0, 1000]
   float ambient = 0.35f;                 // [0, 1]
 };
 bool operator==(const LayerSettings& a, const LayerSettings& b);

@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# Fuzzes the glTF loading path (bytes -> validated model -> material split -> leaf roots,
+# tests/fuzz/) with libFuzzer, clang, AddressSanitizer and UBSan, tinygltf compiled in with the
+# same sanitizers; any report halts the run. Seeds: ../shared/assets (malformed corpus and sample
+# models, with the files beside them) and tests/fuzz/regressions; dictionary tests/fuzz/gltf.dict.
+#   scripts/fuzz.sh [SECONDS]      (default 300; FUZZ_JOBS worker processes, default nproc)
+# Prints executions, coverage and crashes, appends them to tests/fuzz/runs.tsv, and copies every
+# crashing input into tests/fuzz/regressions/ (ctest FuzzRegressions replays them all).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+seconds=${1:-300}
+jobs=${FUZZ_JOBS:-$(nproc)}
+if ! command -v clang++ >/dev/null; then
+  echo "installing clang (libFuzzer)"; apt-get install -y -qq clang >/dev/null
+fi
+cmake -S tests/fuzz -B build/fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ >/dev/null
+cmake --build build/fuzz >/dev/null
+out=build/fuzz
+rm -rf "$out/seeds" "$out/crashes"
+mkdir -p "$out/corpus" "$out/crashes"
+if [ -d ../shared/assets ]; then
+  python3 scripts/fuzz_seeds.py ../shared/assets "$out/seeds" tests/fuzz/regressions
+else
+  echo "../shared/assets absent: seeding from tests/fuzz/regressions only"
+  mkdir -p "$out/seeds"; cp tests/fuzz/regressions/* "$out/seeds/" 2>/dev/null || true
+fi
+# One libFuzzer process per worker on a shared corpus (fork mode restarts its children every few
+# seconds and costs half the executions); each stops at the first report.
+rm -f "$out"/fuzz-*.log
+set +e
+(cd "$out" && ./canopy_gltf_fuzz -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len=65536 -timeout=20 \
+  -rss_limit_mb=2048 -dict=../../tests/fuzz/gltf.dict -artifact_prefix=crashes/ -print_final_stats=1 \
+  corpus seeds > last_run.log 2>&1)
+rc=$?
+set -e
+execs=0 cov=0
+for l in "$out"/fuzz-*.log; do
+  n=$(grep -aE '^stat::number_of_executed_units:' "$l" | awk '{print $2}' | tail -1)
+  [ -n "$n" ] || n=$(grep -aoE '^#[0-9]+' "$l" | tail -1 | tr -d '#')
+  execs=$((execs + ${n:-0}))
+  c=$(grep -aoE 'cov: [0-9]+' "$l" | tail -1 | awk '{print $2}')
+  [ "${c:-0}" -gt "$cov" ] && cov=$c
+done
+corp=$(find "$out/corpus" -type f | wc -l)
+crashes=$(find "$out/crashes" -type f | wc -l)
+for f in "$out"/crashes/*; do
+  [ -f "$f" ] && cp "$f" tests/fuzz/regressions/ && echo "kept $(basename "$f") in tests/fuzz/regressions/"
+done
+[ -f tests/fuzz/runs.tsv ] || printf 'date\tseconds\tjobs\texecutions\tcoverage\tcorpus\tcrashes\tcommit\n' > tests/fuzz/runs.tsv
+printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$seconds" "$jobs" "${execs:-0}" "${cov:-0}" "${corp:-0}" \
+  "$crashes" "$(git rev-parse --short HEAD 2>/dev/null || echo -)" >> tests/fuzz/runs.tsv
+total=$(awk -F'\t' 'NR > 1 { s += $4 } END { print s + 0 }' tests/fuzz/runs.tsv)
+echo "fuzz: ${execs:-0} executions in ${seconds} s on $jobs workers, coverage ${cov:-?}, corpus ${corp:-?}, crashes $crashes (libFuzzer exit $rc); all runs in tests/fuzz/runs.tsv: $total executions"
+[ "$crashes" -eq 0 ] || { grep -ahE -A30 'ERROR|runtime error|deadly signal' "$out"/fuzz-*.log | head -60; exit 1; }

@@ -1,0 +1,187 @@
+// Out-of-memory and device loss (issue "Reliability"), injected the way a host could: Canopy
+// adopts the test's VkDevice through a loader whose entry points fail after N successful object
+// creations and allocations (tools/fault_loader.h). For every failure point of adoption, context
+// creation and the first frames, each public call returns an error with the right Result naming
+// the failing Vulkan call, the context stays destroyable, and after destroyCanopy + releaseDevice
+// every Vulkan object Canopy created through the loader is destroyed again (the loader's count);
+// validation stays clean (GpuTest).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "tests/gpu_test.h"
+#include "tests/test_host.h"
+#include "tools/fault_loader.h"
+#include "tools/leaf_cloud.h"
+
+using namespace canopy;
+using canopy::test::GpuTest;
+using canopy::test::Host;
+
+namespace {
+
+struct Outcome {
+  Status failure;         // the first refusal, if any
+  const char* where = ""; // which public call refused
+  int frames = 0;         // frames recorded before it
+};
+
+}  // namespace
+
+class FaultInjectionTest : public GpuTest {
+ protected:
+  VegetationModel model = makeLeafCloud(400, 3, true);
+
+  // Canopy on the test's own VkDevice, its entry points from `gipa` (the device was created by
+  // createDevice with exactly what enableDeviceFeatures and the requirements name).
+  Status adopt(PFN_vkGetInstanceProcAddr gipa, Device** out) {
+    // The instance's version as tools/own_device.cpp chose it.
+    uint32_t loaderVersion = VK_API_VERSION_1_0;
+    vkEnumerateInstanceVersion(&loaderVersion);
+    const uint32_t api = loaderVersion >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+    DeviceRequirements req;
+    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, dev.instance, api, dev.physical, &req));
+    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
+    VkPhysicalDeviceDynamicRenderingFeatures dyn{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+    f2.pNext = &f11;
+    f11.pNext = &f12;
+    if (api >= VK_API_VERSION_1_3) {
+      f12.pNext = &f13;
+    } else {
+      f12.pNext = &sync2;
+      sync2.pNext = &dyn;
+    }
+    CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, dev.instance, dev.physical, &f2));
+    std::vector<const char*> ext;
+    for (const std::string& e : req.extensions) ext.push_back(e.c_str());
+    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
+    info.enabledExtensionCount = uint32_t(ext.size());
+    info.ppEnabledExtensionNames = ext.data();
+    AdoptDeviceDesc ad;
+    ad.getInstanceProcAddr = gipa;
+    ad.instance = dev.instance;
+    ad.instanceApiVersion = api;
+    ad.physicalDevice = dev.physical;
+    ad.device = dev.device;
+    ad.deviceCreateInfo = &info;
+    ad.queue = dev.queue;
+    ad.queueFamily = dev.queueFamily;
+    ad.framesInFlight = 2;
+    return adoptDevice(ad, out);
+  }
+
+  // Adopt, create a context, record and submit `frames` frames, destroy everything.
+  Outcome scenario(int frames) {
+    Outcome o;
+    Device* cd = nullptr;
+    Status s = adopt(fault::loader(vkGetInstanceProcAddr), &cd);
+    if (!s.ok()) {
+      o.failure = s;
+      o.where = "adoptDevice";
+      EXPECT_EQ(cd, nullptr);
+      return o;
+    }
+    Host host;  // the host's targets on its own (unwrapped) entry points
+    host.w = 48;
+    host.h = 32;
+    EXPECT_TRUE(host.create(dev, 2).ok());
+    CanopyDesc desc;
+    desc.width = host.w;
+    desc.height = host.h;
+    desc.colorFormat = host.colorFormat;
+    desc.depthFormat = host.depthFormat;
+    CanopyContext* ctx = nullptr;
+    s = createCanopy(*cd, model, desc, &ctx);
+    if (!s.ok()) {
+      o.failure = s;
+      o.where = "createCanopy";
+      EXPECT_EQ(ctx, nullptr);
+    }
+    for (int i = 0; ctx && i < frames; ++i) {
+      Status refusal;
+      // Different yaw every frame and a resize once: re-slicing and new parts allocate too.
+      const LayerView v = orbitView(model.boundsMin, model.boundsMax, 20.0f + 10.0f * float(i), 10.0f, 40.0f, 1.5f, 1.05f);
+      if (i == frames - 1) {
+        Status r = resizeCanopy(ctx, host.w + 8, host.h);
+        if (!r.ok()) {
+          o.failure = r;
+          o.where = "resizeCanopy";
+          break;
+        }
+        EXPECT_TRUE(host.finish().ok());
+        host.destroy();
+        host = Host();
+        host.w = 56;
+        host.h = 32;
+        EXPECT_TRUE(host.create(dev, 2).ok());
+      }
+      Status fs = host.frame(uint64_t(i + 1), {ctx}, v, 1.0f / 30.0f, false, nullptr, &refusal);
+      EXPECT_TRUE(fs.ok()) << fs.message();
+      if (!refusal.ok()) {
+        o.failure = refusal;
+        o.where = "recordCanopy";
+        break;
+      }
+      ++o.frames;
+    }
+    EXPECT_TRUE(host.finish().ok());
+    destroyCanopy(ctx);
+    releaseDevice(cd);
+    host.destroy();
+    return o;
+  }
+};
+
+TEST_F(FaultInjectionTest, EveryAllocationFailureIsReportedAndLeavesNothingBehind) {
+  const int64_t live0 = fault::liveObjects();
+  fault::arm(fault::Mode::Off, 0);
+  Outcome clean = scenario(3);
+  ASSERT_TRUE(clean.failure.ok()) << clean.where << ": " << clean.failure.message();
+  const int64_t points = fault::calls();
+  EXPECT_EQ(fault::liveObjects(), live0) << "a clean run leaked Vulkan objects";
+  ASSERT_GT(points, 10);
+  // Every failure point (up to 400; beyond that 400 spread over them, first and last included).
+  std::vector<int64_t> at;
+  const int64_t n = std::min<int64_t>(points, 400);
+  for (int64_t i = 0; i < n; ++i) at.push_back(n == points ? i : i * (points - 1) / (n - 1));
+  int byCall[4] = {0, 0, 0, 0};
+  for (int64_t k : at) {
+    SCOPED_TRACE("allocation " + std::to_string(k) + " of " + std::to_string(points) + " fails");
+    fault::arm(fault::Mode::OutOfMemory, k);
+    Outcome o = scenario(3);
+    EXPECT_TRUE(fault::triggered());
+    fault::arm(fault::Mode::Off, 0);
+    EXPECT_FALSE(o.failure.ok()) << "the injected failure was not reported";
+    EXPECT_EQ(o.failure.code(), Result::OutOfDeviceMemory) << o.where << ": " << o.failure.message();
+    EXPECT_NE(o.failure.message().find("VK_ERROR_OUT_OF_DEVICE_MEMORY"), std::string::npos) << o.failure.message();
+    EXPECT_NE(o.failure.message().find("vk"), std::string::npos) << "the failing Vulkan call is named: " << o.failure.message();
+    EXPECT_EQ(fault::liveObjects(), live0) << "Vulkan objects leaked after a failure in " << o.where;
+    const std::string w = o.where;
+    byCall[w == "adoptDevice" ? 0 : w == "createCanopy" ? 1 : w == "resizeCanopy" ? 2 : 3]++;
+  }
+  std::printf("  %lld allocation points in adopt + create + 3 frames + resize; %zu injected: %d refused by adoptDevice, %d by "
+              "createCanopy, %d by resizeCanopy, %d by recordCanopy; no leak\n",
+              (long long)points, at.size(), byCall[0], byCall[1], byCall[2], byCall[3]);
+}
+
+TEST_F(FaultInjectionTest, ADeviceLossIsReportedAsDeviceLost) {
+  const int64_t live0 = fault::liveObjects();
+  fault::arm(fault::Mode::Off, 0);
+  ASSERT_TRUE(scenario(3).failure.ok());
+  const int64_t points = fault::calls();
+  int reported = 0;
+  for (int64_t k : {int64_t(0), points / 3, points / 2, points - 1}) {
+    fault::arm(fault::Mode::DeviceLost, k);
+    Outcome o = scenario(3);
+    fault::arm(fault::Mode::Off, 0);
+    EXPECT_EQ(o.failure.code(), Result::DeviceLost) << o.where << ": " << o.failure.message();
+    EXPECT_NE(o.failure.message().find("VK_ERROR_DEVICE_LOST"), std::string::npos) << o.failure.message();
+    EXPECT_EQ(fault::liveObjects(), live0);
+    reported += !o.failure.ok();
+  }
+  std::printf("  device lost at 4 points: %d reported as DeviceLost, nothing leaked\n", reported);
+}

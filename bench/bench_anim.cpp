@@ -13,6 +13,7 @@
 #include <map>
 
 #include "bench/bench.h"
+#include "bench/bench_host.h"
 #include "engine/device.h"
 #include "engine/timing.h"
 #include "render/canopy.h"
@@ -24,46 +25,6 @@ namespace {
 
 double nowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-struct HostTargets {
-  Image color, depth;
-};
-
-Status createHostTargets(Device& d, uint32_t w, uint32_t h, HostTargets* t) {
-  ImageDesc c;
-  c.format = VK_FORMAT_R8G8B8A8_UNORM;
-  c.width = w;
-  c.height = h;
-  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  CANOPY_TRY(createImage(d, c, &t->color, "bench host colour"));
-  c.format = VK_FORMAT_D32_SFLOAT;
-  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  return createImage(d, c, &t->depth, "bench host depth");
-}
-
-// The host's frame: clear its targets, then Canopy's passes (or only the clear).
-Status buildHostGraph(Device& d, CanopyContext* ctx, HostTargets& t, bool withCanopy, rg::RenderGraph* g) {
-  const rg::State colorRW = rg::stateOf(rg::Use::ColorAttachmentReadWrite), depthW = rg::stateOf(rg::Use::DepthAttachmentWrite);
-  CompositeTargets ct;
-  ct.color = g->importImage("host colour", descOf(t.color), {}, colorRW);
-  ct.depth = g->importImage("host depth", descOf(t.depth), {}, depthW);
-  g->addPass("host clear", [ct](rg::PassContext& x) {
-     const VkClearColorValue cv{{0.45f, 0.6f, 0.8f, 1.0f}};
-     const VkClearDepthStencilValue dv{1.0f, 0};
-     const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-     vkCmdClearColorImage(x.cmd, x.image(ct.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
-     vkCmdClearDepthStencilImage(x.cmd, x.image(ct.depth).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
-     return Status();
-   })
-      .write(ct.color, rg::Use::TransferDst)
-      .write(ct.depth, rg::Use::TransferDst)
-      .sideEffect();
-  CANOPY_TRY(g->bindImage(ct.color, t.color));
-  CANOPY_TRY(g->bindImage(ct.depth, t.depth));
-  if (withCanopy) CANOPY_TRY(addCanopyPasses(ctx, *g, ct));
-  CANOPY_TRY(g->compile());
-  return g->realize(d);
 }
 
 struct FrameStats {
@@ -138,14 +99,14 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
     CanopyContext* ctx = nullptr;
     Status s = createCanopy(dev, model, desc, &ctx);
     HostTargets host;
-    if (s.ok()) s = createHostTargets(dev, width, height, &host);
+    if (s.ok()) s = createHostTargets(dev, width, height, VK_FORMAT_R8G8B8A8_UNORM, &host);
     const LayerView view = orbitView(model.boundsMin, model.boundsMax, 20, 10, 40, float(width) / float(height), 0.8f);
     GpuTimer timer;
     if (s.ok()) s = timer.init(dev, 64);
     // The host's clear alone, subtracted from every wall figure.
     FrameStats clearOnly;
     rg::RenderGraph clearGraph;
-    if (s.ok()) s = buildHostGraph(dev, ctx, host, false, &clearGraph);
+    if (s.ok()) s = buildHostGraph(dev, ctx, host, false, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &clearGraph);
     if (s.ok()) s = measure(dev, ctx, clearGraph, timer, view, 0.0f, frames, false, &clearOnly);
     clearGraph.release(dev);
     for (const std::string& text : layouts) {
@@ -154,7 +115,7 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
       s = parseLayerLayout(text, &p.layers.layout);
       if (s.ok()) s = setCanopyParams(ctx, p);
       rg::RenderGraph g;
-      if (s.ok()) s = buildHostGraph(dev, ctx, host, true, &g);
+      if (s.ok()) s = buildHostGraph(dev, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &g);
       // The first frame slices the layers (not measured: a still camera never re-slices).
       FrameStats warm, anim, whole;
       if (s.ok()) s = measure(dev, ctx, g, timer, view, 0.0f, 1, true, &warm);
@@ -194,8 +155,7 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
       g.release(dev);
     }
     timer.destroy(dev);
-    destroyImage(dev, host.color);
-    destroyImage(dev, host.depth);
+    destroyHostTargets(dev, host);
     destroyCanopy(ctx);
     if (!s.ok()) {
       std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());

@@ -14,6 +14,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "bench/bench.h"
+#include "bench/bench_host.h"
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/canopy.h"
@@ -59,24 +60,17 @@ int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check) {
               "frames (camera turned, layer count 3 <-> 5).\n",
               frames, model.triangleCount(), w, h, rebuildEvery);
   CanopyContext* ctx = nullptr;
-  Image color, depth;
+  HostTargets host;
   rg::RenderGraph g;
   uint64_t builtFor = ~0ull;
   Status s = [&]() -> Status {
-    ImageDesc c;
-    c.format = VK_FORMAT_R16G16B16A16_SFLOAT;
-    c.width = w;
-    c.height = h;
-    c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    CANOPY_TRY(createImage(dev, c, &color, "soak colour"));
-    c.format = VK_FORMAT_D32_SFLOAT;
-    c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-    CANOPY_TRY(createImage(dev, c, &depth, "soak depth"));
+    CANOPY_TRY(createHostTargets(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT, &host));
+    const Image& color = host.color;
     CanopyDesc desc;
     desc.width = w;
     desc.height = h;
-    desc.colorFormat = color.format;
-    desc.depthFormat = depth.format;
+    desc.colorFormat = host.color.format;
+    desc.depthFormat = host.depth.format;
     CANOPY_TRY(createCanopy(dev, model, desc, &ctx));
 
     std::mt19937 rng(7);
@@ -117,26 +111,7 @@ int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check) {
       if (canopyResourceGeneration(ctx) != builtFor) {  // new layer images: the host's graph again
         g.release(dev);
         g = rg::RenderGraph();
-        CompositeTargets ct;
-        // Contents are cleared every frame, and every frame completes before the next: UNDEFINED in.
-        ct.color = g.importImage("soak colour", descOf(color), rg::State{}, src);
-        ct.depth = g.importImage("soak depth", descOf(depth), rg::State{}, rg::stateOf(rg::Use::DepthAttachmentWrite));
-        g.addPass("clear", [ct](rg::PassContext& x) {
-           const VkClearColorValue cv{{0.45f, 0.6f, 0.8f, 1.0f}};
-           const VkClearDepthStencilValue dv{1.0f, 0};
-           const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-           vkCmdClearColorImage(x.cmd, x.image(ct.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
-           vkCmdClearDepthStencilImage(x.cmd, x.image(ct.depth).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
-           return Status();
-         })
-            .write(ct.color, rg::Use::TransferDst)
-            .write(ct.depth, rg::Use::TransferDst)
-            .sideEffect();
-        CANOPY_TRY(g.bindImage(ct.color, color));
-        CANOPY_TRY(g.bindImage(ct.depth, depth));
-        CANOPY_TRY(addCanopyPasses(ctx, g, ct));
-        CANOPY_TRY(g.compile());
-        CANOPY_TRY(g.realize(dev));
+        CANOPY_TRY(buildHostGraph(dev, ctx, host, true, src, &g));
         builtFor = canopyResourceGeneration(ctx);
       }
       const LayerView view = orbitView(model.boundsMin, model.boundsMax, yaw, 12.0f, 40.0f, float(w) / float(h), 1.1f);
@@ -198,8 +173,7 @@ int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check) {
   if (dev.device) vkQueueWaitIdle(dev.queue);
   destroyCanopy(ctx);
   g.release(dev);
-  destroyImage(dev, color);
-  destroyImage(dev, depth);
+  destroyHostTargets(dev, host);
   if (!s.ok()) {
     std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
     return 1;

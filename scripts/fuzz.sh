@@ -3,7 +3,8 @@
 # tests/fuzz/) with libFuzzer, clang, AddressSanitizer and UBSan, tinygltf compiled in with the
 # same sanitizers; any report halts the run. Seeds: ../shared/assets (malformed corpus and sample
 # models, with the files beside them) and tests/fuzz/regressions; dictionary tests/fuzz/gltf.dict.
-#   scripts/fuzz.sh [SECONDS]      (default 300; FUZZ_JOBS worker processes, default nproc)
+#   scripts/fuzz.sh [SECONDS]      (default 300; FUZZ_JOBS worker processes, default nproc;
+#                                  FUZZ_MAX_LEN longest input, default 65536)
 # Prints executions, coverage and crashes, appends them to tests/fuzz/runs.tsv, and copies every
 # crashing input into tests/fuzz/regressions/ (ctest FuzzRegressions replays them all).
 set -euo pipefail
@@ -28,7 +29,7 @@ fi
 # seconds and costs half the executions); each stops at the first report.
 rm -f "$out"/fuzz-*.log
 set +e
-(cd "$out" && ./canopy_gltf_fuzz -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len=65536 -timeout=20 \
+(cd "$out" && ./canopy_gltf_fuzz -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len="${FUZZ_MAX_LEN:-65536}" -timeout=20 \
   -rss_limit_mb=2048 -dict=../../tests/fuzz/gltf.dict -artifact_prefix=crashes/ -print_final_stats=1 \
   corpus seeds > last_run.log 2>&1)
 rc=$?

@@ -10,6 +10,7 @@
 #include <algorithm>
 
 #include "tests/gpu_test.h"
+#include "tests/host_device.h"
 #include "tests/test_host.h"
 #include "tools/fault_loader.h"
 #include "tools/leaf_cloud.h"
@@ -35,32 +36,13 @@ class FaultInjectionTest : public GpuTest {
   // Canopy on the test's own VkDevice, its entry points from `gipa` (the device was created by
   // createDevice with exactly what enableDeviceFeatures and the requirements name).
   Status adopt(PFN_vkGetInstanceProcAddr gipa, Device** out) {
-    // The instance's version as tools/own_device.cpp chose it.
-    uint32_t loaderVersion = VK_API_VERSION_1_0;
-    vkEnumerateInstanceVersion(&loaderVersion);
-    const uint32_t api = loaderVersion >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
-    DeviceRequirements req;
-    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, dev.instance, api, dev.physical, &req));
-    VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-    VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-    VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
-    VkPhysicalDeviceDynamicRenderingFeatures dyn{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-    f2.pNext = &f11;
-    f11.pNext = &f12;
-    if (api >= VK_API_VERSION_1_3) {
-      f12.pNext = &f13;
-    } else {
-      f12.pNext = &sync2;
-      sync2.pNext = &dyn;
-    }
-    CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, dev.instance, dev.physical, &f2));
-    std::vector<const char*> ext;
-    for (const std::string& e : req.extensions) ext.push_back(e.c_str());
-    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
-    info.enabledExtensionCount = uint32_t(ext.size());
-    info.ppEnabledExtensionNames = ext.data();
+    // The instance's version as tools/own_device.cpp chose it (1.3 when the loader has it).
+    const uint32_t api = test::hostApiVersion();
+    test::CanopyDeviceFeatures chain;
+    CANOPY_TRY(chain.fill(dev.instance, dev.physical, api));
+    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &chain.features};
+    info.enabledExtensionCount = uint32_t(chain.extensions.size());
+    info.ppEnabledExtensionNames = chain.extensions.data();
     AdoptDeviceDesc ad;
     ad.getInstanceProcAddr = gipa;
     ad.instance = dev.instance;

@@ -12,29 +12,13 @@
 #include <sstream>
 
 #include "render/gltf_loader.h"
+#include "tests/model_checks.h"
 
 #include "tests/assets.h"
 
 using namespace canopy;
+using canopy::test::expectConsistent;
 using canopy::test::kAssets;
-
-namespace {
-
-
-// A loaded model must be internally consistent: no garbage reaches the renderer.
-void expectConsistent(const VegetationModel& m, const std::string& name) {
-  EXPECT_EQ(m.indices.size() % 3, 0u) << name;
-  EXPECT_EQ(m.triangleMaterial.size(), m.indices.size() / 3) << name;
-  EXPECT_EQ(m.normals.size(), m.positions.size()) << name;
-  EXPECT_EQ(m.uvs.size(), m.positions.size()) << name;
-  for (uint32_t i : m.indices) ASSERT_LT(i, m.positions.size()) << name;
-  for (uint32_t t : m.triangleMaterial) ASSERT_LT(t, m.materials.size()) << name;
-  for (const glm::vec3& p : m.positions) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << name;
-  for (const ModelMaterial& mat : m.materials)
-    if (mat.baseColorImage >= 0) ASSERT_LT(size_t(mat.baseColorImage), m.images.size()) << name;
-}
-
-}  // namespace
 
 TEST(GltfLoader, RealVegetationLoadsWithExpectedCounts) {
   REQUIRE_ASSETS();

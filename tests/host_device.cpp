@@ -62,11 +62,31 @@ Status createInstance(HostDevice& h, uint32_t apiVersion) {
 
 }  // namespace
 
-Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
-  HostDevice& h = *out;
+uint32_t hostApiVersion() {
   uint32_t loader = VK_API_VERSION_1_0;
   vkEnumerateInstanceVersion(&loader);
-  const uint32_t api = loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+  return loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+}
+
+Status CanopyDeviceFeatures::fill(VkInstance instance, VkPhysicalDevice physical, uint32_t api) {
+  CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, instance, api, physical, &requirements));
+  features.pNext = &f11;
+  f11.pNext = &f12;
+  if (api >= VK_API_VERSION_1_3) {
+    f12.pNext = &f13;
+  } else {
+    f12.pNext = &sync2;
+    sync2.pNext = &dynamicRendering;
+  }
+  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, instance, physical, &features));
+  extensions.clear();
+  for (const std::string& e : requirements.extensions) extensions.push_back(e.c_str());
+  return Status();
+}
+
+Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
+  HostDevice& h = *out;
+  const uint32_t api = hostApiVersion();
   CANOPY_TRY(createInstance(h, api));
 
   // The first physical device Canopy can run on, as an engine would pick among its candidates.
@@ -74,7 +94,6 @@ Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
   vkEnumeratePhysicalDevices(h.instance, &n, nullptr);
   std::vector<VkPhysicalDevice> devices(n);
   vkEnumeratePhysicalDevices(h.instance, &n, devices.data());
-  DeviceRequirements req;
   std::string why;
   for (VkPhysicalDevice pd : devices) {
     DeviceRequirements r;
@@ -84,7 +103,6 @@ Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
       continue;
     }
     h.physical = pd;
-    req = r;
     break;
   }
   if (!h.physical) return Status::error("no physical device can run Canopy: " + why);
@@ -98,33 +116,18 @@ Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
   if (h.family == n) return Status::error("no graphics + compute queue family");
 
   // The host's feature chain for its API version; Canopy switches its features on in it.
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
-  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
-  VkPhysicalDeviceDynamicRenderingFeatures dyn{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-  f2.pNext = &f11;
-  f11.pNext = &f12;
-  if (api >= VK_API_VERSION_1_3) {
-    f12.pNext = &f13;
-  } else {
-    f12.pNext = &sync2;
-    sync2.pNext = &dyn;
-  }
-  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, h.instance, h.physical, &f2));
-  std::vector<const char*> extensions;
-  for (const std::string& e : req.extensions) extensions.push_back(e.c_str());
+  CanopyDeviceFeatures chain;
+  CANOPY_TRY(chain.fill(h.instance, h.physical, api));
   const float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = h.family;
   qci.queueCount = 1;
   qci.pQueuePriorities = &priority;
-  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
+  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &chain.features};
   dci.queueCreateInfoCount = 1;
   dci.pQueueCreateInfos = &qci;
-  dci.enabledExtensionCount = uint32_t(extensions.size());
-  dci.ppEnabledExtensionNames = extensions.data();
+  dci.enabledExtensionCount = uint32_t(chain.extensions.size());
+  dci.ppEnabledExtensionNames = chain.extensions.data();
   HOST_VK(vkCreateDevice(h.physical, &dci, nullptr, &h.device));
   vkGetDeviceQueue(h.device, h.family, 0, &h.queue);
 

@@ -4,6 +4,8 @@
 // physical device and queue family, Canopy's requirements asked for and enabled through the
 // public API (queryDeviceRequirements, enableDeviceFeatures), then adopted (adoptDevice).
 #include <functional>
+#include <string>
+#include <vector>
 
 #include <canopy/canopy.h>
 
@@ -19,6 +21,26 @@ struct HostDevice {
   uint32_t family = 0;
   Device* adopted = nullptr;  // Canopy's view of it
 };
+
+// What a device created for Canopy at instance version `api` enables: the feature chain (head
+// `features`) with Canopy's features switched on (enableDeviceFeatures) and the extensions its
+// requirements name (queryDeviceRequirements). Links to itself: not copyable.
+struct CanopyDeviceFeatures {
+  VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES};
+  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
+  VkPhysicalDeviceDynamicRenderingFeatures dynamicRendering{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+  DeviceRequirements requirements;
+  std::vector<const char*> extensions;  // into requirements.extensions
+  CanopyDeviceFeatures() = default;
+  CanopyDeviceFeatures(const CanopyDeviceFeatures&) = delete;
+  CanopyDeviceFeatures& operator=(const CanopyDeviceFeatures&) = delete;
+  Status fill(VkInstance instance, VkPhysicalDevice physical, uint32_t api);
+};
+// The instance version a test host asks for: 1.3 when the loader has it, else 1.2.
+uint32_t hostApiVersion();
 
 // Creates instance and device and adopts the device with `framesInFlight`. A missing validation
 // layer is an error, never a skip.

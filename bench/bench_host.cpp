@@ -1,0 +1,44 @@
+#include "bench/bench_host.h"
+
+namespace canopy::bench {
+
+Status createHostTargets(Device& d, uint32_t w, uint32_t h, VkFormat format, HostTargets* t) {
+  ImageDesc c;
+  c.format = format;
+  c.width = w;
+  c.height = h;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  CANOPY_TRY(createImage(d, c, &t->color, "bench host colour"));
+  c.format = VK_FORMAT_D32_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  return createImage(d, c, &t->depth, "bench host depth");
+}
+
+void destroyHostTargets(Device& d, HostTargets& t) {
+  destroyImage(d, t.color);
+  destroyImage(d, t.depth);
+}
+
+Status buildHostGraph(Device& d, CanopyContext* ctx, HostTargets& t, bool withCanopy, rg::State colorFinal, rg::RenderGraph* g) {
+  CompositeTargets ct;
+  ct.color = g->importImage("host colour", descOf(t.color), {}, colorFinal);
+  ct.depth = g->importImage("host depth", descOf(t.depth), {}, rg::stateOf(rg::Use::DepthAttachmentWrite));
+  g->addPass("host clear", [ct](rg::PassContext& x) {
+     const VkClearColorValue cv{{0.45f, 0.6f, 0.8f, 1.0f}};
+     const VkClearDepthStencilValue dv{1.0f, 0};
+     const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+     vkCmdClearColorImage(x.cmd, x.image(ct.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+     vkCmdClearDepthStencilImage(x.cmd, x.image(ct.depth).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+     return Status();
+   })
+      .write(ct.color, rg::Use::TransferDst)
+      .write(ct.depth, rg::Use::TransferDst)
+      .sideEffect();
+  CANOPY_TRY(g->bindImage(ct.color, t.color));
+  CANOPY_TRY(g->bindImage(ct.depth, t.depth));
+  if (withCanopy) CANOPY_TRY(addCanopyPasses(ctx, *g, ct));
+  CANOPY_TRY(g->compile());
+  return g->realize(d);
+}
+
+}  // namespace canopy::bench

@@ -2,13 +2,15 @@
 // adopts the test's VkDevice through a loader whose entry points fail after N successful object
 // creations and allocations (tools/fault_loader.h). For every failure point of adoption, context
 // creation and the first frames, each public call returns an error with the right Result naming
-// the failing Vulkan call, the context stays destroyable, and after destroyCanopy + releaseDevice
-// every Vulkan object Canopy created through the loader is destroyed again (the loader's count);
-// validation stays clean (GpuTest).
+// the failing Vulkan call, the context stays destroyable, Canopy's allocator holds no allocation
+// after destroyCanopy, and after releaseDevice every Vulkan object Canopy created through the
+// loader is destroyed again (the loader's count); validation stays clean (GpuTest).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
+#include "engine/device.h"
+#include "engine/memory.h"
 #include "tests/gpu_test.h"
 #include "tests/host_device.h"
 #include "tests/test_host.h"
@@ -112,6 +114,9 @@ class FaultInjectionTest : public GpuTest {
     }
     EXPECT_TRUE(host.finish().ok());
     destroyCanopy(ctx);
+    // Everything the frames released is free now; Canopy's allocator must hold nothing.
+    releaseAllPending(*cd);
+    EXPECT_EQ(cd->allocator->allocationCount, 0u) << "live device sub-allocations after destroyCanopy";
     releaseDevice(cd);
     host.destroy();
     return o;

@@ -124,6 +124,10 @@ int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check) {
         alloc0 = dev.allocator->allocationCount;
         blocks0 = dev.allocator->blocks.size();
       }
+      if ((i + 1) % 1000 == 0) {
+        std::printf("  ... %d frames, %.0f s\n", i + 1, (nowMs() - t0) / 1000.0);
+        std::fflush(stdout);
+      }
       if (i % checkEvery == checkEvery - 1 || i == frames - 1) {
         ++checks;
         const Simulation& sim = canopySimulation(ctx);

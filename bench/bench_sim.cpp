@@ -62,12 +62,15 @@ struct Row {
   double gpuTs = 0, wall = 0, cpu = 0;
   std::vector<PassTiming> passes;
   uint32_t dispatches = 0;
+  uint32_t groupSize = 0;
 };
 
-Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int frames, bool cpu, Row* row) {
+Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int frames, bool cpu, Row* row,
+               uint32_t groupSize = 0) {
   Simulation sim;
   SimulationDesc desc;
   desc.gridSize = n;
+  desc.groupSize = groupSize;
   CANOPY_TRY(createSimulation(dev, desc, &sim));
   SimulationParams p;
   p.wind.sides = kWindFromLeft;
@@ -105,6 +108,7 @@ Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int
   row->gpuTs = median(ts);
   row->wall = median(wall);
   row->dispatches = sim.stats.dispatchesPerStep;
+  row->groupSize = sim.groupSize;
   timer.destroy(dev);
   destroySimulation(sim);
   CANOPY_TRY(s);
@@ -155,12 +159,32 @@ int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, boo
         std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
         return 1;
       }
-      std::printf("  %-5u %-26s %10.3f %10.3f %10.3f %11u %8.2fx %8.1f%%\n", n, v.name, r.gpuTs, r.wall, r.cpu, r.dispatches,
+      std::printf("  %-5u %-26s %10.3f %10.3f %10.3f %11u %8.2fx %8.2f%%\n", n, v.name, r.gpuTs, r.wall, r.cpu, r.dispatches,
                   r.cpu / std::max(r.wall, 1e-9), 100 * removed);
       if (detail)
         for (const PassTiming& t : r.passes)
           if (t.milliseconds > 0.0005) std::printf("        %-32s %8.3f ms\n", t.name.c_str(), t.milliseconds);
     }
+  }
+  // The single-workgroup kernels' width side by side (SimulationDesc.groupSize; the default is
+  // chosen by device class).
+  std::printf("\nWorkgroup width of the single-workgroup kernels, MAC + multigrid (2 V), wall ms (median):\n\n  %-5s", "N");
+  const uint32_t widths[] = {32, 64, 128, 256, 1024};
+  for (uint32_t w : widths) std::printf(" %9u", w);
+  std::printf("   default\n");
+  for (uint32_t n : sizes) {
+    std::printf("  %-5u", n);
+    for (uint32_t w : widths) {
+      Row r;
+      Status s = w <= dev.properties.limits.maxComputeWorkGroupInvocations
+                     ? measure(dev, n, FluidScheme::MacMultigrid, 2, frames, false, &r, w)
+                     : Status::error("too wide");
+      if (s.ok()) std::printf(" %9.3f", r.wall);
+      else std::printf(" %9s", "-");
+    }
+    Row r;
+    Status s = measure(dev, n, FluidScheme::MacMultigrid, 2, 3, false, &r);
+    std::printf("   %u\n", s.ok() ? r.groupSize : 0u);
   }
   return 0;
 }

@@ -53,6 +53,9 @@ Status validateSimulationDesc(const SimulationDesc& d) {
   CANOPY_TRY(checkPositive("historySeconds", d.historySeconds, 3600, "s"));
   CANOPY_TRY(checkPositive("nominalDt", d.nominalDt, 10, "s"));
   if (d.historySize > 4096) return Status::error("historySize = " + std::to_string(d.historySize) + ": must be in [0, 4096]");
+  if (d.groupSize != 0 && (d.groupSize < 32 || d.groupSize > SIM_MAX_GROUP_SIZE || (d.groupSize & (d.groupSize - 1))))
+    return Status::error("groupSize = " + std::to_string(d.groupSize) + ": must be 0 (by device class) or a power of two in [32, " +
+                         std::to_string(SIM_MAX_GROUP_SIZE) + "]");
   return Status();
 }
 
@@ -109,8 +112,8 @@ float maxStableWaveDt(const WaveParams& w, uint32_t n) {
 double estimateLoopTrips(const gpu::SimFrame& f) {
   // Upper bound of the loop iterations one invocation of each single-workgroup kernel runs (the
   // serial multigrid tail runs in invocation 0). Mirrors the loops of shaders/sim_*.comp.
-  if (f.n < 4 || f.n > 1024 || f.mgLevels < 1 || f.mgLevels > 11) return 1e300;  // not a valid frame
-  const double G = SIM_GROUP_SIZE, n = f.n, hn = n / 2;
+  if (f.n < 4 || f.n > 1024 || f.mgLevels < 1 || f.mgLevels > 11 || f.groupSize < 1) return 1e300;  // not a valid frame
+  const double G = f.groupSize, n = f.n, hn = n / 2;
   auto par = [G](double count) { return std::ceil(count / G); };
   const double reduce = std::log2(G) + 2;
   const double diffuse = par(4 * n) + par(gpu::macFloats(f.n)) + f.diffuseSweeps * 2.0 * (par(n * hn + (n - 1) * hn) + 1);
@@ -160,7 +163,8 @@ Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt,
   f.iterations = p.fluid.iterations;
   f.mgCycles = p.fluid.multigridCycles;
   f.mgLevels = gpu::mgLevelCount(n);
-  f.mgSerialSize = 8;  // prepareSimulationStep applies the simulation's own setting (createSimulation)
+  f.mgSerialSize = 8;  // prepareSimulationStep applies the simulation's own settings (createSimulation)
+  f.groupSize = SIM_MAX_GROUP_SIZE;
   f.motorCount = uint32_t(p.motors.size());
   f.strength = p.wind.strength;
   f.frequency = p.wind.frequency;
@@ -219,6 +223,16 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   // no gain beyond noise, since one invocation uses one SIMD lane of eight; on GPUs serial work is
   // slower still.
   s.mgSerialSize = 8;
+  // Single-workgroup width (SimulationDesc.groupSize): lavapipe runs one workgroup on one core in
+  // 8-lane steps, so a wide group only adds lanes to every barrier; measured with `canopy-bench sim
+  // --groups` (docs/performance.md): 64 is fastest there. GPUs take the widest group the device allows.
+  if (desc.groupSize) s.groupSize = desc.groupSize;
+  else if (d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) s.groupSize = 64;
+  else s.groupSize = std::min<uint32_t>(SIM_MAX_GROUP_SIZE, d.properties.limits.maxComputeWorkGroupInvocations);
+  if (s.groupSize > d.properties.limits.maxComputeWorkGroupInvocations || s.groupSize > d.properties.limits.maxComputeWorkGroupSize[0])
+    return Status::error(Result::UnsupportedDevice, "simulation groupSize = " + std::to_string(s.groupSize) +
+                         " exceeds the device's workgroup limit of " +
+                         std::to_string(d.properties.limits.maxComputeWorkGroupInvocations));
   const uint32_t n = s.n;
   const VkBufferUsageFlags use =
       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
@@ -234,12 +248,18 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   const VkDescriptorType SB = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
   const std::vector<VkDescriptorType> b(7, SB);
   const uint32_t push = sizeof(gpu::SimPush);
-  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_diffuse.comp", b, push}, &s.diffuse));
-  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_project.comp", b, push}, &s.project));
-  CANOPY_TRY(createComputePipeline(d, {"sim_fluid_advect.comp", b, push}, &s.advect));
-  CANOPY_TRY(createComputePipeline(d, {"sim_stam_step.comp", b, push}, &s.stam));
-  CANOPY_TRY(createComputePipeline(d, {"sim_wave.comp", b, push}, &s.oscillator));
-  CANOPY_TRY(createComputePipeline(d, {"sim_tile.comp", b, push}, &s.tile));
+  const ComputePipelineDesc one{nullptr, b, push, {s.groupSize}, true}, grid{nullptr, b, push};
+  auto make = [&](const char* shader, const ComputePipelineDesc& base, ComputePipeline* p) {
+    ComputePipelineDesc pd = base;
+    pd.shader = shader;
+    return createComputePipeline(d, pd, p);
+  };
+  CANOPY_TRY(make("sim_fluid_diffuse.comp", one, &s.diffuse));
+  CANOPY_TRY(make("sim_fluid_project.comp", one, &s.project));
+  CANOPY_TRY(make("sim_fluid_advect.comp", grid, &s.advect));
+  CANOPY_TRY(make("sim_stam_step.comp", one, &s.stam));
+  CANOPY_TRY(make("sim_wave.comp", one, &s.oscillator));
+  CANOPY_TRY(make("sim_tile.comp", grid, &s.tile));
 
   // Zero all state once (a one-pass graph: the fills' barriers come from the graph too).
   PreparedWork work;
@@ -296,7 +316,7 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
     return *hold ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
   };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
-  const uint32_t one = SIM_GROUP_SIZE;  // single-workgroup kernels
+  const uint32_t one = s.groupSize;  // single-workgroup kernels
   g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
      if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
@@ -339,6 +359,7 @@ Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt)
   gpu::SimFrame f;
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, slot, s.ringSize, &f));
   f.mgSerialSize = s.mgSerialSize;
+  f.groupSize = s.groupSize;
   CANOPY_TRY(checkLoopBudget(f));
   s.next = f;
   s.time += dt;
@@ -354,6 +375,7 @@ Status runSimulationSteps(Simulation& s, const SimulationParams& p, float dt, ui
   gpu::SimFrame probe;  // every check, before anything is recorded
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, 0, s.ringSize, &probe));
   probe.mgSerialSize = s.mgSerialSize;
+  probe.groupSize = s.groupSize;
   CANOPY_TRY(checkLoopBudget(probe));
   if (!s.graphReady) return Status::error("runSimulationSteps: simulation not created");
   while (count > 0) {
@@ -374,6 +396,7 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
   gpu::SimFrame f;
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), 1.0f / 30.0f, 0, s.ringSize, &f));
   f.scheme = SIM_SCHEME_MAC_MULTIGRID;
+  f.groupSize = s.groupSize;
   rg::RenderGraph g;
   auto frame = g.importBuffer("sim frame", s.frame.size, kFrameRest, kFrameRest);
   auto vel = g.importBuffer("sim velocity", s.velocity.size, kPersistent, kPersistent);
@@ -386,7 +409,7 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
    })
       .write(frame, rg::Use::TransferDst)
       .write(mg, rg::Use::TransferDst);
-  g.addPass("sim: project", [sp](rg::PassContext& c) { return simDispatch(*sp, c.cmd, sp->project, SIM_GROUP_SIZE, 1, 0); })
+  g.addPass("sim: project", [sp](rg::PassContext& c) { return simDispatch(*sp, c.cmd, sp->project, sp->groupSize, 1, 0); })
       .read(frame, rg::Use::ComputeStorageRead)
       .write(vel, rg::Use::ComputeStorageReadWrite)
       .write(mg, rg::Use::ComputeStorageReadWrite);

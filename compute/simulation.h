@@ -37,6 +37,7 @@ struct Simulation {
   Device* device = nullptr;
   uint32_t n = 0, ringSize = 0;
   uint32_t mgSerialSize = 8;  // see createSimulation
+  uint32_t groupSize = SIM_MAX_GROUP_SIZE;  // single-workgroup kernels' width (createSimulation)
   Buffer frame, velocity, multigrid, wave, tiled, ring, ringTimes;
   ComputePipeline diffuse, project, advect, stam, oscillator, tile;
   gpu::SimFrame next{};  // the block the next recorded step uploads (prepareSimulationStep)

@@ -51,6 +51,15 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
   if (desc.pushConstantSize > d.properties.limits.maxPushConstantsSize)
     return Status::error(what + ": push constants of " + std::to_string(desc.pushConstantSize) +
                          " bytes exceed the device limit " + std::to_string(d.properties.limits.maxPushConstantsSize));
+  if (desc.workgroupXFromSpec) {
+    if (desc.specialization.empty() || desc.specialization[0] < 1 ||
+        desc.specialization[0] > d.properties.limits.maxComputeWorkGroupSize[0] ||
+        desc.specialization[0] > d.properties.limits.maxComputeWorkGroupInvocations)
+      return Status::error(what + ": workgroup width " +
+                           (desc.specialization.empty() ? std::string("missing") : std::to_string(desc.specialization[0])) +
+                           " is outside 1.." + std::to_string(d.properties.limits.maxComputeWorkGroupInvocations));
+    out->localSize[0] = desc.specialization[0];
+  }
   out->name = desc.shader;
   out->bindings = desc.bindings;
   out->pushConstantSize = desc.pushConstantSize;
@@ -68,6 +77,11 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     ci.stage.module = module;
     ci.stage.pName = "main";
+    std::vector<VkSpecializationMapEntry> entries(desc.specialization.size());
+    for (size_t i = 0; i < entries.size(); ++i) entries[i] = {uint32_t(i), uint32_t(i * 4), 4};
+    VkSpecializationInfo spec{uint32_t(entries.size()), entries.data(), desc.specialization.size() * 4,
+                              desc.specialization.data()};
+    if (!entries.empty()) ci.stage.pSpecializationInfo = &spec;
     ci.layout = out->layout;
     VkResult r = d.vk.CreateComputePipelines(d.device, d.pipelineCache, 1, &ci, d.allocationCallbacks, &out->pipeline);
     d.vk.DestroyShaderModule(d.device, module, d.allocationCallbacks);
@@ -126,8 +140,9 @@ Status pushDescriptors(Device& d, VkCommandBuffer cmd, VkPipelineBindPoint bindP
   return Status();
 }
 
-Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
-                std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
+namespace {
+Status bindCompute(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, std::initializer_list<Binding> bindings,
+                   const void* push, uint32_t pushSize) {
   if (pushSize != p.pushConstantSize)
     return Status::error("dispatch '" + p.name + "': push constants are " + std::to_string(pushSize) +
                          " bytes, the pipeline declares " + std::to_string(p.pushConstantSize));
@@ -138,8 +153,22 @@ Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32
   CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, p.bindings, bindings,
                              "dispatch '" + p.name + "'"));
   if (pushSize) d.vk.CmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
+  return Status();
+}
+}  // namespace
+
+Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
+                std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
+  CANOPY_TRY(bindCompute(d, cmd, p, bindings, push, pushSize));
   auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
   d.vk.CmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
+  return Status();
+}
+
+Status dispatchIndirect(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, VkBuffer args, VkDeviceSize offset,
+                        std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
+  CANOPY_TRY(bindCompute(d, cmd, p, bindings, push, pushSize));
+  d.vk.CmdDispatchIndirect(cmd, args, offset);
   return Status();
 }
 

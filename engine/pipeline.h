@@ -27,6 +27,10 @@ struct ComputePipelineDesc {
   const char* shader = nullptr;               // embedded shader name, e.g. "example_write.comp"
   std::vector<VkDescriptorType> bindings;     // binding i of set 0
   uint32_t pushConstantSize = 0;              // sizeof the shared push-constant struct
+  // Specialization constants: value i for constant_id i (32-bit). A shader declaring
+  // local_size_x_id = 0 takes its workgroup width from specialization[0]: set workgroupXFromSpec.
+  std::vector<uint32_t> specialization;
+  bool workgroupXFromSpec = false;
 };
 
 // One descriptor for a push: a buffer range, a storage/sampled image view, or both with a sampler.
@@ -83,6 +87,16 @@ template <class Push>
 Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, uint32_t tx, uint32_t ty,
                 uint32_t tz, std::initializer_list<Binding> bindings, const Push& push) {
   return dispatch(device, cmd, pipeline, tx, ty, tz, bindings, &push, uint32_t(sizeof(Push)));
+}
+
+// As dispatch(), with the workgroup counts read by the GPU from `args` at `offset`
+// (VkDispatchIndirectCommand, written by an earlier pass).
+Status dispatchIndirect(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, VkBuffer args,
+                        VkDeviceSize offset, std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize);
+template <class Push>
+Status dispatchIndirect(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, VkBuffer args,
+                        VkDeviceSize offset, std::initializer_list<Binding> bindings, const Push& push) {
+  return dispatchIndirect(device, cmd, pipeline, args, offset, bindings, &push, uint32_t(sizeof(Push)));
 }
 
 }  // namespace canopy

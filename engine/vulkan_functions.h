@@ -33,7 +33,7 @@ namespace canopy {
   X(CreateCommandPool) X(DestroyCommandPool) X(ResetCommandPool) X(AllocateCommandBuffers)       \
   X(FreeCommandBuffers) X(BeginCommandBuffer) X(EndCommandBuffer)                                \
   X(CreateFence) X(DestroyFence) X(WaitForFences) X(ResetFences) X(GetFenceStatus)               \
-  X(CmdBindPipeline) X(CmdPushConstants) X(CmdDispatch) X(CmdDraw) X(CmdDrawIndexed)             \
+  X(CmdBindPipeline) X(CmdPushConstants) X(CmdDispatch) X(CmdDispatchIndirect) X(CmdDraw) X(CmdDrawIndirect) X(CmdDrawIndexed)             \
   X(CmdBindVertexBuffers) X(CmdBindIndexBuffer) X(CmdSetViewport) X(CmdSetScissor)               \
   X(CmdCopyBuffer) X(CmdCopyBufferToImage) X(CmdCopyImageToBuffer) X(CmdUpdateBuffer)            \
   X(CmdFillBuffer) X(CmdClearColorImage) X(CmdClearDepthStencilImage)                            \

@@ -315,6 +315,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     cd.motionFormat = desc.motionFormat;
     cd.reverseZ = desc.depthConvention == DepthConvention::Reverse;
     cd.maxLayers = desc.maxLayers;
+    cd.minCellSize = desc.minCellSize;
     CANOPY_TRY(createCompositor(d, cd, &c->compositor));
     LayeredVegetationDesc ld;
     ld.width = desc.width;

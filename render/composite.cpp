@@ -25,9 +25,130 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
   return Status();
 }
 
+// The compute path (CompositePath::Compute; docs/performance.md): displacement image, tile list
+// reset, classification, the tile kernel (indirect dispatch) and the resolve draw (indirect).
+Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l, rg::ResourceId displacement,
+                      rg::ResourceId previous, const CompositeTargets& t, rg::ResourceId occupancy) {
+  // Every frame rewrites these images before reading them: they enter with their contents
+  // discarded (UNDEFINED), ordered after the previous frame's reads.
+  const rg::State fs = rg::stateOf(rg::Use::FragmentSampled), indirect = rg::stateOf(rg::Use::IndirectBuffer);
+  const rg::State discard{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+  const auto dispImage = g.importImage("composite: displacement image", descOf(c.displacementImage), discard, fs);
+  const auto color = g.importImage("composite: composed colour", descOf(c.composedColor), discard, fs);
+  const auto depth = g.importImage("composite: composed depth", descOf(c.composedDepth), discard, fs);
+  const auto motion = g.importImage("composite: composed motion", descOf(c.composedMotion), discard, fs);
+  const auto tileList = g.importBuffer("composite: tile list", c.tileList.size, indirect, indirect);
+  CANOPY_TRY(g.bindImage(dispImage, c.displacementImage));
+  CANOPY_TRY(g.bindImage(color, c.composedColor));
+  CANOPY_TRY(g.bindImage(depth, c.composedDepth));
+  CANOPY_TRY(g.bindImage(motion, c.composedMotion));
+  CANOPY_TRY(g.bindBuffer(tileList, c.tileList.buffer));
+  Compositor* cp = &c;
+  const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, gen = VK_IMAGE_LAYOUT_GENERAL;
+  g.addPass("composite: displacement image", [cp, displacement, previous](rg::PassContext& x) {
+     if (!cp->computeThisFrame) return Status();
+     const gpu::CompositePush& p = cp->push;
+     return dispatch(*x.device, x.cmd, cp->displacementPipeline, p.gridX * p.gridY, p.layerCount, 1,
+                     {bindBuffer(x.buffer(displacement)), bindBuffer(x.buffer(previous)),
+                      bindImage(cp->displacementImage.view, VK_IMAGE_LAYOUT_GENERAL)},
+                     p);
+   })
+      .read(displacement, rg::Use::ComputeStorageRead)
+      .read(previous, rg::Use::ComputeStorageRead)
+      .write(dispImage, rg::Use::ComputeStorageWrite);
+  g.addPass("composite: tile list reset", [cp](rg::PassContext& x) {
+     if (!cp->computeThisFrame) return Status();
+     const gpu::CompositeTileHeader empty{0, 1, 1, 0, 6, 0, 0, 0};
+     x.device->vk.CmdUpdateBuffer(x.cmd, cp->tileList.buffer, 0, sizeof empty, &empty);
+     return Status();
+   }).write(tileList, rg::Use::TransferDst);
+  g.addPass("composite: classify", [cp, displacement](rg::PassContext& x) {
+     if (!cp->computeThisFrame) return Status();
+     const gpu::CompositePush& p = cp->push;
+     return dispatch(*x.device, x.cmd, cp->classifyPipeline, p.tilesX * p.tilesY, 1, 1,
+                     {bindBuffer(x.buffer(displacement)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->tileList.buffer)},
+                     p);
+   })
+      .read(displacement, rg::Use::ComputeStorageRead)
+      .read(occupancy, rg::Use::ComputeStorageRead)
+      .write(tileList, rg::Use::ComputeStorageReadWrite);
+  g.addPass("composite: warp + composite (tiles)", [cp, l, t, ro, gen](rg::PassContext& x) {
+     if (!cp->computeThisFrame) return Status();
+     const gpu::CompositePush& p = cp->push;
+     return dispatchIndirect(*x.device, x.cmd, cp->tilesPipeline, cp->tileList.buffer, 0,
+                             {bindImage(x.image(l.color).view, ro, cp->params.bilinear ? cp->linear : cp->nearest),
+                              bindImage(x.image(l.depth).view, ro, cp->depthSampler),
+                              bindImage(x.image(l.backgroundColor).view, ro, cp->nearest),
+                              bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler),
+                              bindImage(x.graph->image(t.depth).view, ro, cp->depthSampler),
+                              bindImage(cp->displacementImage.view, ro, cp->displacementSampler),
+                              bindBuffer(cp->tileList.buffer), bindImage(cp->composedColor.view, gen),
+                              bindImage(cp->composedDepth.view, gen), bindImage(cp->composedMotion.view, gen)},
+                             p);
+   })
+      .read(l.color, rg::Use::ComputeSampled)
+      .read(l.depth, rg::Use::ComputeSampled)
+      .read(l.backgroundColor, rg::Use::ComputeSampled)
+      .read(l.backgroundDepth, rg::Use::ComputeSampled)
+      .read(t.depth, rg::Use::ComputeSampled)
+      .read(dispImage, rg::Use::ComputeSampled)
+      .read(tileList, rg::Use::IndirectBuffer)
+      .read(tileList, rg::Use::ComputeStorageRead)
+      .write(color, rg::Use::ComputeStorageWrite)
+      .write(depth, rg::Use::ComputeStorageWrite)
+      .write(motion, rg::Use::ComputeStorageWrite);
+  const bool hasMotion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
+  auto resolve = g.addPass("composite: resolve", [cp, t, hasMotion, ro](rg::PassContext& x) {
+    if (!cp->computeThisFrame) return Status();
+    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+    colors[0].imageView = x.graph->image(t.color).view;
+    colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    if (hasMotion) {
+      colors[1] = colors[0];
+      colors[1].imageView = x.graph->image(t.motion).view;
+    }
+    VkRenderingAttachmentInfo depthAtt{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depthAtt.imageView = x.graph->image(t.depth).view;
+    depthAtt.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    depthAtt.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    depthAtt.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {cp->desc.width, cp->desc.height}};
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = hasMotion ? 2 : 1;
+    ri.pColorAttachments = colors;
+    ri.pDepthAttachment = &depthAtt;
+    x.device->cmdBeginRendering(x.cmd, &ri);
+    setViewportScissor(*x.device, x.cmd, cp->desc.width, cp->desc.height);
+    Status s = bindGraphics(*x.device, x.cmd, cp->resolve,
+                            {bindBuffer(cp->tileList.buffer), bindImage(cp->composedColor.view, ro, cp->nearest),
+                             bindImage(cp->composedDepth.view, ro, cp->nearest),
+                             bindImage(cp->composedMotion.view, ro, cp->nearest)},
+                            cp->push);
+    if (s.ok()) x.device->vk.CmdDrawIndirect(x.cmd, cp->tileList.buffer, offsetof(gpu::CompositeTileHeader, vertexCount), 1, 0);
+    x.device->cmdEndRendering(x.cmd);
+    return s;
+  });
+  resolve.read(tileList, rg::Use::IndirectBuffer)
+      .read(tileList, rg::Use::VertexStorageRead)
+      .read(color, rg::Use::FragmentSampled)
+      .read(depth, rg::Use::FragmentSampled)
+      .read(motion, rg::Use::FragmentSampled)
+      .write(t.color, rg::Use::ColorAttachmentReadWrite)
+      .write(t.depth, rg::Use::DepthAttachmentWrite);
+  if (hasMotion) resolve.write(t.motion, rg::Use::ColorAttachmentReadWrite);
+  return Status();
+}
+
 }  // namespace
 
 Status validateCompositeParams(const CompositeParams& p) {
+  if (p.path != CompositePath::Compute && p.path != CompositePath::Fragment)
+    return Status::error("CompositeParams.path = " + std::to_string(uint32_t(p.path)) + " is outside Compute (0)..Fragment (1)");
   if (!(p.depthAlpha > 0.0f && p.depthAlpha <= 1.0f))
     return Status::error("CompositeParams.depthAlpha = " + std::to_string(p.depthAlpha) + " is outside (0, 1]");
   if (uint32_t(p.debugView) > COMPOSITE_DEBUG_GRID)
@@ -43,6 +164,8 @@ Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
   if (desc.width < 1 || desc.height < 1 || desc.width > 16384 || desc.height > 16384)
     return Status::error("compositor: size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
                          " is outside 1..16384 per side");
+  if (desc.minCellSize < 2 || desc.minCellSize > 256)
+    return Status::error("compositor: minCellSize = " + std::to_string(desc.minCellSize) + " is outside 2..256");
   if (desc.maxLayers < 1 || desc.maxLayers > CANOPY_MAX_LAYERS)
     return Status::error("compositor: maxLayers = " + std::to_string(desc.maxLayers) + " is outside 1.." +
                          std::to_string(CANOPY_MAX_LAYERS));
@@ -94,15 +217,66 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     gp.depthWrite = true;
     CANOPY_TRY(createGraphicsPipeline(d, gp, &out->composite));
     ComputePipelineDesc cp;
-    cp.shader = "composite_occupancy.comp";
     cp.bindings = {sampled, storage};
     cp.pushConstantSize = sizeof(gpu::CompositePush);
-    CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
     cp.shader = "composite_scene_depth.comp";
     CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
+    cp.shader = "composite_occupancy.comp";
+    cp.bindings = {sampled, storage, sampled};
+    CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
     const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
-    CANOPY_TRY(createBuffer(d, tiles * desc.maxLayers * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
+    CANOPY_TRY(createBuffer(d, tiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
                             &out->occupancy, "composite: occupancy"));
+    // Compute path: needs RGBA32F as a linearly filtered storage image (the displacement image).
+    VkFormatProperties df{};
+    d.vk.GetPhysicalDeviceFormatProperties(d.physical, VK_FORMAT_R32G32B32A32_SFLOAT, &df);
+    const VkFormatFeatureFlags dispNeeds = VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT |
+                                           VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
+    out->computeAvailable = (df.optimalTilingFeatures & dispNeeds) == dispNeeds;
+    if (out->computeAvailable) {
+      const VkDescriptorType storageImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
+      cp.shader = "composite_displacement.comp";
+      cp.bindings = {storage, storage, storageImage};
+      CANOPY_TRY(createComputePipeline(d, cp, &out->displacementPipeline));
+      cp.shader = "composite_classify.comp";
+      cp.bindings = {storage, storage, storage};
+      CANOPY_TRY(createComputePipeline(d, cp, &out->classifyPipeline));
+      cp.shader = "composite_tiles.comp";
+      cp.bindings = {sampled, sampled, sampled, sampled, sampled, sampled, storage, storageImage, storageImage, storageImage};
+      CANOPY_TRY(createComputePipeline(d, cp, &out->tilesPipeline));
+      GraphicsPipelineDesc rp = gp;
+      rp.vertexShader = "composite_resolve.vert";
+      rp.fragmentShader = "composite_resolve.frag";
+      rp.bindings = {storage, sampled, sampled, sampled};
+      CANOPY_TRY(createGraphicsPipeline(d, rp, &out->resolve));
+      ImageDesc id;
+      id.format = VK_FORMAT_R32G32B32A32_SFLOAT;
+      id.width = gridCorners(desc.width, desc.minCellSize);
+      id.height = gridCorners(desc.height, desc.minCellSize);
+      id.layers = desc.maxLayers;
+      id.usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+      id.arrayView = true;
+      CANOPY_TRY(createImage(d, id, &out->displacementImage, "composite: displacement image"));
+      id.width = desc.width;
+      id.height = desc.height;
+      id.layers = 1;
+      id.arrayView = false;
+      id.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+      CANOPY_TRY(createImage(d, id, &out->composedColor, "composite: composed colour"));
+      CANOPY_TRY(createImage(d, id, &out->composedMotion, "composite: composed motion"));
+      id.format = VK_FORMAT_R32_SFLOAT;
+      CANOPY_TRY(createImage(d, id, &out->composedDepth, "composite: composed depth"));
+      CANOPY_TRY(createBuffer(d, sizeof(gpu::CompositeTileHeader) + tiles * 8,
+                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
+                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                              MemoryUsage::DeviceLocal, &out->tileList, "composite: tile list"));
+      VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+      si.magFilter = si.minFilter = VK_FILTER_LINEAR;
+      si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+      si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+      si.maxLod = 0.0f;
+      CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &out->displacementSampler));
+    }
     CANOPY_TRY(createBuffer(d, VkDeviceSize(desc.width) * desc.height * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                             MemoryUsage::DeviceLocal, &out->sceneDepth, "composite: scene depth"));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
@@ -122,10 +296,16 @@ void destroyCompositor(Compositor& c) {
   destroyGraphicsPipeline(d, c.composite);
   destroyComputePipeline(d, c.occupancyPipeline);
   destroyComputePipeline(d, c.sceneDepthPipeline);
+  destroyComputePipeline(d, c.displacementPipeline);
+  destroyComputePipeline(d, c.classifyPipeline);
+  destroyComputePipeline(d, c.tilesPipeline);
+  destroyGraphicsPipeline(d, c.resolve);
+  for (Image* img : {&c.displacementImage, &c.composedColor, &c.composedDepth, &c.composedMotion}) destroyImage(d, *img);
+  destroyBuffer(d, c.tileList);
   destroyBuffer(d, c.occupancy);
   destroyBuffer(d, c.sceneDepth);
   destroyBuffer(d, c.debugStandIn);
-  for (VkSampler s : {c.linear, c.nearest, c.depthSampler})
+  for (VkSampler s : {c.linear, c.nearest, c.depthSampler, c.displacementSampler})
     if (s) d.vk.DestroySampler(d.device, s, d.allocationCallbacks);
   c = Compositor{};
 }
@@ -163,6 +343,14 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   if (c.desc.motionFormat != VK_FORMAT_UNDEFINED) p.flags |= COMPOSITE_MOTION;
   if (motionValid) p.flags |= COMPOSITE_MOTION_VALID;
   if (hasBackground) p.flags |= COMPOSITE_BACKGROUND;
+  c.computeThisFrame = params.path == CompositePath::Compute && params.debugView == CompositeDebugView::None &&
+                       c.computeAvailable;
+  if (c.computeThisFrame && (anim.gridX > c.displacementImage.extent.width || anim.gridY > c.displacementImage.extent.height))
+    return Status::error("prepareComposite: the warp grid (" + std::to_string(anim.gridX) + "x" + std::to_string(anim.gridY) +
+                         ") exceeds the compositor's displacement image, sized for cells down to " +
+                         std::to_string(c.desc.minCellSize) + " pixels");
+  p.dispWidth = c.displacementImage.extent.width;
+  p.dispHeight = c.displacementImage.extent.height;
   c.params = params;
   c.occupancyPending = c.occupancyPending || layersRebuilt;
   return Status();
@@ -188,14 +376,17 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
      if (!cp->occupancyPending) return Status();
      cp->occupancyPending = false;
      const gpu::CompositePush& p = cp->push;
-     return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount, 1,
+     return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount + 1, 1,
                      {bindImage(x.image(l.color).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
-                      bindBuffer(cp->occupancy.buffer)},
+                      bindBuffer(cp->occupancy.buffer),
+                      bindImage(x.image(l.backgroundColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest)},
                      p);
    })
       .read(l.color, rg::Use::ComputeSampled)
+      .read(l.backgroundColor, rg::Use::ComputeSampled)
       .write(occupancy, rg::Use::ComputeStorageWrite);
   g.addPass("composite: scene depth", [cp, t](rg::PassContext& x) {
+     if (cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;
      return dispatch(*x.device, x.cmd, cp->sceneDepthPipeline, cp->desc.width * cp->desc.height, 1, 1,
                      {bindImage(x.image(t.depth).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->depthSampler),
@@ -209,6 +400,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion, debug,
                                                         debugSources](rg::PassContext& x) {
     const gpu::CompositePush& p = cp->push;
+    if (cp->computeThisFrame) return Status();
     if (p.debugView == COMPOSITE_DEBUG_VELOCITY && !debugSources)
       return Status::error("composite: the velocity debug view needs the simulation's field (CompositeDebugSources)");
     const Image& color = x.graph->image(t.color);
@@ -267,6 +459,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   if (debugSources) pass.read(debug.animFrame, rg::Use::FragmentStorageRead).read(debug.tiled, rg::Use::FragmentStorageRead);
+  if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy));
   return Status();
 }
 

@@ -38,6 +38,7 @@ struct CompositorDesc {
   VkFormat motionFormat = VK_FORMAT_UNDEFINED;     // UNDEFINED: no motion output
   bool reverseZ = false;                           // the host's depth is reverse-Z (1 = near)
   uint32_t maxLayers = CANOPY_MAX_LAYERS;
+  uint32_t minCellSize = 8;                        // smallest warp-grid cell (sizes the displacement image)
 };
 // Checks formats against the device (blendable colour attachment, sampleable depth attachment).
 Status validateCompositorDesc(Device& device, const CompositorDesc& desc);
@@ -47,7 +48,17 @@ struct Compositor {
   CompositorDesc desc;
   GraphicsPipeline composite;
   ComputePipeline occupancyPipeline, sceneDepthPipeline;
-  Buffer occupancy;   // maxLayers x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage
+  // Compute path (CompositePath::Compute): displacement image, classification, tile kernel, resolve.
+  bool computeAvailable = false;  // RGBA32F storage + linear filtering on this device
+  bool computeThisFrame = false;  // prepareComposite's choice (debug views use the fragment path)
+  ComputePipeline displacementPipeline, classifyPipeline, tilesPipeline;
+  GraphicsPipeline resolve;
+  Image displacementImage;        // RGBA32F array: (d_i, previous d_i) per warp-grid corner
+  Image composedColor, composedDepth, composedMotion;  // the tile kernel's results (RGBA16F, R32F, RGBA16F)
+  Buffer tileList;                // CompositeTileHeader + one uvec2 per screen tile
+  VkSampler displacementSampler = VK_NULL_HANDLE;  // linear, clamp to edge
+  Buffer occupancy;   // (maxLayers + 1) x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage;
+                      // slot layerCount: the rigid background
   Buffer sceneDepth;  // width x height float: the host's depth before the composite
   Buffer debugStandIn;  // bound for the debug views' inputs when the graph has none
   bool hasDebugSources = false;
@@ -75,7 +86,10 @@ struct CompositeDebugSources {
   rg::ResourceId animFrame = rg::kInvalidResource;
   rg::ResourceId tiled = rg::kInvalidResource;
 };
-// Adds "composite: occupancy", "composite: scene depth" and "composite: warp + composite".
+// Adds "composite: occupancy", then the fragment path ("composite: scene depth", "composite: warp +
+// composite") and the compute path ("composite: displacement image", "composite: tile list reset",
+// "composite: classify", "composite: warp + composite (tiles)", "composite: resolve"); each frame
+// records one of the two (prepareComposite).
 // `layers` are the layer images (addLayerPasses), `displacement` and `previous` the dynamics'
 // buffers (addDynamicsPasses); `debug` is needed only for CompositeDebugView::Velocity.
 Status addCompositePasses(Compositor& compositor, rg::RenderGraph& graph, const LayerResources& layers,

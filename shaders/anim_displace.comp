@@ -8,7 +8,10 @@
 #include "shared/anim.h"
 
 layout(local_size_x = ANIM_GROUP_SIZE) in;
-layout(binding = 0, scalar) readonly buffer FrameBuf { AnimFrame f; };
+layout(binding = 0, scalar) readonly buffer FrameBuf { AnimFrame frameIn; };
+// Loaded once per invocation: the shared helpers take the frame by value, and passing the buffer
+// member copies it from memory at every call (shaders/sim_common.glsl).
+AnimFrame f;
 layout(binding = 1, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
 layout(binding = 2, scalar) readonly buffer RingBuf { vec2 ring[]; };
 layout(binding = 3, scalar) readonly buffer RingTimesBuf { float ringTimes[]; };
@@ -59,6 +62,7 @@ vec2 sampleHistory(vec2 a, float tau) {
 }
 
 void main() {
+  f = frameIn;
   uint corners = f.gridX * f.gridY;
   uint id = gl_GlobalInvocationID.x;
   uint layer = gl_GlobalInvocationID.y;

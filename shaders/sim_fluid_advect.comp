@@ -27,6 +27,7 @@ float sampleV(float x, float y) {
 }
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n;
   uint i = gl_GlobalInvocationID.x, j = gl_GlobalInvocationID.y;
   uint B = velocityFloats(n);

@@ -5,7 +5,7 @@
 // then f.diffuseSweeps red-black Gauss-Seidel sweeps. Free-slip across tangential boundaries
 // (missing neighbours drop out). One workgroup.
 #include "sim_common.glsl"
-layout(local_size_x = SIM_GROUP_SIZE) in;
+layout(local_size_x_id = 0) in;  // SIM_GROUP
 
 float a;
 
@@ -25,6 +25,7 @@ void updateV(uint src, uint i, uint j) {
 }
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n, hn = n >> 1u;
   uint B = velocityFloats(n);
   a = f.dt * f.viscosity * float(n) * float(n);

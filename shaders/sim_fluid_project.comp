@@ -9,7 +9,7 @@
 // Neumann on inflow/wall sides, p = 0 outside outflow sides. One workgroup;
 // pc.phase selects the field (0: A, 1: B).
 #include "sim_common.glsl"
-layout(local_size_x = SIM_GROUP_SIZE) in;
+layout(local_size_x_id = 0) in;  // SIM_GROUP
 
 bool dl, dr, db, dtop;  // Dirichlet sides (outflow)
 
@@ -41,7 +41,7 @@ float residualAt(uint po, uint bo, uint m, uint i, uint j) {
 }
 
 void restrictCell(uint po, uint bo, uint m, uint pco, uint bco, uint k) {
-  uint mc = m >> 1u, I = k % mc, J = k / mc;
+  uint mc = m >> 1u, I = k & (mc - 1u), J = k >> findMSB(mc);
   // The sum of the four children: the coarse operator is 4x the fine one.
   mg[bco + k] = residualAt(po, bo, m, 2u * I, 2u * J) + residualAt(po, bo, m, 2u * I + 1u, 2u * J) +
                 residualAt(po, bo, m, 2u * I, 2u * J + 1u) + residualAt(po, bo, m, 2u * I + 1u, 2u * J + 1u);
@@ -59,20 +59,22 @@ float ghosted(uint eo, uint m, int I, int J) {
 
 void prolongCell(uint po, uint eo, uint m, uint k) {
   // Bilinear (cell-centred): 9/16 own coarse cell, 3/16 the two nearest, 1/16 the diagonal.
-  uint mc = m >> 1u, i = k % m, j = k / m;
+  uint mc = m >> 1u, i = k & (m - 1u), j = k >> findMSB(m);
   int I = int(i >> 1u), J = int(j >> 1u);
   int di = (i & 1u) != 0u ? 1 : -1, dj = (j & 1u) != 0u ? 1 : -1;
   mg[po + k] += 0.5625 * ghosted(eo, mc, I, J) + 0.1875 * ghosted(eo, mc, I + di, J) +
                 0.1875 * ghosted(eo, mc, I, J + dj) + 0.0625 * ghosted(eo, mc, I + di, J + dj);
 }
 
+// Levels are powers of two: shifts and masks instead of integer division (which CPU drivers run
+// one lane at a time).
 // Red-black sweep of one colour by the whole workgroup. Levels are powers of two >= 2 a side,
 // so each row holds m/2 cells of each colour.
 void relax(uint po, uint bo, uint m, uint color) {
   uint hm = m >> 1u;
   FOR_EACH(k, m * hm) {
-    uint j = k / hm;
-    relaxCell(po, bo, m, 2u * (k % hm) + ((j + color) & 1u), j);
+    uint j = k >> findMSB(hm);
+    relaxCell(po, bo, m, 2u * (k & (hm - 1u)) + ((j + color) & 1u), j);
   }
   SYNC();
 }
@@ -151,6 +153,7 @@ void vCycle(bool neumann) {
 }
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n;
   uint o = pc.phase == 0u ? 0u : velocityFloats(n);
   dl = isOutflow(SIM_SIDE_LEFT);
@@ -163,7 +166,7 @@ void main() {
   SYNC();
   uint bo = n * n;
   FOR_EACH(c, n * n) {
-    uint i = c % n, j = c / n;
+    uint i = c & (n - 1u), j = c >> findMSB(n);
     mg[bo + c] = -h * (vel[o + macU(n, i + 1u, j)] - vel[o + macU(n, i, j)] + vel[o + macV(n, i, j + 1u)] - vel[o + macV(n, i, j)]) +
                  h * h * motorSource(f, vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
   }
@@ -177,7 +180,7 @@ void main() {
     vel[o + macU(n, i, j)] -= (mg[j * n + i] - mg[j * n + i - 1u]) * invh;
   }
   FOR_EACH(k, n * (n - 1u)) {
-    uint i = k % n, j = 1u + k / n;
+    uint i = k & (n - 1u), j = 1u + (k >> findMSB(n));
     vel[o + macV(n, i, j)] -= (mg[j * n + i] - mg[(j - 1u) * n + i]) * invh;
   }
   FOR_EACH(t, n) {

@@ -5,7 +5,7 @@
 // here (lexicographic order is inherently serial); f.iterations sweeps per linear solve.
 // Field A (offset 0) holds u, v; field B holds u0, v0. One workgroup.
 #include "sim_common.glsl"
-layout(local_size_x = SIM_GROUP_SIZE) in;
+layout(local_size_x_id = 0) in;  // SIM_GROUP
 
 uint IX(uint arr, uint i, uint j) {  // arr: 0 u, 1 v, 2 u0, 3 v0
   uint n = f.n, sz = (n + 2u) * (n + 2u);
@@ -95,6 +95,7 @@ void project(uint u, uint v, uint p, uint div) {
 }
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n;
   float h = 1.0 / float(n);
   // Sources: boundary wind as a body force on the first interior row/column (motors: in project()).

@@ -9,6 +9,7 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n, halfN = n / 2u;
   uint i = gl_GlobalInvocationID.x, j = gl_GlobalInvocationID.y;
   if (i >= n || j >= n) return;

@@ -6,12 +6,13 @@
 // fluid velocity at cell centres (MAC faces averaged, or Stam's collocated interior).
 // One workgroup.
 #include "sim_common.glsl"
-layout(local_size_x = SIM_GROUP_SIZE) in;
+layout(local_size_x_id = 0) in;  // SIM_GROUP
 
 void main() {
+  LOAD_FRAME();
   uint n = f.n, nn = n * n;
   FOR_EACH(c, nn) {
-    uint i = c % n, j = c / n;
+    uint i = c & (n - 1u), j = c >> findMSB(n);
     vec2 w;
     if (f.scheme == SIM_SCHEME_STAM) {
       w = vec2(vel[stamIX(n, 0u, i + 1u, j + 1u)], vel[stamIX(n, 1u, i + 1u, j + 1u)]);
@@ -30,7 +31,7 @@ void main() {
   for (uint sub = 0u; sub < f.waveSubsteps; ++sub) {
     uint curOff = cur * nn, prevOff = (1u - cur) * nn;
     FOR_EACH(c, nn) {
-      uint i = c % n, j = c / n;
+      uint i = c & (n - 1u), j = c >> findMSB(n);
       vec2 x = wave[curOff + c];
       vec2 l = i > 0u ? wave[curOff + c - 1u] : x;
       vec2 r = i + 1u < n ? wave[curOff + c + 1u] : x;

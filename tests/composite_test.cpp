@@ -365,7 +365,10 @@ Scene randomScene(uint32_t seed) {
 }
 
 TEST_F(CompositeTest, MatchesTheCpuReferenceAndTheLeversLeaveTheImageAlone) {
+ for (CompositePath path : {CompositePath::Compute, CompositePath::Fragment}) {
+  SCOPED_TRACE(path == CompositePath::Compute ? "compute path" : "fragment path");
   Scene sc = randomScene(5);
+  sc.params.path = path;
   sc.params.earlyExit = false;
   sc.params.skipEmptyTiles = false;
   const Result plain = run(sc);
@@ -399,6 +402,53 @@ TEST_F(CompositeTest, MatchesTheCpuReferenceAndTheLeversLeaveTheImageAlone) {
   size_t nearestOff = 0;
   for (size_t i = 0; i < sc.pixels(); ++i) nearestOff += maxDiff(nearest.color[i], refNearest.color[i]) > 3.0f / 255.0f;
   EXPECT_LE(nearestOff, sc.pixels() / 100);
+ }
+}
+
+// Issue 15: the compute path's tile lists never drop a contributing layer. Small leaves on empty
+// layers, displaced by up to ~3 tiles so each lands in tiles its layer does not occupy (and across
+// tile borders): the classified kernel must give the unclassified kernel's image (every tile
+// listing every layer), and both the fragment path's.
+TEST_F(CompositeTest, TileListsNeverDropALayerCarriedAcrossTileBorders) {
+  Scene sc;
+  sc.w = 96;
+  sc.h = 72;
+  sc.resize(3);
+  std::mt19937 rng(15);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (uint32_t l = 0; l < sc.n; ++l)
+    for (int leaf = 0; leaf < 6; ++leaf) {
+      const uint32_t cx = 20 + uint32_t(u(rng) * 56), cy = 16 + uint32_t(u(rng) * 40);
+      for (uint32_t y = cy - 2; y <= cy + 2; ++y)
+        for (uint32_t x = cx - 2; x <= cx + 2; ++x) {
+          sc.color(l, x, y) = glm::vec4(0.2f * float(l + 1), 0.6f, 0.1f, 1.0f);
+          sc.depth(l, x, y) = 0.2f + 0.2f * float(l);
+        }
+    }
+  // A smooth warp of up to 22 px (the tile is 8 px), different per layer and corner.
+  for (uint32_t l = 0; l < sc.n; ++l)
+    for (uint32_t gy = 0; gy < sc.gridY(); ++gy)
+      for (uint32_t gx = 0; gx < sc.gridX(); ++gx)
+        sc.disp[(size_t(l) * sc.gridY() + gy) * sc.gridX() + gx] =
+            glm::vec2(22.0f * std::sin(0.5f * float(gx) + float(l)), 22.0f * std::cos(0.4f * float(gy) + 2.0f * float(l)));
+  sc.prev = sc.disp;
+  sc.background = false;
+  sc.params.path = CompositePath::Compute;
+  sc.params.skipEmptyTiles = true;
+  const Result classified = run(sc);
+  sc.params.skipEmptyTiles = false;
+  const Result unclassified = run(sc);
+  sc.params.path = CompositePath::Fragment;
+  const Result fragment = run(sc);
+  size_t covered = 0, differ = 0, differFragment = 0;
+  for (size_t i = 0; i < sc.pixels(); ++i) {
+    covered += unclassified.color[i].a > 0.0f && unclassified.color[i] != glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    differ += maxDiff(classified.color[i], unclassified.color[i]) > 0.0f || classified.depth[i] != unclassified.depth[i];
+    differFragment += maxDiff(classified.color[i], fragment.color[i]) > 3.0f / 255.0f;
+  }
+  EXPECT_GT(covered, 200u) << "the warped leaves must cover pixels for the test to mean anything";
+  EXPECT_EQ(differ, 0u) << "the tile lists dropped a layer somewhere";
+  EXPECT_LE(differFragment, sc.pixels() / 200) << "compute and fragment paths disagree";
 }
 
 TEST_F(CompositeTest, RefusesBadFormatsAndParameters) {

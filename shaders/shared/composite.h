@@ -10,6 +10,14 @@
 #define COMPOSITE_TILE 8u                // occupancy tile, pixels per side
 #define COMPOSITE_OCCUPANCY_GROUP 64u    // occupancy kernel workgroup (one tile per invocation)
 #define COMPOSITE_SCENE_GROUP 64u        // scene-depth copy workgroup (one pixel per invocation)
+#define COMPOSITE_CLASSIFY_GROUP 64u     // classification workgroup (one screen tile per invocation)
+#define COMPOSITE_DISP_GROUP 64u         // displacement-image workgroup (one warp-grid corner per invocation)
+// Compute path: a tile's layer mask has bit i for layer i and this bit when the rigid background
+// (trunks) reaches the tile.
+#define COMPOSITE_TILE_BACKGROUND 0x80000000u
+// Classification searches at most this many occupancy tiles per axis for one layer; a wider source
+// rectangle (a displacement of more than ~COMPOSITE_TILE * this pixels across a tile) counts as reached.
+#define COMPOSITE_CLASSIFY_MAX_SPAN 16u
 
 // CompositePush.flags
 #define COMPOSITE_EARLY_EXIT 1u     // front to back, stop once the pixel is opaque
@@ -50,11 +58,26 @@ struct CompositePush {
   uint debugView;      // COMPOSITE_DEBUG_*
   float debugScale;    // velocity view: speed shown at full brightness, domain units/s
   float exposure;      // the vegetation's linear colour is scaled by this (HDR hosts), >= 0
+  uint dispWidth;      // compute path: texels per row / column of the displacement image (>= gridX, gridY)
+  uint dispHeight;
   uint pad0;
-  uint pad1;
-  uint pad2;
 };
 CANOPY_SIZE_CHECK(CompositePush, 64)
+
+// Compute path: the tile list the classification appends to. The header doubles as the indirect
+// dispatch of the warp + composite kernel (one workgroup per tile) and the indirect draw of the
+// resolve pass (one six-vertex quad per tile); the host resets it every frame.
+struct CompositeTileHeader {
+  uint groupsX;        // = listed tiles
+  uint groupsY;        // 1
+  uint groupsZ;        // 1
+  uint pad0;
+  uint vertexCount;    // 6
+  uint instanceCount;  // = listed tiles
+  uint firstVertex;    // 0
+  uint firstInstance;  // 0
+};
+CANOPY_SIZE_CHECK(CompositeTileHeader, 32)
 
 // The host's depth in Canopy's standard convention (0 = near), and back (design: one convention
 // inside, the host's at the edges; the scene's own value is written back untouched).
@@ -86,6 +109,14 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
   s.i01 = s.i00 + c.gridX;
   s.i11 = s.i01 + 1u;
   return s;
+}
+
+// Compute path: where pixel point p reads the displacement image (texel (gx, gy) = corner (gx, gy))
+// with hardware bilinear filtering: the same corners and weights as gridSample, in normalized
+// coordinates.
+CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
+  float gx = float(s.i00 % c.gridX), gy = float(s.i00 / c.gridX);
+  return vec2((gx + s.t.x + 0.5f) / float(c.dispWidth), (gy + s.t.y + 0.5f) / float(c.dispHeight));
 }
 
 CANOPY_INLINE vec2 blendCorners(GridSample s, vec2 d00, vec2 d10, vec2 d01, vec2 d11) {

@@ -20,7 +20,9 @@
 #define SIM_SIDE_TOP 8u     // on the top boundary, toward -y
 
 #define SIM_MAX_MOTORS 8u
-#define SIM_GROUP_SIZE 1024u  // invocations of the single-workgroup solver kernels
+// Invocations of the single-workgroup solver kernels: a specialization constant chosen per device
+// class (compute/simulation.cpp, simulationGroupSize); this is the largest allowed and the default.
+#define SIM_MAX_GROUP_SIZE 1024u
 #define SIM_MG_PRE_SWEEPS 1u
 #define SIM_MG_POST_SWEEPS 1u
 #define SIM_MG_COARSE_SWEEPS 32u
@@ -58,7 +60,7 @@ struct SimFrame {
   float waveDt;        // dt / waveSubsteps, s
   uint ringSlot;       // history ring slot the tile pass writes
   uint ringSize;       // H
-  uint pad0;
+  uint groupSize;      // invocations of the single-workgroup kernels (their specialization constant)
   uint pad1;
   uint pad2;
   vec4 motors[8];      // xy: position (domain units), z: radius (domain units), w: outward speed at the rim (domain units/s)

@@ -290,6 +290,9 @@ struct SimulationDesc {
   uint32_t historySize = 0;      // H tiled fields kept; 0: enough for historySeconds at nominalDt
   float historySeconds = 1.0f;   // (0, 3600]
   float nominalDt = 1.0f / 30.0f;
+  // Invocations of the single-workgroup solver kernels, a power of two in [32, 1024]; 0: chosen by
+  // device class (64 on CPU devices such as lavapipe, 1024 on GPUs; docs/performance.md).
+  uint32_t groupSize = 0;
 };
 
 // Layers per depth region, written like the paper: {3, 1, 1} is "5(3-1-1)".
@@ -351,9 +354,18 @@ enum class CompositeDebugView : uint32_t {
   Velocity = 2,  // the tiled simulation field over the simulation plane
   Grid = 3,      // the nearest layer's warp grid, displaced
 };
+// How the inverse warp + compositing runs (docs/performance.md compares them).
+enum class CompositePath : uint32_t {
+  Compute = 0,   // tile-classified compute kernel + a resolve draw over the listed tiles (default)
+  Fragment = 1,  // one fused full-screen fragment pass (also used for the debug views)
+};
 struct CompositeParams {
+  CompositePath path = CompositePath::Compute;
   bool earlyExit = true;       // front to back, stop at accumulated alpha >= 1 - 1/1024
-  bool skipEmptyTiles = true;  // skip a layer whose occupancy tile under p - d_i(p) is empty
+  // Skip layers that cannot reach a pixel: per 8x8 screen tile in the compute path (a layer is
+  // listed when its occupancy meets the tile moved by the displacement's range), per pixel in the
+  // fragment path.
+  bool skipEmptyTiles = true;
   bool bilinear = true;        // bilinear layer colour (false: nearest texel)
   float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
   // The vegetation's linear colour is multiplied by this before it is blended over the host's

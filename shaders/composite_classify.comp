@@ -1,0 +1,66 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Compute path, tile classification (docs/performance.md): for every COMPOSITE_TILE screen tile, which
+// layers can reach it under p - d_i(p). d_i is bilinear between warp-grid corners, so over the tile
+// it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
+// layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
+// rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
+// (position + layer mask) to the list that sizes the composite's indirect dispatch and the
+// resolve's indirect draw. Without COMPOSITE_SKIP_EMPTY every tile lists every layer (the
+// unclassified kernel, kept for tests and the benchmark).
+#include "shared/composite.h"
+
+layout(local_size_x = COMPOSITE_CLASSIFY_GROUP) in;
+layout(binding = 0, scalar) readonly buffer DispBuf { vec2 disp[]; };
+layout(binding = 1, scalar) readonly buffer OccBuf { uint occupancy[]; };
+layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
+layout(push_constant, scalar) uniform Push { CompositePush pc; };
+
+void main() {
+  uint tileCount = pc.tilesX * pc.tilesY;
+  uint id = gl_GlobalInvocationID.x;
+  if (id >= tileCount) return;
+  uvec2 tile = uvec2(id % pc.tilesX, id / pc.tilesX);
+  vec2 size = vec2(pc.width, pc.height);
+  // Pixel centres of the tile (clipped to the image).
+  vec2 lo = vec2(tile * COMPOSITE_TILE) + 0.5;
+  vec2 hi = min(lo + float(COMPOSITE_TILE - 1u), size - 0.5);
+  uint mask = 0u;
+  if ((pc.flags & COMPOSITE_BACKGROUND) != 0u && occupancy[pc.layerCount * tileCount + id] != 0u)
+    mask |= COMPOSITE_TILE_BACKGROUND;
+  if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
+    mask |= (1u << pc.layerCount) - 1u;
+  } else {
+    GridSample g0 = gridSample(pc, lo), g1 = gridSample(pc, hi);
+    uint gx0 = g0.i00 % pc.gridX, gy0 = g0.i00 / pc.gridX, gx1 = g1.i00 % pc.gridX + 1u, gy1 = g1.i00 / pc.gridX + 1u;
+    uint corners = pc.gridX * pc.gridY;
+    for (uint i = 0u; i < pc.layerCount; ++i) {
+      vec2 dmin = vec2(1e30), dmax = vec2(-1e30);
+      for (uint gy = gy0; gy <= gy1; ++gy)
+        for (uint gx = gx0; gx <= gx1; ++gx) {
+          vec2 d = disp[i * corners + gy * pc.gridX + gx];
+          dmin = min(dmin, d);
+          dmax = max(dmax, d);
+        }
+      // The composite samples layer i at q = p - d in [-1, size + 1] (bilinear reach included by the
+      // occupancy's one-pixel dilation).
+      vec2 qlo = max(lo - dmax, vec2(-1.0)), qhi = min(hi - dmin, size + 1.0);
+      if (any(greaterThan(qlo, qhi))) continue;
+      uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
+      uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
+      if (t1.x - t0.x >= COMPOSITE_CLASSIFY_MAX_SPAN || t1.y - t0.y >= COMPOSITE_CLASSIFY_MAX_SPAN) {
+        mask |= 1u << i;
+        continue;
+      }
+      bool reached = false;
+      for (uint ty = t0.y; ty <= t1.y && !reached; ++ty)
+        for (uint tx = t0.x; tx <= t1.x; ++tx)
+          if (occupancy[(i * pc.tilesY + ty) * pc.tilesX + tx] != 0u) { reached = true; break; }
+      if (reached) mask |= 1u << i;
+    }
+  }
+  if (mask == 0u) return;
+  uint slot = atomicAdd(header.groupsX, 1u);
+  atomicAdd(header.instanceCount, 1u);
+  tiles[slot] = uvec2(tile.x | (tile.y << 16u), mask);
+}

@@ -1,0 +1,84 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// Compute path of the inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing",
+// docs/performance.md): one workgroup per listed screen tile (composite_classify.comp), one pixel per
+// invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
+// lane's; front to back, a pixel stops once opaque. The displacement (current and previous) comes
+// from one hardware-filtered fetch of the displacement image. The same sums as composite.frag:
+// results go to Canopy's intermediate images and the resolve pass (composite_resolve.*) blends
+// them into the host's targets and writes its depth, on the listed tiles only.
+#include "shared/composite.h"
+
+layout(local_size_x = COMPOSITE_TILE, local_size_y = COMPOSITE_TILE) in;
+layout(binding = 0) uniform sampler2DArray layerColor;  // premultiplied, linear or nearest sampler
+layout(binding = 1) uniform sampler2DArray layerDepth;  // nearest, border = 1 (far)
+layout(binding = 2) uniform sampler2D backgroundColor;
+layout(binding = 3) uniform sampler2D backgroundDepth;
+layout(binding = 4) uniform sampler2D hostDepth;        // the host's depth, read before the resolve writes it
+layout(binding = 5) uniform sampler2DArray dispImage;   // (d_i, previous d_i) per corner, linear, clamp to edge
+layout(binding = 6, scalar) readonly buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
+layout(binding = 7, rgba16f) writeonly uniform image2D outColor;   // premultiplied
+layout(binding = 8, r32f) writeonly uniform image2D outDepth;      // the host's depth to write
+layout(binding = 9, rgba16f) writeonly uniform image2D outMotion;  // (motion, 0, 1 where frontmost)
+layout(push_constant, scalar) uniform Push { CompositePush pc; };
+
+void main() {
+  uvec2 tileEntry = tiles[gl_WorkGroupID.x];
+  uvec2 tile = uvec2(tileEntry.x & 0xffffu, tileEntry.x >> 16u);
+  uint mask = tileEntry.y;
+  ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
+  if (ip.x >= int(pc.width) || ip.y >= int(pc.height)) return;
+  vec2 p = vec2(ip) + 0.5;
+  vec2 size = vec2(pc.width, pc.height);
+  float sceneRaw = texelFetch(hostDepth, ip, 0).r;
+  float sceneZ = compositeStandardDepth(pc.flags, sceneRaw);
+  vec4 bg = vec4(0.0);
+  float bgZ = 1.0;
+  if ((mask & COMPOSITE_TILE_BACKGROUND) != 0u) {
+    bg = texelFetch(backgroundColor, ip, 0);
+    bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, ip, 0).r : 1.0;
+  }
+  if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
+  float opaqueZ = min(sceneZ, bgZ);
+
+  vec2 uvGrid = gridTexcoord(pc, gridSample(pc, p));
+  bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0u;
+  vec4 acc = vec4(0.0);
+  float frontZ = 1.0;
+  vec2 motion = vec2(0.0);
+  bool front = false;
+  uint layers = mask & ((1u << pc.layerCount) - 1u);
+  while (layers != 0u) {
+    uint i = uint(findLSB(layers));
+    layers &= layers - 1u;
+    vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
+    vec2 q = p - dd.xy;
+    if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
+    vec3 uvw = vec3(q / size, float(i));
+    vec4 c = textureLod(layerColor, uvw, 0.0);
+    if (c.a < COMPOSITE_MIN_ALPHA) continue;
+    float z;
+    if (bilinear) {
+      vec4 z4 = textureGather(layerDepth, uvw, 0);
+      z = min(min(z4.x, z4.y), min(z4.z, z4.w));
+    } else {
+      z = textureLod(layerDepth, uvw, 0.0).r;
+    }
+    if (z >= opaqueZ) continue;
+    acc = underPremultiplied(acc, c);
+    if (!front && c.a >= pc.depthAlpha) {
+      front = true;
+      frontZ = z;
+      motion = dd.xy - dd.zw;  // zw = xy when the previous frame is not valid
+    }
+    if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
+  }
+  acc = underPremultiplied(acc, bg);
+  imageStore(outColor, ip, vec4(acc.rgb * pc.exposure, acc.a));
+  float vegZ = min(frontZ, bgZ);
+  imageStore(outDepth, ip, vec4(vegZ < sceneZ ? compositeStandardDepth(pc.flags, vegZ) : sceneRaw));
+  if ((pc.flags & COMPOSITE_MOTION) != 0u) {
+    bool vegetationFront = front && frontZ < bgZ;
+    imageStore(outMotion, ip, vegetationFront ? vec4(motion, 0.0, 1.0) : vec4(0.0));
+  }
+}

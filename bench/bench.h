@@ -20,5 +20,20 @@ int runAnimBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std
 // Soak: `frames` frames with random parameters and periodic re-slicing; prints NaN/Inf counts,
 // RSS, device-allocation and frame-time growth. With `check`, returns 1 when any of them is bad.
 int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check);
+
+// Table 1 (issue 15): face counts x 3(1-1-1)/5(3-1-1) x still/orbiting camera beside the paper's
+// FPS, baselines side by side, optional scaling series (CSV) and a JSON file of all of it.
+struct Table1Options {
+  std::vector<uint64_t> faces = {80000, 10000000};
+  std::vector<uint64_t> seriesFaces = {80000, 1000000, 10000000};
+  std::string scene = "shrub";
+  int frames = 30;
+  uint32_t width = 1024, height = 768;
+  float orbitDegrees = 1.0f;  // camera turn per frame in the orbit rows
+  bool series = false;
+  std::string csvDir;         // series CSV files (empty: none)
+  std::string json = "bench_table1.json";
+};
+int runTable1Bench(Device& dev, const Table1Options& options);
 }
 }  // namespace canopy

@@ -2,6 +2,8 @@
 //   canopy-bench [sim] [layers] [anim] [--sizes 64,128,256] [--frames N] [--detail]
 //                [--faces 80000,10000000] [--rebuilds N] [--layers 5(3-1-1)] [--device NAME]
 //   canopy-bench soak [--frames N] [--rebuild-every N] [--check]
+//   canopy-bench table1 [--faces 80000,10000000] [--scene shrub] [--frames N] [--size 1024x768]
+//                [--orbit DEG] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -25,6 +27,13 @@ static int usage(const char* why) {
                "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
                "  soak           long run: random parameters every frame, re-slicing every --rebuild-every frames;\n"
                "                 NaN/Inf, RSS, device allocations, frame time (--frames default 100000)\n"
+               "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
+               "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
+               "  --size WxH     table1: resolution (default 1024x768)\n"
+               "  --orbit DEG    table1: camera turn per frame in the orbit rows, (0, 90] (default 1)\n"
+               "  --series       table1: scaling series (faces, layers 1..9, resolution); --csv-dir DIR writes CSVs\n"
+               "  --series-faces table1: the face-count series (default 80000,1000000,10000000)\n"
+               "  --json FILE    table1: where the JSON goes ('' for none)\n"
                "  --rebuild-every N  soak: frames between re-slicings, 1..100000 (default 100)\n"
                "  --check        soak: exit 1 on NaN/Inf, device-allocation growth or RSS growth over 64 MiB\n"
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
@@ -42,7 +51,21 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 0;  // 0: the section's default
   bool detail = false;
-  bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false;
+  bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false, runTable1 = false;
+  bench::Table1Options t1;
+  bool facesGiven = false;
+  auto parseList = [](const char* v, std::vector<uint64_t>* out) {
+    if (!v) return false;
+    out->clear();
+    std::stringstream ss(v);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+      uint32_t n;
+      if (!cli::parseUint(item.c_str(), 2, 100000000, &n)) return false;
+      out->push_back(n);
+    }
+    return !out->empty();
+  };
   uint32_t rebuildEvery = 100;
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
@@ -58,6 +81,33 @@ int main(int argc, char** argv) {
     else if (a == "layers") runLayers = true;
     else if (a == "anim") runAnim = true;
     else if (a == "soak") runSoak = true;
+    else if (a == "table1") runTable1 = true;
+    else if (a == "--series") t1.series = true;
+    else if (a == "--series-faces") {
+      if (!parseList(next(), &t1.seriesFaces)) return usage("--series-faces: each must be an integer in [2, 100000000]");
+    } else if (a == "--csv-dir") {
+      const char* v = next();
+      if (!v) return usage("--csv-dir needs a folder");
+      t1.csvDir = v;
+    } else if (a == "--json") {
+      const char* v = next();
+      if (!v) return usage("--json needs a file name ('' for none)");
+      t1.json = v;
+    } else if (a == "--size") {
+      const char* v = next();
+      unsigned w = 0, h = 0;
+      char tail = 0;
+      if (!v || std::sscanf(v, "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192)
+        return usage("--size needs WxH, each in [16, 8192]");
+      t1.width = w;
+      t1.height = h;
+    } else if (a == "--orbit") {
+      const char* v = next();
+      char* end = nullptr;
+      const float deg = v ? std::strtof(v, &end) : 0.0f;
+      if (!v || *end || !(deg > 0.0f && deg <= 90.0f)) return usage("--orbit needs degrees in (0, 90]");
+      t1.orbitDegrees = deg;
+    }
     else if (a == "--check") check = true;
     else if (a == "--rebuild-every") {
       if (!cli::parseUint(next(), 1, 100000, &rebuildEvery)) return usage("--rebuild-every needs an integer in [1, 100000]");
@@ -74,6 +124,7 @@ int main(int argc, char** argv) {
         if (!cli::parseUint(item.c_str(), 2, 100000000, &n)) return usage("--faces: each must be an integer in [2, 100000000]");
         faces.push_back(n);
       }
+      facesGiven = true;
     } else if (a == "--scene") {
       const char* v = next();
       if (!v) return usage("--scene needs a name: shrub, tree, grass, kelp, field");
@@ -115,12 +166,18 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1) runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
   if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768,
                                              scene);
+  if (rc == 0 && runTable1) {
+    if (facesGiven) t1.faces.assign(faces.begin(), faces.end());
+    if (!scene.empty()) t1.scene = scene;
+    if (frames) t1.frames = frames;
+    rc = bench::runTable1Bench(dev, t1);
+  }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

@@ -260,6 +260,16 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   CANOPY_TRY(make("sim_stam_step.comp", one, &s.stam));
   CANOPY_TRY(make("sim_wave.comp", one, &s.oscillator));
   CANOPY_TRY(make("sim_tile.comp", grid, &s.tile));
+  const uint32_t widest = std::min<uint32_t>({SIM_MAX_GROUP_SIZE, d.properties.limits.maxComputeWorkGroupInvocations,
+                                              d.properties.limits.maxComputeWorkGroupSize[0]});
+  if (s.groupSize < widest) {
+    s.wideGroupSize = uint32_t(1) << (31 - __builtin_clz(widest));  // a power of two for the reductions
+    const ComputePipelineDesc wide{nullptr, b, push, {s.wideGroupSize}, true};
+    CANOPY_TRY(make("sim_fluid_diffuse.comp", wide, &s.wideDiffuse));
+    CANOPY_TRY(make("sim_fluid_project.comp", wide, &s.wideProject));
+    CANOPY_TRY(make("sim_stam_step.comp", wide, &s.wideStam));
+    CANOPY_TRY(make("sim_wave.comp", wide, &s.wideOscillator));
+  }
 
   // Zero all state once (a one-pass graph: the fills' barriers come from the graph too).
   PreparedWork work;
@@ -289,7 +299,9 @@ void destroySimulation(Simulation& s) {
   if (!s.device) return;
   Device& d = *s.device;  // the caller made sure no frame in flight uses it (destroyCanopy defers)
   s.graph.release(d);
-  for (ComputePipeline* p : {&s.diffuse, &s.project, &s.advect, &s.stam, &s.oscillator, &s.tile}) destroyComputePipeline(d, *p);
+  for (ComputePipeline* p : {&s.diffuse, &s.project, &s.advect, &s.stam, &s.oscillator, &s.tile, &s.wideDiffuse, &s.wideProject,
+                             &s.wideStam, &s.wideOscillator})
+    destroyComputePipeline(d, *p);
   for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes}) destroyBuffer(d, *b);
   s.device = nullptr;
 }
@@ -316,15 +328,17 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
     return *hold ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
   };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
-  const uint32_t one = s.groupSize;  // single-workgroup kernels
+  // Single-workgroup kernels: the width prepareSimulationStep chose for this step.
+  auto wide = [sp] { return sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize; };
+  auto one = [sp] { return sp->next.groupSize; };
   g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
      if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
    }).write(r.frame, rg::Use::TransferDst);
-  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->diffuse, one, 1, 0) : Status(); })
+  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0) : Status(); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->project, one, 1, 0) : Status(); })
+  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideProject : sp->project, one(), 1, 0) : Status(); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
       .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
@@ -333,14 +347,14 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
    })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? run(c.cmd, sp->project, one, 1, 1) : Status(); })
+  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideProject : sp->project, one(), 1, 1) : Status(); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
       .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return mac() ? Status() : run(c.cmd, sp->stam, one, 1, 0); })
+  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return mac() ? Status() : run(c.cmd, wide() ? sp->wideStam : sp->stam, one(), 1, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) { return run(c.cmd, sp->oscillator, one, 1, 0); })
+  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) { return run(c.cmd, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .read(r.velocity, rg::Use::ComputeStorageRead)
       .write(r.wave, rg::Use::ComputeStorageReadWrite);
@@ -354,13 +368,20 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   return Status();
 }
 
+Status chooseGroupSize(const Simulation& s, gpu::SimFrame* f) {
+  f->groupSize = s.groupSize;
+  Status fits = checkLoopBudget(*f);
+  if (fits.ok() || s.wideGroupSize == 0) return fits;
+  f->groupSize = s.wideGroupSize;
+  return checkLoopBudget(*f);
+}
+
 Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt) {
   const uint32_t slot = uint32_t(s.stats.steps % s.ringSize);
   gpu::SimFrame f;
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, slot, s.ringSize, &f));
   f.mgSerialSize = s.mgSerialSize;
-  f.groupSize = s.groupSize;
-  CANOPY_TRY(checkLoopBudget(f));
+  CANOPY_TRY(chooseGroupSize(s, &f));
   s.next = f;
   s.time += dt;
   s.stats.steps++;
@@ -375,8 +396,7 @@ Status runSimulationSteps(Simulation& s, const SimulationParams& p, float dt, ui
   gpu::SimFrame probe;  // every check, before anything is recorded
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, 0, s.ringSize, &probe));
   probe.mgSerialSize = s.mgSerialSize;
-  probe.groupSize = s.groupSize;
-  CANOPY_TRY(checkLoopBudget(probe));
+  CANOPY_TRY(chooseGroupSize(s, &probe));
   if (!s.graphReady) return Status::error("runSimulationSteps: simulation not created");
   while (count > 0) {
     const uint32_t batch = std::min<uint32_t>(count, 256);
@@ -396,7 +416,8 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
   gpu::SimFrame f;
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), 1.0f / 30.0f, 0, s.ringSize, &f));
   f.scheme = SIM_SCHEME_MAC_MULTIGRID;
-  f.groupSize = s.groupSize;
+  f.mgSerialSize = s.mgSerialSize;
+  CANOPY_TRY(chooseGroupSize(s, &f));
   rg::RenderGraph g;
   auto frame = g.importBuffer("sim frame", s.frame.size, kFrameRest, kFrameRest);
   auto vel = g.importBuffer("sim velocity", s.velocity.size, kPersistent, kPersistent);
@@ -409,7 +430,10 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
    })
       .write(frame, rg::Use::TransferDst)
       .write(mg, rg::Use::TransferDst);
-  g.addPass("sim: project", [sp](rg::PassContext& c) { return simDispatch(*sp, c.cmd, sp->project, sp->groupSize, 1, 0); })
+  const bool wide = s.wideGroupSize != 0 && f.groupSize == s.wideGroupSize;
+  g.addPass("sim: project", [sp, wide, &f](rg::PassContext& c) {
+     return simDispatch(*sp, c.cmd, wide ? sp->wideProject : sp->project, f.groupSize, 1, 0);
+   })
       .read(frame, rg::Use::ComputeStorageRead)
       .write(vel, rg::Use::ComputeStorageReadWrite)
       .write(mg, rg::Use::ComputeStorageReadWrite);

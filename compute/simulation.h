@@ -40,6 +40,11 @@ struct Simulation {
   uint32_t groupSize = SIM_MAX_GROUP_SIZE;  // single-workgroup kernels' width (createSimulation)
   Buffer frame, velocity, multigrid, wave, tiled, ring, ringTimes;
   ComputePipeline diffuse, project, advect, stam, oscillator, tile;
+  // The single-workgroup kernels again at the widest width, when groupSize is narrower: lavapipe
+  // stops a shader's loops after 65535 iterations in all per invocation, so a step whose loops
+  // would not fit at groupSize (many V-cycles or sweeps) runs these instead (prepareSimulationStep).
+  ComputePipeline wideDiffuse, wideProject, wideStam, wideOscillator;
+  uint32_t wideGroupSize = 0;  // 0: no wide variant (groupSize is already the widest)
   gpu::SimFrame next{};  // the block the next recorded step uploads (prepareSimulationStep)
   double time = 0.0;     // simulation clock, s
   SimulationStats stats;
@@ -72,6 +77,9 @@ void destroySimulation(Simulation& sim);
 // `hold` (default: &sim.paused) is read when the graph is recorded: true records no step (a paused
 // host frame, or a context that shares a simulation another context stepped this frame).
 Status addSimulationPasses(Simulation& sim, rg::RenderGraph& graph, SimulationResources* out, const bool* hold = nullptr);
+// The single-workgroup width for the step `frame` describes: the simulation's own groupSize when
+// its loops fit lavapipe's budget there, else the wide variant's; refuses when neither fits.
+Status chooseGroupSize(const Simulation& sim, gpu::SimFrame* frame);
 // Validates `params` and fixes the next recorded step (advances the clock by dt and the ring slot).
 Status prepareSimulationStep(Simulation& sim, const SimulationParams& params, float dt);
 // Standalone: records `count` steps (one command buffer per 256 steps), submits and waits.

@@ -1,0 +1,422 @@
+// canopy-bench table1 (issue 15): the paper's Table 1 at 1024x768 — face counts x layouts
+// 3(1-1-1) / 5(3-1-1) x still / orbiting camera — printed beside the paper's FPS, the share of the
+// frame the vegetation covers, side-by-side baselines from the same run (as ratios), optional
+// scaling series (CSV, drawn by scripts/plot_bench.py), and a JSON file of all of it.
+//
+// Figures of record are wall clock (submit-to-fence of one whole frame, the host's clear
+// subtracted): on CPU devices (lavapipe) GPU timestamps around compute work read near zero after
+// any draw (docs/design.md), so per-pass timestamps are written with "trusted": false there.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "bench/bench.h"
+#include "bench/bench_host.h"
+#include "compute/sim_reference.h"
+#include "compute/simulation.h"
+#include "engine/device.h"
+#include "engine/timing.h"
+#include "engine/transfer.h"
+#include "render/canopy.h"
+#include "render/layer_layout.h"
+#include "tools/scene_generator.h"
+
+namespace canopy::bench {
+namespace {
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+struct Spread {
+  double median = 0, p95 = 0, max = 0;
+};
+Spread spreadOf(std::vector<double> v) {
+  Spread s;
+  if (v.empty()) return s;
+  std::sort(v.begin(), v.end());
+  s.median = median(v);
+  s.p95 = v[std::min(v.size() - 1, size_t(std::ceil(0.95 * double(v.size()))) - 1)];
+  s.max = v.back();
+  return s;
+}
+
+struct Measured {
+  Spread wall;                          // whole frame, ms, the host's clear subtracted
+  std::map<std::string, Spread> passes; // GPU timestamps per pass, ms
+};
+
+// `frames` frames after one warm-up; the camera orbits by `orbitDegrees` per frame (0: still).
+Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& timer, const VegetationModel& model,
+               float aspect, float dt, int frames, float orbitDegrees, double clearMs, Measured* out) {
+  std::vector<double> wall;
+  std::map<std::string, std::vector<double>> passes;
+  for (int i = 0; i < frames + 1; ++i) {
+    const LayerView view = orbitView(model.boundsMin, model.boundsMax, 20.0f + orbitDegrees * float(i), 10.0f, 40.0f,
+                                     aspect, 0.8f);
+    if (ctx) {
+      CanopyFrame f;
+      f.camera = toCamera(view);
+      f.dt = dt;
+      CANOPY_TRY(beginCanopyFrame(ctx, f));
+    }
+    const double w0 = nowMs();
+    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) {
+      timer.reset(cmd);
+      return g.record(cmd, &timer);
+    }));
+    const double w1 = nowMs();
+    std::vector<PassTiming> t;
+    CANOPY_TRY(timer.read(d, &t));
+    if (i == 0) continue;
+    wall.push_back(std::max(0.0, w1 - w0 - clearMs));
+    for (const PassTiming& p : t) passes[p.name].push_back(p.milliseconds);
+  }
+  out->wall = spreadOf(wall);
+  for (auto& [name, v] : passes) out->passes[name] = spreadOf(v);
+  return Status();
+}
+
+// Share of pixels whose colour differs from the host's clear (the vegetation's coverage).
+Status coverage(Device& d, const HostTargets& host, uint32_t w, uint32_t h, double* share) {
+  std::vector<uint32_t> px(size_t(w) * h);
+  CANOPY_TRY(readbackImage(d, host.color, 0, 4, px.data(), rg::stateOf(rg::Use::ColorAttachmentReadWrite)));
+  size_t covered = 0;
+  // The host's clear colour in RGBA8 (bench_host.cpp clears to (0.45, 0.6, 0.8, 1)).
+  for (uint32_t v : px) {
+    const int r = int(v & 255u), gch = int((v >> 8) & 255u), b = int((v >> 16) & 255u);
+    covered += std::abs(r - 115) > 1 || std::abs(gch - 153) > 1 || std::abs(b - 204) > 1;
+  }
+  *share = double(covered) / double(px.size());
+  return Status();
+}
+
+std::string jsonString(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    if (uint8_t(c) < 0x20) continue;
+    o += c;
+  }
+  return o + "\"";
+}
+std::string jsonSpread(const Spread& s) {
+  std::ostringstream o;
+  o << "{\"median\": " << s.median << ", \"p95\": " << s.p95 << ", \"max\": " << s.max << "}";
+  return o.str();
+}
+
+struct Row {
+  uint64_t faces = 0;
+  std::string layout, camera;
+  uint32_t width = 0, height = 0;
+  Measured m;
+  double coverage = -1;
+  double paperFps = 0;
+};
+
+struct Baseline {
+  std::string name, a, b;  // ratio = b / a
+  double aMs = 0, bMs = 0;
+};
+
+// The paper's Table 1 (GTX 275, 1024x768): 80K faces 70 / 65 FPS, 50M faces 40 / 34 FPS for
+// 3(1-1-1) / 5(3-1-1). Rows above 1M faces are compared with its 50M row.
+double paperFps(uint64_t faces, uint32_t layers) {
+  if (faces <= 1000000) return layers == 3 ? 70 : 65;
+  return layers == 3 ? 40 : 34;
+}
+
+// One context at `faces`, `w` x `h`: the host's clear alone, then each configuration.
+struct Bench {
+  Device& d;
+  const Table1Options& o;
+  VegetationModel model;
+  CanopyContext* ctx = nullptr;
+  HostTargets host;
+  GpuTimer timer;
+  rg::RenderGraph graph;
+  double clearMs = 0;
+  uint32_t w = 0, h = 0;
+
+  Bench(Device& dev, const Table1Options& opt) : d(dev), o(opt) {}
+  ~Bench() {
+    graph.release(d);
+    timer.destroy(d);
+    destroyHostTargets(d, host);
+    destroyCanopy(ctx);
+  }
+  Status init(uint64_t faces, uint32_t width, uint32_t height) {
+    w = width;
+    h = height;
+    SceneDesc sd;
+    sd.faces = faces;
+    CANOPY_TRY(parseSceneKind(o.scene, &sd.kind));
+    CANOPY_TRY(generateScene(sd, &model));
+    CanopyDesc desc;
+    desc.width = w;
+    desc.height = h;
+    CANOPY_TRY(createCanopy(d, model, desc, &ctx));
+    CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
+    CANOPY_TRY(timer.init(d, 64));
+    rg::RenderGraph clear;
+    Measured m;
+    Status s = buildHostGraph(d, ctx, host, false, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &clear);
+    if (s.ok()) s = measure(d, nullptr, clear, timer, model, float(w) / float(h), 0.0f, std::min(o.frames, 10), 0.0f, 0.0, &m);
+    clear.release(d);
+    clearMs = m.wall.median;
+    return s;
+  }
+  Status set(const std::string& layout, CompositePath path = CompositePath::Compute,
+             LayerDrawMode draw = LayerDrawMode::Auto) {
+    CanopyParams p = canopyParams(ctx);
+    CANOPY_TRY(parseLayerLayout(layout, &p.layers.layout));
+    p.composite.path = path;
+    p.layers.draw = draw;
+    CANOPY_TRY(setCanopyParams(ctx, p));
+    // A new layout can replace Canopy's images: the host's graph imports them, so it is rebuilt.
+    graph.release(d);
+    graph = rg::RenderGraph();
+    return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
+  }
+  // Whole frame (simulation + dynamics + warp + composite); the first frame slices the layers.
+  Status frame(float orbitDegrees, int frames, Measured* m, float dt = 1.0f / 30.0f) {
+    Measured warm;
+    CANOPY_TRY(measure(d, ctx, graph, timer, model, float(w) / float(h), dt, 1, 0.0f, clearMs, &warm));
+    return measure(d, ctx, graph, timer, model, float(w) / float(h), dt, frames, orbitDegrees, clearMs, m);
+  }
+};
+
+// The paper's split: the same step by the CPU reference, its tiled field and history slot
+// uploaded every frame (measured: the CPU step and the upload, each median of `frames`).
+Status cpuSplitMs(Device& d, int frames, double* stepMs, double* uploadMs) {
+  const uint32_t n = 64;
+  ref::SimState st = ref::makeState(n, 8);
+  SimulationParams p;
+  std::vector<double> step, up;
+  Buffer staging;
+  CANOPY_TRY(createBuffer(d, 2ull * 2 * n * n * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          MemoryUsage::DeviceLocal, &staging, "bench: cpu split upload"));
+  std::vector<float> field(2ull * 2 * n * n, 0.25f);
+  Status s;
+  double t = 0;
+  for (int f = 0; f < frames + 2 && s.ok(); ++f) {
+    gpu::SimFrame fr;
+    s = makeSimFrame(p, n, float(t), 1.0f / 30.0f, uint32_t(f % 8), 8, &fr);
+    if (!s.ok()) break;
+    const double t0 = nowMs();
+    ref::step(fr, st);
+    const double t1 = nowMs();
+    s = uploadBuffer(d, staging, field.data(), field.size() * sizeof(float), rg::stateOf(rg::Use::ComputeStorageRead));
+    const double t2 = nowMs();
+    t += 1.0 / 30.0;
+    if (f >= 2) {
+      step.push_back(t1 - t0);
+      up.push_back(t2 - t1);
+    }
+  }
+  destroyBuffer(d, staging);
+  CANOPY_TRY(s);
+  *stepMs = median(step);
+  *uploadMs = median(up);
+  return Status();
+}
+
+std::string layoutFor(uint32_t layers) {
+  // Near-heavy like the paper's 5(3-1-1): the far two regions get one layer each.
+  if (layers == 1) return "1(1-0-0)";
+  if (layers == 2) return "2(1-1-0)";
+  return std::to_string(layers) + "(" + std::to_string(layers - 2) + "-1-1)";
+}
+
+}  // namespace
+
+int runTable1Bench(Device& d, const Table1Options& o) {
+  const bool cpuDevice = d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  std::printf("\nTable 1 (paper: GTX 275, simulation on the CPU) at %ux%u, generated scene '%s'; whole frame =\n"
+              "simulation step (N = 64, dt = 1/30 s) + dynamics + warp + composite, wall clock minus the host's clear;\n"
+              "median / p95 / max of %d frames. Orbit: the camera turns %.1f degrees per frame (re-slicing by the policy).\n"
+              "Coverage: share of pixels the vegetation changes.\n\n",
+              o.width, o.height, o.scene.c_str(), o.frames, o.orbitDegrees);
+  std::printf("  %-10s %-9s %-6s %9s %8s %8s %7s %9s %9s\n", "faces", "layers", "camera", "frame ms", "p95", "max", "FPS",
+              "paper FPS", "coverage");
+  std::vector<Row> rows;
+  std::vector<Baseline> baselines;
+  std::map<uint64_t, double> stillByFaces;  // 5(3-1-1) still frame ms per face count
+  for (uint64_t faces : o.faces) {
+    const double g0 = nowMs();
+    Bench b(d, o);
+    Status s = b.init(faces, o.width, o.height);
+    const double prepMs = nowMs() - g0;
+    for (const char* layout : {"3(1-1-1)", "5(3-1-1)"}) {
+      for (float orbit : {0.0f, o.orbitDegrees}) {
+        if (!s.ok()) break;
+        Row r;
+        r.faces = faces;
+        r.layout = layout;
+        r.camera = orbit == 0.0f ? "still" : "orbit";
+        r.width = o.width;
+        r.height = o.height;
+        s = b.set(layout);
+        const int frames = orbit == 0.0f || faces <= 1000000 ? o.frames : std::max(3, o.frames / 5);
+        if (s.ok()) s = b.frame(orbit, frames, &r.m);
+        if (s.ok() && orbit == 0.0f) s = coverage(d, b.host, o.width, o.height, &r.coverage);
+        if (!s.ok()) break;
+        r.paperFps = paperFps(faces, layout[0] == '3' ? 3 : 5);
+        char cover[16] = "        -";
+        if (r.coverage >= 0) std::snprintf(cover, sizeof cover, "%8.1f%%", 100.0 * r.coverage);
+        std::printf("  %-10llu %-9s %-6s %9.2f %8.2f %8.2f %7.1f %9.0f %s\n", (unsigned long long)faces, layout,
+                    r.camera.c_str(), r.m.wall.median, r.m.wall.p95, r.m.wall.max, 1000.0 / r.m.wall.median, r.paperFps,
+                    cover);
+        if (orbit == 0.0f && layout[0] == '5') stillByFaces[faces] = r.m.wall.median;
+        rows.push_back(r);
+      }
+    }
+    // Baselines at the first (smallest) face count, 5(3-1-1), in this run.
+    if (s.ok() && faces == o.faces.front()) {
+      Measured gpuAll, frag, anim, orbitSingle, orbitPer;
+      s = b.set("5(3-1-1)");
+      if (s.ok()) s = b.frame(0.0f, o.frames, &gpuAll);
+      if (s.ok()) s = b.set("5(3-1-1)", CompositePath::Fragment);
+      if (s.ok()) s = b.frame(0.0f, o.frames, &frag);
+      if (s.ok()) s = b.set("5(3-1-1)");
+      if (s.ok()) s = b.frame(0.0f, o.frames, &anim, 0.0f);
+      double cpuStep = 0, upload = 0;
+      if (s.ok()) s = cpuSplitMs(d, o.frames, &cpuStep, &upload);
+      if (s.ok()) s = b.set("5(3-1-1)", CompositePath::Compute, LayerDrawMode::SinglePass);
+      if (s.ok()) s = b.frame(o.orbitDegrees, o.frames, &orbitSingle);
+      if (s.ok()) s = b.set("5(3-1-1)", CompositePath::Compute, LayerDrawMode::PerLayer);
+      if (s.ok()) s = b.frame(o.orbitDegrees, o.frames, &orbitPer);
+      if (s.ok()) {
+        const double split = cpuStep + upload + anim.wall.median;
+        baselines.push_back({"CPU simulation + upload (paper's split) vs all-GPU frame", "all-GPU", "CPU split",
+                             gpuAll.wall.median, split});
+        baselines.push_back({"fragment vs compute compositing (whole frame)", "compute", "fragment", gpuAll.wall.median,
+                             frag.wall.median});
+        baselines.push_back({"one draw per layer vs one layered draw (orbiting camera)", "layered draw", "per layer",
+                             orbitSingle.wall.median, orbitPer.wall.median});
+        double orbitMs = 0;
+        for (const Row& r : rows)
+          if (r.faces == faces && r.layout == "5(3-1-1)" && r.camera == "orbit") orbitMs = r.m.wall.median;
+        baselines.push_back({"orbiting vs still camera", "still", "orbit", gpuAll.wall.median, orbitMs});
+        std::printf("  (CPU split at %llu faces: CPU step %.3f ms + upload %.3f ms + GPU animation %.2f ms)\n",
+                    (unsigned long long)faces, cpuStep, upload, anim.wall.median);
+      }
+    }
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+      return 1;
+    }
+    std::printf("  (%llu faces: scene generated and context created in %.0f ms; host clear %.2f ms, subtracted)\n",
+                (unsigned long long)faces, prepMs, b.clearMs);
+  }
+  std::printf("\nBaselines, same run, %llu faces, 5(3-1-1), ms (ratio = second / first):\n\n",
+              (unsigned long long)o.faces.front());
+  for (const Baseline& x : baselines)
+    std::printf("  %-58s %-13s %8.2f   %-10s %8.2f   %6.2fx\n", x.name.c_str(), x.a.c_str(), x.aMs, x.b.c_str(), x.bMs,
+                x.bMs / std::max(x.aMs, 1e-9));
+  if (stillByFaces.size() > 1) {
+    const double first = stillByFaces.begin()->second, last = stillByFaces.rbegin()->second;
+    std::printf("\n  still-camera frame, %llu faces / %llu faces (5(3-1-1)): %.3f\n",
+                (unsigned long long)stillByFaces.rbegin()->first, (unsigned long long)stillByFaces.begin()->first,
+                last / first);
+  }
+
+  // Scaling series: frame cost against face count, layer count and resolution (still camera).
+  struct Point {
+    std::string series;
+    double x = 0;
+    std::string label;
+    Spread wall;
+  };
+  std::vector<Point> series;
+  if (o.series) {
+    std::printf("\nScaling series (still camera, whole frame ms, median):\n");
+    auto point = [&](const std::string& name, double x, const std::string& label, uint64_t faces, uint32_t w, uint32_t h,
+                     const std::string& layout) -> Status {
+      Bench b(d, o);
+      CANOPY_TRY(b.init(faces, w, h));
+      CANOPY_TRY(b.set(layout));
+      Measured m;
+      CANOPY_TRY(b.frame(0.0f, o.frames, &m));
+      series.push_back({name, x, label, m.wall});
+      std::printf("  %-11s %-12s %9.2f ms\n", name.c_str(), label.c_str(), m.wall.median);
+      return Status();
+    };
+    Status s;
+    for (uint64_t f : o.seriesFaces)
+      if (s.ok()) s = point("faces", double(f), std::to_string(f), f, o.width, o.height, "5(3-1-1)");
+    for (uint32_t l = 1; l <= 9 && s.ok(); ++l) s = point("layers", l, layoutFor(l), o.faces.front(), o.width, o.height, layoutFor(l));
+    const uint32_t res[][2] = {{512, 384}, {1024, 768}, {1280, 720}, {1920, 1080}};
+    for (const auto& r : res)
+      if (s.ok())
+        s = point("resolution", double(r[0]) * r[1], std::to_string(r[0]) + "x" + std::to_string(r[1]), o.faces.front(), r[0],
+                  r[1], "5(3-1-1)");
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+      return 1;
+    }
+    if (!o.csvDir.empty())
+      for (const char* name : {"faces", "layers", "resolution"}) {
+        const std::string path = o.csvDir + "/series_" + name + ".csv";
+        std::ofstream f(path);
+        f << "x,label,median_ms,p95_ms,max_ms\n";
+        for (const Point& p : series)
+          if (p.series == name) f << p.x << "," << p.label << "," << p.wall.median << "," << p.wall.p95 << "," << p.wall.max << "\n";
+        if (!f) {
+          std::fprintf(stderr, "canopy-bench: cannot write %s\n", path.c_str());
+          return 1;
+        }
+        std::printf("  wrote %s\n", path.c_str());
+      }
+  }
+
+  if (!o.json.empty()) {
+    std::ostringstream j;
+    j << "{\n  \"device\": " << jsonString(d.properties.deviceName) << ",\n  \"deviceType\": "
+      << (cpuDevice ? "\"cpu\"" : "\"gpu\"") << ",\n  \"driverVersion\": " << d.properties.driverVersion
+      << ",\n  \"apiVersion\": " << d.properties.apiVersion << ",\n  \"timestampsTrusted\": " << (cpuDevice ? "false" : "true")
+      << ",\n  \"figureOfRecord\": \"wall clock, submit-to-fence of one frame minus the host's clear\""
+      << ",\n  \"params\": {\"width\": " << o.width << ", \"height\": " << o.height << ", \"scene\": " << jsonString(o.scene)
+      << ", \"frames\": " << o.frames << ", \"orbitDegreesPerFrame\": " << o.orbitDegrees
+      << ", \"simulation\": {\"gridSize\": 64, \"dt\": 0.0333333}, \"defaults\": \"CanopyParams defaults unless the row says\"},\n"
+      << "  \"rows\": [\n";
+    for (size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      j << "    {\"faces\": " << r.faces << ", \"layout\": " << jsonString(r.layout) << ", \"camera\": " << jsonString(r.camera)
+        << ", \"width\": " << r.width << ", \"height\": " << r.height << ", \"frameMs\": " << jsonSpread(r.m.wall)
+        << ", \"fps\": " << 1000.0 / std::max(r.m.wall.median, 1e-9) << ", \"paperFps\": " << r.paperFps
+        << ", \"coverage\": " << r.coverage << ", \"passes\": {";
+      size_t k = 0;
+      for (const auto& [name, sp] : r.m.passes) j << (k++ ? ", " : "") << jsonString(name) << ": " << jsonSpread(sp);
+      j << "}}" << (i + 1 < rows.size() ? "," : "") << "\n";
+    }
+    j << "  ],\n  \"baselines\": [\n";
+    for (size_t i = 0; i < baselines.size(); ++i) {
+      const Baseline& x = baselines[i];
+      j << "    {\"name\": " << jsonString(x.name) << ", \"first\": " << jsonString(x.a) << ", \"firstMs\": " << x.aMs
+        << ", \"second\": " << jsonString(x.b) << ", \"secondMs\": " << x.bMs
+        << ", \"ratio\": " << x.bMs / std::max(x.aMs, 1e-9) << "}" << (i + 1 < baselines.size() ? "," : "") << "\n";
+    }
+    j << "  ],\n  \"series\": [\n";
+    for (size_t i = 0; i < series.size(); ++i)
+      j << "    {\"series\": " << jsonString(series[i].series) << ", \"x\": " << series[i].x << ", \"label\": "
+        << jsonString(series[i].label) << ", \"frameMs\": " << jsonSpread(series[i].wall) << "}"
+        << (i + 1 < series.size() ? "," : "") << "\n";
+    j << "  ]\n}\n";
+    std::ofstream f(o.json);
+    f << j.str();
+    if (!f) {
+      std::fprintf(stderr, "canopy-bench: cannot write %s\n", o.json.c_str());
+      return 1;
+    }
+    std::printf("\nwrote %s\n", o.json.c_str());
+  }
+  return 0;
+}
+
+}  // namespace canopy::bench

@@ -1,0 +1,56 @@
+#!/usr/bin/python3
+"""Draws canopy-bench table1's scaling series (CSV from --series --csv-dir DIR) as PNG plots with
+Debian's python3-matplotlib (apt-get install python3-matplotlib).
+
+    /usr/bin/python3 scripts/plot_bench.py DIR OUT_PREFIX [TITLE]
+
+writes OUT_PREFIX_faces.png, OUT_PREFIX_layers.png and OUT_PREFIX_resolution.png: the whole-frame
+median (line) and p95 (shaded up to it) against face count, layer count and pixel count."""
+import csv
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+SERIES = {
+    "faces": ("faces (log scale)", True),
+    "layers": ("layers (n(n-2-1-1) layouts; 1(1-0-0), 2(1-1-0))", False),
+    "resolution": ("pixels", False),
+}
+
+
+def main():
+    if len(sys.argv) < 3:
+        print(__doc__)
+        sys.exit(2)
+    folder, prefix = sys.argv[1], sys.argv[2]
+    title = sys.argv[3] if len(sys.argv) > 3 else "canopy-bench table1 --series"
+    for name, (xlabel, logx) in SERIES.items():
+        with open("%s/series_%s.csv" % (folder, name)) as f:
+            rows = list(csv.DictReader(f))
+        x = [float(r["x"]) for r in rows]
+        med = [float(r["median_ms"]) for r in rows]
+        p95 = [float(r["p95_ms"]) for r in rows]
+        fig, ax = plt.subplots(figsize=(5.2, 3.4), dpi=100)
+        ax.plot(x, med, marker="o", label="median")
+        ax.fill_between(x, med, p95, alpha=0.25, label="to p95")
+        for xi, yi, r in zip(x, med, rows):
+            ax.annotate(r["label"], (xi, yi), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=7)
+        if logx:
+            ax.set_xscale("log")
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("whole frame, ms (wall)")
+        ax.set_ylim(bottom=0)
+        ax.set_title("%s: frame vs %s" % (title, name), fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        out = "%s_%s.png" % (prefix, name)
+        fig.savefig(out)
+        print("wrote", out)
+
+
+if __name__ == "__main__":
+    main()

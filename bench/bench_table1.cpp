@@ -160,6 +160,7 @@ struct Bench {
     CanopyDesc desc;
     desc.width = w;
     desc.height = h;
+    desc.maxLayers = CANOPY_MAX_LAYERS;  // the layer series goes to 9
     CANOPY_TRY(createCanopy(d, model, desc, &ctx));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     CANOPY_TRY(timer.init(d, 64));

@@ -89,6 +89,10 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.width = float(d.width);
   f.height = float(d.height);
   f.maxDelay = p.maxDelay;
+  if (d.newestSlot != ANIM_RING_UNORDERED && d.newestSlot >= d.ringSize)
+    return Status::error("dynamics: newestSlot = " + std::to_string(d.newestSlot) + " is outside the ring of " +
+                         std::to_string(d.ringSize) + " slots");
+  f.newestSlot = d.newestSlot;
   const float last = d.layers.back().distance;
   for (uint32_t i = 0; i < n; ++i) {
     gpu::AnimLayer& l = f.layers[i];

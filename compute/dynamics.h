@@ -39,6 +39,7 @@ struct DynamicsFrameDesc {
   uint32_t width = 0, height = 0;     // image, pixels
   uint32_t simSize = 0, ringSize = 0; // N and H of the simulation
   float time = 0;                     // time of the newest simulation field, s
+  uint32_t newestSlot = ANIM_RING_UNORDERED;  // ring slot of the newest field, when written in step order
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize);

@@ -487,6 +487,9 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.simSize = sim.n;
   fd.ringSize = sim.ringSize;
   fd.time = float(sim.time);
+  // The simulation writes slot step % H: the exact delay can binary-search the ring (anim_displace.comp).
+  // Before the first step every slot reads time 0, which is in order from any slot.
+  fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
   CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current));
   const gpu::AnimFrame& a = c->dynamics.current;
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&

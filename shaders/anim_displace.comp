@@ -40,9 +40,36 @@ vec2 sampleTiled(bool fromRing, uint base, vec2 a) {
   return mix(mix(v00, v10, t.x), mix(v01, v11, t.x), t.y);
 }
 
+// The two slots bracketing tau (latest at or before it, earliest at or after it), tau clamped to
+// the history that exists. In step order (f.newestSlot known) the time k slots back never increases
+// with k (unwritten slots read 0), so a binary search finds them: log2(H) loads per corner instead
+// of 2H — the linear search was most of the dynamics pass's cost on lavapipe (docs/performance.md).
+// Both searches pick the same slots (the linear one remains for rings in any order).
+void historySlots(inout float tau, out uint lo, out uint hi) {
+  uint H = f.ringSize, newest = f.newestSlot;
+  float tNewest = ringTimes[newest], tOldest = ringTimes[(newest + 1u) % H];
+  tau = clamp(tau, min(tOldest, tNewest), tNewest);
+  uint a = 0u, b = H - 1u;  // smallest k with time(k) <= tau (time(H - 1) is the minimum)
+  while (a < b) {
+    uint mid = (a + b) >> 1u;
+    if (ringTimes[(newest + H - mid) % H] <= tau) b = mid;
+    else a = mid + 1u;
+  }
+  lo = (newest + H - a) % H;
+  hi = a > 0u ? (newest + H - a + 1u) % H : lo;
+}
+
 // The simulation-plane velocity at time tau from the ring: the two slots bracketing tau, linear in
 // time; tau is clamped to the history that exists.
 vec2 sampleHistory(vec2 a, float tau) {
+  if (f.newestSlot != ANIM_RING_UNORDERED) {
+    uint lo, hi;
+    historySlots(tau, lo, hi);
+    float span = ringTimes[hi] - ringTimes[lo];
+    float w = span > 0.0 ? (tau - ringTimes[lo]) / span : 0.0;
+    uint nn = f.n * f.n;
+    return mix(sampleTiled(true, lo * nn, a), sampleTiled(true, hi * nn, a), w);
+  }
   uint newest = 0u, oldest = 0u;
   for (uint s = 1u; s < f.ringSize; ++s) {
     if (ringTimes[s] > ringTimes[newest]) newest = s;

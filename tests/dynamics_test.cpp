@@ -251,7 +251,15 @@ TEST_F(DynamicsTest, DisplacementMatchesTheCpuReference) {
   }
   const uint32_t newest = uint32_t(std::max_element(times.begin(), times.end()) - times.begin());
   std::copy(ring.begin() + size_t(newest) * n * n, ring.begin() + size_t(newest + 1) * n * n, tiled.begin());
-  for (DelayMode mode : {DelayMode::Exact, DelayMode::Approximate}) {
+  // The exact delay both ways: searching every slot, and by binary search in step order (the ring
+  // above is a rotation: slot s holds step (s + 7) % H, the newest at `newest`).
+  struct Case {
+    DelayMode mode;
+    bool ordered;
+  };
+  for (Case c : {Case{DelayMode::Exact, false}, Case{DelayMode::Exact, true}, Case{DelayMode::Approximate, false}}) {
+    const DelayMode mode = c.mode;
+    SCOPED_TRACE(c.ordered ? "ring in step order (binary search)" : "ring searched slot by slot");
     DynamicsParams p;
     p.delay = mode;
     p.vd = 1.5f;
@@ -264,6 +272,7 @@ TEST_F(DynamicsTest, DisplacementMatchesTheCpuReference) {
     // A view turned against the simulation plane, so V0z and the delay vary per corner.
     desc.view.view = glm::lookAtRH(glm::vec3(4, 2, 9), glm::vec3(0, 0, 0), glm::vec3(0, 1, 0));
     for (auto& l : desc.layers) l.rootLineY = 0.75f * kH, l.height = 0.6f * kH;
+    if (c.ordered) desc.newestSlot = newest;
     gpu::AnimFrame f;
     ASSERT_TRUE(makeAnimFrame(p, desc, &f).ok());
     const std::vector<glm::vec2> gpu = run(f, tiled, ring, times);

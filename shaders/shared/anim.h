@@ -10,6 +10,8 @@
 #define ANIM_DELAY_EXACT 0u        // sample the history ring at t - gamma_i (eq. 3)
 #define ANIM_DELAY_APPROXIMATE 1u  // one lookup at B = A + gamma_i s V (eq. 5)
 #define ANIM_GROUP_SIZE 64u
+// AnimFrame.newestSlot when the ring's slots are not known to be in step order: search them all.
+#define ANIM_RING_UNORDERED 0xffffffffu
 
 CANOPY_NAMESPACE_BEGIN
 
@@ -48,7 +50,10 @@ struct AnimFrame {
   float width;        // image, pixels
   float height;
   float maxDelay;     // |gamma| clamp for a vanishing denominator, s
-  float pad0;
+  // The ring slot holding the newest field when slots are written in step order (slot = step % H,
+  // so going back k slots goes back k steps and the times never increase): the exact delay then
+  // finds its two slots by binary search. ANIM_RING_UNORDERED: by a search of every slot.
+  uint newestSlot;
   AnimLayer layers[CANOPY_MAX_LAYERS];
 };
 CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 5 + 4 * 16 + 32 * CANOPY_MAX_LAYERS)

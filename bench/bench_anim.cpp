@@ -35,29 +35,10 @@ struct FrameStats {
 // `frames` frames after one warm-up; dt = 0 holds the simulation (animation only).
 Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& timer, const LayerView& view, float dt,
                int frames, bool canopy, FrameStats* out) {
-  std::vector<double> wall;
-  std::map<std::string, std::vector<double>> passes;
-  for (int i = 0; i < frames + 1; ++i) {
-    if (canopy) {
-      CanopyFrame f;
-      f.camera = toCamera(view);
-      f.dt = dt;
-      CANOPY_TRY(beginCanopyFrame(ctx, f));
-    }
-    const double w0 = nowMs();
-    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) {
-      timer.reset(cmd);
-      return g.record(cmd, &timer);
-    }));
-    const double w1 = nowMs();
-    std::vector<PassTiming> t;
-    CANOPY_TRY(timer.read(d, &t));
-    if (i == 0) continue;
-    wall.push_back(w1 - w0);
-    for (const PassTiming& p : t) passes[p.name].push_back(p.milliseconds);
-  }
-  out->wallMs = median(wall);
-  for (auto& [name, v] : passes) out->passMs[name] = median(v);
+  FrameSamples s;
+  CANOPY_TRY(sampleFrames(d, canopy ? ctx : nullptr, g, timer, [&](int) { return view; }, dt, frames, &s));
+  out->wallMs = median(s.wallMs);
+  for (auto& [name, v] : s.passMs) out->passMs[name] = median(v);
   return Status();
 }
 

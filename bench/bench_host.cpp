@@ -1,5 +1,10 @@
 #include "bench/bench_host.h"
 
+#include <chrono>
+
+#include "engine/device.h"
+#include "engine/timing.h"
+
 namespace canopy::bench {
 
 Status createHostTargets(Device& d, uint32_t w, uint32_t h, VkFormat format, HostTargets* t) {
@@ -39,6 +44,32 @@ Status buildHostGraph(Device& d, CanopyContext* ctx, HostTargets& t, bool withCa
   if (withCanopy) CANOPY_TRY(addCanopyPasses(ctx, *g, ct));
   CANOPY_TRY(g->compile());
   return g->realize(d);
+}
+
+Status sampleFrames(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& timer,
+                    const std::function<LayerView(int)>& viewOf, float dt, int frames, FrameSamples* out) {
+  using clock = std::chrono::steady_clock;
+  *out = FrameSamples{};
+  for (int i = 0; i < frames + 1; ++i) {
+    if (ctx) {
+      CanopyFrame f;
+      f.camera = toCamera(viewOf(i));
+      f.dt = dt;
+      CANOPY_TRY(beginCanopyFrame(ctx, f));
+    }
+    const auto w0 = clock::now();
+    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) {
+      timer.reset(cmd);
+      return g.record(cmd, &timer);
+    }));
+    const double ms = std::chrono::duration<double, std::milli>(clock::now() - w0).count();
+    std::vector<PassTiming> t;
+    CANOPY_TRY(timer.read(d, &t));
+    if (i == 0) continue;  // warm-up
+    out->wallMs.push_back(ms);
+    for (const PassTiming& p : t) out->passMs[p.name].push_back(p.milliseconds);
+  }
+  return Status();
 }
 
 }  // namespace canopy::bench

@@ -53,31 +53,16 @@ struct Measured {
 // `frames` frames after one warm-up; the camera orbits by `orbitDegrees` per frame (0: still).
 Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& timer, const VegetationModel& model,
                float aspect, float dt, int frames, float orbitDegrees, double clearMs, Measured* out) {
-  std::vector<double> wall;
-  std::map<std::string, std::vector<double>> passes;
-  for (int i = 0; i < frames + 1; ++i) {
-    const LayerView view = orbitView(model.boundsMin, model.boundsMax, 20.0f + orbitDegrees * float(i), 10.0f, 40.0f,
-                                     aspect, 0.8f);
-    if (ctx) {
-      CanopyFrame f;
-      f.camera = toCamera(view);
-      f.dt = dt;
-      CANOPY_TRY(beginCanopyFrame(ctx, f));
-    }
-    const double w0 = nowMs();
-    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) {
-      timer.reset(cmd);
-      return g.record(cmd, &timer);
-    }));
-    const double w1 = nowMs();
-    std::vector<PassTiming> t;
-    CANOPY_TRY(timer.read(d, &t));
-    if (i == 0) continue;
-    wall.push_back(std::max(0.0, w1 - w0 - clearMs));
-    for (const PassTiming& p : t) passes[p.name].push_back(p.milliseconds);
-  }
-  out->wall = spreadOf(wall);
-  for (auto& [name, v] : passes) out->passes[name] = spreadOf(v);
+  FrameSamples s;
+  CANOPY_TRY(sampleFrames(
+      d, ctx, g, timer,
+      [&](int i) {
+        return orbitView(model.boundsMin, model.boundsMax, 20.0f + orbitDegrees * float(i), 10.0f, 40.0f, aspect, 0.8f);
+      },
+      dt, frames, &s));
+  for (double& w : s.wallMs) w = std::max(0.0, w - clearMs);
+  out->wall = spreadOf(s.wallMs);
+  for (auto& [name, v] : s.passMs) out->passes[name] = spreadOf(v);
   return Status();
 }
 

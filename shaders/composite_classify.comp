@@ -5,7 +5,7 @@
 // it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
 // layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
 // rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
-// (position + layer mask) to the list that sizes the composite's indirect dispatch and the
+// (position with the background bit, layer mask) to the list that sizes the composite's indirect dispatch and the
 // resolve's indirect draw. Without COMPOSITE_SKIP_EMPTY every tile lists every layer (the
 // unclassified kernel, kept for tests and the benchmark).
 #include "shared/composite.h"
@@ -26,10 +26,11 @@ void main() {
   vec2 lo = vec2(tile * COMPOSITE_TILE) + 0.5;
   vec2 hi = min(lo + float(COMPOSITE_TILE - 1u), size - 0.5);
   uint mask = 0u;
+  uint position = compositeTilePosition(tile.x, tile.y);
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u && occupancy[pc.layerCount * tileCount + id] != 0u)
-    mask |= COMPOSITE_TILE_BACKGROUND;
+    position |= COMPOSITE_TILE_BACKGROUND;
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
-    mask |= (1u << pc.layerCount) - 1u;
+    mask = compositeLayerBits(pc.layerCount);
   } else {
     GridSample g0 = gridSample(pc, lo), g1 = gridSample(pc, hi);
     uint gx0 = g0.i00 % pc.gridX, gy0 = g0.i00 / pc.gridX, gx1 = g1.i00 % pc.gridX + 1u, gy1 = g1.i00 / pc.gridX + 1u;
@@ -59,8 +60,8 @@ void main() {
       if (reached) mask |= 1u << i;
     }
   }
-  if (mask == 0u) return;
+  if (mask == 0u && (position & COMPOSITE_TILE_BACKGROUND) == 0u) return;
   uint slot = atomicAdd(header.groupsX, 1u);
   atomicAdd(header.instanceCount, 1u);
-  tiles[slot] = uvec2(tile.x | (tile.y << 16u), mask);
+  tiles[slot] = uvec2(position, mask);
 }

@@ -10,7 +10,7 @@ layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 void main() {
   uvec2 entry = tiles[gl_InstanceIndex];
-  vec2 tile = vec2(float(entry.x & 0xffffu), float(entry.x >> 16u));
+  vec2 tile = vec2(float(compositeTileX(entry.x)), float(compositeTileY(entry.x)));
   // Two triangles: corners (0,0) (1,0) (0,1) / (1,0) (1,1) (0,1).
   const vec2 corner[6] = vec2[6](vec2(0, 0), vec2(1, 0), vec2(0, 1), vec2(1, 0), vec2(1, 1), vec2(0, 1));
   vec2 pixel = min((tile + corner[gl_VertexIndex]) * float(COMPOSITE_TILE), vec2(pc.width, pc.height));

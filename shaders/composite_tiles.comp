@@ -24,7 +24,7 @@ layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 void main() {
   uvec2 tileEntry = tiles[gl_WorkGroupID.x];
-  uvec2 tile = uvec2(tileEntry.x & 0xffffu, tileEntry.x >> 16u);
+  uvec2 tile = uvec2(compositeTileX(tileEntry.x), compositeTileY(tileEntry.x));
   uint mask = tileEntry.y;
   ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
   if (ip.x >= int(pc.width) || ip.y >= int(pc.height)) return;
@@ -34,7 +34,7 @@ void main() {
   float sceneZ = compositeStandardDepth(pc.flags, sceneRaw);
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
-  if ((mask & COMPOSITE_TILE_BACKGROUND) != 0u) {
+  if ((tileEntry.x & COMPOSITE_TILE_BACKGROUND) != 0u) {
     bg = texelFetch(backgroundColor, ip, 0);
     bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, ip, 0).r : 1.0;
   }
@@ -47,7 +47,7 @@ void main() {
   float frontZ = 1.0;
   vec2 motion = vec2(0.0);
   bool front = false;
-  uint layers = mask & ((1u << pc.layerCount) - 1u);
+  uint layers = mask & compositeLayerBits(pc.layerCount);
   while (layers != 0u) {
     uint i = uint(findLSB(layers));
     layers &= layers - 1u;

@@ -451,6 +451,34 @@ TEST_F(CompositeTest, TileListsNeverDropALayerCarriedAcrossTileBorders) {
   EXPECT_LE(differFragment, sc.pixels() / 200) << "compute and fragment paths disagree";
 }
 
+// All 32 layers (the most a context allows) with the rigid background: the compute path's tile
+// lists carry layer 31 and the background apart, and match the fragment path.
+TEST_F(CompositeTest, ThirtyTwoLayersAndTheBackgroundKeepTheirOwnBitsInTheTileLists) {
+  Scene sc;
+  sc.w = 32;
+  sc.h = 24;
+  sc.resize(32);
+  for (uint32_t y = 4; y < 12; ++y)
+    for (uint32_t x = 4; x < 12; ++x) {
+      sc.color(31, x, y) = glm::vec4(0.1f, 0.7f, 0.2f, 1.0f);
+      sc.depth(31, x, y) = 0.4f;
+    }
+  for (uint32_t y = 0; y < sc.h; ++y)
+    for (uint32_t x = 20; x < 26; ++x) {
+      sc.bgColor[size_t(y) * sc.w + x] = glm::vec4(0.4f, 0.25f, 0.1f, 1.0f);
+      sc.bgDepth[size_t(y) * sc.w + x] = 0.6f;
+    }
+  sc.params.path = CompositePath::Compute;
+  const Result compute = run(sc);
+  sc.params.path = CompositePath::Fragment;
+  const Result fragment = run(sc);
+  size_t differ = 0;
+  for (size_t i = 0; i < sc.pixels(); ++i) differ += maxDiff(compute.color[i], fragment.color[i]) > 3.0f / 255.0f;
+  EXPECT_EQ(differ, 0u);
+  EXPECT_GT(compute.color[size_t(8) * sc.w + 8].g, 0.6f) << "layer 31 drawn";
+  EXPECT_GT(compute.color[size_t(8) * sc.w + 22].r, 0.35f) << "background drawn";
+}
+
 TEST_F(CompositeTest, RefusesBadFormatsAndParameters) {
   CompositorDesc d;
   d.width = 16;

@@ -12,8 +12,9 @@
 #define COMPOSITE_SCENE_GROUP 64u        // scene-depth copy workgroup (one pixel per invocation)
 #define COMPOSITE_CLASSIFY_GROUP 64u     // classification workgroup (one screen tile per invocation)
 #define COMPOSITE_DISP_GROUP 64u         // displacement-image workgroup (one warp-grid corner per invocation)
-// Compute path: a tile's layer mask has bit i for layer i and this bit when the rigid background
-// (trunks) reaches the tile.
+// Compute path, a tile-list entry: (position, layer mask). The mask has bit i for layer i (all 32
+// layers fit); the position word holds the tile's x in bits 0-14, its y in bits 15-29 and this bit
+// when the rigid background (trunks) reaches the tile.
 #define COMPOSITE_TILE_BACKGROUND 0x80000000u
 // Classification searches at most this many occupancy tiles per axis for one layer; a wider source
 // rectangle (a displacement of more than ~COMPOSITE_TILE * this pixels across a tile) counts as reached.
@@ -118,6 +119,12 @@ CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
   float gx = float(s.i00 % c.gridX), gy = float(s.i00 / c.gridX);
   return vec2((gx + s.t.x + 0.5f) / float(c.dispWidth), (gy + s.t.y + 0.5f) / float(c.dispHeight));
 }
+
+// Bits 0 .. count-1 set (count up to 32; a shift by 32 is undefined).
+CANOPY_INLINE uint compositeLayerBits(uint count) { return count >= 32u ? 0xffffffffu : (1u << count) - 1u; }
+CANOPY_INLINE uint compositeTilePosition(uint x, uint y) { return x | (y << 15u); }
+CANOPY_INLINE uint compositeTileX(uint position) { return position & 0x7fffu; }
+CANOPY_INLINE uint compositeTileY(uint position) { return (position >> 15u) & 0x7fffu; }
 
 CANOPY_INLINE vec2 blendCorners(GridSample s, vec2 d00, vec2 d10, vec2 d01, vec2 d11) {
   return mix(mix(d00, d10, s.t.x), mix(d01, d11, s.t.x), s.t.y);

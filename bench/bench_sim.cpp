@@ -63,6 +63,7 @@ struct Row {
   std::vector<PassTiming> passes;
   uint32_t dispatches = 0;
   uint32_t groupSize = 0;
+  uint32_t laneWidth = 0;  // the lane-blocked projection ran, one subgroup of this width (0: not)
 };
 
 Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int frames, bool cpu, Row* row,
@@ -109,6 +110,7 @@ Status measure(Device& dev, uint32_t n, FluidScheme scheme, uint32_t cycles, int
   row->wall = median(wall);
   row->dispatches = sim.stats.dispatchesPerStep;
   row->groupSize = sim.groupSize;
+  row->laneWidth = sim.laneProjectNext ? sim.laneWidth : 0;
   timer.destroy(dev);
   destroySimulation(sim);
   CANOPY_TRY(s);
@@ -166,9 +168,11 @@ int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, boo
           if (t.milliseconds > 0.0005) std::printf("        %-32s %8.3f ms\n", t.name.c_str(), t.milliseconds);
     }
   }
-  // The single-workgroup kernels' width side by side (SimulationDesc.groupSize; the default is
-  // chosen by device class).
-  std::printf("\nWorkgroup width of the single-workgroup kernels, MAC + multigrid (2 V), wall ms (median):\n\n  %-5s", "N");
+  // The single-workgroup kernels' width side by side (SimulationDesc.groupSize) against the default
+  // chosen by device class: on CPU devices the lane-blocked kernels (one subgroup, fields in
+  // registers: shaders/sim_fluid_project_lanes.comp), which a forced groupSize turns off.
+  std::printf("\nWorkgroup width of the single-workgroup kernels, MAC + multigrid (2 V), wall ms (median);\n"
+              "default: chosen by device class (lanes W: the lane-blocked kernels, one subgroup of W):\n\n  %-5s", "N");
   const uint32_t widths[] = {32, 64, 128, 256, 1024};
   for (uint32_t w : widths) std::printf(" %9u", w);
   std::printf("   default\n");
@@ -183,8 +187,10 @@ int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, boo
       else std::printf(" %9s", "-");
     }
     Row r;
-    Status s = measure(dev, n, FluidScheme::MacMultigrid, 2, 3, false, &r);
-    std::printf("   %u\n", s.ok() ? r.groupSize : 0u);
+    Status s = measure(dev, n, FluidScheme::MacMultigrid, 2, frames, false, &r);
+    if (!s.ok()) std::printf("   -\n");
+    else if (r.laneWidth) std::printf("   %.3f (lanes %u)\n", r.wall, r.laneWidth);
+    else std::printf("   %.3f (group %u)\n", r.wall, r.groupSize);
   }
   return 0;
 }

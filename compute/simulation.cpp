@@ -139,6 +139,50 @@ double estimateLoopTrips(const gpu::SimFrame& f) {
   return std::max(fluid, wave);
 }
 
+namespace {
+// Multigrid levels wider than the serial threshold (the register levels of the lane-blocked kernel).
+uint32_t parallelLevels(const gpu::SimFrame& f) {
+  uint32_t par = 0;
+  while (par + 1 < f.mgLevels && (f.n >> par) > f.mgSerialSize) ++par;
+  return par;
+}
+}  // namespace
+
+double estimateLaneProjectTrips(const gpu::SimFrame& f, uint32_t lanes) {
+  if (f.n < 4 || f.n > 1024 || f.mgLevels < 1 || f.mgLevels > 11 || lanes < 1) return 1e300;
+  // Mirrors the loops of shaders/sim_fluid_project_lanes.comp: boundary, right-hand side, load,
+  // per V-cycle the register levels (sweeps, restriction, mean, prolongation: segment loops over the
+  // rows) and the serial tail in invocation 0, then the gradient; both pure-Neumann means counted.
+  const double n = f.n, W = lanes, sweeps = SIM_MG_PRE_SWEEPS + SIM_MG_POST_SWEEPS;
+  const uint32_t par = parallelLevels(f);
+  double cycle = 0;
+  for (uint32_t l = 0; l + 1 < f.mgLevels; ++l) {
+    const double m = f.n >> l, mc = m / 2, segs = std::max(1.0, m / W);
+    if (l < par)
+      cycle += sweeps * 2.0 * segs * (m + 1) + segs * (mc + 1) + 2 * mc * mc / W + segs * (m + 1) + 2 * segs;
+    else
+      cycle += sweeps * 2.0 * (m * m + 1) + 3 * mc * mc + m * m + 4;
+  }
+  const double mL = f.n >> (f.mgLevels - 1), mP = f.n >> par;
+  cycle += SIM_MG_COARSE_SWEEPS * 2.0 * (mL * mL + 1) + f.mgLevels * 2 + 2 * mP * mP;
+  const double segs = std::max(1.0, n / W);
+  return std::ceil(4 * n / W) + 3 * segs * (n + 1) + 4 * n * n / W + std::log2(W) + 2 + f.mgCycles * (cycle + 1);
+}
+
+double estimateLaneDiffuseTrips(const gpu::SimFrame& f, uint32_t lanes) {
+  if (f.n < 4 || f.n > 1024 || lanes < 1) return 1e300;
+  // Sources and boundary over 4n faces (twice), loads, the Jacobi sweep, the red-black sweeps and
+  // the stores, each a segment loop over the rows of u and v.
+  const double n = f.n, W = lanes, segs = std::max(1.0, n / W), rows = segs * (2 * n + 3);
+  return 2 * std::ceil(4 * n / W) + 3 * rows + 2 * n + f.diffuseSweeps * 2.0 * rows;
+}
+
+double estimateLaneOscillatorTrips(const gpu::SimFrame& f, uint32_t lanes) {
+  if (f.n < 4 || f.n > 1024 || lanes < 1) return 1e300;
+  const double n = f.n, segs = std::max(1.0, n / lanes);  // load, substeps, store: segment loops over n rows
+  return (2.0 + f.waveSubsteps) * segs * (n + 1) + f.waveSubsteps;
+}
+
 Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt, uint32_t ringSlot, uint32_t ringSize,
                     gpu::SimFrame* out) {
   CANOPY_TRY(validateSimulationParams(p, dt));
@@ -260,6 +304,24 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   CANOPY_TRY(make("sim_stam_step.comp", one, &s.stam));
   CANOPY_TRY(make("sim_wave.comp", one, &s.oscillator));
   CANOPY_TRY(make("sim_tile.comp", grid, &s.tile));
+  // CPU devices: the projection as one subgroup with the wide multigrid levels in registers
+  // (shaders/sim_fluid_project_lanes.comp says why). Register levels must be multiples of the
+  // subgroup width: they are the levels wider than mgSerialSize (8), so at least 16 a side.
+  const uint32_t W = d.subgroupSize;
+  if (!desc.groupSize && d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && d.computeSubgroupShuffle &&
+      W >= 2 && W <= 16 && (W & (W - 1)) == 0 && n >= 16 && n <= 128 && s.mgSerialSize >= 8) {
+    gpu::SimFrame shape{};
+    shape.n = n;
+    shape.mgLevels = gpu::mgLevelCount(n);
+    shape.mgSerialSize = s.mgSerialSize;
+    uint32_t floats = 0;  // register floats per lane of each kernel (see the shaders)
+    for (uint32_t l = 0; l < parallelLevels(shape); ++l) floats += (n >> l) * (n >> l) / W;
+    const uint32_t diffuseFloats = 2 * (n / W) * n + 2 * (n / W) * (n + 1) + n;
+    s.laneWidth = W;
+    CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, floats}, true}, &s.laneProject));
+    CANOPY_TRY(make("sim_fluid_diffuse_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, diffuseFloats}, true}, &s.laneDiffuse));
+    CANOPY_TRY(make("sim_wave_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, 3 * (n / W) * n}, true}, &s.laneOscillator));
+  }
   const uint32_t widest = std::min<uint32_t>({SIM_MAX_GROUP_SIZE, d.properties.limits.maxComputeWorkGroupInvocations,
                                               d.properties.limits.maxComputeWorkGroupSize[0]});
   if (s.groupSize < widest) {
@@ -300,7 +362,8 @@ void destroySimulation(Simulation& s) {
   Device& d = *s.device;  // the caller made sure no frame in flight uses it (destroyCanopy defers)
   s.graph.release(d);
   for (ComputePipeline* p : {&s.diffuse, &s.project, &s.advect, &s.stam, &s.oscillator, &s.tile, &s.wideDiffuse, &s.wideProject,
-                             &s.wideStam, &s.wideOscillator})
+                             &s.wideStam, &s.wideOscillator, &s.laneProject, &s.laneDiffuse,
+                             &s.laneOscillator})
     destroyComputePipeline(d, *p);
   for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes}) destroyBuffer(d, *b);
   s.device = nullptr;
@@ -331,14 +394,23 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   // Single-workgroup kernels: the width prepareSimulationStep chose for this step.
   auto wide = [sp] { return sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize; };
   auto one = [sp] { return sp->next.groupSize; };
+  auto project = [sp, run](VkCommandBuffer cmd, uint32_t phase) {
+    if (sp->laneProjectNext) return run(cmd, sp->laneProject, sp->laneWidth, 1, phase);
+    return run(cmd, sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize ? sp->wideProject : sp->project,
+               sp->next.groupSize, 1, phase);
+  };
   g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
      if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
    }).write(r.frame, rg::Use::TransferDst);
-  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0) : Status(); })
+  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) {
+     if (!mac()) return Status();
+     if (sp->laneDiffuseNext) return run(c.cmd, sp->laneDiffuse, sp->laneWidth, 1, 0);
+     return run(c.cmd, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0);
+   })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideProject : sp->project, one(), 1, 0) : Status(); })
+  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? project(c.cmd, 0) : Status(); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
       .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
@@ -347,14 +419,17 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
    })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? run(c.cmd, wide() ? sp->wideProject : sp->project, one(), 1, 1) : Status(); })
+  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? project(c.cmd, 1) : Status(); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
       .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
   g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return mac() ? Status() : run(c.cmd, wide() ? sp->wideStam : sp->stam, one(), 1, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) { return run(c.cmd, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0); })
+  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) {
+     if (sp->laneOscillatorNext) return run(c.cmd, sp->laneOscillator, sp->laneWidth, 1, 0);
+     return run(c.cmd, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0);
+   })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .read(r.velocity, rg::Use::ComputeStorageRead)
       .write(r.wave, rg::Use::ComputeStorageReadWrite);
@@ -383,6 +458,9 @@ Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt)
   f.mgSerialSize = s.mgSerialSize;
   CANOPY_TRY(chooseGroupSize(s, &f));
   s.next = f;
+  s.laneProjectNext = s.laneWidth != 0 && estimateLaneProjectTrips(f, s.laneWidth) <= kMaxLoopTrips;
+  s.laneDiffuseNext = s.laneWidth != 0 && estimateLaneDiffuseTrips(f, s.laneWidth) <= kMaxLoopTrips;
+  s.laneOscillatorNext = s.laneWidth != 0 && estimateLaneOscillatorTrips(f, s.laneWidth) <= kMaxLoopTrips;
   s.time += dt;
   s.stats.steps++;
   s.stats.lastWaveSubsteps = s.next.waveSubsteps;
@@ -431,7 +509,9 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
       .write(frame, rg::Use::TransferDst)
       .write(mg, rg::Use::TransferDst);
   const bool wide = s.wideGroupSize != 0 && f.groupSize == s.wideGroupSize;
-  g.addPass("sim: project", [sp, wide, &f](rg::PassContext& c) {
+  const bool lanes = s.laneWidth != 0 && estimateLaneProjectTrips(f, s.laneWidth) <= kMaxLoopTrips;
+  g.addPass("sim: project", [sp, wide, lanes, &f](rg::PassContext& c) {
+     if (lanes) return simDispatch(*sp, c.cmd, sp->laneProject, sp->laneWidth, 1, 0);
      return simDispatch(*sp, c.cmd, wide ? sp->wideProject : sp->project, f.groupSize, 1, 0);
    })
       .read(frame, rg::Use::ComputeStorageRead)

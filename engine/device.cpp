@@ -251,6 +251,15 @@ Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out) {
   d.vk.GetPhysicalDeviceProperties(d.physical, &d.properties);
   d.vk.GetPhysicalDeviceMemoryProperties(d.physical, &d.memoryProperties);
   {
+    VkPhysicalDeviceSubgroupProperties sg{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2, &sg};
+    d.vk.GetPhysicalDeviceProperties2(d.physical, &p2);
+    const VkSubgroupFeatureFlags need =
+        VK_SUBGROUP_FEATURE_BASIC_BIT | VK_SUBGROUP_FEATURE_SHUFFLE_BIT | VK_SUBGROUP_FEATURE_ARITHMETIC_BIT;
+    d.subgroupSize = sg.subgroupSize;
+    d.computeSubgroupShuffle = (sg.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) && (sg.supportedOperations & need) == need;
+  }
+  {
     uint32_t qn = 0;
     d.vk.GetPhysicalDeviceQueueFamilyProperties(d.physical, &qn, nullptr);
     std::vector<VkQueueFamilyProperties> fams(qn);

@@ -39,6 +39,10 @@ struct Device {
   bool fragmentPrimitiveId = false; // gl_PrimitiveID in fragment shaders (geometryShader feature)
   bool independentBlend = false;
   uint32_t timestampValidBits = 0;
+  // Compute subgroups (Vulkan 1.1 core): the lane-blocked simulation kernels (compute/simulation.cpp)
+  // need shuffles and arithmetic reductions in compute shaders.
+  uint32_t subgroupSize = 0;
+  bool computeSubgroupShuffle = false;
   Allocator* allocator = nullptr;
   VkCommandPool oneShotPool = VK_NULL_HANDLE;  // for submitAndWait()
 

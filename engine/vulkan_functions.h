@@ -13,6 +13,7 @@ namespace canopy {
 #define CANOPY_VK_INSTANCE_FUNCTIONS(X)     \
   X(GetDeviceProcAddr)                      \
   X(GetPhysicalDeviceProperties)            \
+  X(GetPhysicalDeviceProperties2)           \
   X(GetPhysicalDeviceFeatures2)             \
   X(GetPhysicalDeviceQueueFamilyProperties) \
   X(GetPhysicalDeviceMemoryProperties)      \

@@ -291,7 +291,9 @@ struct SimulationDesc {
   float historySeconds = 1.0f;   // (0, 3600]
   float nominalDt = 1.0f / 30.0f;
   // Invocations of the single-workgroup solver kernels, a power of two in [32, 1024]; 0: chosen by
-  // device class (64 on CPU devices such as lavapipe, 1024 on GPUs; docs/performance.md).
+  // device class (docs/performance.md): on CPU devices such as lavapipe, grids of 16..128 run the
+  // diffusion, projection and oscillator as one subgroup with the fields in registers (other steps
+  // at 64), GPUs take 1024. A non-zero value forces the workgroup kernels at that width.
   uint32_t groupSize = 0;
 };
 

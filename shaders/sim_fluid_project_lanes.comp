@@ -1,0 +1,247 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_shuffle : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+// MAC projection, lane-blocked for CPU devices (docs/performance.md, "Simulation step"): the same
+// solve as sim_fluid_project.comp — same right-hand side, V-cycles, smoother, transfers and
+// gradient — but the multigrid levels wider than f.mgSerialSize live in registers instead of the
+// multigrid buffer. The workgroup is one subgroup of W = SIM_GROUP lanes (the device's subgroup
+// size); lane L holds the columns x = k W + L of every row, so a row segment of W cells is one SIMD
+// vector: row neighbours are the same private-array element of the next/previous row (a plain vector
+// load) and column neighbours come from subgroupShuffle. Why: lavapipe (Mesa 22) loads buffer and
+// shared memory one lane at a time with a bounds check per lane (~67 ns per relaxed cell measured),
+// while a private array indexed by uniform loop counters is one vector access (~7 ns per cell).
+// Levels at most f.mgSerialSize a side run in invocation 0 on the buffer as in the other kernel.
+#include "sim_multigrid.glsl"
+layout(local_size_x_id = 0) in;  // SIM_GROUP == the subgroup size (compute/simulation.cpp checks)
+
+// Floats per lane for all register levels: sum over levels l < par of (n >> l)^2 / W
+// (compute/simulation.cpp, laneFloats).
+layout(constant_id = 1) const uint SIM_LANE_FLOATS = 1u;
+float rp[SIM_LANE_FLOATS];  // pressure (unknown) of the register levels
+float rb[SIM_LANE_FLOATS];  // right-hand side of the register levels
+
+// Register index of (segment k, row j) on level l: level offset + k m + j.
+uint regOffset(uint l) { return mgOffset(f.n, l) / (2u * SIM_GROUP); }
+uint lane() { return gl_SubgroupInvocationID; }
+
+// The five stencil values of the vector (segment k, row j) of a register level with m cells a side:
+// own, left (x - 1), right (x + 1), below (j - 1), above (j + 1). Missing neighbours read 0; the
+// caller weighs them by the side rules. Every lane runs this (shuffles need uniform control flow).
+struct Stencil { float c, left, right, down, up; };
+Stencil stencilAt(uint ro, uint m, uint k, uint j) {
+  uint segs = m / SIM_GROUP, r = ro + k * m + j, L = lane(), W = SIM_GROUP;
+  Stencil s;
+  s.c = rp[r];
+  // Indices clamped so the unused side never indexes outside the array.
+  float prevSeg = rp[k > 0u ? r - m : r], nextSeg = rp[k + 1u < segs ? r + m : r];
+  // Lane 0's left neighbour is lane W-1 of the previous segment; lane W-1's right one is lane 0 of the next.
+  s.left = subgroupShuffle(L == W - 1u ? prevSeg : s.c, (L + W - 1u) & (W - 1u));
+  s.right = subgroupShuffle(L == 0u ? nextSeg : s.c, (L + 1u) & (W - 1u));
+  s.down = rp[j > 0u ? r - 1u : r];
+  s.up = rp[j + 1u < m ? r + 1u : r];
+  return s;
+}
+
+// relaxCell of sim_multigrid.glsl for the W cells of one vector, applied to the lanes of `color`.
+void relaxLanes(uint l, uint color) {
+  uint m = f.n >> l, segs = m / SIM_GROUP, ro = regOffset(l);
+  for (uint k = 0u; k < segs; ++k) {
+    uint x = k * SIM_GROUP + lane();
+    bool hasL = x > 0u, hasR = x + 1u < m;
+    for (uint j = 0u; j < m; ++j) {
+      Stencil s = stencilAt(ro, m, k, j);
+      bool hasD = j > 0u, hasU = j + 1u < m;
+      float sum = 0.0, diag = 0.0;
+      if (hasL) { sum += s.left; diag += 1.0; } else if (dl) diag += 2.0;
+      if (hasR) { sum += s.right; diag += 1.0; } else if (dr) diag += 2.0;
+      if (hasD) { sum += s.down; diag += 1.0; } else if (db) diag += 2.0;
+      if (hasU) { sum += s.up; diag += 1.0; } else if (dtop) diag += 2.0;
+      uint r = ro + k * m + j;
+      float updated = (sum + rb[r]) / diag;
+      rp[r] = ((x + j) & 1u) == color ? updated : s.c;
+    }
+  }
+}
+
+// residualAt of sim_multigrid.glsl for one vector.
+float residualLanes(uint ro, uint m, uint k, uint j) {
+  Stencil s = stencilAt(ro, m, k, j);
+  uint x = k * SIM_GROUP + lane();
+  float ap = 0.0;
+  if (x > 0u) ap += s.c - s.left; else if (dl) ap += 2.0 * s.c;
+  if (x + 1u < m) ap += s.c - s.right; else if (dr) ap += 2.0 * s.c;
+  if (j > 0u) ap += s.c - s.down; else if (db) ap += 2.0 * s.c;
+  if (j + 1u < m) ap += s.c - s.up; else if (dtop) ap += 2.0 * s.c;
+  return rb[ro + k * m + j] - ap;
+}
+
+// The sum of the four children of coarse cell (x/2, J), valid in the even lanes (restrictCell's order).
+float childSum(uint ro, uint m, uint k, uint J) {
+  float r0 = residualLanes(ro, m, k, 2u * J), r1 = residualLanes(ro, m, k, 2u * J + 1u);
+  return ((r0 + subgroupShuffleXor(r0, 1u)) + r1) + subgroupShuffleXor(r1, 1u);
+}
+
+// Restriction from register level l to level l + 1: into registers when that level is a register
+// level too, else into the multigrid buffer for the serial tail.
+void restrictLanes(uint l, bool coarseInRegisters) {
+  uint n = f.n, m = n >> l, mc = m >> 1u, segs = m / SIM_GROUP, ro = regOffset(l), L = lane(), W = SIM_GROUP;
+  if (coarseInRegisters) {
+    // Coarse lane Lc of segment K takes fine segment 2K (Lc < W/2) or 2K+1, lane 2 Lc mod W.
+    uint rc = regOffset(l + 1u), src = (2u * L) & (W - 1u);
+    for (uint K = 0u; K < mc / W; ++K)
+      for (uint J = 0u; J < mc; ++J) {
+        float a = subgroupShuffle(childSum(ro, m, 2u * K, J), src);
+        float b = subgroupShuffle(childSum(ro, m, 2u * K + 1u, J), src);
+        rb[rc + K * mc + J] = L < W / 2u ? a : b;
+        rp[rc + K * mc + J] = 0.0;
+      }
+  } else {
+    uint pco = mgOffset(n, l + 1u), bco = pco + mc * mc;
+    for (uint k = 0u; k < segs; ++k)
+      for (uint J = 0u; J < mc; ++J) {
+        float v = childSum(ro, m, k, J);
+        if ((L & 1u) == 0u) {
+          uint X = (k * W + L) >> 1u;
+          mg[bco + J * mc + X] = v;
+          mg[pco + J * mc + X] = 0.0;
+        }
+      }
+  }
+}
+
+// Pure-Neumann compatibility (subtractMean) of a register level's right-hand side or unknown.
+void subtractMeanOf(uint l, bool rhs) {
+  uint m = f.n >> l, ro = regOffset(l), count = m * m / SIM_GROUP;
+  float s = 0.0;
+  for (uint q = 0u; q < count; ++q) s += rhs ? rb[ro + q] : rp[ro + q];
+  float mean = subgroupAdd(s) / float(m * m);
+  for (uint q = 0u; q < count; ++q) {
+    if (rhs) rb[ro + q] -= mean;
+    else rp[ro + q] -= mean;
+  }
+}
+
+// Coarse value of register level lc at row J for each lane's coarse column I (its own segment K)
+// and at column I2 (segment K or `other`), with ghosted()'s rules for a column outside the level.
+void coarseRow(uint rc, uint mc, uint K, uint other, uint J, uint I, int I2, out float own, out float nb) {
+  uint W = SIM_GROUP;
+  float vK = rp[rc + K * mc + J], vO = rp[rc + other * mc + J];
+  own = subgroupShuffle(vK, I & (W - 1u));
+  uint I2c = uint(clamp(I2, 0, int(mc) - 1));
+  float inK = subgroupShuffle(vK, I2c & (W - 1u)), inO = subgroupShuffle(vO, I2c & (W - 1u));
+  nb = (I2c / W) == K ? inK : inO;
+  if (I2 < 0) nb = dl ? -own : own;
+  if (I2 >= int(mc)) nb = dr ? -own : own;
+}
+
+// prolongCell for register level l from level l + 1 (registers or, for the first serial level, the buffer).
+void prolongLanes(uint l, bool coarseInRegisters) {
+  uint n = f.n, m = n >> l, mc = m >> 1u, segs = m / SIM_GROUP, ro = regOffset(l), L = lane(), W = SIM_GROUP;
+  if (!coarseInRegisters) {
+    uint eo = mgOffset(n, l + 1u);
+    for (uint k = 0u; k < segs; ++k)
+      for (uint j = 0u; j < m; ++j) rp[ro + k * m + j] += prolongValue(eo, m, k * W + L, j);
+    return;
+  }
+  uint rc = regOffset(l + 1u), segsC = mc / W;
+  for (uint k = 0u; k < segs; ++k) {
+    uint x = k * W + L, I = x >> 1u, K = k >> 1u;
+    int I2 = int(I) + ((x & 1u) != 0u ? 1 : -1);
+    // The segment a lane's neighbour column may fall into: the previous one for an even fine
+    // segment (its lane 0 looks left), the next one for an odd one.
+    uint other = (k & 1u) != 0u ? min(K + 1u, segsC - 1u) : (K > 0u ? K - 1u : 0u);
+    for (uint j = 0u; j < m; ++j) {
+      uint J = j >> 1u;
+      int J2 = int(J) + ((j & 1u) != 0u ? 1 : -1);
+      uint J2c = uint(clamp(J2, 0, int(mc) - 1));
+      float g00, g10, g01, g11;
+      coarseRow(rc, mc, K, other, J, I, I2, g00, g10);
+      coarseRow(rc, mc, K, other, J2c, I, I2, g01, g11);
+      if (J2 < 0 && db) { g01 = -g01; g11 = -g11; }
+      if (J2 >= int(mc) && dtop) { g01 = -g01; g11 = -g11; }
+      rp[ro + k * m + j] += 0.5625 * g00 + 0.1875 * g10 + 0.1875 * g01 + 0.0625 * g11;
+    }
+  }
+}
+
+void vCycleLanes(bool neumann, uint par) {
+  uint n = f.n;
+  for (uint l = 0u; l < par; ++l) {
+    for (uint s = 0u; s < SIM_MG_PRE_SWEEPS; ++s) { relaxLanes(l, 0u); relaxLanes(l, 1u); }
+    restrictLanes(l, l + 1u < par);
+    if (neumann && l + 1u < par) subtractMeanOf(l + 1u, true);
+  }
+  SYNC();
+  if (gl_LocalInvocationIndex == 0u) {
+    if (neumann) {  // the first serial level's right-hand side, as subtractMean would
+      uint m = n >> par, bo = mgOffset(n, par) + m * m;
+      float s = 0.0;
+      for (uint k = 0u; k < m * m; ++k) s += mg[bo + k];
+      s /= float(m * m);
+      for (uint k = 0u; k < m * m; ++k) mg[bo + k] -= s;
+    }
+    serialTail(par, neumann);
+  }
+  SYNC();
+  for (uint l = par; l-- > 0u;) {
+    prolongLanes(l, l + 1u < par);
+    for (uint s = 0u; s < SIM_MG_POST_SWEEPS; ++s) { relaxLanes(l, 0u); relaxLanes(l, 1u); }
+  }
+}
+
+// projectionRhs in registers: -h^2 (div u - q) of the field at o into level 0's right-hand side.
+// u(x+1, j) is loaded per lane; v(x, j+1) is carried to the next row.
+void rhsLanes(uint o, bool neumann) {
+  uint n = f.n, W = SIM_GROUP, L = lane();
+  float h = 1.0 / float(n);
+  macBoundary(o);
+  SYNC();
+  for (uint k = 0u; k < n / W; ++k) {
+    uint i = k * W + L;
+    float vBelow = vel[o + macV(n, i, 0u)];
+    for (uint j = 0u; j < n; ++j) {
+      float vAbove = vel[o + macV(n, i, j + 1u)];
+      rb[k * n + j] = -h * (vel[o + macU(n, i + 1u, j)] - vel[o + macU(n, i, j)] + vAbove - vBelow) +
+                      h * h * motorSource(f, vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
+      vBelow = vAbove;
+    }
+  }
+  if (neumann) subtractMeanOf(0u, true);
+}
+
+// subtractPressureGradient in registers; level 0's pressure also goes back to the multigrid buffer
+// (the next projection's warm start).
+void gradientLanes(uint o, bool neumann) {
+  uint n = f.n, W = SIM_GROUP, L = lane();
+  if (neumann) subtractMeanOf(0u, false);
+  float invh = float(n);
+  for (uint k = 0u; k < n / W; ++k) {
+    uint i = k * W + L;
+    for (uint j = 0u; j < n; ++j) {
+      Stencil s = stencilAt(0u, n, k, j);
+      mg[j * n + i] = s.c;
+      if (i > 0u) vel[o + macU(n, i, j)] -= (s.c - s.left) * invh;
+      else if (dl) vel[o + macU(n, 0u, j)] -= 2.0 * s.c * invh;
+      if (i + 1u == n && dr) vel[o + macU(n, n, j)] += 2.0 * s.c * invh;
+      if (j > 0u) vel[o + macV(n, i, j)] -= (s.c - s.down) * invh;
+      else if (db) vel[o + macV(n, i, 0u)] -= 2.0 * s.c * invh;
+      if (j + 1u == n && dtop) vel[o + macV(n, i, n)] += 2.0 * s.c * invh;
+    }
+  }
+}
+
+void main() {
+  bool neumann = beginProjection();
+  uint n = f.n, o = pc.phase == 0u ? 0u : velocityFloats(n), W = SIM_GROUP, L = lane();
+  // Register levels: wider than the serial threshold (simulation.cpp selects this kernel only when
+  // there is at least one and every one is a multiple of W wide).
+  uint par = 0u;
+  while (par + 1u < f.mgLevels && (n >> par) > f.mgSerialSize) ++par;
+  rhsLanes(o, neumann);
+  for (uint k = 0u; k < n / W; ++k)
+    for (uint j = 0u; j < n; ++j) rp[k * n + j] = mg[j * n + k * W + L];
+  for (uint c = 0u; c < f.mgCycles; ++c) vCycleLanes(neumann, par);
+  gradientLanes(o, neumann);
+}

@@ -140,10 +140,16 @@ double estimateLoopTrips(const gpu::SimFrame& f) {
 }
 
 namespace {
-// Multigrid levels wider than the serial threshold (the register levels of the lane-blocked kernel).
+// Multigrid levels wider than the serial threshold (the workgroup kernel's parallel levels).
 uint32_t parallelLevels(const gpu::SimFrame& f) {
   uint32_t par = 0;
   while (par + 1 < f.mgLevels && (f.n >> par) > f.mgSerialSize) ++par;
+  return par;
+}
+// The lane-blocked projection's register levels: at least `lanes` wide (never the coarsest).
+uint32_t laneRegisterLevels(uint32_t n, uint32_t mgLevels, uint32_t lanes) {
+  uint32_t par = 0;
+  while (par + 1 < mgLevels && (n >> par) >= lanes) ++par;
   return par;
 }
 }  // namespace
@@ -152,14 +158,14 @@ double estimateLaneProjectTrips(const gpu::SimFrame& f, uint32_t lanes) {
   if (f.n < 4 || f.n > 1024 || f.mgLevels < 1 || f.mgLevels > 11 || lanes < 1) return 1e300;
   // Mirrors the loops of shaders/sim_fluid_project_lanes.comp: boundary, right-hand side, load,
   // per V-cycle the register levels (sweeps, restriction, mean, prolongation: segment loops over the
-  // rows) and the serial tail in invocation 0, then the gradient; both pure-Neumann means counted.
+  // rows) and the tail (every lane), then the gradient; both pure-Neumann means counted.
   const double n = f.n, W = lanes, sweeps = SIM_MG_PRE_SWEEPS + SIM_MG_POST_SWEEPS;
-  const uint32_t par = parallelLevels(f);
+  const uint32_t par = laneRegisterLevels(f.n, f.mgLevels, lanes);
   double cycle = 0;
   for (uint32_t l = 0; l + 1 < f.mgLevels; ++l) {
     const double m = f.n >> l, mc = m / 2, segs = std::max(1.0, m / W);
     if (l < par)
-      cycle += sweeps * 2.0 * segs * (m + 1) + segs * (mc + 1) + 2 * mc * mc / W + segs * (m + 1) + 2 * segs;
+      cycle += sweeps * 2.0 * segs * (m + 1) + segs * (mc + 1) * (1 + W / 2) + 2 * mc * mc / W + segs * (m + 1) + 2 * segs;
     else
       cycle += sweeps * 2.0 * (m * m + 1) + 3 * mc * mc + m * m + 4;
   }
@@ -304,18 +310,15 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   CANOPY_TRY(make("sim_stam_step.comp", one, &s.stam));
   CANOPY_TRY(make("sim_wave.comp", one, &s.oscillator));
   CANOPY_TRY(make("sim_tile.comp", grid, &s.tile));
-  // CPU devices: the projection as one subgroup with the wide multigrid levels in registers
-  // (shaders/sim_fluid_project_lanes.comp says why). Register levels must be multiples of the
-  // subgroup width: they are the levels wider than mgSerialSize (8), so at least 16 a side.
+  // CPU devices: diffusion, projection and oscillator as one subgroup with the fields in registers
+  // (shaders/sim_fluid_project_lanes.comp says why). Register levels are the multigrid levels at
+  // least W wide; the narrower ones (the tail, at most 8 a side) fit its fixed private copy for W <= 16,
+  // and W >= 8 keeps the coarsest level (at most 4 wide) in the tail.
   const uint32_t W = d.subgroupSize;
   if (!desc.groupSize && d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && d.computeSubgroupShuffle &&
-      W >= 2 && W <= 16 && (W & (W - 1)) == 0 && n >= 16 && n <= 128 && s.mgSerialSize >= 8) {
-    gpu::SimFrame shape{};
-    shape.n = n;
-    shape.mgLevels = gpu::mgLevelCount(n);
-    shape.mgSerialSize = s.mgSerialSize;
+      (W == 8 || W == 16) && n >= W && n <= 128) {
     uint32_t floats = 0;  // register floats per lane of each kernel (see the shaders)
-    for (uint32_t l = 0; l < parallelLevels(shape); ++l) floats += (n >> l) * (n >> l) / W;
+    for (uint32_t l = 0; l < laneRegisterLevels(n, gpu::mgLevelCount(n), W); ++l) floats += (n >> l) * (n >> l) / W;
     const uint32_t diffuseFloats = 2 * (n / W) * n + 2 * (n / W) * (n + 1) + n;
     s.laneWidth = W;
     CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, floats}, true}, &s.laneProject));

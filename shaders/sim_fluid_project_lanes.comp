@@ -5,22 +5,34 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 // MAC projection, lane-blocked for CPU devices (docs/performance.md, "Simulation step"): the same
 // solve as sim_fluid_project.comp — same right-hand side, V-cycles, smoother, transfers and
-// gradient — but the multigrid levels wider than f.mgSerialSize live in registers instead of the
-// multigrid buffer. The workgroup is one subgroup of W = SIM_GROUP lanes (the device's subgroup
+// gradient — but the multigrid levels at least W wide live in registers instead of the multigrid
+// buffer. The workgroup is one subgroup of W = SIM_GROUP lanes (the device's subgroup
 // size); lane L holds the columns x = k W + L of every row, so a row segment of W cells is one SIMD
 // vector: row neighbours are the same private-array element of the next/previous row (a plain vector
 // load) and column neighbours come from subgroupShuffle. Why: lavapipe (Mesa 22) loads buffer and
 // shared memory one lane at a time with a bounds check per lane (~67 ns per relaxed cell measured),
 // while a private array indexed by uniform loop counters is one vector access (~7 ns per cell).
-// Levels at most f.mgSerialSize a side run in invocation 0 on the buffer as in the other kernel.
+// Narrower levels run in every lane on a private copy (the tail below).
 #include "sim_multigrid.glsl"
 layout(local_size_x_id = 0) in;  // SIM_GROUP == the subgroup size (compute/simulation.cpp checks)
 
 // Floats per lane for all register levels: sum over levels l < par of (n >> l)^2 / W
-// (compute/simulation.cpp, laneFloats).
+// (compute/simulation.cpp, laneRegisterLevels).
 layout(constant_id = 1) const uint SIM_LANE_FLOATS = 1u;
 float rp[SIM_LANE_FLOATS];  // pressure (unknown) of the register levels
 float rb[SIM_LANE_FLOATS];  // right-hand side of the register levels
+
+// The levels narrower than W (at most 8, 4, 2, 1 a side for W <= 16: 170 floats with their
+// right-hand sides): every lane runs them on its own copy, so the indices are uniform and each
+// access is one vector operation — no buffer, no barrier, no lane idling while one works.
+float tailArr[192];
+uint tailBase;  // mgOffset of the first tail level: tailArr[i - tailBase] is pyramid element i
+#define MG(i) tailArr[(i) - tailBase]
+#define MGF(name) name##Tail
+#include "sim_multigrid_cells.glsl"
+#undef MG
+#undef MGF
+#define MG_TAIL(i) tailArr[(i) - tailBase]
 
 // Register index of (segment k, row j) on level l: level offset + k m + j.
 uint regOffset(uint l) { return mgOffset(f.n, l) / (2u * SIM_GROUP); }
@@ -98,14 +110,15 @@ void restrictLanes(uint l, bool coarseInRegisters) {
         rp[rc + K * mc + J] = 0.0;
       }
   } else {
+    // Into the tail: every lane takes every coarse cell (a broadcast from the even lane holding it).
     uint pco = mgOffset(n, l + 1u), bco = pco + mc * mc;
     for (uint k = 0u; k < segs; ++k)
       for (uint J = 0u; J < mc; ++J) {
         float v = childSum(ro, m, k, J);
-        if ((L & 1u) == 0u) {
-          uint X = (k * W + L) >> 1u;
-          mg[bco + J * mc + X] = v;
-          mg[pco + J * mc + X] = 0.0;
+        for (uint q = 0u; q < W / 2u; ++q) {
+          uint X = k * (W / 2u) + q;
+          MG_TAIL(bco + J * mc + X) = subgroupShuffle(v, 2u * q);
+          MG_TAIL(pco + J * mc + X) = 0.0;
         }
       }
   }
@@ -140,9 +153,9 @@ void coarseRow(uint rc, uint mc, uint K, uint other, uint J, uint I, int I2, out
 void prolongLanes(uint l, bool coarseInRegisters) {
   uint n = f.n, m = n >> l, mc = m >> 1u, segs = m / SIM_GROUP, ro = regOffset(l), L = lane(), W = SIM_GROUP;
   if (!coarseInRegisters) {
-    uint eo = mgOffset(n, l + 1u);
+    uint eo = mgOffset(n, l + 1u);  // the first tail level
     for (uint k = 0u; k < segs; ++k)
-      for (uint j = 0u; j < m; ++j) rp[ro + k * m + j] += prolongValue(eo, m, k * W + L, j);
+      for (uint j = 0u; j < m; ++j) rp[ro + k * m + j] += prolongValueTail(eo, m, k * W + L, j);
     return;
   }
   uint rc = regOffset(l + 1u), segsC = mc / W;
@@ -173,18 +186,14 @@ void vCycleLanes(bool neumann, uint par) {
     restrictLanes(l, l + 1u < par);
     if (neumann && l + 1u < par) subtractMeanOf(l + 1u, true);
   }
-  SYNC();
-  if (gl_LocalInvocationIndex == 0u) {
-    if (neumann) {  // the first serial level's right-hand side, as subtractMean would
-      uint m = n >> par, bo = mgOffset(n, par) + m * m;
-      float s = 0.0;
-      for (uint k = 0u; k < m * m; ++k) s += mg[bo + k];
-      s /= float(m * m);
-      for (uint k = 0u; k < m * m; ++k) mg[bo + k] -= s;
-    }
-    serialTail(par, neumann);
+  if (neumann) {  // the first tail level's right-hand side, as subtractMean would
+    uint m = n >> par, bo = mgOffset(n, par) + m * m;
+    float s = 0.0;
+    for (uint k = 0u; k < m * m; ++k) s += MG_TAIL(bo + k);
+    s /= float(m * m);
+    for (uint k = 0u; k < m * m; ++k) MG_TAIL(bo + k) -= s;
   }
-  SYNC();
+  serialTailTail(par, neumann);
   for (uint l = par; l-- > 0u;) {
     prolongLanes(l, l + 1u < par);
     for (uint s = 0u; s < SIM_MG_POST_SWEEPS; ++s) { relaxLanes(l, 0u); relaxLanes(l, 1u); }
@@ -235,10 +244,11 @@ void gradientLanes(uint o, bool neumann) {
 void main() {
   bool neumann = beginProjection();
   uint n = f.n, o = pc.phase == 0u ? 0u : velocityFloats(n), W = SIM_GROUP, L = lane();
-  // Register levels: wider than the serial threshold (simulation.cpp selects this kernel only when
-  // there is at least one and every one is a multiple of W wide).
+  // Register levels: at least W wide (simulation.cpp selects this kernel only for n >= W and
+  // 8 <= W <= 16, so the coarsest level, at most 4 wide, is always in the tail).
   uint par = 0u;
-  while (par + 1u < f.mgLevels && (n >> par) > f.mgSerialSize) ++par;
+  while (par + 1u < f.mgLevels && (n >> par) >= W) ++par;
+  tailBase = mgOffset(n, par);
   rhsLanes(o, neumann);
   for (uint k = 0u; k < n / W; ++k)
     for (uint j = 0u; j < n; ++j) rp[k * n + j] = mg[j * n + k * W + L];

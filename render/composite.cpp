@@ -63,14 +63,10 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
   const rg::State discard{VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
   const auto dispImage = g.importImage("composite: displacement image", descOf(c.displacementImage), discard, fs);
-  const auto color = g.importImage("composite: composed colour", descOf(c.composedColor), discard, fs);
-  const auto depth = g.importImage("composite: composed depth", descOf(c.composedDepth), discard, fs);
-  const auto motion = g.importImage("composite: composed motion", descOf(c.composedMotion), discard, fs);
+  const auto composed = g.importImage("composite: composed pixels", descOf(c.composed), discard, fs);
   const auto tileList = g.importBuffer("composite: tile list", c.tileList.size, indirect, indirect);
   CANOPY_TRY(g.bindImage(dispImage, c.displacementImage));
-  CANOPY_TRY(g.bindImage(color, c.composedColor));
-  CANOPY_TRY(g.bindImage(depth, c.composedDepth));
-  CANOPY_TRY(g.bindImage(motion, c.composedMotion));
+  CANOPY_TRY(g.bindImage(composed, c.composed));
   CANOPY_TRY(g.bindBuffer(tileList, c.tileList.buffer));
   Compositor* cp = &c;
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, gen = VK_IMAGE_LAYOUT_GENERAL;
@@ -111,8 +107,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
                               bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler),
                               bindImage(x.graph->image(t.depth).view, ro, cp->depthSampler),
                               bindImage(cp->displacementImage.view, ro, cp->displacementSampler),
-                              bindBuffer(cp->tileList.buffer), bindImage(cp->composedColor.view, gen),
-                              bindImage(cp->composedDepth.view, gen), bindImage(cp->composedMotion.view, gen)},
+                              bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, gen)},
                              p);
    })
       .read(l.color, rg::Use::ComputeSampled)
@@ -123,17 +118,13 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .read(dispImage, rg::Use::ComputeSampled)
       .read(tileList, rg::Use::IndirectBuffer)
       .read(tileList, rg::Use::ComputeStorageRead)
-      .write(color, rg::Use::ComputeStorageWrite)
-      .write(depth, rg::Use::ComputeStorageWrite)
-      .write(motion, rg::Use::ComputeStorageWrite);
+      .write(composed, rg::Use::ComputeStorageWrite);
   const bool hasMotion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   auto resolve = g.addPass("composite: resolve", [cp, t, hasMotion, ro](rg::PassContext& x) {
     if (!cp->computeThisFrame) return Status();
     beginHostRendering(*cp, x, t, hasMotion);
     Status s = bindGraphics(*x.device, x.cmd, cp->resolve,
-                            {bindBuffer(cp->tileList.buffer), bindImage(cp->composedColor.view, ro, cp->nearest),
-                             bindImage(cp->composedDepth.view, ro, cp->nearest),
-                             bindImage(cp->composedMotion.view, ro, cp->nearest)},
+                            {bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, ro, cp->nearest)},
                             cp->push);
     if (s.ok()) x.device->vk.CmdDrawIndirect(x.cmd, cp->tileList.buffer, offsetof(gpu::CompositeTileHeader, vertexCount), 1, 0);
     x.device->cmdEndRendering(x.cmd);
@@ -141,9 +132,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
   });
   resolve.read(tileList, rg::Use::IndirectBuffer)
       .read(tileList, rg::Use::VertexStorageRead)
-      .read(color, rg::Use::FragmentSampled)
-      .read(depth, rg::Use::FragmentSampled)
-      .read(motion, rg::Use::FragmentSampled)
+      .read(composed, rg::Use::FragmentSampled)
       .write(t.color, rg::Use::ColorAttachmentReadWrite)
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (hasMotion) resolve.write(t.motion, rg::Use::ColorAttachmentReadWrite);
@@ -248,12 +237,12 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
       cp.bindings = {storage, storage, storage};
       CANOPY_TRY(createComputePipeline(d, cp, &out->classifyPipeline));
       cp.shader = "composite_tiles.comp";
-      cp.bindings = {sampled, sampled, sampled, sampled, sampled, sampled, storage, storageImage, storageImage, storageImage};
+      cp.bindings = {sampled, sampled, sampled, sampled, sampled, sampled, storage, storageImage};
       CANOPY_TRY(createComputePipeline(d, cp, &out->tilesPipeline));
       GraphicsPipelineDesc rp = gp;
       rp.vertexShader = "composite_resolve.vert";
       rp.fragmentShader = "composite_resolve.frag";
-      rp.bindings = {storage, sampled, sampled, sampled};
+      rp.bindings = {storage, sampled};
       CANOPY_TRY(createGraphicsPipeline(d, rp, &out->resolve));
       ImageDesc id;
       id.format = VK_FORMAT_R32G32B32A32_SFLOAT;
@@ -267,11 +256,8 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
       id.height = desc.height;
       id.layers = 1;
       id.arrayView = false;
-      id.format = VK_FORMAT_R16G16B16A16_SFLOAT;
-      CANOPY_TRY(createImage(d, id, &out->composedColor, "composite: composed colour"));
-      CANOPY_TRY(createImage(d, id, &out->composedMotion, "composite: composed motion"));
-      id.format = VK_FORMAT_R32_SFLOAT;
-      CANOPY_TRY(createImage(d, id, &out->composedDepth, "composite: composed depth"));
+      id.format = VK_FORMAT_R32G32B32A32_UINT;  // storage support is required of every device
+      CANOPY_TRY(createImage(d, id, &out->composed, "composite: composed pixels"));
       CANOPY_TRY(createBuffer(d, sizeof(gpu::CompositeTileHeader) + tiles * 8,
                               VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT |
                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
@@ -306,7 +292,7 @@ void destroyCompositor(Compositor& c) {
   destroyComputePipeline(d, c.classifyPipeline);
   destroyComputePipeline(d, c.tilesPipeline);
   destroyGraphicsPipeline(d, c.resolve);
-  for (Image* img : {&c.displacementImage, &c.composedColor, &c.composedDepth, &c.composedMotion}) destroyImage(d, *img);
+  for (Image* img : {&c.displacementImage, &c.composed}) destroyImage(d, *img);
   destroyBuffer(d, c.tileList);
   destroyBuffer(d, c.occupancy);
   destroyBuffer(d, c.sceneDepth);

@@ -54,7 +54,7 @@ struct Compositor {
   ComputePipeline displacementPipeline, classifyPipeline, tilesPipeline;
   GraphicsPipeline resolve;
   Image displacementImage;        // RGBA32F array: (d_i, previous d_i) per warp-grid corner
-  Image composedColor, composedDepth, composedMotion;  // the tile kernel's results (RGBA16F, R32F, RGBA16F)
+  Image composed;  // the tile kernel's result per pixel, RGBA32UI (compositePackPixel, shared/composite.h)
   Buffer tileList;                // CompositeTileHeader + one uvec2 per screen tile
   VkSampler displacementSampler = VK_NULL_HANDLE;  // linear, clamp to edge
   Buffer occupancy;   // (maxLayers + 1) x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage;

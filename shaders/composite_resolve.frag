@@ -4,17 +4,15 @@
 // ("over" by the blend state), its depth written as is, its motion where the vegetation is frontmost.
 #include "shared/composite.h"
 
-layout(binding = 1) uniform sampler2D compColor;
-layout(binding = 2) uniform sampler2D compDepth;
-layout(binding = 3) uniform sampler2D compMotion;
+layout(binding = 1) uniform usampler2D composed;  // compositePackPixel (shared/composite.h)
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 layout(location = 0) out vec4 outColor;
 layout(location = 1) out vec4 outMotion;
 
 void main() {
-  ivec2 ip = ivec2(gl_FragCoord.xy);
-  outColor = texelFetch(compColor, ip, 0);
-  gl_FragDepth = texelFetch(compDepth, ip, 0).r;
-  outMotion = (pc.flags & COMPOSITE_MOTION) != 0u ? texelFetch(compMotion, ip, 0) : vec4(0.0);
+  uvec4 px = texelFetch(composed, ivec2(gl_FragCoord.xy), 0);
+  outColor = compositeUnpackColor(px);
+  gl_FragDepth = compositeUnpackDepth(px);
+  outMotion = (pc.flags & COMPOSITE_MOTION) != 0u ? compositeUnpackMotion(px) : vec4(0.0);
 }

@@ -5,7 +5,7 @@
 // invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
 // lane's; front to back, a pixel stops once opaque. The displacement (current and previous) comes
 // from one hardware-filtered fetch of the displacement image. The same sums as composite.frag:
-// results go to Canopy's intermediate images and the resolve pass (composite_resolve.*) blends
+// results go to Canopy's intermediate image and the resolve pass (composite_resolve.*) blends
 // them into the host's targets and writes its depth, on the listed tiles only.
 #include "shared/composite.h"
 
@@ -17,9 +17,9 @@ layout(binding = 3) uniform sampler2D backgroundDepth;
 layout(binding = 4) uniform sampler2D hostDepth;        // the host's depth, read before the resolve writes it
 layout(binding = 5) uniform sampler2DArray dispImage;   // (d_i, previous d_i) per corner, linear, clamp to edge
 layout(binding = 6, scalar) readonly buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
-layout(binding = 7, rgba16f) writeonly uniform image2D outColor;   // premultiplied
-layout(binding = 8, r32f) writeonly uniform image2D outDepth;      // the host's depth to write
-layout(binding = 9, rgba16f) writeonly uniform image2D outMotion;  // (motion, 0, 1 where frontmost)
+// Colour (premultiplied), the host's depth to write and motion where frontmost, packed
+// (compositePackPixel, shared/composite.h).
+layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 void main() {
@@ -74,11 +74,9 @@ void main() {
     if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
   }
   acc = underPremultiplied(acc, bg);
-  imageStore(outColor, ip, vec4(acc.rgb * pc.exposure, acc.a));
   float vegZ = min(frontZ, bgZ);
-  imageStore(outDepth, ip, vec4(vegZ < sceneZ ? compositeStandardDepth(pc.flags, vegZ) : sceneRaw));
-  if ((pc.flags & COMPOSITE_MOTION) != 0u) {
-    bool vegetationFront = front && frontZ < bgZ;
-    imageStore(outMotion, ip, vegetationFront ? vec4(motion, 0.0, 1.0) : vec4(0.0));
-  }
+  bool vegetationFront = (pc.flags & COMPOSITE_MOTION) != 0u && front && frontZ < bgZ;
+  imageStore(outPixel, ip, compositePackPixel(vec4(acc.rgb * pc.exposure, acc.a),
+                                              vegZ < sceneZ ? compositeStandardDepth(pc.flags, vegZ) : sceneRaw,
+                                              vegetationFront, motion));
 }

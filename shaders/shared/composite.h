@@ -134,6 +134,22 @@ CANOPY_INLINE vec2 blendCorners(GridSample s, vec2 d00, vec2 d10, vec2 d01, vec2
 // far-to-near compositing, since "over" is associative).
 CANOPY_INLINE vec4 underPremultiplied(vec4 acc, vec4 c) { return acc + (1.0f - acc.w) * c; }
 
+// The compute path's composed pixel, composite_tiles.comp -> composite_resolve.frag: one RGBA32UI
+// texel, so the tile kernel stores once and the resolve fetches once (three images cost ~7 ms more per
+// frame on lavapipe: docs/performance.md). x, y: premultiplied colour as two half2 (an RGBA16F
+// image's precision); z: the depth to write (float bits); w: motion as half2, or COMPOSITE_NO_MOTION
+// where the vegetation is not frontmost (the resolve then leaves the host's motion alone).
+#define COMPOSITE_NO_MOTION 0xffffffffu
+#ifndef __cplusplus
+uvec4 compositePackPixel(vec4 color, float depth, bool frontmost, vec2 motion) {
+  return uvec4(packHalf2x16(color.rg), packHalf2x16(color.ba), floatBitsToUint(depth),
+               frontmost ? packHalf2x16(motion) : COMPOSITE_NO_MOTION);
+}
+vec4 compositeUnpackColor(uvec4 p) { return vec4(unpackHalf2x16(p.x), unpackHalf2x16(p.y)); }
+float compositeUnpackDepth(uvec4 p) { return uintBitsToFloat(p.z); }
+vec4 compositeUnpackMotion(uvec4 p) { return p.w == COMPOSITE_NO_MOTION ? vec4(0.0) : vec4(unpackHalf2x16(p.w), 0.0, 1.0); }
+#endif
+
 // Debug colours: a hue in [0, 1) at full saturation and value.
 CANOPY_INLINE vec3 debugHue(float h) {
   return clamp(abs(fract(vec3(h) + vec3(1.0f, 2.0f / 3.0f, 1.0f / 3.0f)) * 6.0f - vec3(3.0f)) - vec3(1.0f), vec3(0.0f), vec3(1.0f));

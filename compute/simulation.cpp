@@ -164,8 +164,11 @@ double estimateLaneProjectTrips(const gpu::SimFrame& f, uint32_t lanes) {
   double cycle = 0;
   for (uint32_t l = 0; l + 1 < f.mgLevels; ++l) {
     const double m = f.n >> l, mc = m / 2, segs = std::max(1.0, m / W);
+    // Restriction: into registers a loop over coarse segments and rows; into the tail a loop over
+    // fine segments and rows with W/2 broadcasts each.
+    const double restriction = l + 1 < par ? (mc / W) * (mc + 2) : segs * (mc + 1) + segs * mc * (W / 2);
     if (l < par)
-      cycle += sweeps * 2.0 * segs * (m + 1) + segs * (mc + 1) * (1 + W / 2) + 2 * mc * mc / W + segs * (m + 1) + 2 * segs;
+      cycle += sweeps * 2.0 * segs * (m + 1) + restriction + 2 * mc * mc / W + segs * (m + 1) + 2 * segs;
     else
       cycle += sweeps * 2.0 * (m * m + 1) + 3 * mc * mc + m * m + 4;
   }

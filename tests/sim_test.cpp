@@ -18,10 +18,11 @@ class Sim : public test::GpuTest {
     destroySimulation(sim);
     GpuTest::TearDown();
   }
-  void create(uint32_t n = 64, uint32_t history = 0) {
+  void create(uint32_t n = 64, uint32_t history = 0, uint32_t groupSize = 0) {
     SimulationDesc d;
     d.gridSize = n;
     d.historySize = history;
+    d.groupSize = groupSize;
     Status s = createSimulation(dev, d, &sim);
     ASSERT_TRUE(s.ok()) << s.message();
   }
@@ -135,6 +136,45 @@ TEST_F(Sim, WallsModeGpuMatchesCpu_10steps_tol1e5) {
   EXPECT_GT(e.refMax, 0.0);
   EXPECT_LE(e.relMax(), 1e-5);
   EXPECT_LE(t.relMax(), 1e-5);
+}
+
+// Both kernel families against the CPU reference: the lane-blocked kernels CPU devices get by
+// default (diffusion, projection, oscillator in one subgroup's registers) and the workgroup kernels
+// GPUs get (forced here with groupSize = 64), tunnel and walls, at the grid sizes where the lane
+// kernels' register levels and tail change shape (16: one register level; 128: the largest).
+TEST_F(Sim, LaneAndWorkgroupKernelsMatchTheCpuReference_10steps_tol1e5) {
+  for (uint32_t n : {16u, 64u, 128u})
+    for (uint32_t groupSize : {0u, 64u})
+      for (FluidBoundary boundary : {FluidBoundary::WindTunnel, FluidBoundary::Walls}) {
+        if (n != 64 && groupSize != 0) continue;  // the workgroup kernels' sizes are covered elsewhere
+        destroySimulation(sim);
+        sim = Simulation{};
+        create(n, 0, groupSize);
+        SimulationParams p = windyParams();
+        p.wind.sides = kWindFromLeft | kWindFromBottom;
+        p.fluid.boundary = boundary;
+        ASSERT_TRUE(runSimulationSteps(sim, p, 1.0f / 30.0f, 10).ok());
+        const bool lanes = sim.laneProjectNext && sim.laneDiffuseNext && sim.laneOscillatorNext;
+        if (groupSize != 0) EXPECT_FALSE(sim.laneProjectNext || sim.laneDiffuseNext || sim.laneOscillatorNext)
+            << "a forced groupSize must select the workgroup kernels";
+        // lavapipe (a CPU device with 8-lane subgroup shuffles) must get the lane kernels by default.
+        if (groupSize == 0 && dev.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && dev.computeSubgroupShuffle &&
+            dev.subgroupSize == 8)
+          EXPECT_TRUE(lanes) << "n " << n << ": the lane-blocked kernels were not selected";
+        SimulationFields g = fields();
+        ref::SimState c = cpuRun(p, n, sim.ringSize, 1.0f / 30.0f, 10);
+        const size_t vf = gpu::velocityFloats(n);
+        Err e = compare(std::vector<float>(g.velocity.begin() + vf, g.velocity.end()), c.velB, gpu::macFloats(n));
+        Err w = compare(g.vs, std::vector<float>(c.wave.begin(), c.wave.begin() + 2 * n * n), 2 * n * n);
+        Err t = compare(g.tiled, c.tiled, 2 * n * n);
+        std::printf("  n %3u %-9s %-6s: velocity %.3g, V_s %.3g, tiled %.3g (relative max errors)\n", n,
+                    lanes ? "lanes" : "workgroup", boundary == FluidBoundary::Walls ? "walls" : "tunnel", e.relMax(),
+                    w.relMax(), t.relMax());
+        EXPECT_GT(e.refMax, 0.0);
+        EXPECT_LE(e.relMax(), 1e-5) << "n " << n << " groupSize " << groupSize;
+        EXPECT_LE(w.relMax(), 1e-5) << "n " << n << " groupSize " << groupSize;
+        EXPECT_LE(t.relMax(), 1e-5) << "n " << n << " groupSize " << groupSize;
+      }
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -140,12 +140,6 @@ double estimateLoopTrips(const gpu::SimFrame& f) {
 }
 
 namespace {
-// Multigrid levels wider than the serial threshold (the workgroup kernel's parallel levels).
-uint32_t parallelLevels(const gpu::SimFrame& f) {
-  uint32_t par = 0;
-  while (par + 1 < f.mgLevels && (f.n >> par) > f.mgSerialSize) ++par;
-  return par;
-}
 // The lane-blocked projection's register levels: at least `lanes` wide (never the coarsest).
 uint32_t laneRegisterLevels(uint32_t n, uint32_t mgLevels, uint32_t lanes) {
   uint32_t par = 0;
@@ -191,6 +185,19 @@ double estimateLaneOscillatorTrips(const gpu::SimFrame& f, uint32_t lanes) {
   const double n = f.n, segs = std::max(1.0, n / lanes);  // load, substeps, store: segment loops over n rows
   return (2.0 + f.waveSubsteps) * segs * (n + 1) + f.waveSubsteps;
 }
+
+namespace {
+// The projection kernel for the step `f` describes and its thread count: the lane-blocked one where it
+// was created and its loops fit lavapipe's budget, else the workgroup kernel at the step's width.
+const ComputePipeline& projectionKernel(const Simulation& s, const gpu::SimFrame& f, uint32_t* threads) {
+  if (s.laneWidth != 0 && estimateLaneProjectTrips(f, s.laneWidth) <= kMaxLoopTrips) {
+    *threads = s.laneWidth;
+    return s.laneProject;
+  }
+  *threads = f.groupSize;
+  return s.wideGroupSize != 0 && f.groupSize == s.wideGroupSize ? s.wideProject : s.project;
+}
+}  // namespace
 
 Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt, uint32_t ringSlot, uint32_t ringSize,
                     gpu::SimFrame* out) {
@@ -401,9 +408,9 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   auto wide = [sp] { return sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize; };
   auto one = [sp] { return sp->next.groupSize; };
   auto project = [sp, run](VkCommandBuffer cmd, uint32_t phase) {
-    if (sp->laneProjectNext) return run(cmd, sp->laneProject, sp->laneWidth, 1, phase);
-    return run(cmd, sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize ? sp->wideProject : sp->project,
-               sp->next.groupSize, 1, phase);
+    uint32_t threads = 0;
+    const ComputePipeline& kernel = projectionKernel(*sp, sp->next, &threads);
+    return run(cmd, kernel, threads, 1, phase);
   };
   g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
      if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
@@ -464,7 +471,8 @@ Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt)
   f.mgSerialSize = s.mgSerialSize;
   CANOPY_TRY(chooseGroupSize(s, &f));
   s.next = f;
-  s.laneProjectNext = s.laneWidth != 0 && estimateLaneProjectTrips(f, s.laneWidth) <= kMaxLoopTrips;
+  uint32_t projectThreads = 0;
+  s.laneProjectNext = &projectionKernel(s, f, &projectThreads) == &s.laneProject;
   s.laneDiffuseNext = s.laneWidth != 0 && estimateLaneDiffuseTrips(f, s.laneWidth) <= kMaxLoopTrips;
   s.laneOscillatorNext = s.laneWidth != 0 && estimateLaneOscillatorTrips(f, s.laneWidth) <= kMaxLoopTrips;
   s.time += dt;
@@ -514,11 +522,10 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
    })
       .write(frame, rg::Use::TransferDst)
       .write(mg, rg::Use::TransferDst);
-  const bool wide = s.wideGroupSize != 0 && f.groupSize == s.wideGroupSize;
-  const bool lanes = s.laneWidth != 0 && estimateLaneProjectTrips(f, s.laneWidth) <= kMaxLoopTrips;
-  g.addPass("sim: project", [sp, wide, lanes, &f](rg::PassContext& c) {
-     if (lanes) return simDispatch(*sp, c.cmd, sp->laneProject, sp->laneWidth, 1, 0);
-     return simDispatch(*sp, c.cmd, wide ? sp->wideProject : sp->project, f.groupSize, 1, 0);
+  g.addPass("sim: project", [sp, &f](rg::PassContext& c) {
+     uint32_t threads = 0;
+     const ComputePipeline& kernel = projectionKernel(*sp, f, &threads);
+     return simDispatch(*sp, c.cmd, kernel, threads, 1, 0);
    })
       .read(frame, rg::Use::ComputeStorageRead)
       .write(vel, rg::Use::ComputeStorageReadWrite)

@@ -45,10 +45,10 @@ struct Simulation {
   // would not fit at groupSize (many V-cycles or sweeps) runs these instead (prepareSimulationStep).
   ComputePipeline wideDiffuse, wideProject, wideStam, wideOscillator;
   uint32_t wideGroupSize = 0;  // 0: no wide variant (groupSize is already the widest)
-  // The lane-blocked projection (shaders/sim_fluid_project_lanes.comp) for CPU devices: one subgroup
-  // of laneWidth lanes holding the multigrid's wide levels in registers. laneWidth 0: not created
-  // (a GPU, no compute shuffles, a grid outside [16, 128] or a groupSize the host chose).
-  // sim_fluid_diffuse_lanes.comp and sim_wave_lanes.comp likewise.
+  // The lane-blocked diffusion, projection and oscillator (shaders/sim_*_lanes.comp) for CPU devices:
+  // one subgroup of laneWidth lanes holding the fields in registers. laneWidth 0: not created (a GPU,
+  // no compute shuffles, a subgroup other than 8 or 16 wide, a grid outside [laneWidth, 128] or a
+  // groupSize the host chose).
   ComputePipeline laneProject, laneDiffuse, laneOscillator;
   uint32_t laneWidth = 0;
   bool laneProjectNext = false, laneDiffuseNext = false, laneOscillatorNext = false;  // the next recorded step uses them (prepareSimulationStep)
@@ -72,7 +72,7 @@ Status makeSimFrame(const SimulationParams& params, uint32_t n, float time, floa
 // the check against kMaxLoopTrips (lavapipe silently stops loops past 65535 iterations).
 inline constexpr double kMaxLoopTrips = 60000;
 double estimateLoopTrips(const gpu::SimFrame& frame);
-// The same for the lane-blocked projection and diffusion kernels with `lanes` lanes.
+// The same for the lane-blocked projection, diffusion and oscillator kernels with `lanes` lanes.
 double estimateLaneProjectTrips(const gpu::SimFrame& frame, uint32_t lanes);
 double estimateLaneDiffuseTrips(const gpu::SimFrame& frame, uint32_t lanes);
 double estimateLaneOscillatorTrips(const gpu::SimFrame& frame, uint32_t lanes);

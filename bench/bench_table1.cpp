@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "bench/bench.h"
@@ -177,6 +178,30 @@ struct Bench {
   }
 };
 
+// Still-camera frames of two contexts (e.g. 80K and 10M faces) alternated frame by frame, A B A B
+// ..., after two warm-ups each (the first slices the layers): this machine's drift and bursts then
+// fall on both alike, where rows measured a minute apart differ by their noise. Medians, each
+// context's host clear subtracted; frames without timestamp queries.
+Status pairedStill(Bench& a, Bench& b, const std::string& layout, int frames, double* aMs, double* bMs) {
+  CANOPY_TRY(a.set(layout));
+  CANOPY_TRY(b.set(layout));
+  std::vector<double> wa, wb;
+  for (int i = 0; i < 2 * (frames + 2); ++i) {
+    Bench& x = (i & 1) ? b : a;
+    CanopyFrame f;
+    f.camera = toCamera(orbitView(x.model.boundsMin, x.model.boundsMax, 20.0f, 10.0f, 40.0f, float(x.w) / float(x.h), 0.8f));
+    f.dt = 1.0f / 30.0f;
+    CANOPY_TRY(beginCanopyFrame(x.ctx, f));
+    const double t0 = nowMs();
+    CANOPY_TRY(submitAndWait(x.d, [&](VkCommandBuffer cmd) { return x.graph.record(cmd, nullptr); }));
+    const double ms = std::max(0.0, nowMs() - t0 - x.clearMs);
+    if (i >= 4) ((i & 1) ? wb : wa).push_back(ms);
+  }
+  *aMs = spreadOf(wa).median;
+  *bMs = spreadOf(wb).median;
+  return Status();
+}
+
 // The paper's split: the same step by the CPU reference, its tiled field and history slot
 // uploaded every frame (measured: the CPU step and the upload, each median of `frames`).
 Status cpuSplitMs(Device& d, int frames, double* stepMs, double* uploadMs) {
@@ -233,10 +258,16 @@ int runTable1Bench(Device& d, const Table1Options& o) {
               "paper FPS", "coverage");
   std::vector<Row> rows;
   std::vector<Baseline> baselines;
-  std::map<uint64_t, double> stillByFaces;  // 5(3-1-1) still frame ms per face count
+  struct FaceRatio {
+    std::string layout;
+    double smallMs = 0, largeMs = 0;
+  };
+  std::vector<FaceRatio> faceRatios;  // still frame, largest / smallest face count, frames alternated
+  std::unique_ptr<Bench> smallest;    // the first face count's context, kept for the paired comparison
   for (uint64_t faces : o.faces) {
     const double g0 = nowMs();
-    Bench b(d, o);
+    auto bench = std::make_unique<Bench>(d, o);
+    Bench& b = *bench;
     Status s = b.init(faces, o.width, o.height);
     const double prepMs = nowMs() - g0;
     for (const char* layout : {"3(1-1-1)", "5(3-1-1)"}) {
@@ -259,7 +290,6 @@ int runTable1Bench(Device& d, const Table1Options& o) {
         std::printf("  %-10llu %-9s %-6s %9.2f %8.2f %8.2f %7.1f %9.0f %s\n", (unsigned long long)faces, layout,
                     r.camera.c_str(), r.m.wall.median, r.m.wall.p95, r.m.wall.max, 1000.0 / r.m.wall.median, r.paperFps,
                     cover);
-        if (orbit == 0.0f && layout[0] == '5') stillByFaces[faces] = r.m.wall.median;
         rows.push_back(r);
       }
     }
@@ -300,17 +330,32 @@ int runTable1Bench(Device& d, const Table1Options& o) {
     }
     std::printf("  (%llu faces: scene generated and context created in %.0f ms; host clear %.2f ms, subtracted)\n",
                 (unsigned long long)faces, prepMs, b.clearMs);
+    if (o.faces.size() > 1 && faces == o.faces.front()) {
+      smallest = std::move(bench);
+    } else if (smallest && faces == o.faces.back()) {
+      for (const char* layout : {"3(1-1-1)", "5(3-1-1)"}) {
+        FaceRatio fr;
+        fr.layout = layout;
+        if (s.ok()) s = pairedStill(*smallest, b, layout, o.frames, &fr.smallMs, &fr.largeMs);
+        if (s.ok()) faceRatios.push_back(fr);
+      }
+      if (!s.ok()) {
+        std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+        return 1;
+      }
+    }
   }
   std::printf("\nBaselines, same run, %llu faces, 5(3-1-1), ms (ratio = second / first):\n\n",
               (unsigned long long)o.faces.front());
   for (const Baseline& x : baselines)
     std::printf("  %-58s %-13s %8.2f   %-10s %8.2f   %6.2fx\n", x.name.c_str(), x.a.c_str(), x.aMs, x.b.c_str(), x.bMs,
                 x.bMs / std::max(x.aMs, 1e-9));
-  if (stillByFaces.size() > 1) {
-    const double first = stillByFaces.begin()->second, last = stillByFaces.rbegin()->second;
-    std::printf("\n  still-camera frame, %llu faces / %llu faces (5(3-1-1)): %.3f\n",
-                (unsigned long long)stillByFaces.rbegin()->first, (unsigned long long)stillByFaces.begin()->first,
-                last / first);
+  if (!faceRatios.empty()) {
+    std::printf("\nStill-camera frame, %llu faces / %llu faces, the two contexts' frames alternated (%d each), ms:\n\n",
+                (unsigned long long)o.faces.back(), (unsigned long long)o.faces.front(), o.frames);
+    for (const FaceRatio& x : faceRatios)
+      std::printf("  %-9s %10llu: %7.2f   %10llu: %7.2f   ratio %.3f\n", x.layout.c_str(), (unsigned long long)o.faces.front(),
+                  x.smallMs, (unsigned long long)o.faces.back(), x.largeMs, x.largeMs / std::max(x.smallMs, 1e-9));
   }
 
   // Scaling series: frame cost against face count, layer count and resolution (still camera).
@@ -388,6 +433,14 @@ int runTable1Bench(Device& d, const Table1Options& o) {
       j << "    {\"name\": " << jsonString(x.name) << ", \"first\": " << jsonString(x.a) << ", \"firstMs\": " << x.aMs
         << ", \"second\": " << jsonString(x.b) << ", \"secondMs\": " << x.bMs
         << ", \"ratio\": " << x.bMs / std::max(x.aMs, 1e-9) << "}" << (i + 1 < baselines.size() ? "," : "") << "\n";
+    }
+    j << "  ],\n  \"faceRatios\": [\n";
+    for (size_t i = 0; i < faceRatios.size(); ++i) {
+      const FaceRatio& x = faceRatios[i];
+      j << "    {\"layout\": " << jsonString(x.layout) << ", \"smallFaces\": " << o.faces.front() << ", \"smallMs\": " << x.smallMs
+        << ", \"largeFaces\": " << o.faces.back() << ", \"largeMs\": " << x.largeMs
+        << ", \"ratio\": " << x.largeMs / std::max(x.smallMs, 1e-9) << ", \"method\": \"frames alternated\"}"
+        << (i + 1 < faceRatios.size() ? "," : "") << "\n";
     }
     j << "  ],\n  \"series\": [\n";
     for (size_t i = 0; i < series.size(); ++i)

@@ -57,7 +57,7 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
         vi = f.delayMode == ANIM_DELAY_EXACT ? gpu::simToView(f, history(a, f.time - gamma))
                                              : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, a + gamma * f.propagation * vs));
       }
-      out[size_t(layer) * corners + id] = gpu::displacementPixels(f, layer, pixel.y, vi);
+      out[size_t(layer) * corners + id] = gpu::displacementPixels(f, f.layers[layer], pixel.y, vi);
     }
   return out;
 }

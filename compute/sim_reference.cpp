@@ -23,6 +23,12 @@ SimState makeState(uint32_t n, uint32_t ringSize) {
 namespace {
 
 bool isSource(const SimFrame& f, uint side) { return (f.windSides & side) != 0; }
+// The motors' mass source at p (shared/sim.h, motorSource), summed in the shaders' order.
+float motorSources(const SimFrame& f, vec2 p) {
+  float q = 0.0f;
+  for (uint m = 0; m < f.motorCount; ++m) q += motorSource(f.motors[m], p);
+  return q;
+}
 // Inflow is prescribed only in the tunnel; a closed box gets the wind as a body force instead.
 bool isInflow(const SimFrame& f, uint side) { return f.boundary == SIM_BOUNDARY_TUNNEL && isSource(f, side); }
 // Whether a side is open outflow (pressure 0) in the MAC scheme.
@@ -150,7 +156,7 @@ void macProject(const SimFrame& f, std::vector<float>& w, std::vector<float>& mg
   for (uint j = 0; j < n; ++j)
     for (uint i = 0; i < n; ++i)
       b[j * n + i] = -h * (w[macU(n, i + 1, j)] - w[macU(n, i, j)] + w[macV(n, i, j + 1)] - w[macV(n, i, j)]) +
-                     h * h * motorSource(f, vec2((float(i) + 0.5f) * h, (float(j) + 0.5f) * h));
+                     h * h * motorSources(f, vec2((float(i) + 0.5f) * h, (float(j) + 0.5f) * h));
   if (!sd.anyDirichlet()) subtractMean(b, n * n);
   for (uint c = 0; c < f.mgCycles; ++c) vCycle(f, mg, sd);
   if (!sd.anyDirichlet()) subtractMean(p, n * n);
@@ -316,12 +322,12 @@ void stamProject(const SimFrame& f, float* u, float* v, float* p, float* div, Gs
   // balanced by a uniform sink to keep the Neumann problem solvable.
   double qsum = 0.0;
   for (uint j = 1; j <= n; ++j)
-    for (uint i = 1; i <= n; ++i) qsum += motorSource(f, vec2((float(i) - 0.5f) * h, (float(j) - 0.5f) * h));
+    for (uint i = 1; i <= n; ++i) qsum += motorSources(f, vec2((float(i) - 0.5f) * h, (float(j) - 0.5f) * h));
   const float qmean = float(qsum / double(n * n));
   for (uint j = 1; j <= n; ++j)
     for (uint i = 1; i <= n; ++i) {
       div[IX(i, j)] = -0.5f * (u[IX(i + 1, j)] - u[IX(i - 1, j)] + v[IX(i, j + 1)] - v[IX(i, j - 1)]) / float(n) +
-                      h * h * (motorSource(f, vec2((float(i) - 0.5f) * h, (float(j) - 0.5f) * h)) - qmean);
+                      h * h * (motorSources(f, vec2((float(i) - 0.5f) * h, (float(j) - 0.5f) * h)) - qmean);
       p[IX(i, j)] = 0.0f;
     }
   setBnd(n, 0, div);

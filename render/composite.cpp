@@ -164,6 +164,8 @@ Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
   if (desc.maxLayers < 1 || desc.maxLayers > CANOPY_MAX_LAYERS)
     return Status::error("compositor: maxLayers = " + std::to_string(desc.maxLayers) + " is outside 1.." +
                          std::to_string(CANOPY_MAX_LAYERS));
+  if (desc.tilesPerGroup > 64)
+    return Status::error("compositor: tilesPerGroup = " + std::to_string(desc.tilesPerGroup) + " is outside 0..64 (0 = by device class)");
   VkFormatProperties fp{};
   d.vk.GetPhysicalDeviceFormatProperties(d.physical, desc.colorFormat, &fp);
   const VkFormatFeatureFlags blendable = VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT;
@@ -343,6 +345,10 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
                          std::to_string(c.desc.minCellSize) + " pixels");
   p.dispWidth = c.displacementImage.extent.width;
   p.dispHeight = c.displacementImage.extent.height;
+  // A workgroup launch on lavapipe costs more than one 8x8 tile's pixels (docs/performance.md);
+  // GPUs want one workgroup per tile for parallelism.
+  const bool cpuDevice = c.device->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  p.tilesPerGroup = c.desc.tilesPerGroup != 0 ? c.desc.tilesPerGroup : cpuDevice ? 16u : 1u;
   c.params = params;
   c.occupancyPending = c.occupancyPending || layersRebuilt;
   return Status();

@@ -39,6 +39,9 @@ struct CompositorDesc {
   bool reverseZ = false;                           // the host's depth is reverse-Z (1 = near)
   uint32_t maxLayers = CANOPY_MAX_LAYERS;
   uint32_t minCellSize = 8;                        // smallest warp-grid cell (sizes the displacement image)
+  // Compute path: listed 8x8 tiles per workgroup of the tile kernel, 1..64; 0 = by device class
+  // (16 on CPU devices, where a workgroup launch costs more than an 8x8 tile's pixels; 1 on GPUs).
+  uint32_t tilesPerGroup = 0;
 };
 // Checks formats against the device (blendable colour attachment, sampleable depth attachment).
 Status validateCompositorDesc(Device& device, const CompositorDesc& desc);

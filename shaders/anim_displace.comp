@@ -120,5 +120,5 @@ void main() {
   }
   uint at = layer * corners + id;
   prevDisp[at] = disp[at];
-  disp[at] = displacementPixels(f, layer, pixel.y, vi);
+  disp[at] = displacementPixels(f, f.layers[layer], pixel.y, vi);
 }

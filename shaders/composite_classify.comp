@@ -33,7 +33,7 @@ void main() {
     mask = compositeLayerBits(pc.layerCount);
   } else {
     GridSample g0 = gridSample(pc, lo), g1 = gridSample(pc, hi);
-    uint gx0 = g0.i00 % pc.gridX, gy0 = g0.i00 / pc.gridX, gx1 = g1.i00 % pc.gridX + 1u, gy1 = g1.i00 / pc.gridX + 1u;
+    uint gx0 = uint(g0.cell.x), gy0 = uint(g0.cell.y), gx1 = uint(g1.cell.x) + 1u, gy1 = uint(g1.cell.y) + 1u;
     uint corners = pc.gridX * pc.gridY;
     for (uint i = 0u; i < pc.layerCount; ++i) {
       vec2 dmin = vec2(1e30), dmax = vec2(-1e30);
@@ -61,7 +61,7 @@ void main() {
     }
   }
   if (mask == 0u && (position & COMPOSITE_TILE_BACKGROUND) == 0u) return;
-  uint slot = atomicAdd(header.groupsX, 1u);
-  atomicAdd(header.instanceCount, 1u);
+  uint slot = atomicAdd(header.instanceCount, 1u);
+  atomicMax(header.groupsX, slot / pc.tilesPerGroup + 1u);
   tiles[slot] = uvec2(position, mask);
 }

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Compute path of the inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing",
-// docs/performance.md): one workgroup per listed screen tile (composite_classify.comp), one pixel per
+// docs/performance.md): a workgroup per tilesPerGroup listed screen tiles (composite_classify.comp), one pixel of each per
 // invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
 // lane's; front to back, a pixel stops once opaque. The displacement (current and previous) comes
 // from one hardware-filtered fetch of the displacement image. The same sums as composite.frag:
@@ -22,12 +22,12 @@ layout(binding = 6, scalar) readonly buffer TileBuf { CompositeTileHeader header
 layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
-void main() {
-  uvec2 tileEntry = tiles[gl_WorkGroupID.x];
+// One listed tile: its pixel at this invocation.
+void compositeTile(uvec2 tileEntry) {
   uvec2 tile = uvec2(compositeTileX(tileEntry.x), compositeTileY(tileEntry.x));
   uint mask = tileEntry.y;
   ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
-  if (ip.x >= int(pc.width) || ip.y >= int(pc.height)) return;
+  if (ip.x >= int(pc.width) || ip.y >= int(pc.height)) return;  // the tile's part outside the image
   vec2 p = vec2(ip) + 0.5;
   vec2 size = vec2(pc.width, pc.height);
   float sceneRaw = texelFetch(hostDepth, ip, 0).r;
@@ -79,4 +79,11 @@ void main() {
   imageStore(outPixel, ip, compositePackPixel(vec4(acc.rgb * pc.exposure, acc.a),
                                               vegZ < sceneZ ? compositeStandardDepth(pc.flags, vegZ) : sceneRaw,
                                               vegetationFront, motion));
+}
+
+// A workgroup takes tilesPerGroup consecutive entries of the list: on CPU devices each workgroup
+// launch has a fixed cost that one 8x8 tile does not amortise (CompositorDesc.tilesPerGroup).
+void main() {
+  uint first = gl_WorkGroupID.x * pc.tilesPerGroup, end = min(first + pc.tilesPerGroup, header.instanceCount);
+  for (uint k = first; k < end; ++k) compositeTile(tiles[k]);
 }

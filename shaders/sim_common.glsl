@@ -14,6 +14,13 @@ layout(binding = 0, scalar) readonly buffer FrameBuf { SimFrame frameIn; };
 // (measured on lavapipe: 1.35 ms of the projection's 1.7 ms outside the V-cycles).
 SimFrame f;
 #define LOAD_FRAME() f = frameIn
+// The motors' mass source at p (shared/sim.h, motorSource), summed in the CPU reference's order;
+// reads the global frame rather than taking it as an argument (a copy per call on lavapipe).
+float motorSourcesAt(vec2 p) {
+  float q = 0.0;
+  for (uint m = 0u; m < f.motorCount; ++m) q += motorSource(f.motors[m], p);
+  return q;
+}
 // Velocity: field A at 0, field B at velocityFloats(n) (MAC faces or Stam's collocated arrays).
 layout(binding = 1, scalar) SIM_COHERENT buffer VelBuf { float vel[]; };
 layout(binding = 2, scalar) SIM_COHERENT buffer MgBuf { float mg[]; };

@@ -213,7 +213,7 @@ void rhsLanes(uint o, bool neumann) {
     for (uint j = 0u; j < n; ++j) {
       float vAbove = vel[o + macV(n, i, j + 1u)];
       rb[k * n + j] = -h * (vel[o + macU(n, i + 1u, j)] - vel[o + macU(n, i, j)] + vAbove - vBelow) +
-                      h * h * motorSource(f, vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
+                      h * h * motorSourcesAt(vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
       vBelow = vAbove;
     }
   }

@@ -46,7 +46,7 @@ void projectionRhs(uint o, bool neumann) {
   FOR_EACH(c, n * n) {
     uint i = c & (n - 1u), j = c >> findMSB(n);
     mg[bo + c] = -h * (vel[o + macU(n, i + 1u, j)] - vel[o + macU(n, i, j)] + vel[o + macV(n, i, j + 1u)] - vel[o + macV(n, i, j)]) +
-                 h * h * motorSource(f, vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
+                 h * h * motorSourcesAt(vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
   }
   SYNC();
   if (neumann) subtractMean(bo, n * n);

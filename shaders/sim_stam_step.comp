@@ -70,14 +70,14 @@ void project(uint u, uint v, uint p, uint div) {
   // to keep the Neumann problem solvable).
   float qsum = 0.0;
   if (f.motorCount > 0u) {
-    FOR_EACH(k, n * n) qsum += motorSource(f, vec2((float(k % n) + 0.5) * h, (float(k / n) + 0.5) * h));
+    FOR_EACH(k, n * n) qsum += motorSourcesAt(vec2((float(k % n) + 0.5) * h, (float(k / n) + 0.5) * h));
     qsum = groupSum(qsum);
   }
   float qmean = qsum / float(n * n);
   FOR_EACH(k, n * n) {
     uint i = 1u + k % n, j = 1u + k / n;
     vel[IX(div, i, j)] = -0.5 * (vel[IX(u, i + 1u, j)] - vel[IX(u, i - 1u, j)] + vel[IX(v, i, j + 1u)] - vel[IX(v, i, j - 1u)]) / float(n) +
-                         h * h * (motorSource(f, vec2((float(i) - 0.5) * h, (float(j) - 0.5) * h)) - qmean);
+                         h * h * (motorSourcesAt(vec2((float(i) - 0.5) * h, (float(j) - 0.5) * h)) - qmean);
     vel[IX(p, i, j)] = 0.0;
   }
   SYNC();

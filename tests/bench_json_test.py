@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Issue 15: the benchmark's JSON cannot silently rot. Runs `canopy-bench table1` small and checks
-every row: each expected pass present, no negative time, frame times positive and ordered
+every row: each expected pass present, the face-count ratio of frames alternated between two contexts, no negative time, frame times positive and ordered
 (median <= p95 <= max), FPS consistent with the median frame time, the baselines' ratios with
 their two figures, and the device/parameter record. No timing thresholds."""
 import json
@@ -26,7 +26,7 @@ def main():
     bench = sys.argv[1]
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "table1.json")
-        cmd = [bench, "table1", "--faces", "2000", "--frames", "3", "--size", "128x96", "--json", out]
+        cmd = [bench, "table1", "--faces", "2000,4000", "--frames", "3", "--size", "128x96", "--json", out]
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)
         print(r.stdout)
         if r.returncode != 0:
@@ -72,6 +72,14 @@ def main():
             fail("baseline %s has a non-positive time" % b["name"])
         if not math.isclose(b["ratio"], b["secondMs"] / b["firstMs"], rel_tol=1e-3):
             fail("baseline %s ratio inconsistent" % b["name"])
+    ratios = doc.get("faceRatios", [])
+    if sorted(x["layout"] for x in ratios) != ["3(1-1-1)", "5(3-1-1)"]:
+        fail("face-count ratios (frames alternated) missing: %r" % ratios)
+    for x in ratios:
+        if (x["smallFaces"], x["largeFaces"]) != (2000, 4000) or not (x["smallMs"] > 0 and x["largeMs"] > 0):
+            fail("face-count ratio %r" % x)
+        if not math.isclose(x["ratio"], x["largeMs"] / x["smallMs"], rel_tol=1e-3):
+            fail("face-count ratio inconsistent: %r" % x)
     print("bench JSON: %d rows, %d baselines, %d passes per row checked" % (len(rows), len(doc["baselines"]), len(rows[0]["passes"])))
 
 

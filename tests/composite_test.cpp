@@ -34,6 +34,7 @@ struct Scene {
   CompositeParams params;
   bool background = true;
   bool motionValid = true;
+  uint32_t tilesPerGroup = 0;  // CompositorDesc.tilesPerGroup (0: by device class)
 
   uint32_t gridX() const { return gridCorners(w, cell); }
   uint32_t gridY() const { return gridCorners(h, cell); }
@@ -126,6 +127,7 @@ class CompositeTest : public GpuTest {
     cd.depthFormat = kDepth;
     cd.motionFormat = kMotion;
     cd.maxLayers = sc.n;
+    cd.tilesPerGroup = sc.tilesPerGroup;
     Status s = createCompositor(dev, cd, &c);
     EXPECT_TRUE(s.ok()) << s.message();
     gpu::AnimFrame a{};
@@ -436,6 +438,18 @@ TEST_F(CompositeTest, TileListsNeverDropALayerCarriedAcrossTileBorders) {
   sc.params.path = CompositePath::Compute;
   sc.params.skipEmptyTiles = true;
   const Result classified = run(sc);
+  // Listed tiles per workgroup of the tile kernel: one (GPUs), a count that leaves a partial last
+  // group, and more than the whole list — the same pixels every time.
+  for (uint32_t perGroup : {1u, 3u, 64u}) {
+    SCOPED_TRACE("tilesPerGroup " + std::to_string(perGroup));
+    sc.tilesPerGroup = perGroup;
+    const Result grouped = run(sc);
+    size_t differGroup = 0;
+    for (size_t i = 0; i < sc.pixels(); ++i)
+      differGroup += classified.color[i] != grouped.color[i] || classified.depth[i] != grouped.depth[i];
+    EXPECT_EQ(differGroup, 0u);
+  }
+  sc.tilesPerGroup = 0;
   sc.params.skipEmptyTiles = false;
   const Result unclassified = run(sc);
   sc.params.path = CompositePath::Fragment;
@@ -492,6 +506,10 @@ TEST_F(CompositeTest, RefusesBadFormatsAndParameters) {
   d.motionFormat = VK_FORMAT_R8G8B8A8_UNORM;
   s = createCompositor(dev, d, &c);
   EXPECT_NE(s.message().find("motion format"), std::string::npos) << s.message();
+  d.motionFormat = VK_FORMAT_UNDEFINED;
+  d.tilesPerGroup = 65;
+  s = createCompositor(dev, d, &c);
+  EXPECT_NE(s.message().find("tilesPerGroup = 65 is outside 0..64"), std::string::npos) << s.message();
   CompositeParams p;
   p.depthAlpha = 0.0f;
   s = validateCompositeParams(p);

@@ -71,17 +71,21 @@ CANOPY_INLINE float layerDelay(AnimFrame f, float distance, float v0z) {
   return clamp(g, -f.maxDelay, f.maxDelay);
 }
 
+// The helpers below take the layer's record (f.layers[i]) rather than indexing the frame's array:
+// GLSL passes a struct by value, and lavapipe copies a frame whose array the callee indexes
+// dynamically on every call (measured on the simulation's motors, docs/performance.md).
+
 // Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1].
-CANOPY_INLINE float rigidityFactor(AnimFrame f, uint layer, float pixelY) {
+CANOPY_INLINE float rigidityFactor(AnimFrame f, AnimLayer layer, float pixelY) {
   if (f.everyPartMoves != 0u) return 1.0f;
-  float l = f.layers[layer].rootLineY - pixelY;
-  float x = clamp(l / max(f.layers[layer].height, 1.0f), 0.0f, 1.0f);
+  float l = layer.rootLineY - pixelY;
+  float x = clamp(l / max(layer.height, 1.0f), 0.0f, 1.0f);
   return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
 }
 
 // Eq. 6 (docs/design.md's reading) in pixels, y pointing down the image (view y points up).
-CANOPY_INLINE vec2 displacementPixels(AnimFrame f, uint layer, float pixelY, vec3 vi) {
-  float k = rigidityFactor(f, layer, pixelY) * f.layers[layer].attenuation * f.lambda.w;
+CANOPY_INLINE vec2 displacementPixels(AnimFrame f, AnimLayer layer, float pixelY, vec3 vi) {
+  float k = rigidityFactor(f, layer, pixelY) * layer.attenuation * f.lambda.w;
   float dx = k * f.lambda.x * vi.x;
   float dyUp = k * (f.lambda.y * vi.y - f.lambda.z * abs(vi.z));
   return vec2(dx, -dyUp);

@@ -61,15 +61,15 @@ struct CompositePush {
   float exposure;      // the vegetation's linear colour is scaled by this (HDR hosts), >= 0
   uint dispWidth;      // compute path: texels per row / column of the displacement image (>= gridX, gridY)
   uint dispHeight;
-  uint pad0;
+  uint tilesPerGroup;  // compute path: listed tiles per workgroup of the tile kernel (>= 1; CompositorDesc)
 };
 CANOPY_SIZE_CHECK(CompositePush, 64)
 
 // Compute path: the tile list the classification appends to. The header doubles as the indirect
-// dispatch of the warp + composite kernel (one workgroup per tile) and the indirect draw of the
-// resolve pass (one six-vertex quad per tile); the host resets it every frame.
+// dispatch of the warp + composite kernel (one workgroup per tilesPerGroup listed tiles) and the
+// indirect draw of the resolve pass (one six-vertex quad per tile); the host resets it every frame.
 struct CompositeTileHeader {
-  uint groupsX;        // = listed tiles
+  uint groupsX;        // = ceil(listed tiles / tilesPerGroup)
   uint groupsY;        // 1
   uint groupsZ;        // 1
   uint pad0;
@@ -95,6 +95,7 @@ struct GridSample {
   uint i01;
   uint i11;
   vec2 t;
+  vec2 cell;  // (gx, gy) of corner i00, so no caller divides i00 by gridX (CPU drivers run integer division lane by lane)
 };
 
 CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
@@ -105,6 +106,7 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
   float x1 = min(x0 + c.cellSize, c.width), y1 = min(y0 + c.cellSize, c.height);
   s.t = vec2(clamp((p.x - x0) / max(x1 - x0, 1e-6f), 0.0f, 1.0f), clamp((p.y - y0) / max(y1 - y0, 1e-6f), 0.0f, 1.0f));
   uint gx = uint(cx), gy = uint(cy);
+  s.cell = vec2(cx, cy);
   s.i00 = gy * c.gridX + gx;
   s.i10 = s.i00 + 1u;
   s.i01 = s.i00 + c.gridX;
@@ -116,8 +118,7 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
 // with hardware bilinear filtering: the same corners and weights as gridSample, in normalized
 // coordinates.
 CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
-  float gx = float(s.i00 % c.gridX), gy = float(s.i00 / c.gridX);
-  return vec2((gx + s.t.x + 0.5f) / float(c.dispWidth), (gy + s.t.y + 0.5f) / float(c.dispHeight));
+  return vec2((s.cell.x + s.t.x + 0.5f) / float(c.dispWidth), (s.cell.y + s.t.y + 0.5f) / float(c.dispHeight));
 }
 
 // Bits 0 .. count-1 set (count up to 32; a shift by 32 is undefined).

@@ -125,16 +125,16 @@ CANOPY_INLINE float inflowSpeed(SimFrame f, uint side, float s) {
 // Mass-source rate (1/s) of the point motors at domain position p. An incompressible flow removes
 // any radial push (it is a pure gradient), so a motor — a character or an explosion displacing
 // air — is a source the projection keeps: div u = q. q = 6 s (1 - r/R) / R inside radius R, so the
-// total flux is 2 pi R s and the outward speed at the rim is s (negative s: a sink).
-CANOPY_INLINE float motorSource(SimFrame f, vec2 p) {
-  float q = 0.0f;
-  for (uint m = 0u; m < f.motorCount; ++m) {
-    float dx = p.x - f.motors[m].x, dy = p.y - f.motors[m].y;
-    float r = sqrt(dx * dx + dy * dy);
-    float R = f.motors[m].z;
-    if (r < R) q += 6.0f * f.motors[m].w * (1.0f - r / R) / R;
-  }
-  return q;
+// total flux is 2 pi R s and the outward speed at the rim is s (negative s: a sink). The source
+// at p is the sum of motorSource over SimFrame.motors[0 .. motorCount), in that order (the CPU
+// reference's motorSources, the shaders' motorSourcesAt). The term takes one motor, not the frame:
+// GLSL passes a struct by value, and lavapipe copied the whole frame — its motors[] indexed by the
+// loop — on every call (0.12 ms per projection at N = 64, docs/performance.md).
+CANOPY_INLINE float motorSource(vec4 motor, vec2 p) {
+  float dx = p.x - motor.x, dy = p.y - motor.y;
+  float r = sqrt(dx * dx + dy * dy);
+  float R = motor.z;
+  return r < R ? 6.0f * motor.w * (1.0f - r / R) / R : 0.0f;
 }
 // Linear seam-blend weight of the tiling (docs/design.md): 1 at the tile centre, 0 at its edges.
 CANOPY_INLINE float tileWeight(uint i, uint n) {

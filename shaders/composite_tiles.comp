@@ -1,8 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Compute path of the inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing",
-// docs/performance.md): a workgroup per tilesPerGroup listed screen tiles (composite_classify.comp), one pixel of each per
-// invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
+// docs/performance.md): a workgroup per tilesPerGroup listed screen tiles (composite_classify.comp),
+// one pixel of each per invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
 // lane's; front to back, a pixel stops once opaque. The displacement (current and previous) comes
 // from one hardware-filtered fetch of the displacement image. The same sums as composite.frag:
 // results go to Canopy's intermediate image and the resolve pass (composite_resolve.*) blends

@@ -129,7 +129,7 @@ CANOPY_INLINE float inflowSpeed(SimFrame f, uint side, float s) {
 // at p is the sum of motorSource over SimFrame.motors[0 .. motorCount), in that order (the CPU
 // reference's motorSources, the shaders' motorSourcesAt). The term takes one motor, not the frame:
 // GLSL passes a struct by value, and lavapipe copied the whole frame — its motors[] indexed by the
-// loop — on every call (0.12 ms per projection at N = 64, docs/performance.md).
+// loop — on every call (~0.14 ms per projection at N = 64, docs/performance.md).
 CANOPY_INLINE float motorSource(vec4 motor, vec2 p) {
   float dx = p.x - motor.x, dy = p.y - motor.y;
   float r = sqrt(dx * dx + dy * dy);

@@ -28,6 +28,7 @@ struct Table1Options {
   std::vector<uint64_t> seriesFaces = {80000, 1000000, 10000000};
   std::string scene = "shrub";
   int frames = 30;
+  int pairFrames = 150;  // frames per context in the alternated face-count comparison
   uint32_t width = 1024, height = 768;
   float orbitDegrees = 1.0f;  // camera turn per frame in the orbit rows
   bool series = false;

@@ -3,7 +3,7 @@
 //                [--faces 80000,10000000] [--rebuilds N] [--layers 5(3-1-1)] [--device NAME]
 //   canopy-bench soak [--frames N] [--rebuild-every N] [--check]
 //   canopy-bench table1 [--faces 80000,10000000] [--scene shrub] [--frames N] [--size 1024x768]
-//                [--orbit DEG] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
+//                [--orbit DEG] [--pair-frames N] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -34,6 +34,8 @@ static int usage(const char* why) {
                "  --series       table1: scaling series (faces, layers 1..9, resolution); --csv-dir DIR writes CSVs\n"
                "  --series-faces table1: the face-count series (default 80000,1000000,10000000)\n"
                "  --json FILE    table1: where the JSON goes ('' for none)\n"
+               "  --pair-frames N  table1: still frames per context in the face-count comparison, frames of the two\n"
+               "                 contexts alternated, 3..100000 (default 150)\n"
                "  --rebuild-every N  soak: frames between re-slicings, 1..100000 (default 100)\n"
                "  --check        soak: exit 1 on NaN/Inf, device-allocation growth or RSS growth over 64 MiB\n"
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
@@ -85,6 +87,10 @@ int main(int argc, char** argv) {
     else if (a == "--series") t1.series = true;
     else if (a == "--series-faces") {
       if (!parseList(next(), &t1.seriesFaces)) return usage("--series-faces: each must be an integer in [2, 100000000]");
+    } else if (a == "--pair-frames") {
+      uint32_t n = 0;
+      if (!cli::parseUint(next(), 3, 100000, &n)) return usage("--pair-frames needs an integer in [3, 100000]");
+      t1.pairFrames = int(n);
     } else if (a == "--csv-dir") {
       const char* v = next();
       if (!v) return usage("--csv-dir needs a folder");

@@ -169,7 +169,9 @@ double estimateLaneProjectTrips(const gpu::SimFrame& f, uint32_t lanes) {
   const double mL = f.n >> (f.mgLevels - 1), mP = f.n >> par;
   cycle += SIM_MG_COARSE_SWEEPS * 2.0 * (mL * mL + 1) + f.mgLevels * 2 + 2 * mP * mP;
   const double segs = std::max(1.0, n / W);
-  return std::ceil(4 * n / W) + 3 * segs * (n + 1) + 4 * n * n / W + std::log2(W) + 2 + f.mgCycles * (cycle + 1);
+  // Velocity loaded into registers and stored back: two segment loops over u and v rows, column n twice.
+  const double velocity = 2 * segs * (2 * n + 1) + 2 * n;
+  return std::ceil(4 * n / W) + 3 * segs * (n + 1) + 4 * n * n / W + std::log2(W) + 2 + velocity + f.mgCycles * (cycle + 1);
 }
 
 double estimateLaneDiffuseTrips(const gpu::SimFrame& f, uint32_t lanes) {
@@ -329,9 +331,11 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
       (W == 8 || W == 16) && n >= W && n <= 128) {
     uint32_t floats = 0;  // register floats per lane of each kernel (see the shaders)
     for (uint32_t l = 0; l < laneRegisterLevels(n, gpu::mgLevelCount(n), W); ++l) floats += (n >> l) * (n >> l) / W;
+    const uint32_t laneVelocityFloats = (n / W) * n + (n / W) * (n + 1) + n;  // u, v, u column n (one field)
     const uint32_t diffuseFloats = 2 * (n / W) * n + 2 * (n / W) * (n + 1) + n;
     s.laneWidth = W;
-    CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, floats}, true}, &s.laneProject));
+    CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, floats, laneVelocityFloats}, true},
+                    &s.laneProject));
     CANOPY_TRY(make("sim_fluid_diffuse_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, diffuseFloats}, true}, &s.laneDiffuse));
     CANOPY_TRY(make("sim_wave_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, 3 * (n / W) * n}, true}, &s.laneOscillator));
   }

@@ -200,21 +200,62 @@ void vCycleLanes(bool neumann, uint par) {
   }
 }
 
+// The velocity field in registers for the projection (docs/performance.md, "Simulation step"): u
+// faces of columns 0..n-1 (segs x n), v faces (segs x (n + 1)), u column n in every lane. Loaded
+// once after the boundary faces are set and stored once after the gradient, where the right-hand
+// side read four faces per cell and the gradient read and wrote two (each a lane-by-lane buffer
+// access on lavapipe).
+layout(constant_id = 2) const uint SIM_LANE_VEL_FLOATS = 1u;
+float rv[SIM_LANE_VEL_FLOATS];
+uint segsV, uOff, vOff, uEdgeOff;  // register offsets of u, v and u column n
+
+// The right neighbour along x of u face (segment k, row j): lane L + 1, lane 0 of the next segment,
+// or column n. Every lane runs it (shuffles).
+float uRight(uint k, uint j) {
+  uint n = f.n, r = uOff + k * n + j, L = lane(), W = SIM_GROUP;
+  float c = rv[r];
+  float next = k + 1u < segsV ? rv[r + n] : rv[uEdgeOff + j];  // r + n: v's registers when unused
+  return subgroupShuffle(L == 0u ? next : c, (L + 1u) & (W - 1u));
+}
+
+void loadVelocityLanes(uint o) {
+  uint n = f.n, W = SIM_GROUP, L = lane();
+  segsV = n / W;
+  uOff = 0u;
+  vOff = segsV * n;
+  uEdgeOff = vOff + segsV * (n + 1u);
+  for (uint k = 0u; k < segsV; ++k) {
+    uint x = k * W + L;
+    for (uint j = 0u; j < n; ++j) rv[uOff + k * n + j] = vel[o + macU(n, x, j)];
+    for (uint j = 0u; j <= n; ++j) rv[vOff + k * (n + 1u) + j] = vel[o + macV(n, x, j)];
+  }
+  for (uint j = 0u; j < n; ++j) rv[uEdgeOff + j] = vel[o + macU(n, n, j)];
+}
+
+void storeVelocityLanes(uint o) {
+  uint n = f.n, W = SIM_GROUP, L = lane();
+  for (uint k = 0u; k < segsV; ++k) {
+    uint x = k * W + L;
+    for (uint j = 0u; j < n; ++j) vel[o + macU(n, x, j)] = rv[uOff + k * n + j];
+    for (uint j = 0u; j <= n; ++j) vel[o + macV(n, x, j)] = rv[vOff + k * (n + 1u) + j];
+  }
+  if (L == 0u)
+    for (uint j = 0u; j < n; ++j) vel[o + macU(n, n, j)] = rv[uEdgeOff + j];
+}
+
 // projectionRhs in registers: -h^2 (div u - q) of the field at o into level 0's right-hand side.
-// u(x+1, j) is loaded per lane; v(x, j+1) is carried to the next row.
 void rhsLanes(uint o, bool neumann) {
   uint n = f.n, W = SIM_GROUP, L = lane();
   float h = 1.0 / float(n);
   macBoundary(o);
   SYNC();
+  loadVelocityLanes(o);
   for (uint k = 0u; k < n / W; ++k) {
     uint i = k * W + L;
-    float vBelow = vel[o + macV(n, i, 0u)];
     for (uint j = 0u; j < n; ++j) {
-      float vAbove = vel[o + macV(n, i, j + 1u)];
-      rb[k * n + j] = -h * (vel[o + macU(n, i + 1u, j)] - vel[o + macU(n, i, j)] + vAbove - vBelow) +
+      uint vr = vOff + k * (n + 1u) + j;
+      rb[k * n + j] = -h * (uRight(k, j) - rv[uOff + k * n + j] + rv[vr + 1u] - rv[vr]) +
                       h * h * motorSourcesAt(vec2((float(i) + 0.5) * h, (float(j) + 0.5) * h));
-      vBelow = vAbove;
     }
   }
   if (neumann) subtractMeanOf(0u, true);
@@ -231,14 +272,17 @@ void gradientLanes(uint o, bool neumann) {
     for (uint j = 0u; j < n; ++j) {
       Stencil s = stencilAt(0u, n, k, j);
       mg[j * n + i] = s.c;
-      if (i > 0u) vel[o + macU(n, i, j)] -= (s.c - s.left) * invh;
-      else if (dl) vel[o + macU(n, 0u, j)] -= 2.0 * s.c * invh;
-      if (i + 1u == n && dr) vel[o + macU(n, n, j)] += 2.0 * s.c * invh;
-      if (j > 0u) vel[o + macV(n, i, j)] -= (s.c - s.down) * invh;
-      else if (db) vel[o + macV(n, i, 0u)] -= 2.0 * s.c * invh;
-      if (j + 1u == n && dtop) vel[o + macV(n, i, n)] += 2.0 * s.c * invh;
+      uint ur = uOff + k * n + j, vr = vOff + k * (n + 1u) + j;
+      if (i > 0u) rv[ur] -= (s.c - s.left) * invh;
+      else if (dl) rv[ur] -= 2.0 * s.c * invh;
+      if (j > 0u) rv[vr] -= (s.c - s.down) * invh;
+      else if (db) rv[vr] -= 2.0 * s.c * invh;
+      if (j + 1u == n && dtop) rv[vr + 1u] += 2.0 * s.c * invh;
+      // Column n's face takes lane W - 1's cell of the last segment (k is uniform: every lane shuffles).
+      if (k + 1u == n / W && dr) rv[uEdgeOff + j] += 2.0 * subgroupShuffle(s.c, W - 1u) * invh;
     }
   }
+  storeVelocityLanes(o);
 }
 
 void main() {

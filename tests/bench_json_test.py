@@ -26,7 +26,7 @@ def main():
     bench = sys.argv[1]
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "table1.json")
-        cmd = [bench, "table1", "--faces", "2000,4000", "--frames", "3", "--size", "128x96", "--json", out]
+        cmd = [bench, "table1", "--faces", "2000,4000", "--frames", "3", "--pair-frames", "5", "--size", "128x96", "--json", out]
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=1200)
         print(r.stdout)
         if r.returncode != 0:
@@ -80,6 +80,8 @@ def main():
             fail("face-count ratio %r" % x)
         if not math.isclose(x["ratio"], x["largeMs"] / x["smallMs"], rel_tol=1e-3):
             fail("face-count ratio inconsistent: %r" % x)
+        if not (x.get("pairRatioMedian", 0) > 0 and x.get("frames", 0) == 5):
+            fail("face-count ratio without its pair median or frame count: %r" % x)
     print("bench JSON: %d rows, %d baselines, %d passes per row checked" % (len(rows), len(doc["baselines"]), len(rows[0]["passes"])))
 
 

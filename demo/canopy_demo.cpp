@@ -17,6 +17,7 @@
 
 extern char** environ;
 
+#include "demo/cli.h"
 #include "demo/demo_app.h"
 #include "tools/fault_loader.h"
 #include "tools/image_io.h"
@@ -317,6 +318,15 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
                              (o.camera == CameraPath::Orbit ? std::string(", every frame re-slices") : std::string()) + "):");
     if (measureSway) text += "\n" + sway.summary();
+    char mem[512];
+    std::snprintf(mem, sizeof mem,
+                  "\nMemory: peak host %.2f GiB (VmHWM; on a CPU driver it includes device memory), device %.1f MiB live / "
+                  "%.1f MiB peak (Canopy's buffers and images), mesh %.1f MiB in %u chunks (%.1f bytes per face)\n",
+                  double(cli::peakResidentBytes()) / double(1ull << 30), double(st.deviceBytes) / double(1 << 20),
+                  double(st.peakDeviceBytes) / double(1 << 20), double(st.layers.meshBytes) / double(1 << 20),
+                  st.layers.meshChunks,
+                  double(st.layers.meshBytes) / double(std::max<uint64_t>(st.layers.foliageTriangles + st.layers.rigidTriangles, 1)));
+    text += mem;
     if (FILE* f = std::fopen((o.outDir + "/timing.txt").c_str(), "w")) {
       std::fputs(text.c_str(), f);
       std::fclose(f);

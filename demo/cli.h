@@ -67,4 +67,17 @@ inline uint64_t availableMemoryBytes() {
   return kb * 1024;
 }
 
+// The process's peak resident memory (VmHWM of /proc/self/status) in bytes, 0 when unknown. On a
+// CPU driver (lavapipe) device memory is host memory too, so this includes it.
+inline uint64_t peakResidentBytes() {
+  uint64_t kb = 0;
+  if (FILE* f = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (std::sscanf(line, "VmHWM: %lu kB", (unsigned long*)&kb) == 1) break;
+    std::fclose(f);
+  }
+  return kb * 1024;
+}
+
 }  // namespace canopy::cli

@@ -7,6 +7,12 @@
 namespace canopy {
 namespace {
 
+void countLive(Allocator& a, VkDeviceSize bytes) {
+  a.allocationCount++;
+  a.liveBytes += bytes;
+  a.peakLiveBytes = std::max(a.peakLiveBytes, a.liveBytes);
+}
+
 Status findMemoryType(const Device& d, uint32_t typeBits, MemoryUsage usage, uint32_t* out) {
   // Preference order per usage; the first memory type matching any entry wins.
   std::vector<VkMemoryPropertyFlags> prefs;
@@ -52,7 +58,7 @@ Status allocateFromHost(Device& d, const VkMemoryRequirements& req, MemoryUsage 
   out->typeIndex = r.memoryTypeIndex;
   out->host = true;
   out->hostHandle = r.hostHandle;
-  d.allocator->allocationCount++;
+  countLive(*d.allocator, r.size);
   return Status();
 }
 
@@ -66,7 +72,7 @@ Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, b
     uint64_t off = b->ranges.allocate(req.size, req.alignment);
     if (off == RangeAllocator::kInvalid) continue;
     *out = {b.get(), b->memory, off, req.size, b->mapped ? static_cast<char*>(b->mapped) + off : nullptr, type};
-    a.allocationCount++;
+    countLive(a, req.size);
     return Status();
   }
   auto block = std::make_unique<MemoryBlock>();
@@ -92,7 +98,9 @@ Status allocate(Device& d, const VkMemoryRequirements& req, MemoryUsage usage, b
   *out = {block.get(), block->memory, off, req.size, block->mapped ? static_cast<char*>(block->mapped) + off : nullptr,
           type};
   a.blocks.push_back(std::move(block));
-  a.allocationCount++;
+  a.blockBytes += size;
+  a.peakBlockBytes = std::max(a.peakBlockBytes, a.blockBytes);
+  countLive(a, req.size);
   return Status();
 }
 
@@ -100,12 +108,14 @@ void release(Device& d, Allocation& al) {
   if (al.host) {
     d.hostAllocator.free(d.hostAllocator.user, {al.memory, al.offset, al.size, al.mapped, al.typeIndex, al.hostHandle});
     d.allocator->allocationCount--;
+    d.allocator->liveBytes -= al.size;
     al = Allocation{};
     return;
   }
   if (!al.block) return;
   al.block->ranges.free(al.offset);
   d.allocator->allocationCount--;
+  d.allocator->liveBytes -= al.size;
   al = Allocation{};
 }
 
@@ -119,6 +129,7 @@ void destroyAllocator(Device& d, Allocator& a) {
     d.vk.FreeMemory(d.device, b->memory, d.allocationCallbacks);
   }
   a.blocks.clear();
+  a.blockBytes = 0;
 }
 
 VkImageAspectFlags aspectOf(VkFormat f) {

@@ -26,6 +26,10 @@ struct Allocator {
   std::vector<std::unique_ptr<MemoryBlock>> blocks;
   VkDeviceSize blockSize = 64ull << 20;  // a larger request gets a block of its own size
   uint64_t allocationCount = 0;          // live sub-allocations (for stats/tests)
+  // Bytes of the live sub-allocations (the host's allocator included) and of Canopy's own blocks,
+  // now and at their highest since the device was created (issue 16: peak device memory).
+  uint64_t liveBytes = 0, peakLiveBytes = 0;
+  uint64_t blockBytes = 0, peakBlockBytes = 0;
 };
 
 struct Allocation {

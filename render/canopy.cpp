@@ -561,6 +561,9 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.resourceGeneration = c->generation;
   s.internalGraphBuilds = c->graphBuilds;
   s.pendingReleases = c->device->pending.size();
+  s.deviceBytes = c->device->allocator->liveBytes;
+  s.peakDeviceBytes = c->device->allocator->peakLiveBytes;
+  s.deviceBlockBytes = c->device->allocator->blockBytes;
   s.layers = c->layers.stats;
   s.simulation = c->shared->sim.stats;
   return s;

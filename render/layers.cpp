@@ -13,8 +13,8 @@
 namespace canopy {
 namespace {
 
-static_assert(offsetof(gpu::LayerVertex, position) == 0 && offsetof(gpu::LayerVertex, normal) == 12 &&
-                  offsetof(gpu::LayerVertex, uv) == 16 && offsetof(gpu::LayerVertex, leaf) == 24,
+static_assert(offsetof(gpu::LayerVertex, positionXY) == 0 && offsetof(gpu::LayerVertex, normal) == 8 &&
+                  offsetof(gpu::LayerVertex, uv) == 12,
               "LayerVertex offsets differ from the attributes the pipelines declare");
 
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
@@ -27,11 +27,6 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 // The frame block is read by the vertex stage (boundaries, matrices) and the fragment stage (light).
 const rg::State kFrameRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
-
-uint32_t packNormal(const glm::vec3& n) {
-  const glm::vec3 u = glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 0, 1);
-  return glm::packSnorm4x8(glm::vec4(u, 0.0f));
-}
 
 // Frees the layer images once no host frame in flight can read them (deferRelease), so a new
 // layer count or size never waits for the device.
@@ -153,10 +148,9 @@ Status createPipelines(LayeredVegetation& lv) {
                 VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
   p.pushConstantSize = sizeof(gpu::LayerDrawPush);
   p.vertexStride = sizeof(gpu::LayerVertex);
-  p.attributes = {{0, VK_FORMAT_R32G32B32_SFLOAT, 0},
-                  {1, VK_FORMAT_R8G8B8A8_SNORM, 12},
-                  {2, VK_FORMAT_R32G32_SFLOAT, 16},
-                  {3, VK_FORMAT_R32_UINT, 24}};
+  p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0},  // quantised position, chunk-local leaf
+                  {1, VK_FORMAT_R16G16_SNORM, 8},        // octahedral normal
+                  {2, VK_FORMAT_R16G16_SFLOAT, 12}};     // texcoord 0
   p.colorFormats = {lv.desc.colorFormat};
   p.depthFormat = kDepthFormat;
   p.blend = BlendMode::PremultipliedOver;
@@ -216,42 +210,43 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
     LayerDraw draw{uint32_t(k % nm), uint32_t(start[k] * 3), uint32_t((start[k + 1] - start[k]) * 3)};
     (k < nm ? lv.foliageDraws : lv.rigidDraws).push_back(draw);
   }
-  std::vector<glm::vec4> rootTable(std::max<size_t>(roots.leafCount(), 1), glm::vec4(0));
-  for (uint32_t l = 0; l < roots.leafCount(); ++l) rootTable[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
-  const VkDeviceSize rootBytes = rootTable.size() * sizeof(glm::vec4);
-  if (rootBytes > d.properties.limits.maxStorageBufferRange)
-    return Status::error((m.path.empty() ? std::string("the model") : m.path) + ": " + std::to_string(roots.leafCount()) +
-                         " leaves need a " +
-                         std::to_string(rootBytes >> 20) + " MiB root table, over the device's storage-buffer range of " +
-                         std::to_string(d.properties.limits.maxStorageBufferRange >> 20) + " MiB");
-  CANOPY_TRY(createBuffer(d, std::max<size_t>(nv, 1) * sizeof(gpu::LayerVertex),
-                          VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
-                          &lv.vertices, "layers: vertices"));
-  // Where device memory is host-visible and coherent (CPU drivers, UMA and ReBAR GPUs) the vertices
-  // are written in place: no staging copy and no second pass over a mesh of hundreds of MB. The
-  // queue submission that first reads them makes the host writes visible.
-  auto* direct = static_cast<gpu::LayerVertex*>(hostCoherentPointer(d, lv.vertices.allocation));
-  std::vector<gpu::LayerVertex> staged;
-  if (!direct) staged.resize(std::max<size_t>(nv, 1));
-  gpu::LayerVertex* verts = direct ? direct : staged.data();
-  for (size_t v = 0; v < nv; ++v) {
-    if ((v & 0xfffff) == 0 && lv.desc.progress) lv.desc.progress("vertices", v, nv);
-    gpu::LayerVertex& x = verts[v];
-    x.position = m.positions[v];
-    x.normal = packNormal(v < m.normals.size() ? m.normals[v] : glm::vec3(0, 0, 1));
-    x.uv = m.uvs[v];
-    x.leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_NO_LEAF : roots.leafOfVertex[v];
-  }
+  // The compact chunked mesh (render/mesh_chunks.h): 16-byte vertices, 16-bit indices and a
+  // leaf-root table per chunk, so no buffer is indexed past the device's storage range.
+  std::vector<TriangleRange> ranges;
+  for (const LayerDraw& dr : lv.foliageDraws) ranges.push_back({dr.material, true, dr.firstIndex / 3, dr.indexCount / 3});
+  for (const LayerDraw& dr : lv.rigidDraws) ranges.push_back({dr.material, false, dr.firstIndex / 3, dr.indexCount / 3});
+  CompactMeshOptions co;
+  co.maxChunkVertices = lv.desc.maxChunkVertices;
+  const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
+  co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
+  if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
+    return Status::error("layers: minStorageBufferOffsetAlignment " + std::to_string(align) + " is not a power of two");
+  CompactMesh mesh;
+  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, &mesh));
+  lv.chunks = mesh.chunks;
+  lv.stats.meshChunks = uint32_t(mesh.chunks.size());
+  lv.stats.meshBytes = mesh.bytes();
+  auto upload = [&](Buffer& buf, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage, rg::Use use,
+                    const char* name) -> Status {
+    CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::DeviceLocal, &buf, name));
+    if (bytes == 0) return Status();
+    // Where device memory is host-visible and coherent (CPU drivers, UMA and ReBAR GPUs) the data is
+    // written in place: no staging copy of a mesh of hundreds of MB. The queue submission that first
+    // reads it makes the host writes visible.
+    if (void* direct = hostCoherentPointer(d, buf.allocation)) {
+      std::memcpy(direct, data, bytes);
+      return Status();
+    }
+    return uploadBuffer(d, buf, data, bytes, rg::stateOf(use));
+  };
   if (lv.desc.progress) lv.desc.progress("vertices", nv, nv);
-  if (!direct) CANOPY_TRY(uploadBuffer(d, lv.vertices, staged.data(), lv.vertices.size, rg::stateOf(rg::Use::VertexBuffer)));
-  const std::vector<uint32_t> dummy = {0, 0, 0};
-  const std::vector<uint32_t>& idx = lv.indices.empty() ? dummy : lv.indices;
-  CANOPY_TRY(createBuffer(d, idx.size() * 4, VK_BUFFER_USAGE_INDEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                          MemoryUsage::DeviceLocal, &lv.indexBuffer, "layers: indices"));
-  CANOPY_TRY(uploadBuffer(d, lv.indexBuffer, idx.data(), lv.indexBuffer.size, rg::stateOf(rg::Use::IndexBuffer)));
-  CANOPY_TRY(createBuffer(d, rootBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                          MemoryUsage::DeviceLocal, &lv.leafRoots, "layers: leaf roots"));
-  CANOPY_TRY(uploadBuffer(d, lv.leafRoots, rootTable.data(), rootBytes, rg::stateOf(rg::Use::VertexStorageRead)));
+  CANOPY_TRY(upload(lv.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
+                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
+  CANOPY_TRY(upload(lv.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                    rg::Use::IndexBuffer, "layers: indices"));
+  CANOPY_TRY(upload(lv.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
+                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots"));
   CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                           MemoryUsage::DeviceLocal, &lv.frameBuffer, "layers: frame"));
   // Textures: sRGB base colour, so the shader reads linear values; a white texel for untextured materials.
@@ -374,28 +369,35 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 
 // Binds the mesh and draws `draws` (one per material) with `pipe`; the push constants say how the
 // vertex shader routes triangles (passKind, targetLayer).
-Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
-                     const std::vector<LayerDraw>& draws, uint32_t passKind, uint32_t target) {
+Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
+                     uint32_t passKind, uint32_t target) {
   const Device& d = *lv.device;
   const VkDeviceSize zero = 0;
   d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
-  d.vk.CmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT32);
+  d.vk.CmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
   setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
-  for (const LayerDraw& dr : draws) {
-    const ModelMaterial& mat = lv.materials[dr.material];
+  // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
+  // is bound at its own offset (render/mesh_chunks.h).
+  for (const MeshChunk& c : lv.chunks) {
+    if (c.foliage != foliage) continue;
+    const ModelMaterial& mat = lv.materials[c.material];
     const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
     gpu::LayerDrawPush push{};
     push.baseColor = mat.baseColorFactor;
+    push.chunkOrigin = glm::vec4(c.origin, 0.0f);
+    push.chunkScale = glm::vec4(c.scale, 0.0f);
     push.alphaCutoff = mat.alphaCutoff;
     push.alphaMode = uint32_t(mat.alphaMode);
     push.targetLayer = target;
     push.passKind = passKind;
-    push.triangleBase = dr.firstIndex / 3;
+    push.triangleBase = uint32_t(c.firstTriangle);
+    const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
     CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                            {bindBuffer(lv.frameBuffer.buffer), bindBuffer(lv.leafRoots.buffer),
+                            {bindBuffer(lv.frameBuffer.buffer),
+                             bindBuffer(lv.leafRoots.buffer, c.firstRoot * sizeof(gpu::LayerLeafRoot), rootBytes),
                              bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
                             push));
-    d.vk.CmdDrawIndexed(cmd, dr.indexCount, 1, dr.firstIndex, 0, 0);
+    d.vk.CmdDrawIndexed(cmd, c.triangleCount * 3, 1, uint32_t(c.firstIndex), int32_t(c.firstVertex), 0);
   }
   return Status();
 }
@@ -435,8 +437,8 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd) {
         clearedAttachment(lv.desc.writeIds ? (lv.singlePass ? lv.ids.view : lv.idsLayerViews[i]) : VK_NULL_HANDLE, false)};
     const VkRenderingAttachmentInfo depth = clearedAttachment(lv.singlePass ? lv.depth.view : lv.depthLayerViews[i], true);
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, lv.desc.writeIds ? 2 : 1, depth, [&] {
-      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, lv.foliageDraws, LAYER_PASS_LAYERED, 0)
-                           : drawMaterials(lv, cmd, lv.perLayer, lv.foliageDraws, LAYER_PASS_ONE_LAYER, i);
+      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, true, LAYER_PASS_LAYERED, 0)
+                           : drawMaterials(lv, cmd, lv.perLayer, true, LAYER_PASS_ONE_LAYER, i);
     }));
   }
   return Status();
@@ -446,7 +448,7 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
   const VkRenderingAttachmentInfo color = clearedAttachment(lv.backgroundColor.view, false);
   const VkRenderingAttachmentInfo depth = clearedAttachment(lv.backgroundDepth.view, true);
   return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
-    return drawMaterials(lv, cmd, lv.background, lv.rigidDraws, LAYER_PASS_BACKGROUND, 0);
+    return drawMaterials(lv, cmd, lv.background, false, LAYER_PASS_BACKGROUND, 0);
   });
 }
 

@@ -24,6 +24,7 @@
 #include "render/layer_layout.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
+#include "render/mesh_chunks.h"
 #include "shared/layers.h"
 
 namespace canopy {
@@ -41,6 +42,7 @@ struct LayeredVegetationDesc {
   // there. Empty (the default), or a model without a path: no file is touched.
   std::string rootCacheDir;
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
+  uint32_t maxChunkVertices = kMaxChunkVertices;  // distinct vertices per mesh chunk, 3..65535 (tests cut small chunks)
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
@@ -73,7 +75,8 @@ struct LayeredVegetation {
   std::vector<glm::vec3> leafRootPosition;
   std::vector<uint32_t> indices;          // GPU order (foliage by material, then rigid)
   std::vector<uint32_t> gpuToModelTriangle;
-  std::vector<LayerDraw> foliageDraws, rigidDraws;
+  std::vector<LayerDraw> foliageDraws, rigidDraws;  // per material, GPU order
+  std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
   // GPU mesh and materials.
   Buffer vertices, indexBuffer, leafRoots, frameBuffer;
   std::vector<Image> textures;            // per model image (sRGB), plus a white one last

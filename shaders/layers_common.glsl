@@ -3,9 +3,10 @@
 #include "shared/layers.h"
 
 layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
-// Leaf-root table: world position of each leaf's root vertex (paper 3.2's per-vertex root index,
-// stored per leaf so the table stays small: vertices carry their leaf's index).
-layout(binding = 1, scalar) readonly buffer RootBuf { vec4 leafRoot[]; };
+// The draw's chunk of the leaf-root table (bound at the chunk's offset): world position of each
+// leaf's root vertex (paper 3.2's per-vertex root index, stored per leaf so the table stays small:
+// vertices carry their leaf's chunk-local index) and the leaf's model-wide index.
+layout(binding = 1, scalar) readonly buffer RootBuf { LayerLeafRoot leafRoot[]; };
 layout(binding = 2) uniform sampler2D baseColorTex;
 layout(push_constant, scalar) uniform Push { LayerDrawPush pc; };
 
@@ -16,27 +17,38 @@ out gl_PerVertex {
   float gl_ClipDistance[2];
 };
 #endif
-layout(location = 0) in vec3 inPosition;
-layout(location = 1) in vec4 inNormal;
+// LayerVertex (shared/layers.h): quantised position and chunk-local leaf, octahedral normal, half UV.
+layout(location = 0) in uvec4 inPositionLeaf;
+layout(location = 1) in vec2 inNormalOct;
 layout(location = 2) in vec2 inUv;
-layout(location = 3) in uint inLeaf;
 layout(location = 0) out vec3 vNormal;
 layout(location = 1) out vec2 vUv;
 layout(location = 2) flat out uint vLeaf;
 
 float viewDepth(vec3 p) { return dot(f.depthRow, vec4(p, 1.0)); }
 
-// The layer of this vertex's triangle. Every vertex of a leaf reads the same root, so a leaf's
-// triangles all agree and no leaf is cut (the near/far test is made on the root only).
+vec3 vertexPosition() { return pc.chunkOrigin.xyz + vec3(inPositionLeaf.xyz) * pc.chunkScale.xyz; }
+bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
+
+// Octahedral decode (Meyer et al. 2010; render/mesh_chunks.cpp encodes).
+vec3 decodeNormal(vec2 e) {
+  vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+  if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+  return normalize(n);
+}
+
+// The layer of this vertex's triangle. Every vertex of a leaf reads the same root (a leaf split
+// over chunks has the same root in each chunk's table), so a leaf's triangles all agree and no leaf
+// is cut (the near/far test is made on the root only).
 uint triangleLayer() {
-  vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && inLeaf != LAYER_NO_LEAF) ? leafRoot[inLeaf].xyz : inPosition;
+  vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && hasLeaf()) ? leafRoot[inPositionLeaf.w].position : vertexPosition();
   return layerOfDepth(f, viewDepth(root));
 }
 
 void emitVertex() {
-  gl_Position = f.viewProj * vec4(inPosition, 1.0);
-  vNormal = inNormal.xyz;
+  gl_Position = f.viewProj * vec4(vertexPosition(), 1.0);
+  vNormal = decodeNormal(inNormalOct);
   vUv = inUv;
-  vLeaf = inLeaf;
+  vLeaf = hasLeaf() ? leafRoot[inPositionLeaf.w].leaf : LAYER_NO_LEAF;
 }
 #endif

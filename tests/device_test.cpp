@@ -30,8 +30,17 @@ TEST_F(DeviceCore, ManyBuffersShareOneMemoryBlock) {
     ASSERT_TRUE(createBuffer(dev, 4096, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal, &b).ok());
   EXPECT_LE(dev.allocator->blocks.size(), before + 1) << "sub-allocation should not allocate memory per buffer";
   EXPECT_EQ(dev.allocator->allocationCount, bufs.size());
+  // Issue 16's memory statistics: the live bytes are the sub-allocations' sizes, the peak keeps
+  // their highest total, the blocks cover them.
+  uint64_t sum = 0;
+  for (auto& b : bufs) sum += b.allocation.size;
+  EXPECT_EQ(dev.allocator->liveBytes, sum);
+  EXPECT_GE(dev.allocator->peakLiveBytes, sum);
+  EXPECT_GE(dev.allocator->blockBytes, sum);
   for (auto& b : bufs) destroyBuffer(dev, b);
   EXPECT_EQ(dev.allocator->allocationCount, 0u);
+  EXPECT_EQ(dev.allocator->liveBytes, 0u);
+  EXPECT_GE(dev.allocator->peakLiveBytes, sum);
 }
 
 TEST_F(DeviceCore, UploadReadbackRoundTrip) {

@@ -157,6 +157,35 @@ void expectIdentical(const std::vector<float>& a, const std::vector<float>& b, u
   }
 }
 
+// Image metric for paths that may move an edge by a fraction of a pixel: pixels whose largest
+// channel difference exceeds `tol`, as a share of the image, must stay within `maxShare`; on
+// failure a diff PNG (red = over tolerance) is written.
+void expectClose(const std::vector<glm::vec4>& a, const std::vector<glm::vec4>& b, float tol, double maxShare,
+                 const std::string& what) {
+  ASSERT_EQ(a.size(), b.size());
+  size_t over = 0;
+  float maxDiff = 0;
+  std::vector<uint8_t> diff(a.size() * 4, 0);
+  for (size_t p = 0; p < a.size(); ++p) {
+    const glm::vec4 d = glm::abs(a[p] - b[p]);
+    const float m = std::max(std::max(d.x, d.y), std::max(d.z, d.w));
+    maxDiff = std::max(maxDiff, m);
+    over += m > tol;
+    diff[p * 4] = m > tol ? 255 : 0;
+    diff[p * 4 + 1] = uint8_t(std::min(255.0f, 255.0f * a[p].a));
+    diff[p * 4 + 3] = 255;
+  }
+  const double share = double(over) / double(std::max<size_t>(a.size(), 1));
+  if (share > maxShare) {
+    std::filesystem::create_directories("failures");
+    const std::string path = "failures/" + what + "_diff.png";
+    (void)writePng(path, kW, kH, diff);
+    ADD_FAILURE() << what << ": " << over << " pixels (" << 100.0 * share << " %) differ by more than " << tol
+                  << " (allowed " << 100.0 * maxShare << " %), max " << maxDiff << "; diff image "
+                  << std::filesystem::absolute(path);
+  }
+}
+
 void expectSameLayers(LayeredVegetation& x, LayeredVegetation& y, const std::string& what) {
   for (uint32_t l = 0; l < x.settings.layout.count(); ++l) {
     std::vector<glm::vec4> ca, cb;
@@ -346,6 +375,47 @@ TEST_F(LayersTest, AlphaCutoffAndRigidBackground) {
     }
   EXPECT_GT(bark, 500u) << "the rigid quad must be in the background";
   destroyLayeredVegetation(lv);
+}
+
+// Issue 16: chunks of at most 3 vertices put every triangle in a chunk of its own, so each leaf
+// quad is split by a chunk border (and its root sits in two chunk tables). Leaves stay whole in
+// the layer of their root, the ids are those of the default chunking, and the images differ only
+// where the per-chunk quantisation moves an edge by a fraction of a pixel.
+TEST_F(LayersTest, ChunkBordersInsideLeavesCutNoLeaf) {
+  const VegetationModel m = straddlingLeaves(12, 8, true);
+  for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+    const std::string what = mode == LayerDrawMode::SinglePass ? "single_pass" : "per_layer";
+    LayeredVegetationDesc a = smallDesc();
+    a.settings.draw = mode;
+    LayeredVegetationDesc b = a;
+    b.maxChunkVertices = 3;
+    LayeredVegetation x, y;
+    ASSERT_TRUE(createLayeredVegetation(dev, m, a, &x).ok());
+    Status s = createLayeredVegetation(dev, m, b, &y);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_LE(x.chunks.size(), 2u) << "default chunking: one foliage and one rigid chunk";
+    EXPECT_EQ(y.chunks.size(), size_t(2 * 12 * 8 + 2)) << "one triangle per chunk";
+    EXPECT_EQ(y.stats.meshChunks, y.chunks.size());
+    ASSERT_TRUE(renderOnce(dev, x, frontView()).ok());
+    ASSERT_TRUE(renderOnce(dev, y, frontView()).ok());
+    Coverage c = readCoverage(y);
+    EXPECT_EQ(c.layersOfLeaf.size(), 12u * 8u) << what;
+    for (auto& [leaf, layers] : c.layersOfLeaf) {
+      ASSERT_EQ(layers.size(), 1u) << what << ": leaf " << leaf << " is cut across " << layers.size() << " layers";
+      const float rootDepth = glm::dot(y.frame.depthRow, glm::vec4(y.leafRootPosition[leaf], 1.0f));
+      EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(y.frame, rootDepth)) << what << ": leaf " << leaf;
+    }
+    Coverage cx = readCoverage(x);
+    EXPECT_EQ(c.layersOfLeaf, cx.layersOfLeaf) << what << ": leaves land in other layers than with one chunk";
+    for (uint32_t l = 0; l < x.settings.layout.count(); ++l) {
+      std::vector<glm::vec4> ca, cb;
+      ASSERT_TRUE(readLayerColor(x, l, &ca).ok());
+      ASSERT_TRUE(readLayerColor(y, l, &cb).ok());
+      expectClose(ca, cb, 0.02f, 0.005, what + "_chunks_layer" + std::to_string(l));
+    }
+    destroyLayeredVegetation(x);
+    destroyLayeredVegetation(y);
+  }
 }
 
 TEST_F(LayersTest, ReslicingFollowsThePolicy) {

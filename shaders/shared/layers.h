@@ -43,6 +43,10 @@ CANOPY_SIZE_CHECK(LayerFrame, 64 + 16 * 3 + 16 + 4 * (CANOPY_MAX_LAYERS + 4))
 
 struct LayerDrawPush {
   vec4 baseColor;    // material base colour factor (linear RGBA)
+  // The draw's mesh chunk (render/mesh_chunks.h): world position = chunkOrigin + q * chunkScale for
+  // the vertex's quantised q (0..65535 per axis); w unused.
+  vec4 chunkOrigin;
+  vec4 chunkScale;
   float alphaCutoff; // LAYER_ALPHA_MASK: fragments with alpha below are discarded
   uint alphaMode;    // LAYER_ALPHA_*
   uint targetLayer;  // LAYER_PASS_ONE_LAYER: the layer this draw renders
@@ -52,17 +56,30 @@ struct LayerDrawPush {
   uint pad1;
   uint pad2;
 };
-CANOPY_SIZE_CHECK(LayerDrawPush, 48)
+CANOPY_SIZE_CHECK(LayerDrawPush, 80)
 
-// One vertex of the GPU mesh (vertex attributes, not a buffer block; the C++ side static_asserts
-// the offsets the pipeline declares).
+// A chunk-local leaf index that means "no leaf" (rigid parts).
+#define LAYER_CHUNK_NO_LEAF 0xffffu
+
+// One vertex of the compact GPU mesh (issue 16; vertex attributes, not a buffer block; the C++ side
+// static_asserts the offsets the pipeline declares). 16 bytes, against 28 for float positions,
+// snorm8 normals, float UVs and a 32-bit leaf index plus a global 16-byte root per leaf.
 struct LayerVertex {
-  vec3 position;   // world space
-  uint normal;     // unit normal as 4 x snorm8 (xyz, w = 0)
-  vec2 uv;         // texcoord 0
-  uint leaf;       // index into the leaf-root table, LAYER_NO_LEAF for rigid parts
+  uint positionXY;   // x | y << 16: position quantised to the chunk's bounds (R16G16B16A16_UINT)
+  uint positionZLeaf;// z | leaf << 16: leaf = index into the chunk's root table, LAYER_CHUNK_NO_LEAF
+  uint normal;       // octahedral unit normal as 2 x snorm16 (R16G16_SNORM)
+  uint uv;           // texcoord 0 as 2 x half (R16G16_SFLOAT)
 };
-CANOPY_SIZE_CHECK(LayerVertex, 28)
+CANOPY_SIZE_CHECK(LayerVertex, 16)
+
+// A chunk's leaf-root table entry (bound per draw at the chunk's offset): the root vertex's world
+// position at full precision, so a leaf's layer is decided exactly as the CPU placement decides it,
+// and the model-wide leaf index for the id output.
+struct LayerLeafRoot {
+  vec3 position;
+  uint leaf;
+};
+CANOPY_SIZE_CHECK(LayerLeafRoot, 16)
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {
   uint layer = 0u;

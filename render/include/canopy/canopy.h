@@ -502,6 +502,8 @@ struct LayerStats {
   uint64_t rebuilds = 0;      // of which re-sliced the layers
   std::string lastRebuildReason;
   double lastPlacementMs = 0; // CPU time of the last placement
+  uint32_t meshChunks = 0;    // draws per layer rebuild (compact mesh chunks, foliage + rigid)
+  uint64_t meshBytes = 0;     // the compact mesh on the device: vertices, 16-bit indices, root tables
 };
 struct SimulationStats {
   uint64_t steps = 0;
@@ -516,6 +518,10 @@ struct CanopyStats {
   uint64_t resourceGeneration = 0;   // bumps when Canopy's resources were recreated
   uint64_t internalGraphBuilds = 0;  // recordCanopy() graph (re)compilations
   uint64_t pendingReleases = 0;      // objects waiting for their frames to complete (device-wide)
+  // Device memory of Canopy's device object, bytes (a shared device counts every context on it):
+  // live buffers and images, their highest total so far, and the memory blocks Canopy allocated
+  // (0 when the host's DeviceMemoryAllocator provides the memory).
+  uint64_t deviceBytes = 0, peakDeviceBytes = 0, deviceBlockBytes = 0;
   LayerStats layers;
   SimulationStats simulation;
 };

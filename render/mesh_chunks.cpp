@@ -1,0 +1,163 @@
+#include "render/mesh_chunks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <glm/gtc/packing.hpp>
+
+namespace canopy {
+namespace {
+
+// Octahedral encoding (Meyer et al. 2010, "On floating-point normal vectors"): the unit sphere
+// folded onto [-1, 1]^2; decodeNormal below and layers_common.glsl undo it.
+glm::vec2 octahedral(glm::vec3 n) {
+  const float l1 = std::abs(n.x) + std::abs(n.y) + std::abs(n.z);
+  if (!(l1 > 0.0f) || !std::isfinite(l1)) return glm::vec2(0.0f, 0.0f);  // no normal: +Z
+  n /= l1;
+  glm::vec2 e(n.x, n.y);
+  if (n.z < 0.0f)
+    e = (1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0.0f ? 1.0f : -1.0f, n.y >= 0.0f ? 1.0f : -1.0f);
+  return e;
+}
+
+std::string modelName(const VegetationModel& m) { return m.path.empty() ? std::string("the model") : m.path; }
+
+uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
+
+}  // namespace
+
+glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v) {
+  const glm::vec3 q(float(v.positionXY & 0xffffu), float(v.positionXY >> 16), float(v.positionZLeaf & 0xffffu));
+  return c.origin + q * c.scale;
+}
+
+glm::vec3 decodeNormal(const gpu::LayerVertex& v) {
+  const glm::vec2 e = glm::unpackSnorm2x16(v.normal);
+  glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
+  if (n.z < 0.0f)
+    n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0.0f ? 1.0f : -1.0f, n.y >= 0.0f ? 1.0f : -1.0f),
+                  n.z);
+  return glm::normalize(n);
+}
+
+glm::vec2 decodeUv(const gpu::LayerVertex& v) { return glm::unpackHalf2x16(v.uv); }
+
+uint32_t chunkLeaf(const gpu::LayerVertex& v) { return v.positionZLeaf >> 16; }
+
+Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
+                        const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
+                        const CompactMeshOptions& o, CompactMesh* out) {
+  *out = CompactMesh{};
+  if (o.maxChunkVertices < 3 || o.maxChunkVertices > kMaxChunkVertices)
+    return Status::error("mesh chunks: maxChunkVertices " + std::to_string(o.maxChunkVertices) + " is outside 3.." +
+                         std::to_string(kMaxChunkVertices));
+  if (o.rootAlignment < 1 || o.rootAlignment > 4096)
+    return Status::error("mesh chunks: rootAlignment " + std::to_string(o.rootAlignment) + " is outside 1..4096");
+  const size_t nv = m.positions.size();
+  if (roots.leafOfVertex.size() != nv || m.uvs.size() != nv)
+    return Status::error("mesh chunks: " + modelName(m) + ": per-vertex arrays disagree with the vertex count");
+  // Chunk-local numbers by stamp: local[v] is valid while stamp[v] == the current chunk + 1, so the
+  // working set is two words per vertex and two per leaf, however many chunks there are.
+  std::vector<uint32_t> vStamp(nv, 0), vLocal(nv, 0);
+  std::vector<uint32_t> lStamp(roots.leafCount(), 0), lLocal(roots.leafCount(), 0);
+  std::vector<uint32_t> chunkVertices, chunkLeaves;
+  uint32_t stamp = 0;
+  MeshChunk cur;
+  auto open = [&](const TriangleRange& r, uint64_t firstTriangle) {
+    ++stamp;
+    cur = MeshChunk{};
+    cur.material = r.material;
+    cur.foliage = r.foliage;
+    cur.firstTriangle = firstTriangle;
+    cur.firstIndex = out->indices.size();
+    cur.firstVertex = out->vertices.size();
+    chunkVertices.clear();
+    chunkLeaves.clear();
+  };
+  auto close = [&]() -> Status {
+    if (cur.triangleCount == 0) return Status();
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (uint32_t v : chunkVertices) {
+      lo = glm::min(lo, m.positions[v]);
+      hi = glm::max(hi, m.positions[v]);
+    }
+    cur.origin = lo;
+    cur.scale = (hi - lo) / 65535.0f;
+    const glm::vec3 inv(cur.scale.x > 0 ? 1.0f / cur.scale.x : 0.0f, cur.scale.y > 0 ? 1.0f / cur.scale.y : 0.0f,
+                        cur.scale.z > 0 ? 1.0f / cur.scale.z : 0.0f);
+    cur.vertexCount = uint32_t(chunkVertices.size());
+    for (uint32_t v : chunkVertices) {
+      const glm::vec3 q = glm::clamp(glm::round((m.positions[v] - lo) * inv), glm::vec3(0.0f), glm::vec3(65535.0f));
+      const uint32_t leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_CHUNK_NO_LEAF : lLocal[roots.leafOfVertex[v]];
+      const glm::vec2 uv = m.uvs[v];
+      if (!(std::abs(uv.x) <= 65504.0f && std::abs(uv.y) <= 65504.0f))
+        return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has texture coordinate (" +
+                             std::to_string(uv.x) + ", " + std::to_string(uv.y) +
+                             ") outside the half-float range [-65504, 65504] of the compact mesh");
+      gpu::LayerVertex x;
+      x.positionXY = uint32_t(q.x) | uint32_t(q.y) << 16;
+      x.positionZLeaf = uint32_t(q.z) | leaf << 16;
+      x.normal = glm::packSnorm2x16(octahedral(v < m.normals.size() ? m.normals[v] : glm::vec3(0, 0, 1)));
+      x.uv = glm::packHalf2x16(uv);
+      out->vertices.push_back(x);
+    }
+    // Root blocks start aligned so each chunk's block can be bound at its own offset; a chunk
+    // without leaves still gets one (unused) entry, since a binding's range cannot be 0.
+    cur.firstRoot = alignUp(out->roots.size(), o.rootAlignment);
+    cur.rootCount = uint32_t(chunkLeaves.size());
+    out->roots.resize(cur.firstRoot + std::max<size_t>(chunkLeaves.size(), 1), gpu::LayerLeafRoot{});
+    for (size_t i = 0; i < chunkLeaves.size(); ++i) {
+      gpu::LayerLeafRoot& r = out->roots[cur.firstRoot + i];
+      r.position = m.positions[roots.leafRoot[chunkLeaves[i]]];
+      r.leaf = chunkLeaves[i];
+    }
+    out->chunks.push_back(cur);
+    return Status();
+  };
+  for (const TriangleRange& r : ranges) {
+    if (r.first + r.count > gpuIndices.size() / 3)
+      return Status::error("mesh chunks: triangle range past the index list");
+    open(r, r.first);
+    for (uint64_t t = r.first; t < r.first + r.count; ++t) {
+      // New vertices and leaves this triangle would add to the chunk.
+      uint32_t newV = 0, newL = 0;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = gpuIndices[t * 3 + k];
+        if (v >= nv) return Status::error("mesh chunks: " + modelName(m) + ": index " + std::to_string(v) + " past the vertices");
+        if (!std::isfinite(m.positions[v].x) || !std::isfinite(m.positions[v].y) || !std::isfinite(m.positions[v].z))
+          return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has a non-finite position");
+        bool seen = vStamp[v] == stamp;
+        for (int j = 0; j < k; ++j) seen = seen || gpuIndices[t * 3 + j] == v;
+        newV += !seen;
+        const uint32_t leaf = roots.leafOfVertex[v];
+        if (leaf != kNoLeaf && !seen && lStamp[leaf] != stamp) ++newL;  // over-counts a leaf new twice: harmless
+      }
+      if (cur.triangleCount > 0 &&
+          (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
+        CANOPY_TRY(close());
+        open(r, t);
+      }
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = gpuIndices[t * 3 + k];
+        if (vStamp[v] != stamp) {
+          vStamp[v] = stamp;
+          vLocal[v] = uint32_t(chunkVertices.size());
+          chunkVertices.push_back(v);
+          const uint32_t leaf = roots.leafOfVertex[v];
+          if (leaf != kNoLeaf && lStamp[leaf] != stamp) {
+            lStamp[leaf] = stamp;
+            lLocal[leaf] = uint32_t(chunkLeaves.size());
+            chunkLeaves.push_back(leaf);
+          }
+        }
+        out->indices.push_back(uint16_t(vLocal[v]));
+      }
+      cur.triangleCount++;
+    }
+    CANOPY_TRY(close());
+  }
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,77 @@
+#pragma once
+// The compact, chunked GPU form of a vegetation mesh (issue 16; docs/design.md, "Layers: mesh
+// chunks"). The triangles, in the layers' GPU order (foliage by material, then rigid by material),
+// are cut into chunks of at most `maxChunkVertices` distinct vertices, each drawn on its own:
+// - 16-bit indices, local to the chunk;
+// - positions quantised to 16 bits per axis inside the chunk's bounds (error at most half a step,
+//   step = chunk extent / 65535 per axis), octahedral normals as 2 x snorm16, UVs as half floats;
+// - a leaf-root table per chunk (gpu::LayerLeafRoot: the root at full precision and the model-wide
+//   leaf index), which vertices index with 16 bits. A leaf whose triangles fall into two chunks has
+//   its root in both tables, so a chunk border never cuts a leaf, and no table is sized by the
+//   whole model (the global table hit the device's storage-buffer range at ~8M leaves).
+// 16 bytes per vertex and 2 per index, against 28 and 4 before, plus 16 per leaf and chunk.
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "engine/status.h"
+#include "render/gltf_loader.h"
+#include "render/leaf_roots.h"
+#include "shared/layers.h"
+
+namespace canopy {
+
+constexpr uint32_t kMaxChunkVertices = 65535;  // 16-bit indices
+constexpr uint32_t kMaxChunkLeaves = 65535;    // chunk-local leaf 0xffff = none (LAYER_CHUNK_NO_LEAF)
+
+struct MeshChunk {
+  uint32_t material = 0;
+  bool foliage = true;
+  uint64_t firstTriangle = 0;  // GPU-order triangle index of the chunk's first (the id output's base)
+  uint32_t triangleCount = 0;
+  uint64_t firstVertex = 0;    // into CompactMesh::vertices (the draw's vertexOffset)
+  uint32_t vertexCount = 0;
+  uint64_t firstIndex = 0;     // into CompactMesh::indices
+  uint64_t firstRoot = 0;      // into CompactMesh::roots, a multiple of the root alignment
+  uint32_t rootCount = 0;      // leaves with a vertex in the chunk
+  glm::vec3 origin{0}, scale{0};  // world position = origin + q * scale, q in 0..65535
+};
+
+struct CompactMesh {
+  std::vector<gpu::LayerVertex> vertices;
+  std::vector<uint16_t> indices;
+  std::vector<gpu::LayerLeafRoot> roots;  // per chunk, each chunk's block aligned (bind offsets)
+  std::vector<MeshChunk> chunks;          // foliage chunks first, then rigid, in GPU triangle order
+  uint64_t bytes() const {
+    return vertices.size() * sizeof(gpu::LayerVertex) + indices.size() * 2 + roots.size() * sizeof(gpu::LayerLeafRoot);
+  }
+};
+
+struct CompactMeshOptions {
+  uint32_t maxChunkVertices = kMaxChunkVertices;  // 3..65535
+  uint32_t rootAlignment = 1;  // chunk root blocks start at multiples of this many entries (>= 1)
+};
+
+// One draw range of the GPU order: `count` triangles from `first`, all of `material`.
+struct TriangleRange {
+  uint32_t material = 0;
+  bool foliage = true;
+  uint64_t first = 0, count = 0;
+};
+
+// Builds the compact mesh of model `m` whose triangles in GPU order are `gpuIndices` (3 per
+// triangle, model vertex indices) cut into `ranges`; `roots` from computeLeafRoots. Errors name the
+// model and the offending vertex (a texture coordinate outside the half-float range, a
+// non-finite position) or option.
+Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
+                        const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
+                        const CompactMeshOptions& options, CompactMesh* out);
+
+// The decoding the vertex shader does (tests and tools): world position, unit normal, UV.
+glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v);
+glm::vec3 decodeNormal(const gpu::LayerVertex& v);
+glm::vec2 decodeUv(const gpu::LayerVertex& v);
+uint32_t chunkLeaf(const gpu::LayerVertex& v);  // chunk-local leaf, LAYER_CHUNK_NO_LEAF for none
+
+}  // namespace canopy

@@ -233,9 +233,10 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
     *label = o.gltf;
     return Status();
   }
-  // Generating and preparing a scene peaks at about 330 bytes per face (measured with /usr/bin/time
-  // on `canopy-demo --scene shrub --faces 10M`: 3.27 GB; on a CPU driver the GPU buffers are host
-  // memory too). Refuse what cannot fit instead of being killed by the OOM killer half-way.
+  // Generating and preparing a scene peaks at about 250 bytes per face with the compact mesh
+  // (VmHWM of `canopy-demo --scene shrub --faces 50M`: 11.47 GiB; 10M: 2.38 GiB; on a CPU driver the
+  // GPU buffers are host memory too); 350 keeps a margin for other scenes and drivers. Refuse what
+  // cannot fit instead of being killed by the OOM killer half-way.
   constexpr uint64_t kPeakBytesPerFace = 350;
   const uint64_t available = cli::availableMemoryBytes();
   if (available > 0 && o.faces * kPeakBytesPerFace > available)

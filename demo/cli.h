@@ -3,7 +3,9 @@
 // a number in range, otherwise the caller prints a one-line reason.
 #include <cstdint>
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -54,30 +56,25 @@ inline std::vector<std::string> splitList(const std::string& s) {
   return out;
 }
 
-// MemAvailable of /proc/meminfo in bytes (0 when unknown): the memory a big request may use
-// before the kernel's OOM killer ends the process, which no bad_alloc would report.
-inline uint64_t availableMemoryBytes() {
+// A "Key: N kB" line of a /proc file, in bytes (0 when unknown).
+inline uint64_t procKilobytes(const char* path, const char* key) {
   uint64_t kb = 0;
-  if (FILE* f = std::fopen("/proc/meminfo", "r")) {
+  if (FILE* f = std::fopen(path, "r")) {
     char line[256];
+    const size_t n = std::strlen(key);
     while (std::fgets(line, sizeof line, f))
-      if (std::sscanf(line, "MemAvailable: %lu kB", (unsigned long*)&kb) == 1) break;
+      if (std::strncmp(line, key, n) == 0 && line[n] == ':' && std::sscanf(line + n + 1, "%lu", (unsigned long*)&kb) == 1) break;
     std::fclose(f);
   }
   return kb * 1024;
 }
 
-// The process's peak resident memory (VmHWM of /proc/self/status) in bytes, 0 when unknown. On a
-// CPU driver (lavapipe) device memory is host memory too, so this includes it.
-inline uint64_t peakResidentBytes() {
-  uint64_t kb = 0;
-  if (FILE* f = std::fopen("/proc/self/status", "r")) {
-    char line[256];
-    while (std::fgets(line, sizeof line, f))
-      if (std::sscanf(line, "VmHWM: %lu kB", (unsigned long*)&kb) == 1) break;
-    std::fclose(f);
-  }
-  return kb * 1024;
-}
+// MemAvailable of /proc/meminfo: the memory a big request may use before the kernel's OOM killer
+// ends the process, which no bad_alloc would report.
+inline uint64_t availableMemoryBytes() { return procKilobytes("/proc/meminfo", "MemAvailable"); }
+
+// The process's peak resident memory (VmHWM of /proc/self/status). On a CPU driver (lavapipe)
+// device memory is host memory too, so this includes it.
+inline uint64_t peakResidentBytes() { return procKilobytes("/proc/self/status", "VmHWM"); }
 
 }  // namespace canopy::cli

@@ -191,7 +191,7 @@ Status chooseDrawPath(const LayeredVegetation& lv, const LayerSettings& s, bool*
 Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vector<uint8_t>& foliage,
                   const LeafRoots& roots) {
   Device& d = *lv.device;
-  const size_t nv = m.positions.size(), nt = m.triangleCount();
+  const size_t nt = m.triangleCount();
   // GPU triangle order: foliage grouped by material, then rigid by material (one draw each).
   const size_t nm = m.materials.size();
   std::vector<uint64_t> start(2 * nm + 1, 0);
@@ -222,10 +222,10 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
     return Status::error("layers: minStorageBufferOffsetAlignment " + std::to_string(align) + " is not a power of two");
   CompactMesh mesh;
-  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, &mesh));
-  lv.chunks = mesh.chunks;
+  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, &mesh, lv.desc.progress));
   lv.stats.meshChunks = uint32_t(mesh.chunks.size());
   lv.stats.meshBytes = mesh.bytes();
+  lv.chunks = std::move(mesh.chunks);
   auto upload = [&](Buffer& buf, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage, rg::Use use,
                     const char* name) -> Status {
     CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
@@ -240,7 +240,6 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
     }
     return uploadBuffer(d, buf, data, bytes, rg::stateOf(use));
   };
-  if (lv.desc.progress) lv.desc.progress("vertices", nv, nv);
   CANOPY_TRY(upload(lv.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
   CANOPY_TRY(upload(lv.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
@@ -367,7 +366,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   return Status();
 }
 
-// Binds the mesh and draws `draws` (one per material) with `pipe`; the push constants say how the
+// Binds the mesh and draws its foliage or rigid chunks with `pipe`; the push constants say how the
 // vertex shader routes triangles (passKind, targetLayer).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
                      uint32_t passKind, uint32_t target) {

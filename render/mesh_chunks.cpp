@@ -10,7 +10,7 @@ namespace canopy {
 namespace {
 
 // Octahedral encoding (Meyer et al. 2010, "On floating-point normal vectors"): the unit sphere
-// folded onto [-1, 1]^2; decodeNormal below and layers_common.glsl undo it.
+// folded onto [-1, 1]^2; gpu::layerDecodeNormal (shared/layers.h) undoes it.
 glm::vec2 octahedral(glm::vec3 n) {
   const float l1 = std::abs(n.x) + std::abs(n.y) + std::abs(n.z);
   if (!(l1 > 0.0f) || !std::isfinite(l1)) return glm::vec2(0.0f, 0.0f);  // no normal: +Z
@@ -32,14 +32,7 @@ glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v) {
   return c.origin + q * c.scale;
 }
 
-glm::vec3 decodeNormal(const gpu::LayerVertex& v) {
-  const glm::vec2 e = glm::unpackSnorm2x16(v.normal);
-  glm::vec3 n(e, 1.0f - std::abs(e.x) - std::abs(e.y));
-  if (n.z < 0.0f)
-    n = glm::vec3((1.0f - glm::abs(glm::vec2(n.y, n.x))) * glm::vec2(n.x >= 0.0f ? 1.0f : -1.0f, n.y >= 0.0f ? 1.0f : -1.0f),
-                  n.z);
-  return glm::normalize(n);
-}
+glm::vec3 decodeNormal(const gpu::LayerVertex& v) { return gpu::layerDecodeNormal(glm::unpackSnorm2x16(v.normal)); }
 
 glm::vec2 decodeUv(const gpu::LayerVertex& v) { return glm::unpackHalf2x16(v.uv); }
 
@@ -47,7 +40,7 @@ uint32_t chunkLeaf(const gpu::LayerVertex& v) { return v.positionZLeaf >> 16; }
 
 Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
-                        const CompactMeshOptions& o, CompactMesh* out) {
+                        const CompactMeshOptions& o, CompactMesh* out, const Progress& progress) {
   *out = CompactMesh{};
   if (o.maxChunkVertices < 3 || o.maxChunkVertices > kMaxChunkVertices)
     return Status::error("mesh chunks: maxChunkVertices " + std::to_string(o.maxChunkVertices) + " is outside 3.." +
@@ -120,6 +113,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
       return Status::error("mesh chunks: triangle range past the index list");
     open(r, r.first);
     for (uint64_t t = r.first; t < r.first + r.count; ++t) {
+      if (progress && (t & 0xfffff) == 0) progress("vertices", t, gpuIndices.size() / 3);
       // New vertices and leaves this triangle would add to the chunk.
       uint32_t newV = 0, newL = 0;
       for (int k = 0; k < 3; ++k) {
@@ -157,6 +151,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
     }
     CANOPY_TRY(close());
   }
+  if (progress) progress("vertices", gpuIndices.size() / 3, gpuIndices.size() / 3);
   return Status();
 }
 

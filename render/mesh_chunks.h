@@ -63,10 +63,11 @@ struct TriangleRange {
 // Builds the compact mesh of model `m` whose triangles in GPU order are `gpuIndices` (3 per
 // triangle, model vertex indices) cut into `ranges`; `roots` from computeLeafRoots. Errors name the
 // model and the offending vertex (a texture coordinate outside the half-float range, a
-// non-finite position) or option.
+// non-finite position) or option. `progress` (optional) gets ("vertices", triangles done, total)
+// about every million triangles.
 Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
-                        const CompactMeshOptions& options, CompactMesh* out);
+                        const CompactMeshOptions& options, CompactMesh* out, const Progress& progress = {});
 
 // The decoding the vertex shader does (tests and tools): world position, unit normal, UV.
 glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v);

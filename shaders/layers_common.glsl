@@ -30,13 +30,6 @@ float viewDepth(vec3 p) { return dot(f.depthRow, vec4(p, 1.0)); }
 vec3 vertexPosition() { return pc.chunkOrigin.xyz + vec3(inPositionLeaf.xyz) * pc.chunkScale.xyz; }
 bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
 
-// Octahedral decode (Meyer et al. 2010; render/mesh_chunks.cpp encodes).
-vec3 decodeNormal(vec2 e) {
-  vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
-  if (n.z < 0.0) n.xy = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
-  return normalize(n);
-}
-
 // The layer of this vertex's triangle. Every vertex of a leaf reads the same root (a leaf split
 // over chunks has the same root in each chunk's table), so a leaf's triangles all agree and no leaf
 // is cut (the near/far test is made on the root only).
@@ -47,7 +40,7 @@ uint triangleLayer() {
 
 void emitVertex() {
   gl_Position = f.viewProj * vec4(vertexPosition(), 1.0);
-  vNormal = decodeNormal(inNormalOct);
+  vNormal = layerDecodeNormal(inNormalOct);
   vUv = inUv;
   vLeaf = hasLeaf() ? leafRoot[inPositionLeaf.w].leaf : LAYER_NO_LEAF;
 }

@@ -17,7 +17,8 @@
   using glm::vec2; using glm::vec3; using glm::vec4; using glm::ivec2; using glm::ivec4; \
   using glm::uvec2; using glm::uvec4; using glm::mat4; using uint = uint32_t;            \
   using std::sin; using std::cos; using std::abs; using std::floor; using std::sqrt; using std::pow; \
-  using glm::fract; using glm::mix; using glm::clamp; using glm::smoothstep; using glm::min; using glm::max;
+  using glm::fract; using glm::mix; using glm::clamp; using glm::smoothstep; using glm::min; using glm::max; \
+  using glm::normalize;
 #define CANOPY_NAMESPACE_END }
 #define CANOPY_SIZE_CHECK(T, bytes) \
   static_assert(sizeof(T) == (bytes), #T ": size differs from its GLSL scalar-layout size");

@@ -81,6 +81,15 @@ struct LayerLeafRoot {
 };
 CANOPY_SIZE_CHECK(LayerLeafRoot, 16)
 
+// Octahedral unit-vector decoding (Meyer et al. 2010): LayerVertex.normal unpacked to [-1, 1]^2 ->
+// unit normal; render/mesh_chunks.cpp encodes, the layer vertex shaders and the tests decode.
+CANOPY_INLINE vec3 layerDecodeNormal(vec2 e) {
+  vec3 n = vec3(e.x, e.y, 1.0f - abs(e.x) - abs(e.y));
+  if (n.z < 0.0f)
+    n = vec3((1.0f - abs(e.y)) * (e.x >= 0.0f ? 1.0f : -1.0f), (1.0f - abs(e.x)) * (e.y >= 0.0f ? 1.0f : -1.0f), n.z);
+  return normalize(n);
+}
+
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {
   uint layer = 0u;
   for (uint i = 1u; i < f.layerCount; ++i)

@@ -3,8 +3,9 @@
 // chunks"). The triangles, in the layers' GPU order (foliage by material, then rigid by material),
 // are cut into chunks of at most `maxChunkVertices` distinct vertices, each drawn on its own:
 // - 16-bit indices, local to the chunk;
-// - positions quantised to 16 bits per axis inside the chunk's bounds (error at most half a step,
-//   step = chunk extent / 65535 per axis), octahedral normals as 2 x snorm16, UVs as half floats;
+// - positions quantised to 16 bits per axis inside the chunk's bounds (error within one step:
+//   half a step of rounding plus float rounding; step = chunk extent / 65535 per axis), octahedral
+//   normals as 2 x snorm16, UVs as half floats;
 // - a leaf-root table per chunk (gpu::LayerLeafRoot: the root at full precision and the model-wide
 //   leaf index), which vertices index with 16 bits. A leaf whose triangles fall into two chunks has
 //   its root in both tables, so a chunk border never cuts a leaf, and no table is sized by the

@@ -36,5 +36,9 @@ struct Table1Options {
   std::string json = "bench_table1.json";
 };
 int runTable1Bench(Device& dev, const Table1Options& options);
+
+// Re-slicing (issue 16): at once vs spread over frames with `budgetMs`, per face count.
+int runRebuildBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, float budgetMs,
+                    int rebuilds, uint32_t width, uint32_t height);
 }
 }  // namespace canopy

@@ -4,6 +4,7 @@
 //   canopy-bench soak [--frames N] [--rebuild-every N] [--check]
 //   canopy-bench table1 [--faces 80000,10000000] [--scene shrub] [--frames N] [--size 1024x768]
 //                [--orbit DEG] [--pair-frames N] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
+//   canopy-bench rebuild [--faces 80000,10000000] [--scene shrub] [--budget MS] [--rebuilds N] [--size WxH]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -27,6 +28,7 @@ static int usage(const char* why) {
                "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
                "  soak           long run: random parameters every frame, re-slicing every --rebuild-every frames;\n"
                "                 NaN/Inf, RSS, device allocations, frame time (--frames default 100000)\n"
+               "  rebuild        re-slicing: at once vs spread over frames (--budget MS, default 4), per face count\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -69,6 +71,8 @@ int main(int argc, char** argv) {
     return !out->empty();
   };
   uint32_t rebuildEvery = 100;
+  bool runRebuild = false;
+  float budgetMs = 4.0f;
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
@@ -84,6 +88,13 @@ int main(int argc, char** argv) {
     else if (a == "anim") runAnim = true;
     else if (a == "soak") runSoak = true;
     else if (a == "table1") runTable1 = true;
+    else if (a == "rebuild") runRebuild = true;
+    else if (a == "--budget") {
+      const char* v = next();
+      char* end = nullptr;
+      budgetMs = v ? std::strtof(v, &end) : 0.0f;
+      if (!v || *end || !(budgetMs > 0.0f && budgetMs <= 1000.0f)) return usage("--budget needs ms in (0, 1000]");
+    }
     else if (a == "--series") t1.series = true;
     else if (a == "--series-faces") {
       if (!parseList(next(), &t1.seriesFaces)) return usage("--series-faces: each must be an integer in [2, 100000000]");
@@ -172,7 +183,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild) runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
@@ -184,6 +195,9 @@ int main(int argc, char** argv) {
     if (frames) t1.frames = frames;
     rc = bench::runTable1Bench(dev, t1);
   }
+  if (rc == 0 && runRebuild)
+    rc = bench::runRebuildBench(dev, faces, scene.empty() ? "shrub" : scene, budgetMs, int(rebuilds),
+                                t1.width, t1.height);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

@@ -306,17 +306,19 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     char head[2048];
     std::snprintf(head, sizeof head,
                   "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
-                  "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices\n"
+                  "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices (%u spread over frames "
+                  "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles)\n"
                   "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
                   "(docs/design.md): the wall-clock line is the figure to trust there.\n",
                   label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
                   o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
-                  dev.properties.deviceName, uint32_t(st.layers.rebuilds));
+                  dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
+                  st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles);
     std::string text = head;
     text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
     if (!steady.wallMs.empty())
       text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
-                             (o.camera == CameraPath::Orbit ? std::string(", every frame re-slices") : std::string()) + "):");
+                             (o.camera == CameraPath::Orbit ? std::string(o.rebuildBudgetMs > 0 ? ", re-slices spread over frames" : ", every frame re-slices") : std::string()) + "):");
     if (measureSway) text += "\n" + sway.summary();
     char mem[512];
     std::snprintf(mem, sizeof mem,

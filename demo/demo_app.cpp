@@ -48,6 +48,8 @@ void printHelp() {
       "  --fps F             animation frames per second, dt = 1/F, [1, 1000] (default %g)\n"
       "  --camera PATH       still or orbit (default still)\n"
       "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
+      "  --rebuild-budget MS a re-slice after a camera move is spread over frames, about MS ms of work a\n"
+      "                      frame, then cross-faded in; 0: at once in one frame, [0, 1000] (default %g)\n"
       "  --out DIR           output folder, created if missing; frame files beyond --frames left there by\n"
       "                      an earlier run are removed (default %s)\n"
       "  --no-mp4            do not encode demo.mp4 even when ffmpeg is installed\n"
@@ -67,7 +69,7 @@ void printHelp() {
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
       (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust, d.width,
-      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.outDir.c_str());
+      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.outDir.c_str());
 }
 
 namespace {
@@ -184,6 +186,8 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       else return bad(quoted(v) + " is not still or orbit");
     } else if (a == "--orbit-degrees") {
       if (const int rc = number(-3600, 3600, &o->orbitDegrees)) return rc;
+    } else if (a == "--rebuild-budget") {
+      if (const int rc = number(0, 1000, &o->rebuildBudgetMs)) return rc;
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
@@ -283,6 +287,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.simulation.wind.modulation = o.windModulation;
   p.simulation.wind.gust = o.windGust;
   p.dynamics.delay = o.delay;
+  p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
   p.composite.debugView = o.debug;
   p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
   return p;

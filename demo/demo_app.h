@@ -44,6 +44,7 @@ struct Options {
   float fps = 30.0f;                   // simulation steps per second of animation (dt = 1 / fps)
   CameraPath camera = CameraPath::Still;
   float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence
+  float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
   std::string outDir = "demo_out";
   bool mp4 = true;
   // Window mode

@@ -82,14 +82,19 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
         att[i].srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
         att[i].dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
         att[i].alphaBlendOp = VK_BLEND_OP_ADD;
+      } else if (i < desc.blendedAttachments && desc.blend == BlendMode::ConstantMix) {
+        att[i].blendEnable = VK_TRUE;
+        att[i].srcColorBlendFactor = att[i].srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+        att[i].dstColorBlendFactor = att[i].dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_CONSTANT_ALPHA;
+        att[i].colorBlendOp = att[i].alphaBlendOp = VK_BLEND_OP_ADD;
       }
     }
     VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
     cb.attachmentCount = uint32_t(att.size());
     cb.pAttachments = att.data();
-    const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_BLEND_CONSTANTS};
     VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-    dy.dynamicStateCount = 2;
+    dy.dynamicStateCount = desc.blend == BlendMode::ConstantMix ? 3 : 2;
     dy.pDynamicStates = dyn;
     VkPipelineRenderingCreateInfo ri{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
     ri.colorAttachmentCount = uint32_t(desc.colorFormats.size());

@@ -19,7 +19,10 @@ struct VertexAttribute {
   uint32_t offset = 0;  // bytes into the (single, interleaved) vertex stream
 };
 
-enum class BlendMode { None, PremultipliedOver };
+// ConstantMix: result = source + destination * (1 - blend-constant alpha), the constant set per
+// draw (vkCmdSetBlendConstants, a dynamic state of these pipelines): a cross-fade whose shader
+// writes the new value already weighted.
+enum class BlendMode { None, PremultipliedOver, ConstantMix };
 
 struct EmbeddedShader;
 using ShaderLookup = const EmbeddedShader* (*)(const char* name);

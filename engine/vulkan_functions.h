@@ -35,8 +35,8 @@ namespace canopy {
   X(FreeCommandBuffers) X(BeginCommandBuffer) X(EndCommandBuffer)                                \
   X(CreateFence) X(DestroyFence) X(WaitForFences) X(ResetFences) X(GetFenceStatus)               \
   X(CmdBindPipeline) X(CmdPushConstants) X(CmdDispatch) X(CmdDispatchIndirect) X(CmdDraw) X(CmdDrawIndirect) X(CmdDrawIndexed)             \
-  X(CmdBindVertexBuffers) X(CmdBindIndexBuffer) X(CmdSetViewport) X(CmdSetScissor)               \
-  X(CmdCopyBuffer) X(CmdCopyBufferToImage) X(CmdCopyImageToBuffer) X(CmdUpdateBuffer)            \
+  X(CmdBindVertexBuffers) X(CmdBindIndexBuffer) X(CmdSetViewport) X(CmdSetScissor) X(CmdSetBlendConstants) \
+  X(CmdCopyBuffer) X(CmdCopyImage) X(CmdCopyBufferToImage) X(CmdCopyImageToBuffer) X(CmdUpdateBuffer)            \
   X(CmdFillBuffer) X(CmdClearColorImage) X(CmdClearDepthStencilImage)                            \
   X(CmdResetQueryPool) X(CmdWriteTimestamp)
 

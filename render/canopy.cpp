@@ -391,9 +391,9 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
     if (!c) return Status::error("setCanopyParams: null context");
     CANOPY_TRY(validateParams(*c, p));
     if (!(p.layers == c->params.layers)) {
-      const uint32_t before = c->layers.settings.layout.count();
-      CANOPY_TRY(setLayerSettings(c->layers, p.layers));
-      if (p.layers.layout.count() != before) c->generation++;  // new layer images
+      bool recreated = false;
+      CANOPY_TRY(setLayerSettings(c->layers, p.layers, &recreated));
+      if (recreated) c->generation++;  // new layer images
     }
     if (p.customPlane) {
       c->plane = p.plane;
@@ -465,7 +465,10 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   }
   const LayerView view = standardView(*c, f.camera);
   c->cut = f.cameraCut;
-  if (f.cameraCut) c->layers.forcedReason = "camera cut";
+  if (f.cameraCut) {
+    c->layers.forcedReason = "camera cut";
+    c->layers.forceImmediate = true;
+  }
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   if (!c->planeFixed) {
@@ -494,8 +497,9 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   const gpu::AnimFrame& a = c->dynamics.current;
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
                            a.layerCount == c->last.layerCount;
-  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, !c->layers.rigidDraws.empty(), rebuild,
-                              motionValid));
+  const VkRect2D footprint = layerFootprint(c->layers);
+  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, !c->layers.rigidDraws.empty(), c->layers.occupancyDirty,
+                              motionValid, &footprint));
   c->last = a;
   c->layersRebuilt = rebuild;
   c->frames++;
@@ -508,6 +512,15 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
   return declarePasses(*c, g, targets);
+}
+
+Status requestCanopyRebuild(CanopyContext* c, bool immediate) {
+  return guardApi("requestCanopyRebuild", [&]() -> Status {
+    if (!c) return Status::error("requestCanopyRebuild: null context");
+    c->layers.forcedReason = immediate ? "requested at once" : "requested";
+    c->layers.forceImmediate = c->layers.forceImmediate || immediate;
+    return Status();
+  });
 }
 
 uint64_t canopyResourceGeneration(const CanopyContext* c) { return c ? c->generation : 0; }

@@ -305,7 +305,7 @@ void destroyCompositor(Compositor& c) {
 }
 
 Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu::AnimFrame& anim, bool hasBackground,
-                        bool layersRebuilt, bool motionValid) {
+                        bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect) {
   if (!c.device) return Status::error("prepareComposite: the compositor was not created");
   CANOPY_TRY(validateCompositeParams(params));
   if (anim.layerCount < 1 || anim.layerCount > c.desc.maxLayers)
@@ -326,6 +326,16 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.depthAlpha = params.depthAlpha;
   p.tilesX = tilesFor(c.desc.width);
   p.tilesY = tilesFor(c.desc.height);
+  p.occupancyX1 = p.tilesX;
+  p.occupancyY1 = p.tilesY;
+  if (foliageRect) {
+    // One tile of margin: a tile counts the texels one pixel around it.
+    const uint32_t x0 = uint32_t(std::max(foliageRect->offset.x, 0)), y0 = uint32_t(std::max(foliageRect->offset.y, 0));
+    p.occupancyX0 = std::min(x0 / COMPOSITE_TILE, p.tilesX) - std::min(x0 / COMPOSITE_TILE, 1u);
+    p.occupancyY0 = std::min(y0 / COMPOSITE_TILE, p.tilesY) - std::min(y0 / COMPOSITE_TILE, 1u);
+    p.occupancyX1 = std::min(tilesFor(x0 + foliageRect->extent.width) + 1, p.tilesX);
+    p.occupancyY1 = std::min(tilesFor(y0 + foliageRect->extent.height) + 1, p.tilesY);
+  }
   p.debugView = uint32_t(params.debugView);
   p.debugScale = params.debugVelocityScale;
   p.exposure = params.exposure;

@@ -76,8 +76,10 @@ void destroyCompositor(Compositor& compositor);
 // Fixes the next recorded composite: layer count and warp grid from the dynamics frame, the levers
 // from `params`, whether the layers were rebuilt (occupancy) and whether the previous displacement
 // is last frame's (motion vectors).
+// `foliageRect` (pixels; null: the whole target) bounds where the layers can hold foliage: the
+// occupancy pass reads only those tiles.
 Status prepareComposite(Compositor& compositor, const CompositeParams& params, const gpu::AnimFrame& anim,
-                        bool hasBackground, bool layersRebuilt, bool motionValid);
+                        bool hasBackground, bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect = nullptr);
 
 struct CompositeTargets {
   rg::ResourceId color = rg::kInvalidResource;   // host colour (blended over)

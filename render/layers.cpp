@@ -8,6 +8,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "engine/device.h"
+#include "engine/timing.h"
 #include "engine/transfer.h"
 
 namespace canopy {
@@ -28,21 +29,31 @@ double msSince(std::chrono::steady_clock::time_point t0) {
 const rg::State kFrameRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
 
+// The next set rests where the cross-fade reads it.
+const rg::State kNextRest = rg::stateOf(rg::Use::FragmentSampled);
+
+// Spread re-slicing needs the second layer set; the id output is re-sliced at once (its images are
+// for tests and tools, and a cross-fade of ids means nothing).
+bool spreadEnabled(const LayeredVegetation& lv) { return lv.settings.rebuildBudgetMs > 0 && !lv.desc.writeIds; }
+
 // Frees the layer images once no host frame in flight can read them (deferRelease), so a new
 // layer count or size never waits for the device.
 void destroyTargets(LayeredVegetation& lv) {
   Device* d = lv.device;
   dropPreparedWork(*d, lv.pendingClear);  // a clear of these images never recorded: nothing to wait for
   std::vector<VkImageView> views;
-  for (auto* v : {&lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews}) {
+  for (auto* v : {&lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews, &lv.next.colorLayerViews,
+                  &lv.next.depthLayerViews}) {
     views.insert(views.end(), v->begin(), v->end());
     v->clear();
   }
   std::vector<Image> images;
-  for (Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) {
+  for (Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth, &lv.next.color,
+                     &lv.next.depth, &lv.next.backgroundColor, &lv.next.backgroundDepth}) {
     if (img->image) images.push_back(*img);
     *img = Image{};
   }
+  lv.spread = SpreadRebuild{};  // a spread re-slice drew into the old images
   deferRelease(*d, [d, views, images]() mutable {
     for (VkImageView v : views) d->vk.DestroyImageView(d->device, v, d->allocationCallbacks);
     for (Image& img : images) destroyImage(*d, img);
@@ -57,6 +68,30 @@ Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) 
   vi.subresourceRange = {img.aspect, 0, 1, layer, 1};
   CANOPY_VK(d.vk.CreateImageView(d.device, &vi, d.allocationCallbacks, out));
   return Status();
+}
+
+// The cross-fade pipelines and their sampler (texel fetches only), for the next set.
+Status createFadePipelines(LayeredVegetation& lv) {
+  Device& d = *lv.device;
+  if (!lv.nearestSampler) {
+    VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+    si.magFilter = si.minFilter = VK_FILTER_NEAREST;
+    si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+    si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+    CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &lv.nearestSampler));
+  }
+  if (lv.fade.pipeline) return Status();
+  GraphicsPipelineDesc p;
+  p.bindings = {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
+  p.pushConstantSize = sizeof(gpu::LayerFadePush);
+  p.colorFormats = {lv.desc.colorFormat};
+  p.blend = BlendMode::ConstantMix;
+  p.depthTest = p.depthWrite = false;
+  p.vertexShader = "layers_fade.vert";
+  p.fragmentShader = "layers_fade.frag";
+  CANOPY_TRY(createGraphicsPipeline(d, p, &lv.fade));
+  p.fragmentShader = "layers_fade_bg.frag";
+  return createGraphicsPipeline(d, p, &lv.fadeBackground);
 }
 
 // Creates the layer arrays and the background for the current layer count, cleared and left in
@@ -91,6 +126,20 @@ Status createTargets(LayeredVegetation& lv) {
   bz.layers = 1;
   bz.arrayView = false;
   CANOPY_TRY(createImage(d, bz, &lv.backgroundDepth, "background: depth"));
+  if (spreadEnabled(lv)) {
+    CANOPY_TRY(createFadePipelines(lv));
+    CANOPY_TRY(createImage(d, c, &lv.next.color, "layers (next set): colour"));
+    CANOPY_TRY(createImage(d, z, &lv.next.depth, "layers (next set): depth"));
+    CANOPY_TRY(createImage(d, bc, &lv.next.backgroundColor, "background (next set): colour"));
+    CANOPY_TRY(createImage(d, bz, &lv.next.backgroundDepth, "background (next set): depth"));
+    for (uint32_t l = 0; l < n; ++l) {
+      VkImageView v;
+      CANOPY_TRY(layerView(d, lv.next.color, l, &v));
+      lv.next.colorLayerViews.push_back(v);
+      CANOPY_TRY(layerView(d, lv.next.depth, l, &v));
+      lv.next.depthLayerViews.push_back(v);
+    }
+  }
   for (uint32_t l = 0; l < n; ++l) {
     VkImageView v;
     CANOPY_TRY(layerView(d, lv.color, l, &v));
@@ -111,6 +160,10 @@ Status createTargets(LayeredVegetation& lv) {
   for (const Image* img : {&lv.color, &lv.depth, &lv.ids, &lv.backgroundColor, &lv.backgroundDepth}) {
     if (!img->image) continue;
     imgs.push_back({g.importImage("layer target", descOf(*img), {}, rest), img});
+  }
+  for (const Image* img : {&lv.next.color, &lv.next.depth, &lv.next.backgroundColor, &lv.next.backgroundDepth}) {
+    if (!img->image) continue;
+    imgs.push_back({g.importImage("layer target (next set)", descOf(*img), {}, kNextRest), img});
   }
   std::vector<rg::ResourceId> ids;
   for (auto& [id, img] : imgs) ids.push_back(id);
@@ -284,12 +337,14 @@ float angleDegrees(const glm::vec3& a, const glm::vec3& b) {
   return glm::degrees(std::acos(std::clamp(glm::dot(a, b), -1.0f, 1.0f)));
 }
 
-// Depth range of the slicing keys, layer boundaries and per-layer bounds for `view`.
-Status placeForView(LayeredVegetation& lv, const LayerView& view) {
-  const auto t0 = std::chrono::steady_clock::now();
+using Clock = std::chrono::steady_clock;
+
+// Starts the placement for `view`: the frame constants the layer draws read.
+void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job) {
+  job = PlacementJob{};
+  job.view = view;
   const LayerSettings& s = lv.settings;
-  gpu::LayerFrame& f = lv.frame;
-  f = gpu::LayerFrame{};
+  gpu::LayerFrame& f = job.frame;
   f.viewProj = view.proj * view.view;
   f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
   const glm::vec3 dir = toGlm(s.lightDirection);
@@ -298,78 +353,138 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
   f.layerCount = s.layout.count();
   f.sliceMode = s.slice == SliceMode::Geometry ? LAYER_SLICE_GEOMETRY : LAYER_SLICE_LEAF_ROOT;
-  auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
+  job.zMin = INFINITY;
+  job.zMax = -INFINITY;
+  job.bottom = -INFINITY;
+  job.leafDepth.resize(lv.leafRootPosition.size());
+}
+
+// Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
+// layer, per-layer top and the root line over the vertices, triangles per layer) until it is done
+// or `deadline` (null: none) has passed; the clock is read every kBatch items.
+Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Clock::time_point* deadline, bool* done) {
+  constexpr size_t kBatch = 1 << 14;
+  const auto t0 = Clock::now();
+  const LayerSettings& s = lv.settings;
+  gpu::LayerFrame& f = job.frame;
   const bool geometric = s.slice == SliceMode::Geometry;
-  const uint32_t nLeaves = uint32_t(lv.leafRootPosition.size());
-  // The keys the layers are assigned by: leaf roots, or every foliage vertex for geometric slicing.
-  float zMin = INFINITY, zMax = -INFINITY;
-  std::vector<float> leafDepth(nLeaves);
-  for (uint32_t i = 0; i < nLeaves; ++i) {
-    leafDepth[i] = depthOf(lv.leafRootPosition[i]);
-    if (!geometric) {
-      zMin = std::min(zMin, leafDepth[i]);
-      zMax = std::max(zMax, leafDepth[i]);
-    }
-  }
-  if (geometric)
-    for (size_t v = 0; v < lv.positions.size(); ++v)
-      if (lv.leafOfVertex[v] != kNoLeaf) {
-        const float z = depthOf(lv.positions[v]);
-        zMin = std::min(zMin, z);
-        zMax = std::max(zMax, z);
-      }
-  if (!(zMin <= zMax)) zMin = zMax = 0.0f;  // no foliage: empty layers
-  std::vector<LayerSlab> slabs;
-  std::vector<float> bounds;
-  CANOPY_TRY(placeLayers(s.layout, s.regions, zMin, zMax, &slabs, &bounds));
-  for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) f.boundaries[i] = bounds[std::min<size_t>(i, bounds.size() - 1)];
-  // Per-layer statistics and the screen-space root line / heights (eq. 7).
-  const uint32_t n = f.layerCount;
-  lv.layers.assign(n, LayerInfo{});
-  for (uint32_t i = 0; i < n; ++i) {
-    lv.layers[i].slab = slabs[i];
-    lv.layers[i].top = INFINITY;
-  }
-  std::vector<uint8_t> leafLayer(nLeaves);
-  for (uint32_t i = 0; i < nLeaves; ++i) {
-    leafLayer[i] = uint8_t(gpu::layerOfDepth(f, leafDepth[i]));
-    lv.layers[leafLayer[i]].leaves++;
-  }
+  auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
+  const size_t nLeaves = lv.leafRootPosition.size(), nVertices = lv.positions.size();
+  size_t foliageIndices = 0;
+  for (const LayerDraw& dr : lv.foliageDraws) foliageIndices = std::max<size_t>(foliageIndices, dr.firstIndex + dr.indexCount);
   const glm::vec4 rowY(f.viewProj[0][1], f.viewProj[1][1], f.viewProj[2][1], f.viewProj[3][1]);
   const glm::vec4 rowW(f.viewProj[0][3], f.viewProj[1][3], f.viewProj[2][3], f.viewProj[3][3]);
   const float h = float(lv.desc.height);
-  float bottom = -INFINITY;
-  for (size_t v = 0; v < lv.positions.size(); ++v) {
-    const glm::vec4 p(lv.positions[v], 1.0f);
-    const float w = glm::dot(rowW, p);
-    if (w <= 1e-6f) continue;
-    const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
-    bottom = std::max(bottom, y);
-    const uint32_t leaf = lv.leafOfVertex[v];
-    if (leaf == kNoLeaf) continue;
-    const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : leafLayer[leaf];
-    lv.layers[layer].top = std::min(lv.layers[layer].top, y);
-  }
-  for (const LayerDraw& dr : lv.foliageDraws)
-    for (uint32_t k = dr.firstIndex; k < dr.firstIndex + dr.indexCount; k += 3) {
-      const uint32_t v = lv.indices[k];
-      const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : leafLayer[lv.leafOfVertex[v]];
-      lv.layers[layer].triangles++;
+  *done = false;
+  while (!*done) {
+    size_t end = 0;
+    switch (job.stage) {
+      case 0:  // the keys the layers are assigned by: leaf roots (or, below, every foliage vertex)
+        end = std::min(job.next + kBatch, nLeaves);
+        for (size_t i = job.next; i < end; ++i) {
+          job.leafDepth[i] = depthOf(lv.leafRootPosition[i]);
+          if (!geometric) {
+            job.zMin = std::min(job.zMin, job.leafDepth[i]);
+            job.zMax = std::max(job.zMax, job.leafDepth[i]);
+          }
+        }
+        if (end == nLeaves) job.stage = geometric ? 1 : 2, end = 0;
+        break;
+      case 1:
+        end = std::min(job.next + kBatch, nVertices);
+        for (size_t v = job.next; v < end; ++v)
+          if (lv.leafOfVertex[v] != kNoLeaf) {
+            const float z = depthOf(lv.positions[v]);
+            job.zMin = std::min(job.zMin, z);
+            job.zMax = std::max(job.zMax, z);
+          }
+        if (end == nVertices) job.stage = 2, end = 0;
+        break;
+      case 2: {
+        if (!(job.zMin <= job.zMax)) job.zMin = job.zMax = 0.0f;  // no foliage: empty layers
+        std::vector<LayerSlab> slabs;
+        std::vector<float> bounds;
+        CANOPY_TRY(placeLayers(s.layout, s.regions, job.zMin, job.zMax, &slabs, &bounds));
+        for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) f.boundaries[i] = bounds[std::min<size_t>(i, bounds.size() - 1)];
+        job.layers.assign(f.layerCount, LayerInfo{});
+        for (uint32_t i = 0; i < f.layerCount; ++i) {
+          job.layers[i].slab = slabs[i];
+          job.layers[i].top = INFINITY;
+        }
+        job.leafLayer.resize(nLeaves);
+        job.stage = 3;
+        break;
+      }
+      case 3:
+        end = std::min(job.next + kBatch, nLeaves);
+        for (size_t i = job.next; i < end; ++i) {
+          job.leafLayer[i] = uint8_t(gpu::layerOfDepth(f, job.leafDepth[i]));
+          job.layers[job.leafLayer[i]].leaves++;
+        }
+        if (end == nLeaves) job.stage = 4, end = 0;
+        break;
+      case 4:  // the screen-space root line and per-layer tops (eq. 7)
+        end = std::min(job.next + kBatch, nVertices);
+        for (size_t v = job.next; v < end; ++v) {
+          const glm::vec4 p(lv.positions[v], 1.0f);
+          const float w = glm::dot(rowW, p);
+          if (w <= 1e-6f) continue;
+          const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
+          job.bottom = std::max(job.bottom, y);
+          const uint32_t leaf = lv.leafOfVertex[v];
+          if (leaf == kNoLeaf) continue;
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : job.leafLayer[leaf];
+          job.layers[layer].top = std::min(job.layers[layer].top, y);
+        }
+        if (end == nVertices) job.stage = 5, end = 0;
+        break;
+      case 5:  // foliage triangles come first in GPU order: indices [0, foliageIndices)
+        end = std::min(job.next + 3 * kBatch, foliageIndices);
+        for (size_t k = job.next; k < end; k += 3) {
+          const uint32_t v = lv.indices[k];
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : job.leafLayer[lv.leafOfVertex[v]];
+          job.layers[layer].triangles++;
+        }
+        if (end == foliageIndices) job.stage = 6, end = 0;
+        break;
+      default: {
+        float bottom = job.bottom;
+        if (!std::isfinite(bottom)) bottom = h;
+        for (LayerInfo& li : job.layers) {
+          li.rootLineY = bottom;
+          if (!std::isfinite(li.top)) li.top = bottom;
+          li.height = std::max(bottom - li.top, 1.0f);
+        }
+        job.leafDepth = {};
+        job.leafLayer = {};
+        *done = true;
+        break;
+      }
     }
-  if (!std::isfinite(bottom)) bottom = h;
-  for (LayerInfo& li : lv.layers) {
-    li.rootLineY = bottom;
-    if (!std::isfinite(li.top)) li.top = bottom;
-    li.height = std::max(bottom - li.top, 1.0f);
+    job.next = end;
+    if (!*done && deadline && Clock::now() >= *deadline) break;
   }
-  lv.stats.lastPlacementMs = msSince(t0);
+  job.ms += msSince(t0);
   return Status();
 }
 
-// Binds the mesh and draws its foliage or rigid chunks with `pipe`; the push constants say how the
-// vertex shader routes triangles (passKind, targetLayer).
+// The whole placement for `view` at once, made the visible one.
+Status placeForView(LayeredVegetation& lv, const LayerView& view) {
+  PlacementJob job;
+  beginPlacement(lv, view, job);
+  bool done = false;
+  CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
+  lv.frame = job.frame;
+  lv.layers = std::move(job.layers);
+  lv.stats.lastPlacementMs = job.ms;
+  return Status();
+}
+
+// Binds the mesh and draws its foliage or rigid chunks with `pipe` (`parts`: only those parts of
+// chunks; null: every chunk whole); the push constants say how the vertex shader routes triangles
+// (passKind, targetLayer).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
-                     uint32_t passKind, uint32_t target) {
+                     uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts) {
   const Device& d = *lv.device;
   const VkDeviceSize zero = 0;
   d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
@@ -377,8 +492,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
   setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
   // is bound at its own offset (render/mesh_chunks.h).
-  for (const MeshChunk& c : lv.chunks) {
-    if (c.foliage != foliage) continue;
+  auto draw = [&](const MeshChunk& c, uint32_t first, uint32_t count) -> Status {
     const ModelMaterial& mat = lv.materials[c.material];
     const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
     gpu::LayerDrawPush push{};
@@ -396,16 +510,26 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                              bindBuffer(lv.leafRoots.buffer, c.firstRoot * sizeof(gpu::LayerLeafRoot), rootBytes),
                              bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
                             push));
-    d.vk.CmdDrawIndexed(cmd, c.triangleCount * 3, 1, uint32_t(c.firstIndex), int32_t(c.firstVertex), 0);
+    // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
+    // id output (re-sliced at once) never draws parts.
+    d.vk.CmdDrawIndexed(cmd, count * 3, 1, uint32_t(c.firstIndex) + first * 3, int32_t(c.firstVertex), 0);
+    return Status();
+  };
+  if (parts) {
+    for (const ChunkPart& p : *parts)
+      if (lv.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(lv.chunks[p.chunk], p.firstTriangle, p.triangleCount));
+    return Status();
   }
+  for (const MeshChunk& c : lv.chunks)
+    if (c.foliage == foliage) CANOPY_TRY(draw(c, 0, c.triangleCount));
   return Status();
 }
 
-VkRenderingAttachmentInfo clearedAttachment(VkImageView view, bool depth) {
+VkRenderingAttachmentInfo attachment(VkImageView view, bool depth, bool clear) {
   VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
   a.imageView = view;
   a.imageLayout = depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  a.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  a.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
   a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   if (depth) a.clearValue.depthStencil = {1.0f, 0};
   return a;
@@ -427,28 +551,135 @@ Status renderInto(Device& d, VkCommandBuffer cmd, const LayeredVegetation& lv, u
   return s;
 }
 
-Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd) {
+// Where foliage and rigid parts are drawn: the visible set (a re-slice at once) or the next set (a
+// spread slice).
+struct DrawTargets {
+  VkImageView color, depth, ids;  // array views
+  const std::vector<VkImageView>*colorLayers, *depthLayers, *idsLayers;
+  VkImageView backgroundColor, backgroundDepth;
+};
+DrawTargets visibleTargets(const LayeredVegetation& lv) {
+  return {lv.color.view, lv.depth.view, lv.ids.view, &lv.colorLayerViews, &lv.depthLayerViews, &lv.idsLayerViews,
+          lv.backgroundColor.view, lv.backgroundDepth.view};
+}
+DrawTargets nextTargets(const LayeredVegetation& lv) {
+  return {lv.next.color.view, lv.next.depth.view, VK_NULL_HANDLE, &lv.next.colorLayerViews, &lv.next.depthLayerViews,
+          nullptr, lv.next.backgroundColor.view, lv.next.backgroundDepth.view};
+}
+
+Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
+                     const std::vector<ChunkPart>* parts) {
   const uint32_t n = lv.settings.layout.count();
   const uint32_t passes = lv.singlePass ? 1 : n;
+  const bool ids = t.ids != VK_NULL_HANDLE;
   for (uint32_t i = 0; i < passes; ++i) {
     const VkRenderingAttachmentInfo colors[2] = {
-        clearedAttachment(lv.singlePass ? lv.color.view : lv.colorLayerViews[i], false),
-        clearedAttachment(lv.desc.writeIds ? (lv.singlePass ? lv.ids.view : lv.idsLayerViews[i]) : VK_NULL_HANDLE, false)};
-    const VkRenderingAttachmentInfo depth = clearedAttachment(lv.singlePass ? lv.depth.view : lv.depthLayerViews[i], true);
-    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, lv.desc.writeIds ? 2 : 1, depth, [&] {
-      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, true, LAYER_PASS_LAYERED, 0)
-                           : drawMaterials(lv, cmd, lv.perLayer, true, LAYER_PASS_ONE_LAYER, i);
+        attachment(lv.singlePass ? t.color : (*t.colorLayers)[i], false, clear),
+        attachment(ids ? (lv.singlePass ? t.ids : (*t.idsLayers)[i]) : VK_NULL_HANDLE, false, clear)};
+    const VkRenderingAttachmentInfo depth = attachment(lv.singlePass ? t.depth : (*t.depthLayers)[i], true, clear);
+    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&] {
+      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, true, LAYER_PASS_LAYERED, 0, parts)
+                           : drawMaterials(lv, cmd, lv.perLayer, true, LAYER_PASS_ONE_LAYER, i, parts);
     }));
   }
   return Status();
 }
 
-Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
-  const VkRenderingAttachmentInfo color = clearedAttachment(lv.backgroundColor.view, false);
-  const VkRenderingAttachmentInfo depth = clearedAttachment(lv.backgroundDepth.view, true);
+Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
+                        const std::vector<ChunkPart>* parts) {
+  const VkRenderingAttachmentInfo color = attachment(t.backgroundColor, false, clear);
+  const VkRenderingAttachmentInfo depth = attachment(t.backgroundDepth, true, clear);
   return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
-    return drawMaterials(lv, cmd, lv.background, false, LAYER_PASS_BACKGROUND, 0);
+    return drawMaterials(lv, cmd, lv.background, false, LAYER_PASS_BACKGROUND, 0, parts);
   });
+}
+
+// Whether a spread slice holds parts of foliage (rigid) chunks.
+bool sliceHas(const LayeredVegetation& lv, bool foliage) {
+  for (const ChunkPart& p : lv.spread.slice)
+    if (lv.chunks[p.chunk].foliage == foliage) return true;
+  return false;
+}
+
+}  // namespace
+
+VkRect2D layerFootprint(const LayeredVegetation& lv) {
+  const float w = float(lv.desc.width), h = float(lv.desc.height);
+  const VkRect2D all{{0, 0}, {lv.desc.width, lv.desc.height}};
+  glm::vec2 lo(INFINITY), hi(-INFINITY);
+  std::vector<const glm::mat4*> views{&lv.frame.viewProj};
+  if (lv.spread.phase == SpreadPhase::Drawing || lv.spread.phase == SpreadPhase::CrossFading)
+    views.push_back(&lv.spread.job.frame.viewProj);
+  for (const glm::mat4* vp : views)
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 p((c & 1) ? lv.boundsMax.x : lv.boundsMin.x, (c & 2) ? lv.boundsMax.y : lv.boundsMin.y,
+                        (c & 4) ? lv.boundsMax.z : lv.boundsMin.z);
+      const glm::vec4 q = *vp * glm::vec4(p, 1.0f);
+      if (!(q.w > 1e-6f)) return all;  // a corner behind the camera (or no view yet)
+      const glm::vec2 px((q.x / q.w * 0.5f + 0.5f) * w, (q.y / q.w * 0.5f + 0.5f) * h);
+      lo = glm::min(lo, px);
+      hi = glm::max(hi, px);
+    }
+  if (!std::isfinite(lo.x) || !std::isfinite(lo.y) || !std::isfinite(hi.x) || !std::isfinite(hi.y)) return all;
+  const int x0 = int(std::clamp(std::floor(lo.x) - 2.0f, 0.0f, w)), y0 = int(std::clamp(std::floor(lo.y) - 2.0f, 0.0f, h));
+  const int x1 = int(std::clamp(std::ceil(hi.x) + 2.0f, 0.0f, w)), y1 = int(std::clamp(std::ceil(hi.y) + 2.0f, 0.0f, h));
+  return {{x0, y0}, {uint32_t(std::max(x1 - x0, 0)), uint32_t(std::max(y1 - y0, 0))}};
+}
+
+namespace {
+
+// One cross-fade step before the last (shared/layers.h LayerFadePush): each visible layer's colour
+// and the background's blended towards the next set inside fadeRect. Only colour: the composite
+// reads depth where a layer is opaque enough, and the old depth for a few frames is cheaper than a
+// depth pass per layer (which costs ~15 ms a layer at 1024x768 on lavapipe).
+Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  Device& d = *lv.device;
+  const float w = lv.spread.fadeWeight;
+  const float constants[4] = {0.0f, 0.0f, 0.0f, w};
+  const VkRect2D rect = layerFootprint(lv);
+  if (rect.extent.width == 0 || rect.extent.height == 0) return Status();
+  auto step = [&](const GraphicsPipeline& pipe, VkImageView color, const Image& newColor, uint32_t layer) -> Status {
+    VkRenderingAttachmentInfo c = attachment(color, false, false);
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = rect;
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = 1;
+    ri.pColorAttachments = &c;
+    d.cmdBeginRendering(cmd, &ri);
+    gpu::LayerFadePush push{};
+    push.layer = layer;
+    push.weight = w;
+    Status s = bindGraphics(d, cmd, pipe, {bindImage(newColor.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.nearestSampler)},
+                            push);
+    if (s.ok()) {
+      setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+      d.vk.CmdSetScissor(cmd, 0, 1, &rect);
+      d.vk.CmdSetBlendConstants(cmd, constants);
+      d.vk.CmdDraw(cmd, 3, 1, 0, 0);
+    }
+    d.cmdEndRendering(cmd);
+    return s;
+  };
+  for (uint32_t i = 0; i < lv.settings.layout.count(); ++i) CANOPY_TRY(step(lv.fade, lv.colorLayerViews[i], lv.next.color, i));
+  if (lv.rigidDraws.empty()) return Status();  // both backgrounds stay cleared
+  return step(lv.fadeBackground, lv.backgroundColor.view, lv.next.backgroundColor, 0);
+}
+
+// The last cross-fade step: the next set copied whole into the visible one, colour and depth.
+Status recordFadeCopy(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  Device& d = *lv.device;
+  auto copy = [&](const Image& from, const Image& to) {
+    VkImageCopy r{};
+    r.srcSubresource = {from.aspect, 0, 0, from.layers};
+    r.dstSubresource = {to.aspect, 0, 0, to.layers};
+    r.extent = {lv.desc.width, lv.desc.height, 1};
+    d.vk.CmdCopyImage(cmd, from.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, to.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &r);
+  };
+  copy(lv.next.color, lv.color);
+  copy(lv.next.depth, lv.depth);
+  copy(lv.next.backgroundColor, lv.backgroundColor);
+  copy(lv.next.backgroundDepth, lv.backgroundDepth);
+  return Status();
 }
 
 }  // namespace
@@ -456,7 +687,8 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd) {
 bool operator==(const LayerSettings& a, const LayerSettings& b) {
   return a.layout == b.layout && a.regions == b.regions && a.slice == b.slice && a.draw == b.draw && a.policy == b.policy &&
          a.moveThreshold == b.moveThreshold && a.turnThresholdDegrees == b.turnThresholdDegrees &&
-         a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient;
+         a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient &&
+         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
 }
 
 Status validateLayerSettings(const LayerSettings& s) {
@@ -478,6 +710,10 @@ Status validateLayerSettings(const LayerSettings& s) {
     return Status::error("layer settings: moveThreshold " + std::to_string(s.moveThreshold) + " is outside [0, 10]");
   if (!(s.turnThresholdDegrees >= 0 && s.turnThresholdDegrees <= 180))
     return Status::error("layer settings: turnThresholdDegrees " + std::to_string(s.turnThresholdDegrees) + " is outside [0, 180]");
+  if (!(s.rebuildBudgetMs >= 0 && s.rebuildBudgetMs <= 1000))
+    return Status::error("layer settings: rebuildBudgetMs " + std::to_string(s.rebuildBudgetMs) + " is outside [0, 1000]");
+  if (s.crossFadeFrames < 1 || s.crossFadeFrames > 240)
+    return Status::error("layer settings: crossFadeFrames " + std::to_string(s.crossFadeFrames) + " is outside [1, 240]");
   if (!(s.ambient >= 0 && s.ambient <= 1))
     return Status::error("layer settings: ambient " + std::to_string(s.ambient) + " is outside [0, 1]");
   for (int i = 0; i < 3; ++i) {
@@ -561,25 +797,33 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
   destroyTargets(lv);
-  for (GraphicsPipeline* p : {&lv.layered, &lv.perLayer, &lv.background}) destroyGraphicsPipeline(d, *p);
+  for (GraphicsPipeline* p : {&lv.layered, &lv.perLayer, &lv.background, &lv.fade, &lv.fadeBackground})
+    destroyGraphicsPipeline(d, *p);
   for (Image& t : lv.textures) destroyImage(d, t);
-  if (lv.sampler) d.vk.DestroySampler(d.device, lv.sampler, d.allocationCallbacks);
+  for (VkSampler smp : {lv.sampler, lv.nearestSampler})
+    if (smp) d.vk.DestroySampler(d.device, smp, d.allocationCallbacks);
   for (Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots, &lv.frameBuffer}) destroyBuffer(d, *b);
   lv = LayeredVegetation{};
 }
 
-Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s) {
+Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* targetsRecreated) {
+  if (targetsRecreated) *targetsRecreated = false;
   CANOPY_TRY(validateLayerSettings(s));
   bool single = false;
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
-  const bool recreate = s.layout.count() != lv.settings.layout.count();
+  const bool spreadBefore = spreadEnabled(lv);
+  const bool countChanged = s.layout.count() != lv.settings.layout.count();
   lv.settings = s;
   lv.singlePass = single;
   lv.stats.singlePass = single;
   lv.settingsChanged = true;
-  if (recreate) {
+  if (countChanged || spreadEnabled(lv) != spreadBefore) {
     destroyTargets(lv);
     CANOPY_TRY(createTargets(lv));
+    if (targetsRecreated) *targetsRecreated = true;
+    lv.forceImmediate = true;  // nothing to fade from
+  } else if (lv.spread.phase != SpreadPhase::Idle) {
+    lv.spread = SpreadRebuild{};  // drawn with the old settings: start again
   }
   return Status();
 }
@@ -593,19 +837,145 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
   lv.desc.width = width;
   lv.desc.height = height;
   lv.settingsChanged = true;  // the placement is in pixels of the old size: re-slice
+  lv.forceImmediate = true;
   return createTargets(lv);
 }
 
-Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebuild) {
+namespace {
+
+// The interval since the last view update tells what the last frame's layer work cost
+// (SliceRateControl); a drawing frame's triangles over its cost above the still baseline update
+// the rate, by at most a factor 1.5 per frame (frame times are noisy).
+void updateSliceRate(LayeredVegetation& lv) {
+  SliceRateControl& r = lv.rate;
+  const auto now = Clock::now();
+  if (r.haveLast) {
+    const double ms = std::chrono::duration<double, std::milli>(now - r.lastUpdate).count();
+    constexpr size_t kStill = 15;
+    // A placement frame is a still frame plus its (timed) CPU placement: a baseline sample too, so
+    // an orbiting camera that never stands still still has one.
+    if (r.lastWork == SliceRateControl::Work::None || r.lastWork == SliceRateControl::Work::Placement) {
+      const double still = r.lastWork == SliceRateControl::Work::None ? ms : std::max(ms - r.lastPlacementMs, 0.0);
+      if (r.stillMs.size() < kStill) r.stillMs.push_back(still);
+      else r.stillMs[r.stillNext++ % kStill] = still;
+    } else if (r.lastWork == SliceRateControl::Work::Slice && r.stillMs.size() >= 3 && r.lastTriangles > 0) {
+      const double excess = std::max(ms - median(r.stillMs), 0.05);
+      const double measured = double(r.lastTriangles) / excess;
+      r.trianglesPerMs *= std::clamp(measured / r.trianglesPerMs, 1.0 / 1.5, 1.5);
+    }
+  }
+  r.haveLast = true;
+  r.lastUpdate = now;
+  r.lastWork = SliceRateControl::Work::None;
+  r.lastTriangles = 0;
+}
+
+// The next frame's draws of a spread re-slice: triangles from the cursor, as many as the budget
+// and the measured rate allow (at least 1024, so it always ends).
+void planSlice(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.spread;
+  const uint64_t want = lv.desc.fixedSliceTriangles
+                            ? lv.desc.fixedSliceTriangles
+                            : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.rate.trianglesPerMs));
+  sp.slice.clear();
+  sp.sliceClears = sp.cursorChunk == 0 && sp.cursorTriangle == 0;
+  uint64_t drawn = 0;
+  while (sp.cursorChunk < lv.chunks.size() && drawn < want) {
+    const MeshChunk& c = lv.chunks[sp.cursorChunk];
+    const uint32_t count = uint32_t(std::min<uint64_t>(c.triangleCount - sp.cursorTriangle, want - drawn));
+    if (count) sp.slice.push_back({sp.cursorChunk, sp.cursorTriangle, count});
+    drawn += count;
+    sp.cursorTriangle += count;
+    if (sp.cursorTriangle >= c.triangleCount) {
+      sp.cursorChunk++;
+      sp.cursorTriangle = 0;
+    }
+  }
+  lv.slicePending = true;
+  lv.rate.lastWork = SliceRateControl::Work::Slice;
+  lv.rate.lastTriangles = drawn;
+  lv.stats.lastSliceTriangles = drawn;
+  lv.stats.maxSliceTriangles = std::max(lv.stats.maxSliceTriangles, drawn);
+}
+
+LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
+  LayerInfo m = b;
+  m.slab.depth = glm::mix(a.slab.depth, b.slab.depth, t);
+  m.slab.distance = glm::mix(a.slab.distance, b.slab.distance, t);
+  m.top = glm::mix(a.top, b.top, t);
+  m.rootLineY = glm::mix(a.rootLineY, b.rootLineY, t);
+  m.height = glm::mix(a.height, b.height, t);
+  return m;
+}
+
+// One frame of a spread re-slice: placement for up to the budget, then slices, then the fade.
+Status advanceSpread(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.spread;
+  sp.frames++;
+  switch (sp.phase) {
+    case SpreadPhase::Placing: {
+      const auto deadline = Clock::now() + std::chrono::duration<double, std::milli>(lv.settings.rebuildBudgetMs);
+      const auto deadlineTp = std::chrono::time_point_cast<Clock::duration>(deadline);
+      bool done = false;
+      const double before = sp.job.ms;
+      CANOPY_TRY(advancePlacement(lv, sp.job, &deadlineTp, &done));
+      lv.rate.lastWork = SliceRateControl::Work::Placement;
+      lv.rate.lastPlacementMs = sp.job.ms - before;
+      if (done) {
+        lv.stats.lastPlacementMs = sp.job.ms;
+        sp.phase = SpreadPhase::Drawing;
+      }
+      break;
+    }
+    case SpreadPhase::Drawing:
+      planSlice(lv);
+      if (sp.cursorChunk >= lv.chunks.size()) sp.phase = SpreadPhase::CrossFading;  // from the next frame
+      break;
+    case SpreadPhase::CrossFading: {
+      // Step k of F blends with weight 1 / (F - k + 1): the new set's share is then exactly k / F.
+      const uint32_t f = lv.settings.crossFadeFrames;
+      if (sp.fadeStep == 0) sp.fadeFrom = lv.layers;
+      sp.fadeStep++;
+      sp.fadeWeight = 1.0f / float(f - sp.fadeStep + 1);
+      const float share = float(sp.fadeStep) / float(f);
+      lv.fadePending = true;
+      lv.rate.lastWork = SliceRateControl::Work::Other;
+      lv.stats.crossFade = share;
+      if (sp.fadeStep >= f) {
+        lv.frame = sp.job.frame;
+        lv.layers = std::move(sp.job.layers);
+        lv.stats.spreadRebuilds++;
+        lv.stats.lastSpreadFrames = sp.frames;
+        sp.phase = SpreadPhase::Idle;
+        sp.job = PlacementJob{};
+        sp.fadeFrom.clear();
+      } else {
+        for (size_t i = 0; i < lv.layers.size(); ++i) lv.layers[i] = mixLayerInfo(sp.fadeFrom[i], sp.job.layers[i], share);
+      }
+      break;
+    }
+    case SpreadPhase::Idle: break;
+  }
+  return Status();
+}
+
+}  // namespace
+
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
   lv.stats.viewUpdates++;
+  updateSliceRate(lv);
+  lv.rebuildPending = lv.slicePending = lv.fadePending = false;
   std::string reason;
   const LayerSettings& s = lv.settings;
+  bool forced = false;
   if (!lv.haveView) {
     reason = "first view";
   } else if (!lv.forcedReason.empty()) {
     reason = lv.forcedReason;
+    forced = true;
   } else if (lv.settingsChanged) {
     reason = "settings changed";
+    forced = true;
   } else if (s.policy == ReslicePolicy::EveryFrame) {
     reason = "every frame";
   } else {
@@ -621,16 +991,38 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebui
       reason = "projection changed";
     }
   }
-  lv.rebuildPending = !reason.empty();
-  *rebuild = lv.rebuildPending;
-  if (!lv.rebuildPending) return Status();
-  CANOPY_TRY(placeForView(lv, view));
-  lv.haveView = true;
-  lv.settingsChanged = false;
-  lv.forcedReason.clear();
-  lv.lastRebuildView = view;
-  lv.stats.rebuilds++;
-  lv.stats.lastRebuildReason = reason;
+  const bool atOnce = !lv.haveView || lv.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
+  const bool spreading = lv.spread.phase != SpreadPhase::Idle;
+  // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
+  // re-slice or new settings restart it).
+  if (!reason.empty() && (atOnce || !spreading || forced)) {
+    lv.haveView = true;
+    lv.settingsChanged = false;
+    lv.forcedReason.clear();
+    lv.forceImmediate = false;
+    lv.lastRebuildView = view;
+    lv.stats.rebuilds++;
+    lv.stats.lastRebuildReason = reason;
+    if (atOnce) {
+      lv.spread = SpreadRebuild{};
+      CANOPY_TRY(placeForView(lv, view));
+      lv.rebuildPending = true;
+      lv.rate.lastWork = SliceRateControl::Work::Other;
+      lv.stats.crossFade = 1.0f;
+    } else {
+      lv.spread = SpreadRebuild{};
+      lv.spread.phase = SpreadPhase::Placing;
+      beginPlacement(lv, view, lv.spread.job);
+      lv.stats.crossFade = 0.0f;
+    }
+  }
+  if (lv.spread.phase != SpreadPhase::Idle) CANOPY_TRY(advanceSpread(lv));
+  lv.stats.spreadPhase = uint32_t(lv.spread.phase);
+  lv.stats.trianglesPerMs = lv.rate.trianglesPerMs;
+  *changed = lv.rebuildPending || lv.fadePending;
+  // Between the first and last fade steps every texel with alpha in either set keeps some, so the
+  // occupancy of the first step (a superset from then on) stays valid: the pass is not rerun.
+  lv.occupancyDirty = lv.rebuildPending || (lv.fadePending && (lv.spread.fadeStep == 1 || lv.spread.phase == SpreadPhase::Idle));
   return Status();
 }
 
@@ -650,12 +1042,16 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, roots, roots);
   const auto frame = g.importBuffer("layers: frame", lv.frameBuffer.size, kFrameRead, kFrameRead);
   LayeredVegetation* p = &lv;
+  // The frame block holds the placement being drawn: the visible one for a re-slice at once, the
+  // spread re-slice's from its first slice on.
   g.addPass("layers: frame constants", [p](rg::PassContext& c) {
      if (p->rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->frame);
+     else if (p->slicePending && p->spread.sliceClears)
+       c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->spread.job.frame);
      return Status();
    }).write(frame, rg::Use::TransferDst);
   auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {
-                    return p->rebuildPending ? recordFoliage(*p, c.cmd) : Status();
+                    return p->rebuildPending ? recordFoliage(*p, c.cmd, visibleTargets(*p), true, nullptr) : Status();
                   });
   foliage.access(frame, kFrameRead)
       .read(vertices, rg::Use::VertexBuffer)
@@ -665,7 +1061,8 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
       .write(r.depth, rg::Use::DepthAttachmentWrite);
   if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
   g.addPass("layers: background", [p](rg::PassContext& c) {
-     return p->rebuildPending && !p->rigidDraws.empty() ? recordBackground(*p, c.cmd) : Status();
+     return p->rebuildPending && !p->rigidDraws.empty() ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
+                                                        : Status();
    })
       .access(frame, kFrameRead)
       .read(vertices, rg::Use::VertexBuffer)
@@ -673,6 +1070,51 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
       .read(leafRoots, rg::Use::VertexStorageRead)
       .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
       .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite);
+  if (lv.next.color.image) {
+    // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): this frame's slice into the
+    // next set (loaded: earlier slices are kept), then a cross-fade step into the visible set.
+    const auto nextColor = g.importImage("layers (next set): colour", descOf(lv.next.color), kNextRest, kNextRest);
+    const auto nextDepth = g.importImage("layers (next set): depth", descOf(lv.next.depth), kNextRest, kNextRest);
+    const auto nextBgColor = g.importImage("background (next set): colour", descOf(lv.next.backgroundColor), kNextRest, kNextRest);
+    const auto nextBgDepth = g.importImage("background (next set): depth", descOf(lv.next.backgroundDepth), kNextRest, kNextRest);
+    g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
+       if (!p->slicePending) return Status();
+       const bool clear = p->spread.sliceClears;
+       if (clear || sliceHas(*p, true)) CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
+       if (!p->rigidDraws.empty() && (clear || sliceHas(*p, false)))
+         CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
+       return Status();
+     })
+        .access(frame, kFrameRead)
+        .read(vertices, rg::Use::VertexBuffer)
+        .read(indices, rg::Use::IndexBuffer)
+        .read(leafRoots, rg::Use::VertexStorageRead)
+        .write(nextColor, rg::Use::ColorAttachmentReadWrite)
+        .write(nextDepth, rg::Use::DepthAttachmentWrite)
+        .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)
+        .write(nextBgDepth, rg::Use::DepthAttachmentWrite);
+    const bool rigid = !lv.rigidDraws.empty();
+    auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
+      return p->fadePending && p->spread.fadeWeight < 1.0f ? recordFadeBlend(*p, c.cmd) : Status();
+    });
+    blend.read(nextColor, rg::Use::FragmentSampled).write(r.color, rg::Use::ColorAttachmentReadWrite);
+    if (rigid) blend.read(nextBgColor, rg::Use::FragmentSampled).write(r.backgroundColor, rg::Use::ColorAttachmentReadWrite);
+    g.addPass("layers: cross-fade (last step)", [p](rg::PassContext& c) {
+       return p->fadePending && p->spread.fadeWeight >= 1.0f ? recordFadeCopy(*p, c.cmd) : Status();
+     })
+        .read(nextColor, rg::Use::TransferSrc)
+        .read(nextDepth, rg::Use::TransferSrc)
+        .read(nextBgColor, rg::Use::TransferSrc)
+        .read(nextBgDepth, rg::Use::TransferSrc)
+        .write(r.color, rg::Use::TransferDst)
+        .write(r.depth, rg::Use::TransferDst)
+        .write(r.backgroundColor, rg::Use::TransferDst)
+        .write(r.backgroundDepth, rg::Use::TransferDst);
+    CANOPY_TRY(g.bindImage(nextColor, lv.next.color));
+    CANOPY_TRY(g.bindImage(nextDepth, lv.next.depth));
+    CANOPY_TRY(g.bindImage(nextBgColor, lv.next.backgroundColor));
+    CANOPY_TRY(g.bindImage(nextBgDepth, lv.next.backgroundDepth));
+  }
   CANOPY_TRY(g.bindImage(r.color, lv.color));
   CANOPY_TRY(g.bindImage(r.depth, lv.depth));
   if (lv.desc.writeIds) CANOPY_TRY(g.bindImage(r.ids, lv.ids));

@@ -9,6 +9,7 @@
 // re-slicing policy and, when a rebuild is due, places the layers); addLayerPasses() adds the
 // draws to a render graph (they record only when a rebuild is due). The layer images stay in
 // desc.restUse between rebuilds.
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -43,6 +44,9 @@ struct LayeredVegetationDesc {
   std::string rootCacheDir;
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
   uint32_t maxChunkVertices = kMaxChunkVertices;  // distinct vertices per mesh chunk, 3..65535 (tests cut small chunks)
+  // Spread re-slicing: every drawing frame draws this many triangles instead of what the budget and
+  // the measured drawing rate give (tests: a deterministic number of slices). 0: measured.
+  uint32_t fixedSliceTriangles = 0;
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
@@ -61,6 +65,60 @@ struct LayerInfo {
 struct LayerDraw {
   uint32_t material = 0;
   uint32_t firstIndex = 0, indexCount = 0;
+};
+
+// The second layer set a spread re-slice draws into (LayerSettings.rebuildBudgetMs > 0), rested
+// in FragmentSampled for the cross-fade that copies it into the visible set.
+struct LayerTargetSet {
+  Image color, depth, backgroundColor, backgroundDepth;
+  std::vector<VkImageView> colorLayerViews, depthLayerViews;  // per layer (per-layer draw path)
+};
+
+// The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
+// bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
+struct PlacementJob {
+  LayerView view;
+  gpu::LayerFrame frame{};
+  std::vector<LayerInfo> layers;
+  std::vector<float> leafDepth;
+  std::vector<uint8_t> leafLayer;
+  float zMin = 0, zMax = 0, bottom = 0;
+  uint32_t stage = 0;
+  size_t next = 0;
+  double ms = 0;  // CPU time spent so far
+};
+
+// A part of a mesh chunk drawn by one spread slice.
+struct ChunkPart {
+  uint32_t chunk = 0, firstTriangle = 0, triangleCount = 0;
+};
+
+enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFading = 3 };  // = LayerStats.spreadPhase
+
+// docs/design.md "Layers: spread re-slicing".
+struct SpreadRebuild {
+  SpreadPhase phase = SpreadPhase::Idle;
+  PlacementJob job;
+  uint32_t frames = 0;                 // frames since it started
+  uint32_t cursorChunk = 0, cursorTriangle = 0;  // the next triangle to draw
+  std::vector<ChunkPart> slice;        // this frame's draws into the next set
+  bool sliceClears = false;            // this frame's slice is the first: clear the next set
+  uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade
+  float fadeWeight = 0;                // this frame's LayerFadePush.weight
+  std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
+};
+
+// Sizes the spread slices: frame intervals (between updateLayerView calls) of frames without layer
+// work give the still baseline; a drawing frame's interval above it is what its triangles cost.
+struct SliceRateControl {
+  std::chrono::steady_clock::time_point lastUpdate{};
+  bool haveLast = false;
+  enum class Work { None, Placement, Slice, Other } lastWork = Work::Other;
+  uint64_t lastTriangles = 0;
+  double lastPlacementMs = 0;          // CPU placement time of a Placement frame (taken off its interval)
+  std::vector<double> stillMs;         // the last few still intervals (ring)
+  uint32_t stillNext = 0;
+  double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~6000/ms)
 };
 
 struct LayeredVegetation {
@@ -85,6 +143,9 @@ struct LayeredVegetation {
   Image color, depth, ids, backgroundColor, backgroundDepth;
   std::vector<VkImageView> colorLayerViews, depthLayerViews, idsLayerViews;  // per-layer (fallback)
   GraphicsPipeline layered, perLayer, background;
+  LayerTargetSet next;                    // spread re-slicing only
+  GraphicsPipeline fade, fadeBackground;  // spread re-slicing only
+  VkSampler nearestSampler = VK_NULL_HANDLE;
   // State.
   LayerSettings settings;
   bool singlePass = false;
@@ -92,6 +153,14 @@ struct LayeredVegetation {
   bool haveView = false;
   bool settingsChanged = false;
   std::string forcedReason;  // re-slice at the next view update for this reason (a camera cut)
+  bool forceImmediate = false;  // ... and at once
+  bool slicePending = false;    // this frame draws spread.slice into the next set
+  bool fadePending = false;     // this frame runs a cross-fade step
+  // Which tiles hold foliage may have changed this frame (the composite's occupancy): a re-slice at
+  // once, the first cross-fade step (old and new both show: their union) and the last.
+  bool occupancyDirty = false;
+  SpreadRebuild spread;
+  SliceRateControl rate;
   std::vector<PreparedWork> pendingClear;  // the targets' first clear, not yet recorded (host devices)
   LayerView lastRebuildView;
   gpu::LayerFrame frame{};
@@ -107,23 +176,33 @@ void destroyLayeredVegetation(LayeredVegetation& lv);
 
 // Changes settings at run time; a different layer count recreates the layer images (a graph
 // holding them must be rebuilt), anything else only marks the layers for a rebuild.
-Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings);
+// *targetsRecreated (optional) tells whether the layer images were recreated.
+Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bool* targetsRecreated = nullptr);
 
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;
 // the mesh, leaf roots and settings are kept.
 Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height);
 
-// Applies the re-slicing policy for the new view: *rebuild tells whether the next recorded layer
-// passes will redraw the layers (then the placement has been recomputed for `view`).
-Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* rebuild);
+// Applies the re-slicing policy for the new view and advances a spread re-slice: *changed tells
+// whether the next recorded layer passes change the visible layers (a re-slice at once, whose
+// placement has been recomputed for `view`, or a cross-fade step); lv.layers is then the placement
+// they show.
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed);
+
+// The pixels the visible layers (and, during a spread re-slice, the next set) can cover: the
+// model's bounding box projected by the placements' views, 2 pixels of margin; the whole target
+// when a corner is behind a camera.
+VkRect2D layerFootprint(const LayeredVegetation& lv);
 
 struct LayerResources {
   rg::ResourceId color = rg::kInvalidResource, depth = rg::kInvalidResource, ids = rg::kInvalidResource;
   rg::ResourceId backgroundColor = rg::kInvalidResource, backgroundDepth = rg::kInvalidResource;
 };
 // Adds "layers: frame constants", "layers: foliage" and "layers: background" with the layer
-// images imported (and bound) in desc.restUse. The passes draw only when a rebuild is pending.
+// images imported (and bound) in desc.restUse, and with spread re-slicing "layers: spread slice"
+// and "layers: cross-fade" (the next set imported in FragmentSampled). The passes draw only when
+// updateLayerView planned that work for this frame.
 Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& graph, LayerResources* out);
 
 // Reads the layer images back (tests and tools): premultiplied linear RGBA as float, depth, ids.

@@ -22,14 +22,24 @@ void main() {
     occupancy[layer * tiles + id] = 0u;
     return;
   }
-  ivec2 t0 = ivec2(id % pc.tilesX, id / pc.tilesX) * int(COMPOSITE_TILE);
-  ivec2 hi = ivec2(pc.width, pc.height) - 1;
+  // The tile and one texel around it, 2x2 texels per gather: a gather at the corner shared by texels
+  // (x, y) and (x + 1, y + 1) returns those four (the border sampler reads outside texels as
+  // transparent; a clamped read would land on an edge texel of this tile, read anyway). A quarter of the texel reads, which is what this
+  // pass costs on CPU devices after every re-slice (docs/performance.md).
+  uvec2 tile = uvec2(id % pc.tilesX, id / pc.tilesX);
+  if (tile.x < pc.occupancyX0 || tile.y < pc.occupancyY0 || tile.x >= pc.occupancyX1 || tile.y >= pc.occupancyY1) {
+    occupancy[layer * tiles + id] = 0u;
+    return;
+  }
+  ivec2 t0 = ivec2(tile) * int(COMPOSITE_TILE);
+  vec2 size = vec2(pc.width, pc.height);
   uint any = 0u;
-  for (int y = -1; y <= int(COMPOSITE_TILE) && any == 0u; ++y)
-    for (int x = -1; x <= int(COMPOSITE_TILE); ++x) {
-      ivec2 q = clamp(t0 + ivec2(x, y), ivec2(0), hi);
-      float a = background ? texelFetch(backgroundColor, q, 0).a : texelFetch(layerColor, ivec3(q, layer), 0).a;
-      if (a > 0.0 && (background || a >= COMPOSITE_MIN_ALPHA)) { any = 1u; break; }
+  for (int y = -1; y <= int(COMPOSITE_TILE) && any == 0u; y += 2)
+    for (int x = -1; x <= int(COMPOSITE_TILE); x += 2) {
+      vec2 uv = vec2(t0 + ivec2(x + 1, y + 1)) / size;
+      vec4 a = background ? textureGather(backgroundColor, uv, 3) : textureGather(layerColor, vec3(uv, float(layer)), 3);
+      float m = max(max(a.x, a.y), max(a.z, a.w));
+      if (m > 0.0 && (background || m >= COMPOSITE_MIN_ALPHA)) { any = 1u; break; }
     }
   occupancy[layer * tiles + id] = any;
 }

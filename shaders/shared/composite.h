@@ -62,8 +62,14 @@ struct CompositePush {
   uint dispWidth;      // compute path: texels per row / column of the displacement image (>= gridX, gridY)
   uint dispHeight;
   uint tilesPerGroup;  // compute path: listed tiles per workgroup of the tile kernel (>= 1; CompositorDesc)
+  // Occupancy pass: the tiles [occupancyX0, occupancyX1) x [occupancyY0, occupancyY1) can hold
+  // foliage (the layers' projected bounds); the others are empty without reading a texel.
+  uint occupancyX0;
+  uint occupancyY0;
+  uint occupancyX1;
+  uint occupancyY1;
 };
-CANOPY_SIZE_CHECK(CompositePush, 64)
+CANOPY_SIZE_CHECK(CompositePush, 80)
 
 // Compute path: the tile list the classification appends to. The header doubles as the indirect
 // dispatch of the warp + composite kernel (one workgroup per tilesPerGroup listed tiles) and the

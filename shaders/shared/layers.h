@@ -58,6 +58,18 @@ struct LayerDrawPush {
 };
 CANOPY_SIZE_CHECK(LayerDrawPush, 80)
 
+// One step of a spread re-slice's cross-fade (docs/design.md "Layers: spread re-slicing"): the
+// visible layer's (or background's) colour becomes visible * (1 - weight) + new * weight, with
+// weight 1 / (F - k + 1) at step k of F, so after step k the new set's share is exactly k / F; the
+// last step (weight 1) is a copy of the new set, depth included.
+struct LayerFadePush {
+  uint layer;    // array layer of the new set read and of the visible set written (0: background)
+  float weight;  // this step's weight of the new set, (0, 1]
+  uint pad0;
+  uint pad1;
+};
+CANOPY_SIZE_CHECK(LayerFadePush, 16)
+
 // A chunk-local leaf index that means "no leaf" (rigid parts).
 #define LAYER_CHUNK_NO_LEAF 0xffffu
 

@@ -333,6 +333,16 @@ struct LayerSettings {
   Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space, finite (normalised; zero: straight up)
   Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each in [0, 1000]
   float ambient = 0.35f;                 // [0, 1]
+  // Spread re-slicing (docs/design.md "Layers: spread re-slicing"). > 0: a re-slice caused by a
+  // camera move, turn or projection change, a light change or requestCanopyRebuild(spread) is done
+  // over several frames, each adding about this much work: the placement on the CPU (timed), then
+  // triangles drawn into a second layer set (as many as the measured drawing rate fits); the old
+  // layers keep animating meanwhile, and the new ones replace them over crossFadeFrames frames.
+  // 0: every re-slice is drawn at once in the frame that asks for it. The first view, a camera
+  // cut, a new layer count or size, ReslicePolicy::EveryFrame and the id output always re-slice
+  // at once. ms, [0, 1000].
+  float rebuildBudgetMs = 0.0f;
+  uint32_t crossFadeFrames = 8;          // frames a spread re-slice fades in over, [1, 240]
 };
 bool operator==(const LayerSettings& a, const LayerSettings& b);
 
@@ -491,6 +501,12 @@ struct CanopyFrameInputs {
 // `final` states.
 Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
+// Re-slices the layers at the next recorded frame whatever the camera did: `immediate` draws the
+// new layers in that frame; otherwise the re-slice is spread over frames like a view change
+// (LayerSettings.rebuildBudgetMs; at once when that is 0). A spread re-slice already running is
+// restarted for the next frame's camera.
+Status requestCanopyRebuild(CanopyContext* context, bool immediate);
+
 struct LayerStats {
   double preprocessMs = 0;    // material split + leaf roots (or cache read)
   bool rootCacheHit = false;
@@ -504,6 +520,14 @@ struct LayerStats {
   double lastPlacementMs = 0; // CPU time of the last placement
   uint32_t meshChunks = 0;    // draws per layer rebuild (compact mesh chunks, foliage + rigid)
   uint64_t meshBytes = 0;     // the compact mesh on the device: vertices, 16-bit indices, root tables
+  // Spread re-slicing (LayerSettings.rebuildBudgetMs):
+  uint32_t spreadPhase = 0;          // 0 idle, 1 placing (CPU), 2 drawing the new set, 3 cross-fading
+  uint64_t spreadRebuilds = 0;       // spread re-slices completed
+  uint32_t lastSpreadFrames = 0;     // frames the last completed one took, placement to last fade step
+  uint64_t lastSliceTriangles = 0;   // triangles drawn by the last drawing frame
+  uint64_t maxSliceTriangles = 0;    // the most any drawing frame drew
+  double trianglesPerMs = 0;         // the drawing-rate estimate that sizes the slices (measured)
+  float crossFade = 1.0f;            // the newest set's share of the visible layers, [0, 1]
 };
 struct SimulationStats {
   uint64_t steps = 0;

@@ -1,0 +1,18 @@
+// Cross-fade step of a spread re-slice (shared/layers.h LayerFadePush; docs/design.md "Layers:
+// spread re-slicing"). The pipeline blends source + destination * (1 - weight), so the colour
+// written is the new layer's premultiplied colour already weighted. Depth is not blended: the
+// visible depth stays the old set's until the last step, which copies the new set whole
+// (render/layers.cpp recordFadeCopy).
+#include "shared/layers.h"
+
+#ifdef CANOPY_FADE_BACKGROUND
+layout(binding = 0) uniform sampler2D newColor;
+#define FETCH(t) texelFetch(t, ivec2(gl_FragCoord.xy), 0)
+#else
+layout(binding = 0) uniform sampler2DArray newColor;
+#define FETCH(t) texelFetch(t, ivec3(ivec2(gl_FragCoord.xy), int(pc.layer)), 0)
+#endif
+layout(push_constant, scalar) uniform Push { LayerFadePush pc; };
+layout(location = 0) out vec4 outColor;
+
+void main() { outColor = FETCH(newColor) * pc.weight; }

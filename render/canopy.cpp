@@ -499,7 +499,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
                            a.layerCount == c->last.layerCount;
   const VkRect2D footprint = layerFootprint(c->layers);
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, !c->layers.rigidDraws.empty(), c->layers.occupancyDirty,
-                              motionValid, &footprint));
+                              motionValid, &footprint, c->layers.occupancyUniteNext));
   c->last = a;
   c->layersRebuilt = rebuild;
   c->frames++;

@@ -219,7 +219,7 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     cp.shader = "composite_scene_depth.comp";
     CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
     cp.shader = "composite_occupancy.comp";
-    cp.bindings = {sampled, storage, sampled};
+    cp.bindings = {sampled, storage, sampled, sampled, sampled};
     CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
     const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
     CANOPY_TRY(createBuffer(d, tiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
@@ -305,7 +305,7 @@ void destroyCompositor(Compositor& c) {
 }
 
 Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu::AnimFrame& anim, bool hasBackground,
-                        bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect) {
+                        bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect, bool uniteNext) {
   if (!c.device) return Status::error("prepareComposite: the compositor was not created");
   CANOPY_TRY(validateCompositeParams(params));
   if (anim.layerCount < 1 || anim.layerCount > c.desc.maxLayers)
@@ -361,6 +361,7 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.tilesPerGroup = c.desc.tilesPerGroup != 0 ? c.desc.tilesPerGroup : cpuDevice ? 16u : 1u;
   c.params = params;
   c.occupancyPending = c.occupancyPending || layersRebuilt;
+  c.occupancyUnitePending = c.occupancyUnitePending || uniteNext;
   return Status();
 }
 
@@ -380,19 +381,30 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   CANOPY_TRY(g.bindBuffer(scene, c.sceneDepth.buffer));
   Compositor* cp = &c;
   const LayerResources l = layers;
-  g.addPass("composite: occupancy", [cp, l](rg::PassContext& x) {
-     if (!cp->occupancyPending) return Status();
-     cp->occupancyPending = false;
-     const gpu::CompositePush& p = cp->push;
-     return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount + 1, 1,
-                     {bindImage(x.image(l.color).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
-                      bindBuffer(cp->occupancy.buffer),
-                      bindImage(x.image(l.backgroundColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest)},
-                     p);
-   })
-      .read(l.color, rg::Use::ComputeSampled)
+  // One dispatch a frame: a pending recompute from the visible layers first, a union with the next
+  // set (spread re-slicing) in the frame after if both are pending.
+  auto occupancyPass = g.addPass("composite: occupancy", [cp, l](rg::PassContext& x) {
+    const bool unite = !cp->occupancyPending && cp->occupancyUnitePending && l.nextColor != rg::kInvalidResource;
+    if (!cp->occupancyPending && !unite) return Status();
+    if (unite) cp->occupancyUnitePending = false;
+    cp->occupancyPending = false;
+    gpu::CompositePush p = cp->push;
+    if (unite) p.flags |= COMPOSITE_OCCUPANCY_UNION;
+    const rg::ResourceId nextColor = unite ? l.nextColor : l.color;
+    const rg::ResourceId nextBackground = unite ? l.nextBackgroundColor : l.backgroundColor;
+    return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount + 1, 1,
+                    {bindImage(x.image(l.color).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
+                     bindBuffer(cp->occupancy.buffer),
+                     bindImage(x.image(l.backgroundColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
+                     bindImage(x.image(nextColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
+                     bindImage(x.image(nextBackground).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest)},
+                    p);
+  });
+  occupancyPass.read(l.color, rg::Use::ComputeSampled)
       .read(l.backgroundColor, rg::Use::ComputeSampled)
-      .write(occupancy, rg::Use::ComputeStorageWrite);
+      .write(occupancy, rg::Use::ComputeStorageReadWrite);
+  if (l.nextColor != rg::kInvalidResource)
+    occupancyPass.read(l.nextColor, rg::Use::ComputeSampled).read(l.nextBackgroundColor, rg::Use::ComputeSampled);
   g.addPass("composite: scene depth", [cp, t](rg::PassContext& x) {
      if (cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;

@@ -69,6 +69,7 @@ struct Compositor {
   CompositeParams params;
   gpu::CompositePush push{};     // the next recorded frame's constants (prepareComposite)
   bool occupancyPending = true;  // recompute occupancy (after a layer rebuild)
+  bool occupancyUnitePending = false;  // OR the next set's occupancy in (after any recompute)
 };
 Status createCompositor(Device& device, const CompositorDesc& desc, Compositor* out);
 void destroyCompositor(Compositor& compositor);
@@ -78,8 +79,11 @@ void destroyCompositor(Compositor& compositor);
 // is last frame's (motion vectors).
 // `foliageRect` (pixels; null: the whole target) bounds where the layers can hold foliage: the
 // occupancy pass reads only those tiles.
+// `uniteNext`: OR the next layer set's occupancy (LayerResources.nextColor; a spread re-slice whose
+// last slice is drawn this frame) into the current one, so it holds for the whole cross-fade.
 Status prepareComposite(Compositor& compositor, const CompositeParams& params, const gpu::AnimFrame& anim,
-                        bool hasBackground, bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect = nullptr);
+                        bool hasBackground, bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect = nullptr,
+                        bool uniteNext = false);
 
 struct CompositeTargets {
   rg::ResourceId color = rg::kInvalidResource;   // host colour (blended over)

@@ -628,17 +628,18 @@ VkRect2D layerFootprint(const LayeredVegetation& lv) {
 
 namespace {
 
-// One cross-fade step before the last (shared/layers.h LayerFadePush): each visible layer's colour
-// and the background's blended towards the next set inside fadeRect. Only colour: the composite
-// reads depth where a layer is opaque enough, and the old depth for a few frames is cheaper than a
-// depth pass per layer (which costs ~15 ms a layer at 1024x768 on lavapipe).
+// A cross-fade step before the last (shared/layers.h LayerFadePush): the visible layers' colours
+// (and the background's) with a weight this frame blended towards the next set inside
+// layerFootprint. Only colour: the composite reads depth where a layer is opaque enough, and the
+// old depth for a few frames is cheaper than a depth pass per layer (with gl_FragDepth, ~15 ms a
+// layer at 1024x768 on lavapipe).
 Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   Device& d = *lv.device;
-  const float w = lv.spread.fadeWeight;
-  const float constants[4] = {0.0f, 0.0f, 0.0f, w};
   const VkRect2D rect = layerFootprint(lv);
   if (rect.extent.width == 0 || rect.extent.height == 0) return Status();
-  auto step = [&](const GraphicsPipeline& pipe, VkImageView color, const Image& newColor, uint32_t layer) -> Status {
+  auto step = [&](const GraphicsPipeline& pipe, VkImageView color, const Image& newColor, uint32_t layer, float w) -> Status {
+    if (w <= 0.0f) return Status();
+    const float constants[4] = {0.0f, 0.0f, 0.0f, w};
     VkRenderingAttachmentInfo c = attachment(color, false, false);
     VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
     ri.renderArea = rect;
@@ -660,9 +661,11 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
     d.cmdEndRendering(cmd);
     return s;
   };
-  for (uint32_t i = 0; i < lv.settings.layout.count(); ++i) CANOPY_TRY(step(lv.fade, lv.colorLayerViews[i], lv.next.color, i));
+  const std::vector<float>& w = lv.spread.fadeWeights;
+  const uint32_t n = lv.settings.layout.count();
+  for (uint32_t i = 0; i < n; ++i) CANOPY_TRY(step(lv.fade, lv.colorLayerViews[i], lv.next.color, i, w[i]));
   if (lv.rigidDraws.empty()) return Status();  // both backgrounds stay cleared
-  return step(lv.fadeBackground, lv.backgroundColor.view, lv.next.backgroundColor, 0);
+  return step(lv.fadeBackground, lv.backgroundColor.view, lv.next.backgroundColor, 0, w[n]);
 }
 
 // The last cross-fade step: the next set copied whole into the visible one, colour and depth.
@@ -932,20 +935,40 @@ Status advanceSpread(LayeredVegetation& lv) {
       if (sp.cursorChunk >= lv.chunks.size()) sp.phase = SpreadPhase::CrossFading;  // from the next frame
       break;
     case SpreadPhase::CrossFading: {
-      // Step k of F blends with weight 1 / (F - k + 1): the new set's share is then exactly k / F.
-      const uint32_t f = lv.settings.crossFadeFrames;
+      lv.rate.lastWork = SliceRateControl::Work::Other;
+      if (!sp.united) {  // the composite unites the next set's occupancy in; no blend this frame
+        sp.united = true;
+        lv.occupancyUniteNext = true;
+        break;
+      }
+      // F frames: F - 1 blend frames, then a copy of the next set (depth included). Each frame blends
+      // every other image (layers and background alternate), which halves a blend frame's cost; an
+      // image blended H times before the copy takes weight 1 / (H + 2 - j) at its j-th blend, so its
+      // new share is j / (H + 1) and the copy ends it at 1.
+      const uint32_t f = lv.settings.crossFadeFrames, n = lv.settings.layout.count(), blends = f - 1;
       if (sp.fadeStep == 0) sp.fadeFrom = lv.layers;
       sp.fadeStep++;
-      sp.fadeWeight = 1.0f / float(f - sp.fadeStep + 1);
+      sp.fadeCopy = sp.fadeStep >= f;
+      sp.fadeWeights.assign(n + 1, 0.0f);
+      if (!sp.fadeCopy) {
+        for (uint32_t i = 0; i <= n; ++i) {
+          const bool alternate = blends >= 2;
+          if (alternate && (sp.fadeStep + i) % 2 != 0) continue;
+          const uint32_t h = !alternate ? blends : (i % 2 == 0 ? blends / 2 : (blends + 1) / 2);
+          // Image i blends at frames k with k + i even: its j-th blend is at k = 2j - (i odd).
+          const uint32_t j = !alternate ? sp.fadeStep : (sp.fadeStep + i % 2) / 2;
+          sp.fadeWeights[i] = 1.0f / float(h + 2 - std::min(j, h));
+        }
+      }
       const float share = float(sp.fadeStep) / float(f);
       lv.fadePending = true;
-      lv.rate.lastWork = SliceRateControl::Work::Other;
       lv.stats.crossFade = share;
-      if (sp.fadeStep >= f) {
+      if (sp.fadeCopy) {
         lv.frame = sp.job.frame;
         lv.layers = std::move(sp.job.layers);
         lv.stats.spreadRebuilds++;
         lv.stats.lastSpreadFrames = sp.frames;
+        lv.occupancyRecomputeNext = true;
         sp.phase = SpreadPhase::Idle;
         sp.job = PlacementJob{};
         sp.fadeFrom.clear();
@@ -964,7 +987,9 @@ Status advanceSpread(LayeredVegetation& lv) {
 Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
   lv.stats.viewUpdates++;
   updateSliceRate(lv);
-  lv.rebuildPending = lv.slicePending = lv.fadePending = false;
+  lv.rebuildPending = lv.slicePending = lv.fadePending = lv.occupancyUniteNext = false;
+  const bool recomputeOccupancy = lv.occupancyRecomputeNext;
+  lv.occupancyRecomputeNext = false;
   std::string reason;
   const LayerSettings& s = lv.settings;
   bool forced = false;
@@ -1020,9 +1045,13 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   lv.stats.spreadPhase = uint32_t(lv.spread.phase);
   lv.stats.trianglesPerMs = lv.rate.trianglesPerMs;
   *changed = lv.rebuildPending || lv.fadePending;
-  // Between the first and last fade steps every texel with alpha in either set keeps some, so the
-  // occupancy of the first step (a superset from then on) stays valid: the pass is not rerun.
-  lv.occupancyDirty = lv.rebuildPending || (lv.fadePending && (lv.spread.fadeStep == 1 || lv.spread.phase == SpreadPhase::Idle));
+  // The composite's occupancy: recomputed after a re-slice at once and in the frame after a
+  // cross-fade's copy; the frame after the last slice unites the next set's tiles in
+  // (occupancyUniteNext), which covers every fade step (old and new both partly visible) without
+  // a recompute in a fade frame. (Marking the views' whole footprint occupied instead was tried:
+  // the composite then works through every footprint tile of every layer, 60-70 ms a fade frame
+  // more at 80K faces on lavapipe.)
+  lv.occupancyDirty = lv.rebuildPending || recomputeOccupancy;
   return Status();
 }
 
@@ -1095,12 +1124,12 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .write(nextBgDepth, rg::Use::DepthAttachmentWrite);
     const bool rigid = !lv.rigidDraws.empty();
     auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
-      return p->fadePending && p->spread.fadeWeight < 1.0f ? recordFadeBlend(*p, c.cmd) : Status();
+      return p->fadePending && !p->spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();
     });
     blend.read(nextColor, rg::Use::FragmentSampled).write(r.color, rg::Use::ColorAttachmentReadWrite);
     if (rigid) blend.read(nextBgColor, rg::Use::FragmentSampled).write(r.backgroundColor, rg::Use::ColorAttachmentReadWrite);
     g.addPass("layers: cross-fade (last step)", [p](rg::PassContext& c) {
-       return p->fadePending && p->spread.fadeWeight >= 1.0f ? recordFadeCopy(*p, c.cmd) : Status();
+       return p->fadePending && p->spread.fadeCopy ? recordFadeCopy(*p, c.cmd) : Status();
      })
         .read(nextColor, rg::Use::TransferSrc)
         .read(nextDepth, rg::Use::TransferSrc)
@@ -1110,6 +1139,8 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .write(r.depth, rg::Use::TransferDst)
         .write(r.backgroundColor, rg::Use::TransferDst)
         .write(r.backgroundDepth, rg::Use::TransferDst);
+    r.nextColor = nextColor;
+    r.nextBackgroundColor = nextBgColor;
     CANOPY_TRY(g.bindImage(nextColor, lv.next.color));
     CANOPY_TRY(g.bindImage(nextDepth, lv.next.depth));
     CANOPY_TRY(g.bindImage(nextBgColor, lv.next.backgroundColor));

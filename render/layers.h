@@ -103,8 +103,11 @@ struct SpreadRebuild {
   uint32_t cursorChunk = 0, cursorTriangle = 0;  // the next triangle to draw
   std::vector<ChunkPart> slice;        // this frame's draws into the next set
   bool sliceClears = false;            // this frame's slice is the first: clear the next set
-  uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade
-  float fadeWeight = 0;                // this frame's LayerFadePush.weight
+  bool united = false;                 // the frame after the last slice unites the occupancy (no fade)
+  uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade (the last copies)
+  bool fadeCopy = false;               // this frame's step is the last: copy the next set
+  std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
+                                       // background; 0: not blended this frame
   std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
 };
 
@@ -157,8 +160,11 @@ struct LayeredVegetation {
   bool slicePending = false;    // this frame draws spread.slice into the next set
   bool fadePending = false;     // this frame runs a cross-fade step
   // Which tiles hold foliage may have changed this frame (the composite's occupancy): a re-slice at
-  // once, the first cross-fade step (old and new both show: their union) and the last.
+  // once and the frame after a cross-fade recompute it; the frame after a spread re-slice's last
+  // slice has the next set's tiles united in (occupancyUniteNext), which covers the cross-fade.
   bool occupancyDirty = false;
+  bool occupancyUniteNext = false;
+  bool occupancyRecomputeNext = false;  // the last fade step asks the frame after it
   SpreadRebuild spread;
   SliceRateControl rate;
   std::vector<PreparedWork> pendingClear;  // the targets' first clear, not yet recorded (host devices)
@@ -198,6 +204,8 @@ VkRect2D layerFootprint(const LayeredVegetation& lv);
 struct LayerResources {
   rg::ResourceId color = rg::kInvalidResource, depth = rg::kInvalidResource, ids = rg::kInvalidResource;
   rg::ResourceId backgroundColor = rg::kInvalidResource, backgroundDepth = rg::kInvalidResource;
+  // The next set's colour (spread re-slicing only): the composite's occupancy unites it in.
+  rg::ResourceId nextColor = rg::kInvalidResource, nextBackgroundColor = rg::kInvalidResource;
 };
 // Adds "layers: frame constants", "layers: foliage" and "layers: background" with the layer
 // images imported (and bound) in desc.restUse, and with spread re-slicing "layers: spread slice"

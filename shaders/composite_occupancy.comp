@@ -2,14 +2,18 @@
 #extension GL_GOOGLE_include_directive : require
 // Which COMPOSITE_TILE-sized tiles of each layer hold any foliage (run after a layer rebuild), and,
 // in slot layerCount, which tiles the rigid background covers (the compute path's classification).
+// With COMPOSITE_OCCUPANCY_UNION the next layer set of a spread re-slice (bindings 3, 4) is read
+// and ORed into the occupancy, so it covers every step of the cross-fade (render/layers.cpp).
 // A tile counts texels one pixel around it too, so any bilinear footprint whose sample point lies
 // in an empty tile reads only empty texels: skipping it changes nothing.
 #include "shared/composite.h"
 
 layout(local_size_x = COMPOSITE_OCCUPANCY_GROUP) in;
 layout(binding = 0) uniform sampler2DArray layerColor;
-layout(binding = 1, scalar) writeonly buffer OccBuf { uint occupancy[]; };
+layout(binding = 1, scalar) buffer OccBuf { uint occupancy[]; };
 layout(binding = 2) uniform sampler2D backgroundColor;
+layout(binding = 3) uniform sampler2DArray nextLayerColor;
+layout(binding = 4) uniform sampler2D nextBackgroundColor;
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 void main() {
@@ -18,26 +22,31 @@ void main() {
   uint layer = gl_GlobalInvocationID.y;
   if (id >= tiles || layer > pc.layerCount) return;
   bool background = layer == pc.layerCount;
+  bool unite = (pc.flags & COMPOSITE_OCCUPANCY_UNION) != 0u;
+  if (unite && occupancy[layer * tiles + id] != 0u) return;  // already occupied
   if (background && (pc.flags & COMPOSITE_BACKGROUND) == 0u) {
     occupancy[layer * tiles + id] = 0u;
     return;
   }
-  // The tile and one texel around it, 2x2 texels per gather: a gather at the corner shared by texels
-  // (x, y) and (x + 1, y + 1) returns those four (the border sampler reads outside texels as
-  // transparent; a clamped read would land on an edge texel of this tile, read anyway). A quarter of the texel reads, which is what this
-  // pass costs on CPU devices after every re-slice (docs/performance.md).
+  // Tiles outside the layers' footprint (CompositePush.occupancy*) hold nothing.
   uvec2 tile = uvec2(id % pc.tilesX, id / pc.tilesX);
   if (tile.x < pc.occupancyX0 || tile.y < pc.occupancyY0 || tile.x >= pc.occupancyX1 || tile.y >= pc.occupancyY1) {
-    occupancy[layer * tiles + id] = 0u;
+    if (!unite) occupancy[layer * tiles + id] = 0u;
     return;
   }
+  // The tile and one texel around it, 2x2 texels per gather: a gather at the corner shared by
+  // texels (x, y) and (x + 1, y + 1) returns those four (the border sampler reads outside texels
+  // as transparent; a clamped read would land on an edge texel of this tile, read anyway). A
+  // quarter of the texel reads of one fetch each, which is what this pass costs on CPU devices.
   ivec2 t0 = ivec2(tile) * int(COMPOSITE_TILE);
   vec2 size = vec2(pc.width, pc.height);
   uint any = 0u;
   for (int y = -1; y <= int(COMPOSITE_TILE) && any == 0u; y += 2)
     for (int x = -1; x <= int(COMPOSITE_TILE); x += 2) {
       vec2 uv = vec2(t0 + ivec2(x + 1, y + 1)) / size;
-      vec4 a = background ? textureGather(backgroundColor, uv, 3) : textureGather(layerColor, vec3(uv, float(layer)), 3);
+      vec4 a = background ? (unite ? textureGather(nextBackgroundColor, uv, 3) : textureGather(backgroundColor, uv, 3))
+                          : (unite ? textureGather(nextLayerColor, vec3(uv, float(layer)), 3)
+                                   : textureGather(layerColor, vec3(uv, float(layer)), 3));
       float m = max(max(a.x, a.y), max(a.z, a.w));
       if (m > 0.0 && (background || m >= COMPOSITE_MIN_ALPHA)) { any = 1u; break; }
     }

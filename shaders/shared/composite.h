@@ -29,6 +29,8 @@
 #define COMPOSITE_BACKGROUND 32u    // a rigid background was drawn
 #define COMPOSITE_SCENE_DEPTH 64u   // the host's depth was copied (else everything is in front)
 #define COMPOSITE_REVERSE_Z 128u    // the host's depth is reverse-Z (1 = near); layers are standard
+#define COMPOSITE_OCCUPANCY_UNION 256u  // occupancy: OR the next layer set's tiles into the current
+                                        // occupancy (a spread re-slice, before its cross-fade)
 
 
 // CompositePush.debugView: what the demo's and a host's debug overlays show.

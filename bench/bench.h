@@ -37,8 +37,9 @@ struct Table1Options {
 };
 int runTable1Bench(Device& dev, const Table1Options& options);
 
-// Re-slicing (issue 16): at once vs spread over frames with `budgetMs`, per face count.
+// Re-slicing (issue 16): at once vs spread over frames with `budgetMs` (face counts up to
+// `spreadMaxFaces`), per face count.
 int runRebuildBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, float budgetMs,
-                    int rebuilds, uint32_t width, uint32_t height);
+                    int rebuilds, uint32_t width, uint32_t height, uint64_t spreadMaxFaces);
 }
 }  // namespace canopy

@@ -5,6 +5,7 @@
 //   canopy-bench table1 [--faces 80000,10000000] [--scene shrub] [--frames N] [--size 1024x768]
 //                [--orbit DEG] [--pair-frames N] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
 //   canopy-bench rebuild [--faces 80000,10000000] [--scene shrub] [--budget MS] [--rebuilds N] [--size WxH]
+//                [--spread-max-faces N]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -28,7 +29,8 @@ static int usage(const char* why) {
                "  anim           per-frame delay + warp + composite and whole frame, 3 vs 5 layers, levers\n"
                "  soak           long run: random parameters every frame, re-slicing every --rebuild-every frames;\n"
                "                 NaN/Inf, RSS, device allocations, frame time (--frames default 100000)\n"
-               "  rebuild        re-slicing: at once vs spread over frames (--budget MS, default 4), per face count\n"
+               "  rebuild        re-slicing: at once vs spread over frames (--budget MS, default 4), per face count;\n"
+               "                 spread only up to --spread-max-faces (default 10000000)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -73,6 +75,7 @@ int main(int argc, char** argv) {
   uint32_t rebuildEvery = 100;
   bool runRebuild = false;
   float budgetMs = 4.0f;
+  uint64_t spreadMaxFaces = 10000000;
   std::vector<uint64_t> faces = {80000, 10000000};
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
@@ -89,6 +92,11 @@ int main(int argc, char** argv) {
     else if (a == "soak") runSoak = true;
     else if (a == "table1") runTable1 = true;
     else if (a == "rebuild") runRebuild = true;
+    else if (a == "--spread-max-faces") {
+      uint32_t n = 0;
+      if (!cli::parseUint(next(), 0, 100000000, &n)) return usage("--spread-max-faces needs an integer in [0, 100000000]");
+      spreadMaxFaces = n;
+    }
     else if (a == "--budget") {
       const char* v = next();
       char* end = nullptr;
@@ -197,7 +205,7 @@ int main(int argc, char** argv) {
   }
   if (rc == 0 && runRebuild)
     rc = bench::runRebuildBench(dev, faces, scene.empty() ? "shrub" : scene, budgetMs, int(rebuilds),
-                                t1.width, t1.height);
+                                t1.width, t1.height, spreadMaxFaces);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

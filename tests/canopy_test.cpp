@@ -499,3 +499,94 @@ INSTANTIATE_TEST_SUITE_P(Scenes, GoldenTest,
                          [](const auto& info) { return std::string(info.param.name); });
 
 }  // namespace
+
+// Issue 16, through the public API: a turn re-sliced over frames while the wind keeps animating
+// the old layers; every frame, during the slices and the cross-fade, is the CPU reference's
+// composite of the layers then visible; requestCanopyRebuild and a camera cut re-slice at once.
+TEST_F(CanopyTest, SpreadReslicingKeepsAnimatingAsTheCpuReferenceDoes) {
+  const uint32_t w = 128, h = 96;
+  const VegetationModel model = makeLeafCloud(4000, 3, true);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 2.0f;
+  p.dynamics.cellSize = 8;
+  p.layers.rebuildBudgetMs = 0.5f;
+  p.layers.crossFadeFrames = 4;
+  const uint64_t gen = canopyStats(ctx).resourceGeneration;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  EXPECT_EQ(canopyStats(ctx).resourceGeneration, gen + 1) << "the second layer set is new";
+  Host host;
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = toCamera(cameraFor(model, w, h, 20.0f));
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(host.frame(ctx, f).ok());
+  auto checkReference = [&](const std::string& when) {
+    std::vector<glm::vec4> color;
+    std::vector<float> depth;
+    CompositeReferenceOutputs ref;
+    float maxDisp = 0;
+    ASSERT_TRUE(host.read(&color, &depth).ok());
+    ASSERT_TRUE(referenceFrame(dev, ctx, w, h, &ref, &maxDisp).ok());
+    size_t off = 0, depthOff = 0;
+    for (size_t i = 0; i < color.size(); ++i) {
+      off += maxDiff(color[i], ref.color[i]) > 3.0f / 255.0f;
+      depthOff += std::abs(depth[i] - ref.depth[i]) > 1e-6f;
+    }
+    EXPECT_GT(maxDisp, 0.5f) << when << ": the wind moves the layers";
+    EXPECT_LE(off, color.size() / 200) << when << ": pixels more than 3/255 off the CPU reference";
+    EXPECT_LE(depthOff, color.size() / 100) << when;
+  };
+  f.camera = toCamera(cameraFor(model, w, h, 24.0f));
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  CanopyStats st = canopyStats(ctx);
+  EXPECT_FALSE(st.layersRebuilt);
+  EXPECT_NE(st.layers.spreadPhase, 0u);
+  int frames = 1, fadeFrames = 0;
+  bool checkedSlices = false, checkedFade = false;
+  while (canopyStats(ctx).layers.spreadRebuilds == 0 && frames < 10000) {
+    ASSERT_TRUE(host.frame(ctx, f).ok());
+    ++frames;
+    st = canopyStats(ctx);
+    fadeFrames += st.layersRebuilt;
+    if (st.layers.spreadPhase == 2 && !checkedSlices) {
+      checkReference("while drawing slices");
+      checkedSlices = true;
+    }
+    if (st.layers.spreadPhase == 3 && st.layers.crossFade == 0.5f) {
+      checkReference("halfway through the cross-fade");
+      checkedFade = true;
+    }
+  }
+  EXPECT_TRUE(checkedSlices && checkedFade);
+  EXPECT_EQ(st.layers.spreadRebuilds, 1u);
+  EXPECT_EQ(fadeFrames, 4) << "the visible layers change only in the cross-fade's frames";
+  EXPECT_EQ(st.layers.lastSpreadFrames, uint32_t(frames));
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  checkReference("after the cross-fade");
+  // Forced re-slices.
+  ASSERT_TRUE(requestCanopyRebuild(ctx, true).ok());
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  st = canopyStats(ctx);
+  EXPECT_TRUE(st.layersRebuilt);
+  EXPECT_EQ(st.layers.lastRebuildReason, "requested at once");
+  EXPECT_EQ(st.layers.spreadPhase, 0u);
+  ASSERT_TRUE(requestCanopyRebuild(ctx, false).ok());
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  st = canopyStats(ctx);
+  EXPECT_FALSE(st.layersRebuilt);
+  EXPECT_EQ(st.layers.lastRebuildReason, "requested");
+  EXPECT_NE(st.layers.spreadPhase, 0u);
+  f.cameraCut = true;
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  st = canopyStats(ctx);
+  EXPECT_TRUE(st.layersRebuilt);
+  EXPECT_EQ(st.layers.spreadPhase, 0u) << "a camera cut re-slices at once";
+  EXPECT_FALSE(requestCanopyRebuild(nullptr, true).ok());
+  p.layers.crossFadeFrames = 500;
+  s = setCanopyParams(ctx, p);
+  EXPECT_NE(s.message().find("crossFadeFrames"), std::string::npos) << s.message();
+  host.destroy();
+  destroyCanopy(ctx);
+}

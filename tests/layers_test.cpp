@@ -474,3 +474,192 @@ TEST_F(LayersTest, ReslicingFollowsThePolicy) {
   EXPECT_NE(s.message().find("ambient"), std::string::npos) << s.message();
   destroyLayeredVegetation(lv);
 }
+
+// Issue 16: a re-slice spread over frames (slices of 7 triangles through chunks of at most 16
+// vertices, so slices end inside chunks and chunk borders fall inside leaves) leaves exactly the
+// layers a re-slice at once draws, for both draw paths; until its cross-fade the visible layers
+// and their placement stay the old ones; the cross-fade starts the frame after the frame that
+// unites the occupancy, which follows the last slice, and lasts crossFadeFrames frames, each
+// visible layer moving towards the new one by the step's weight.
+TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
+  const VegetationModel m = straddlingLeaves(12, 8, true);
+  constexpr uint32_t kSlice = 7, kFade = 5;
+  for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+    const std::string what = mode == LayerDrawMode::SinglePass ? "spread_single_pass" : "spread_per_layer";
+    LayeredVegetationDesc d = smallDesc();
+    d.writeIds = false;
+    d.settings.draw = mode;
+    d.maxChunkVertices = 16;
+    d.fixedSliceTriangles = kSlice;
+    d.settings.rebuildBudgetMs = 2.0f;
+    d.settings.crossFadeFrames = kFade;
+    LayeredVegetationDesc once = d;
+    once.settings.rebuildBudgetMs = 0.0f;
+    LayeredVegetation x, y;
+    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &x).ok());
+    ASSERT_TRUE(createLayeredVegetation(dev, m, once, &y).ok());
+    ASSERT_NE(x.next.color.image, VkImage(VK_NULL_HANDLE)) << "spread re-slicing draws into a second layer set";
+    EXPECT_EQ(y.next.color.image, VkImage(VK_NULL_HANDLE));
+    rg::RenderGraph g;
+    ASSERT_TRUE(addLayerPasses(x, g, nullptr).ok());
+    ASSERT_TRUE(g.compile().ok());
+    ASSERT_TRUE(g.realize(dev).ok());
+    bool changed = false;
+    auto frame = [&](const LayerView& v) {
+      Status s = updateLayerView(x, v, &changed);
+      if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+      return s;
+    };
+    const uint32_t n = x.settings.layout.count();
+    auto readAll = [&](LayeredVegetation& lv, std::vector<std::vector<glm::vec4>>* c) {
+      c->resize(n);
+      for (uint32_t l = 0; l < n; ++l) ASSERT_TRUE(readLayerColor(lv, l, &(*c)[l]).ok());
+    };
+    // The first view is drawn at once.
+    const LayerView a = frontView();
+    ASSERT_TRUE(frame(a).ok());
+    EXPECT_TRUE(changed);
+    EXPECT_EQ(x.stats.spreadPhase, 0u);
+    std::vector<std::vector<glm::vec4>> oldColor, newColor, mid;
+    readAll(x, &oldColor);
+    const std::vector<LayerInfo> oldLayers = x.layers;
+    // A 3-degree turn: placement, slices, the occupancy frame, the fade.
+    LayerView b = a;
+    b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+    ASSERT_TRUE(renderOnce(dev, y, b).ok());
+    readAll(y, &newColor);
+    uint64_t triangles = 0;
+    for (const MeshChunk& c : x.chunks) triangles += c.triangleCount;
+    const uint32_t slices = uint32_t((triangles + kSlice - 1) / kSlice);
+    ASSERT_GT(slices, 20u);
+    ASSERT_TRUE(frame(b).ok());  // placement (the mesh is small: done in this frame)
+    EXPECT_FALSE(changed);
+    EXPECT_EQ(x.stats.spreadPhase, uint32_t(SpreadPhase::Drawing)) << "placement done, drawing from the next frame";
+    for (uint32_t i = 0; i < slices; ++i) {
+      ASSERT_TRUE(frame(b).ok());
+      EXPECT_FALSE(changed) << what << ": slice " << i << " changed the visible layers";
+      EXPECT_TRUE(x.slicePending);
+      EXPECT_LE(x.stats.lastSliceTriangles, kSlice);
+      if (i == slices / 2) {
+        // Halfway: the visible layers and their placement are the old ones.
+        readAll(x, &mid);
+        for (uint32_t l = 0; l < n; ++l) expectClose(mid[l], oldColor[l], 0.0f, 0.0, what + "_halfway_layer" + std::to_string(l));
+        for (uint32_t l = 0; l < n; ++l) EXPECT_EQ(x.layers[l].slab.depth, oldLayers[l].slab.depth);
+      }
+    }
+    EXPECT_EQ(x.stats.spreadPhase, uint32_t(SpreadPhase::CrossFading)) << what << ": the last slice was drawn";
+    ASSERT_TRUE(frame(b).ok());  // unites the occupancy, no fade yet
+    EXPECT_FALSE(changed);
+    EXPECT_TRUE(x.occupancyUniteNext);
+    EXPECT_EQ(x.stats.crossFade, 0.0f);
+    for (uint32_t k = 1; k <= kFade; ++k) {
+      ASSERT_TRUE(frame(b).ok());
+      EXPECT_TRUE(changed) << what << ": fade step " << k;
+      EXPECT_FLOAT_EQ(x.stats.crossFade, float(k) / float(kFade));
+      if (k < kFade) {
+        EXPECT_EQ(x.stats.spreadPhase, uint32_t(SpreadPhase::CrossFading));
+        // Layer info moves linearly with the share.
+        const float t = float(k) / float(kFade);
+        EXPECT_NEAR(x.layers[0].slab.depth, glm::mix(oldLayers[0].slab.depth, y.layers[0].slab.depth, t), 1e-4f);
+      }
+      if (k == 2) {
+        // Image i has had floor((k + (i odd)) / 2) of its H + 1 steps (H = blends of its parity):
+        // colour = mix(old, new, j / (H + 1)) up to half-float rounding.
+        readAll(x, &mid);
+        for (uint32_t l = 0; l < n; ++l) {
+          const uint32_t blends = kFade - 1, h = l % 2 == 0 ? blends / 2 : (blends + 1) / 2, j = (k + l % 2) / 2;
+          const float share = float(j) / float(h + 1);
+          std::vector<glm::vec4> expect(oldColor[l].size());
+          for (size_t p = 0; p < expect.size(); ++p) expect[p] = glm::mix(oldColor[l][p], newColor[l][p], share);
+          expectClose(mid[l], expect, 4e-3f, 0.0, what + "_fade_layer" + std::to_string(l));
+        }
+      }
+    }
+    EXPECT_EQ(x.stats.spreadPhase, 0u);
+    EXPECT_EQ(x.stats.spreadRebuilds, 1u);
+    EXPECT_EQ(x.stats.lastSpreadFrames, 1 + slices + 1 + kFade);
+    ASSERT_TRUE(frame(b).ok());
+    EXPECT_FALSE(changed);
+    EXPECT_TRUE(x.occupancyDirty) << "the frame after the fade recomputes the occupancy";
+    // Exactly the layers drawn at once: colour and depth of every layer, and the background.
+    expectSameLayers(x, y, what);
+    std::vector<glm::vec4> bx, by;
+    std::vector<float> zx, zy;
+    ASSERT_TRUE(readBackground(x, &bx, &zx).ok());
+    ASSERT_TRUE(readBackground(y, &by, &zy).ok());
+    expectClose(bx, by, 0.0f, 0.0, what + "_background");
+    expectIdentical(zx, zy, 1, what + "_background_depth");
+    for (uint32_t l = 0; l < n; ++l) {
+      EXPECT_EQ(x.layers[l].slab.depth, y.layers[l].slab.depth);
+      EXPECT_EQ(x.layers[l].leaves, y.layers[l].leaves);
+      EXPECT_EQ(x.layers[l].triangles, y.layers[l].triangles);
+    }
+    g.release(dev);
+    destroyLayeredVegetation(x);
+    destroyLayeredVegetation(y);
+  }
+}
+
+// The policy with spreading on: a camera cut, a new layer count and the EveryFrame policy
+// re-slice at once; a turn while a spread re-slice runs waits for it; bad values are refused.
+TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
+  const VegetationModel m = straddlingLeaves(6, 4, false);
+  LayeredVegetationDesc d = smallDesc();
+  d.writeIds = false;
+  d.fixedSliceTriangles = 4;
+  d.settings.rebuildBudgetMs = 1.0f;
+  LayeredVegetation lv;
+  ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+  bool changed = false;
+  const LayerView a = frontView();
+  ASSERT_TRUE(updateLayerView(lv, a, &changed).ok());
+  EXPECT_TRUE(changed) << "first view: at once";
+  LayerView b = a;
+  b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+  ASSERT_TRUE(updateLayerView(lv, b, &changed).ok());
+  EXPECT_FALSE(changed);
+  EXPECT_NE(lv.stats.spreadPhase, 0u);
+  EXPECT_EQ(lv.stats.rebuilds, 2u);
+  LayerView c = b;
+  c.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * b.view;
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_EQ(lv.stats.rebuilds, 2u) << "a turn during a spread re-slice waits for it";
+  lv.forcedReason = "camera cut";
+  lv.forceImmediate = true;
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_TRUE(changed);
+  EXPECT_TRUE(lv.rebuildPending);
+  EXPECT_EQ(lv.stats.spreadPhase, 0u) << "a camera cut re-slices at once and ends the spread one";
+  EXPECT_EQ(lv.stats.lastRebuildReason, "camera cut");
+  LayerSettings every = lv.settings;
+  every.policy = ReslicePolicy::EveryFrame;
+  ASSERT_TRUE(setLayerSettings(lv, every).ok());
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+    EXPECT_TRUE(changed && lv.rebuildPending) << "EveryFrame re-slices at once";
+  }
+  LayerSettings three = lv.settings;
+  three.policy = ReslicePolicy::OnViewChange;
+  ASSERT_TRUE(parseLayerLayout("3(1-1-1)", &three.layout).ok());
+  bool recreated = false;
+  ASSERT_TRUE(setLayerSettings(lv, three, &recreated).ok());
+  EXPECT_TRUE(recreated);
+  EXPECT_EQ(lv.next.color.layers, 3u);
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_TRUE(changed && lv.rebuildPending) << "new layer images: nothing to fade from";
+  LayerSettings off = three;
+  off.rebuildBudgetMs = 0.0f;
+  ASSERT_TRUE(setLayerSettings(lv, off, &recreated).ok());
+  EXPECT_TRUE(recreated);
+  EXPECT_EQ(lv.next.color.image, VkImage(VK_NULL_HANDLE)) << "no second set without spreading";
+  LayerSettings bad = three;
+  bad.rebuildBudgetMs = -1.0f;
+  Status s = setLayerSettings(lv, bad);
+  EXPECT_NE(s.message().find("rebuildBudgetMs"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("[0, 1000]"), std::string::npos) << s.message();
+  bad = three;
+  bad.crossFadeFrames = 0;
+  s = setLayerSettings(lv, bad);
+  EXPECT_NE(s.message().find("crossFadeFrames"), std::string::npos) << s.message();
+  destroyLayeredVegetation(lv);
+}

@@ -816,16 +816,28 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
   const bool spreadBefore = spreadEnabled(lv);
   const bool countChanged = s.layout.count() != lv.settings.layout.count();
+  // How a re-slice is scheduled does not change what the layers hold: no re-slice for it.
+  LayerSettings content = s;
+  content.rebuildBudgetMs = lv.settings.rebuildBudgetMs;
+  content.crossFadeFrames = lv.settings.crossFadeFrames;
+  const bool contentChanged = !(content == lv.settings);
+  if (s.rebuildBudgetMs != lv.settings.rebuildBudgetMs) {
+    // A slice's cost is not linear in its triangles (fixed costs per frame): a rate measured with
+    // other slice sizes does not carry over to the new budget. The still baseline does.
+    lv.rate.trianglesPerMs = SliceRateControl{}.trianglesPerMs;
+    lv.rate.rateSamples.clear();
+  }
   lv.settings = s;
   lv.singlePass = single;
   lv.stats.singlePass = single;
-  lv.settingsChanged = true;
+  lv.settingsChanged = lv.settingsChanged || contentChanged;
   if (countChanged || spreadEnabled(lv) != spreadBefore) {
     destroyTargets(lv);
     CANOPY_TRY(createTargets(lv));
     if (targetsRecreated) *targetsRecreated = true;
-    lv.forceImmediate = true;  // nothing to fade from
-  } else if (lv.spread.phase != SpreadPhase::Idle) {
+    lv.settingsChanged = true;  // new images: empty until re-sliced
+    lv.forceImmediate = true;   // nothing to fade from
+  } else if (contentChanged && lv.spread.phase != SpreadPhase::Idle) {
     lv.spread = SpreadRebuild{};  // drawn with the old settings: start again
   }
   return Status();
@@ -848,7 +860,7 @@ namespace {
 
 // The interval since the last view update tells what the last frame's layer work cost
 // (SliceRateControl); a drawing frame's triangles over its cost above the still baseline update
-// the rate, by at most a factor 1.5 per frame (frame times are noisy).
+// the rate (frame times are noisy: see below).
 void updateSliceRate(LayeredVegetation& lv) {
   SliceRateControl& r = lv.rate;
   const auto now = Clock::now();
@@ -862,9 +874,18 @@ void updateSliceRate(LayeredVegetation& lv) {
       if (r.stillMs.size() < kStill) r.stillMs.push_back(still);
       else r.stillMs[r.stillNext++ % kStill] = still;
     } else if (r.lastWork == SliceRateControl::Work::Slice && r.stillMs.size() >= 3 && r.lastTriangles > 0) {
-      const double excess = std::max(ms - median(r.stillMs), 0.05);
-      const double measured = double(r.lastTriangles) / excess;
-      r.trianglesPerMs *= std::clamp(measured / r.trianglesPerMs, 1.0 / 1.5, 1.5);
+      // Cautious up, quick down: a slice is never believed to cost under a quarter of the budget
+      // (a lucky fast frame would otherwise ask for a huge next slice), the estimate follows the
+      // median of the last five slices by at most x1.2 up / x0.5 down a frame, and a slice that
+      // cost over twice the budget halves it at once.
+      const double budget = std::max<double>(lv.settings.rebuildBudgetMs, 1e-3);
+      const double raw = ms - median(r.stillMs);
+      const double measured = double(r.lastTriangles) / std::max(raw, 0.25 * budget);
+      constexpr size_t kSamples = 5;
+      if (r.rateSamples.size() < kSamples) r.rateSamples.push_back(measured);
+      else r.rateSamples[r.rateNext++ % kSamples] = measured;
+      r.trianglesPerMs *= std::clamp(median(r.rateSamples) / r.trianglesPerMs, 0.5, 1.2);
+      if (raw > 2.0 * budget) r.trianglesPerMs = std::min(r.trianglesPerMs, 0.5 * double(r.lastTriangles) / budget);
     }
   }
   r.haveLast = true;
@@ -1037,6 +1058,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     } else {
       lv.spread = SpreadRebuild{};
       lv.spread.phase = SpreadPhase::Placing;
+      lv.stats.maxSliceTriangles = 0;
       beginPlacement(lv, view, lv.spread.job);
       lv.stats.crossFade = 0.0f;
     }
@@ -1071,6 +1093,13 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, roots, roots);
   const auto frame = g.importBuffer("layers: frame", lv.frameBuffer.size, kFrameRead, kFrameRead);
   LayeredVegetation* p = &lv;
+  // What every mesh draw reads: the frame block and the chunked mesh.
+  auto drawsMesh = [&](rg::RenderGraph::PassBuilder b) {
+    return b.access(frame, kFrameRead)
+        .read(vertices, rg::Use::VertexBuffer)
+        .read(indices, rg::Use::IndexBuffer)
+        .read(leafRoots, rg::Use::VertexStorageRead);
+  };
   // The frame block holds the placement being drawn: the visible one for a re-slice at once, the
   // spread re-slice's from its first slice on.
   g.addPass("layers: frame constants", [p](rg::PassContext& c) {
@@ -1082,21 +1111,14 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {
                     return p->rebuildPending ? recordFoliage(*p, c.cmd, visibleTargets(*p), true, nullptr) : Status();
                   });
-  foliage.access(frame, kFrameRead)
-      .read(vertices, rg::Use::VertexBuffer)
-      .read(indices, rg::Use::IndexBuffer)
-      .read(leafRoots, rg::Use::VertexStorageRead)
+  drawsMesh(foliage)
       .write(r.color, rg::Use::ColorAttachmentWrite)
       .write(r.depth, rg::Use::DepthAttachmentWrite);
   if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
-  g.addPass("layers: background", [p](rg::PassContext& c) {
+  drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
      return p->rebuildPending && !p->rigidDraws.empty() ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
                                                         : Status();
-   })
-      .access(frame, kFrameRead)
-      .read(vertices, rg::Use::VertexBuffer)
-      .read(indices, rg::Use::IndexBuffer)
-      .read(leafRoots, rg::Use::VertexStorageRead)
+   }))
       .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
       .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite);
   if (lv.next.color.image) {
@@ -1106,18 +1128,14 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
     const auto nextDepth = g.importImage("layers (next set): depth", descOf(lv.next.depth), kNextRest, kNextRest);
     const auto nextBgColor = g.importImage("background (next set): colour", descOf(lv.next.backgroundColor), kNextRest, kNextRest);
     const auto nextBgDepth = g.importImage("background (next set): depth", descOf(lv.next.backgroundDepth), kNextRest, kNextRest);
-    g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
+    drawsMesh(g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
        if (!p->slicePending) return Status();
        const bool clear = p->spread.sliceClears;
        if (clear || sliceHas(*p, true)) CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
        if (!p->rigidDraws.empty() && (clear || sliceHas(*p, false)))
          CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
        return Status();
-     })
-        .access(frame, kFrameRead)
-        .read(vertices, rg::Use::VertexBuffer)
-        .read(indices, rg::Use::IndexBuffer)
-        .read(leafRoots, rg::Use::VertexStorageRead)
+     }))
         .write(nextColor, rg::Use::ColorAttachmentReadWrite)
         .write(nextDepth, rg::Use::DepthAttachmentWrite)
         .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)

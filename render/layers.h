@@ -121,7 +121,9 @@ struct SliceRateControl {
   double lastPlacementMs = 0;          // CPU placement time of a Placement frame (taken off its interval)
   std::vector<double> stillMs;         // the last few still intervals (ring)
   uint32_t stillNext = 0;
-  double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~6000/ms)
+  std::vector<double> rateSamples;     // the last few slices' triangles / cost (ring)
+  uint32_t rateNext = 0;
+  double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~2000-4000/ms)
 };
 
 struct LayeredVegetation {

@@ -631,6 +631,14 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   EXPECT_TRUE(lv.rebuildPending);
   EXPECT_EQ(lv.stats.spreadPhase, 0u) << "a camera cut re-slices at once and ends the spread one";
   EXPECT_EQ(lv.stats.lastRebuildReason, "camera cut");
+  LayerSettings slower = lv.settings;
+  slower.crossFadeFrames = 12;
+  slower.rebuildBudgetMs = 3.0f;
+  ASSERT_TRUE(setLayerSettings(lv, slower).ok());
+  const uint64_t rebuilds = lv.stats.rebuilds;
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_FALSE(changed);
+  EXPECT_EQ(lv.stats.rebuilds, rebuilds) << "a new budget or fade length changes no layer: no re-slice";
   LayerSettings every = lv.settings;
   every.policy = ReslicePolicy::EveryFrame;
   ASSERT_TRUE(setLayerSettings(lv, every).ok());

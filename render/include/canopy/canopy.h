@@ -525,7 +525,7 @@ struct LayerStats {
   uint64_t spreadRebuilds = 0;       // spread re-slices completed
   uint32_t lastSpreadFrames = 0;     // frames the last completed one took, placement to last fade step
   uint64_t lastSliceTriangles = 0;   // triangles drawn by the last drawing frame
-  uint64_t maxSliceTriangles = 0;    // the most any drawing frame drew
+  uint64_t maxSliceTriangles = 0;    // the most one drawing frame of the last (or running) one drew
   double trianglesPerMs = 0;         // the drawing-rate estimate that sizes the slices (measured)
   float crossFade = 1.0f;            // the newest set's share of the visible layers, [0, 1]
 };

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "render/canopy.h"
 #include "render/gltf_loader.h"
 
 namespace canopy {
@@ -34,12 +35,13 @@ struct Table1Options {
   bool series = false;
   std::string csvDir;         // series CSV files (empty: none)
   std::string json = "bench_table1.json";
+  uint64_t deviceMemoryBudget = CanopyDesc{}.deviceMemoryBudget;  // CanopyDesc.deviceMemoryBudget (0: none)
 };
 int runTable1Bench(Device& dev, const Table1Options& options);
 
 // Re-slicing (issue 16): at once vs spread over frames with `budgetMs` (face counts up to
 // `spreadMaxFaces`), per face count.
 int runRebuildBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, float budgetMs,
-                    int rebuilds, uint32_t width, uint32_t height, uint64_t spreadMaxFaces);
+                    int rebuilds, uint32_t width, uint32_t height, uint64_t spreadMaxFaces, uint64_t deviceMemoryBudget);
 }
 }  // namespace canopy

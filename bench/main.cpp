@@ -5,7 +5,7 @@
 //   canopy-bench table1 [--faces 80000,10000000] [--scene shrub] [--frames N] [--size 1024x768]
 //                [--orbit DEG] [--pair-frames N] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
 //   canopy-bench rebuild [--faces 80000,10000000] [--scene shrub] [--budget MS] [--rebuilds N] [--size WxH]
-//                [--spread-max-faces N]
+//                [--spread-max-faces N] [--device-budget MIB]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -45,6 +45,8 @@ static int usage(const char* why) {
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
                "  --scene NAME   anim: a generated scene (shrub, tree, grass, kelp, field) instead of leaf clouds\n"
                "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
+               "  --device-budget MIB  table1, rebuild: CanopyDesc.deviceMemoryBudget; a mesh over it is streamed\n"
+               "                 through the staging ring; 0: no limit (default 1536)\n"
                "  --layers L     layers: layout (default 5(3-1-1))\n"
                "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
                "  --frames N     sim: steps, anim: frames measured per configuration, 3..100000 (default 60; anim 30)\n"
@@ -97,7 +99,11 @@ int main(int argc, char** argv) {
       if (!cli::parseUint(next(), 0, 100000000, &n)) return usage("--spread-max-faces needs an integer in [0, 100000000]");
       spreadMaxFaces = n;
     }
-    else if (a == "--budget") {
+    else if (a == "--device-budget") {
+      uint32_t mib = 0;
+      if (!cli::parseUint(next(), 0, 1u << 20, &mib)) return usage("--device-budget needs MiB in [0, 1048576]");
+      t1.deviceMemoryBudget = uint64_t(mib) << 20;
+    } else if (a == "--budget") {
       const char* v = next();
       char* end = nullptr;
       budgetMs = v ? std::strtof(v, &end) : 0.0f;
@@ -205,7 +211,7 @@ int main(int argc, char** argv) {
   }
   if (rc == 0 && runRebuild)
     rc = bench::runRebuildBench(dev, faces, scene.empty() ? "shrub" : scene, budgetMs, int(rebuilds),
-                                t1.width, t1.height, spreadMaxFaces);
+                                t1.width, t1.height, spreadMaxFaces, t1.deviceMemoryBudget);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

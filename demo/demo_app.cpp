@@ -50,6 +50,9 @@ void printHelp() {
       "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
       "  --rebuild-budget MS a re-slice after a camera move is spread over frames, about MS ms of work a\n"
       "                      frame, then cross-faded in; 0: at once in one frame, [0, 1000] (default %g)\n"
+      "  --device-budget MIB device memory Canopy may allocate; a mesh that does not fit is streamed\n"
+      "                      through a staging ring at each re-slice; 0: no limit, [0, 1048576] (default %g)\n"
+      "  --ring MIB          the staging ring of a streamed mesh, [1, 4096] (default %g)\n"
       "  --out DIR           output folder, created if missing; frame files beyond --frames left there by\n"
       "                      an earlier run are removed (default %s)\n"
       "  --no-mp4            do not encode demo.mp4 even when ffmpeg is installed\n"
@@ -69,7 +72,7 @@ void printHelp() {
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
       (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust, d.width,
-      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.outDir.c_str());
+      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.deviceBudgetMiB, d.ringMiB, d.outDir.c_str());
 }
 
 namespace {
@@ -188,6 +191,10 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (const int rc = number(-3600, 3600, &o->orbitDegrees)) return rc;
     } else if (a == "--rebuild-budget") {
       if (const int rc = number(0, 1000, &o->rebuildBudgetMs)) return rc;
+    } else if (a == "--device-budget") {
+      if (const int rc = number(0, 1048576, &o->deviceBudgetMiB)) return rc;
+    } else if (a == "--ring") {
+      if (const int rc = number(1, 4096, &o->ringMiB)) return rc;
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
@@ -455,6 +462,8 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   if (parseLayerLayout(o.layout, &layout).ok()) desc.maxLayers = std::max(desc.maxLayers, layout.count());
   desc.rootCacheDir = o.cacheDir.empty() ? o.outDir : o.cacheDir;
   desc.split = o.split;
+  desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
+  desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
   const auto t0 = std::chrono::steady_clock::now();
   cli::ProgressLine progress("preparing");
   if (model.triangleCount() >= 1'000'000) {

@@ -45,6 +45,8 @@ struct Options {
   CameraPath camera = CameraPath::Still;
   float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
+  float deviceBudgetMiB = 1536.0f;     // CanopyDesc.deviceMemoryBudget (0: no limit)
+  float ringMiB = 64.0f;               // CanopyDesc.meshStagingRingBytes
   std::string outDir = "demo_out";
   bool mp4 = true;
   // Window mode

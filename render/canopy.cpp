@@ -288,6 +288,9 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   CANOPY_TRY(checkRange("CanopyDesc.height", desc.height, 1, 16384));
   CANOPY_TRY(checkRange("CanopyDesc.maxLayers", desc.maxLayers, 1, CANOPY_MAX_LAYERS));
   CANOPY_TRY(checkRange("CanopyDesc.minCellSize", desc.minCellSize, 2, 256));
+  if (desc.meshStagingRingBytes < (1ull << 20) || desc.meshStagingRingBytes > (4ull << 30))
+    return Status::error("CanopyDesc.meshStagingRingBytes = " + std::to_string(desc.meshStagingRingBytes) +
+                         " is outside [1 MiB, 4 GiB]");
   if (desc.depthConvention != DepthConvention::Standard && desc.depthConvention != DepthConvention::Reverse)
     return Status::error("CanopyDesc.depthConvention = " + std::to_string(uint32_t(desc.depthConvention)) + " is outside 0..1");
   if (desc.shareSimulationWith && desc.shareSimulationWith->device != &d)
@@ -301,6 +304,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   auto* c = new (std::nothrow) CanopyContext();
   if (!c) return Status::error(Result::OutOfHostMemory, "createCanopy: out of host memory");
   c->device = &d;
+  const uint64_t liveAtStart = d.allocator->liveBytes;
   c->desc = desc;
   c->desc.shareSimulationWith = nullptr;  // kept through `shared`, never dereferenced later
   c->params = desc.params;
@@ -343,10 +347,6 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       return Status::error(Result::InvalidModel, what + " has no foliage: every material is rigid (" + names +
                                                      "); name the leaf materials in CanopyDesc.split.foliage");
     }
-    {
-      DeferInto defer(d, &c->pending);
-      CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
-    }
     if (desc.shareSimulationWith) {
       c->shared = desc.shareSimulationWith->shared;
     } else {
@@ -355,6 +355,21 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim));
     }
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
+    // The layers last: what the budget leaves after the compositor, simulation and dynamics decides
+    // whether the mesh is resident or streamed (docs/design.md "Layers: mesh budget and staging ring").
+    if (desc.deviceMemoryBudget) {
+      const uint64_t used = d.allocator->liveBytes - liveAtStart;
+      if (used >= desc.deviceMemoryBudget)
+        return Status::error("CanopyDesc.deviceMemoryBudget " + std::to_string(desc.deviceMemoryBudget >> 20) +
+                             " MiB: the compositor, simulation and dynamics alone take " + std::to_string(used >> 20) +
+                             " MiB; raise it (or 0: no limit)");
+      ld.deviceMemoryBudget = desc.deviceMemoryBudget - used;
+    }
+    ld.stagingRingBytes = desc.meshStagingRingBytes;
+    {
+      DeferInto defer(d, &c->pending);
+      CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    }
     return computeGroupUses(*c);
   }();
   if (!s.ok()) {

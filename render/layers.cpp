@@ -35,10 +35,18 @@ const rg::State kNextRest = rg::stateOf(rg::Use::FragmentSampled);
 // Spread re-slicing needs the second layer set; the id output is re-sliced at once (its images are
 // for tests and tools, and a cross-fade of ids means nothing).
 bool spreadEnabled(const LayeredVegetation& lv) { return lv.settings.rebuildBudgetMs > 0 && !lv.desc.writeIds; }
+// A streamed mesh is always drawn in slices into the second set (never with the id output).
+bool usesNextSet(const LayeredVegetation& lv) { return spreadEnabled(lv) || lv.streamed; }
+
+std::string mib(uint64_t bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.1f MiB", double(bytes) / double(1 << 20));
+  return buf;
+}
 
 // Frees the layer images once no host frame in flight can read them (deferRelease), so a new
-// layer count or size never waits for the device.
-void destroyTargets(LayeredVegetation& lv) {
+// layer count or size never waits for the device; `now`: at once (images no frame has used).
+void destroyTargets(LayeredVegetation& lv, bool now = false) {
   Device* d = lv.device;
   dropPreparedWork(*d, lv.pendingClear);  // a clear of these images never recorded: nothing to wait for
   std::vector<VkImageView> views;
@@ -54,10 +62,12 @@ void destroyTargets(LayeredVegetation& lv) {
     *img = Image{};
   }
   lv.spread = SpreadRebuild{};  // a spread re-slice drew into the old images
-  deferRelease(*d, [d, views, images]() mutable {
+  auto release = [d, views, images]() mutable {
     for (VkImageView v : views) d->vk.DestroyImageView(d->device, v, d->allocationCallbacks);
     for (Image& img : images) destroyImage(*d, img);
-  });
+  };
+  if (now) release();
+  else deferRelease(*d, std::move(release));
 }
 
 Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) {
@@ -126,7 +136,7 @@ Status createTargets(LayeredVegetation& lv) {
   bz.layers = 1;
   bz.arrayView = false;
   CANOPY_TRY(createImage(d, bz, &lv.backgroundDepth, "background: depth"));
-  if (spreadEnabled(lv)) {
+  if (usesNextSet(lv)) {
     CANOPY_TRY(createFadePipelines(lv));
     CANOPY_TRY(createImage(d, c, &lv.next.color, "layers (next set): colour"));
     CANOPY_TRY(createImage(d, z, &lv.next.depth, "layers (next set): depth"));
@@ -241,8 +251,9 @@ Status chooseDrawPath(const LayeredVegetation& lv, const LayerSettings& s, bool*
   return Status();
 }
 
-Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vector<uint8_t>& foliage,
-                  const LeafRoots& roots) {
+// The GPU triangle order and the compact chunked mesh, in host memory.
+Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vector<uint8_t>& foliage,
+                 const LeafRoots& roots, CompactMesh* mesh) {
   Device& d = *lv.device;
   const size_t nt = m.triangleCount();
   // GPU triangle order: foliage grouped by material, then rigid by material (one draw each).
@@ -274,31 +285,17 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
     return Status::error("layers: minStorageBufferOffsetAlignment " + std::to_string(align) + " is not a power of two");
-  CompactMesh mesh;
-  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, &mesh, lv.desc.progress));
-  lv.stats.meshChunks = uint32_t(mesh.chunks.size());
-  lv.stats.meshBytes = mesh.bytes();
-  lv.chunks = std::move(mesh.chunks);
-  auto upload = [&](Buffer& buf, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage, rg::Use use,
-                    const char* name) -> Status {
-    CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                            MemoryUsage::DeviceLocal, &buf, name));
-    if (bytes == 0) return Status();
-    // Where device memory is host-visible and coherent (CPU drivers, UMA and ReBAR GPUs) the data is
-    // written in place: no staging copy of a mesh of hundreds of MB. The queue submission that first
-    // reads it makes the host writes visible.
-    if (void* direct = hostCoherentPointer(d, buf.allocation)) {
-      std::memcpy(direct, data, bytes);
-      return Status();
-    }
-    return uploadBuffer(d, buf, data, bytes, rg::stateOf(use));
-  };
-  CANOPY_TRY(upload(lv.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
-                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
-  CANOPY_TRY(upload(lv.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-                    rg::Use::IndexBuffer, "layers: indices"));
-  CANOPY_TRY(upload(lv.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
-                    VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots"));
+  lv.ring.rootAlignment = co.rootAlignment;
+  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, mesh, lv.desc.progress));
+  lv.stats.meshChunks = uint32_t(mesh->chunks.size());
+  lv.stats.meshBytes = mesh->bytes();
+  lv.chunks = mesh->chunks;
+  return Status();
+}
+
+// The frame block, the material textures and their sampler.
+Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
+  Device& d = *lv.device;
   CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                           MemoryUsage::DeviceLocal, &lv.frameBuffer, "layers: frame"));
   // Textures: sRGB base colour, so the shader reads linear values; a white texel for untextured materials.
@@ -326,6 +323,104 @@ Status uploadMesh(LayeredVegetation& lv, const VegetationModel& m, const std::ve
   return Status();
 }
 
+
+uint64_t roundUp(uint64_t x, uint64_t a) { return (x + a - 1) / a * a; }
+
+// Where the compact mesh lives (docs/design.md "Layers: mesh budget and staging ring"): resident
+// when it fits the budget beside everything else this object allocates, with room for the second
+// layer set (a spread re-slice needs it, and settings may ask for it later); else in host memory,
+// streamed through rings sized from desc.stagingRingBytes, which needs the second set now. Called
+// after the textures, frame block and targets, so the bytes are the allocator's, not estimates.
+Status chooseMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes) {
+  const uint64_t budget = lv.desc.deviceMemoryBudget;
+  lv.streamed = false;
+  if (budget == 0) return Status();
+  const uint64_t used = lv.device->allocator->liveBytes - liveAtStart;
+  uint64_t nextSet = 0;  // the second set is the visible one's twin
+  if (!lv.next.color.image)
+    for (const Image* img : {&lv.color, &lv.depth, &lv.backgroundColor, &lv.backgroundDepth}) nextSet += img->allocation.size;
+  if (used + nextSet + meshBytes + 3 * 256 <= budget) return Status();
+  if (lv.desc.writeIds)
+    return Status::error("layers: the id output draws the mesh at once and needs it resident: the compact mesh (" +
+                         mib(meshBytes) + ") with the layer images and textures (" + mib(used + nextSet) +
+                         ") is over deviceMemoryBudget " + mib(budget));
+  lv.streamed = true;
+  if (lv.next.color.image) return Status();
+  // Never used by a frame (their clear was submitted and waited for, or is dropped): freed now,
+  // so the allocator's count is exact for the ring that follows.
+  destroyTargets(lv, true);
+  return createTargets(lv);
+}
+
+// Creates the resident buffers and fills them, or the staging rings (the mesh stays in lv.ring.host).
+Status placeMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart) {
+  Device& d = *lv.device;
+  const uint64_t budget = lv.desc.deviceMemoryBudget;
+  if (lv.streamed) {
+    // Per segment each ring holds at least the largest chunk (its vertices, its root block, and
+    // 1024 of its triangles), so every frame's slice makes progress; the rest of the ring's bytes
+    // are shared in the proportions of the whole mesh.
+    MeshRing& r = lv.ring;
+    r.segments = std::max<uint32_t>(d.framesInFlight, 1);
+    uint64_t minV = 0, minR = 0, minI = 3;
+    for (const MeshChunk& c : mesh.chunks) {
+      minV = std::max<uint64_t>(minV, c.vertexCount);
+      minR = std::max<uint64_t>(minR, roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment));
+      minI = std::max<uint64_t>(minI, 3ull * std::min<uint32_t>(c.triangleCount, 1024));
+    }
+    const uint64_t vb = mesh.vertices.size() * sizeof(gpu::LayerVertex), ib = mesh.indices.size() * 2,
+                   rb = mesh.roots.size() * sizeof(gpu::LayerLeafRoot);
+    const uint64_t total = std::max<uint64_t>(vb + ib + rb, 1);
+    const double share = double(lv.desc.stagingRingBytes) / double(r.segments) / double(total);
+    r.vertexCapacity = std::min<uint64_t>(std::max<uint64_t>(minV, uint64_t(share * vb) / sizeof(gpu::LayerVertex)), mesh.vertices.size());
+    r.indexCapacity = std::min<uint64_t>(std::max<uint64_t>(minI, uint64_t(share * ib) / 2), mesh.indices.size());
+    r.rootCapacity = roundUp(std::max<uint64_t>(minR, uint64_t(share * rb) / sizeof(gpu::LayerLeafRoot)), r.rootAlignment);
+    r.bytes = r.segments * (r.vertexCapacity * sizeof(gpu::LayerVertex) + roundUp(r.indexCapacity * 2, 4) +
+                            r.rootCapacity * sizeof(gpu::LayerLeafRoot));
+    const uint64_t used = d.allocator->liveBytes - liveAtStart;
+    if (used + r.bytes > budget)
+      return Status::error("layers: deviceMemoryBudget " + mib(budget) + ": the layer images and textures take " + mib(used) +
+                           ", the mesh (" + mib(mesh.bytes()) + ") does not fit and its staging ring needs " + mib(r.bytes) +
+                           " (" + std::to_string(r.segments) + " segments, each at least the largest chunk; stagingRingBytes " +
+                           mib(lv.desc.stagingRingBytes) + "); raise the budget");
+    CANOPY_TRY(createBuffer(d, r.segments * r.vertexCapacity * sizeof(gpu::LayerVertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
+                            MemoryUsage::Upload, &lv.vertices, "layers: vertex ring"));
+    CANOPY_TRY(createBuffer(d, r.segments * roundUp(r.indexCapacity * 2, 4), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                            MemoryUsage::Upload, &lv.indexBuffer, "layers: index ring"));
+    CANOPY_TRY(createBuffer(d, r.segments * r.rootCapacity * sizeof(gpu::LayerLeafRoot), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                            MemoryUsage::Upload, &lv.leafRoots, "layers: leaf-root ring"));
+    for (const Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots})
+      if (!hostCoherentPointer(d, b->allocation))
+        return Status::error("layers: the staging ring's memory is not host-visible and coherent");
+    r.host = std::move(mesh);
+    lv.stats.meshResident = false;
+    lv.stats.meshRingBytes = r.bytes;
+    return Status();
+  }
+  lv.stats.meshResident = true;
+  lv.stats.meshRingBytes = 0;
+  auto upload = [&](Buffer& buf, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage, rg::Use use,
+                    const char* name) -> Status {
+    CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::DeviceLocal, &buf, name));
+    if (bytes == 0) return Status();
+    // Where device memory is host-visible and coherent (CPU drivers, UMA and ReBAR GPUs) the data is
+    // written in place: no staging copy of a mesh of hundreds of MB. The queue submission that first
+    // reads it makes the host writes visible.
+    if (void* direct = hostCoherentPointer(d, buf.allocation)) {
+      std::memcpy(direct, data, bytes);
+      return Status();
+    }
+    return uploadBuffer(d, buf, data, bytes, rg::stateOf(use));
+  };
+  CANOPY_TRY(upload(lv.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
+                    VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
+  CANOPY_TRY(upload(lv.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+                    rg::Use::IndexBuffer, "layers: indices"));
+  return upload(lv.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
+                VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots");
+}
+
 bool matricesDiffer(const glm::mat4& a, const glm::mat4& b) {
   for (int c = 0; c < 4; ++c)
     for (int r = 0; r < 4; ++r)
@@ -342,7 +437,6 @@ using Clock = std::chrono::steady_clock;
 // Starts the placement for `view`: the frame constants the layer draws read.
 void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job) {
   job = PlacementJob{};
-  job.view = view;
   const LayerSettings& s = lv.settings;
   gpu::LayerFrame& f = job.frame;
   f.viewProj = view.proj * view.view;
@@ -492,7 +586,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
   setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
   // is bound at its own offset (render/mesh_chunks.h).
-  auto draw = [&](const MeshChunk& c, uint32_t first, uint32_t count) -> Status {
+  auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
     const ModelMaterial& mat = lv.materials[c.material];
     const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
     gpu::LayerDrawPush push{};
@@ -505,23 +599,29 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     push.passKind = passKind;
     push.triangleBase = uint32_t(c.firstTriangle);
     const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
+    // A streamed mesh's part sits in this frame's ring segment (planSlice copied it there).
+    const bool ring = lv.streamed;
+    const uint64_t rootAt = ring ? part->ringRoot : c.firstRoot;
+    const uint64_t indexAt = ring ? part->ringIndex : c.firstIndex + 3ull * first;
+    const uint64_t vertexAt = ring ? part->ringVertex : c.firstVertex;
     CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
                             {bindBuffer(lv.frameBuffer.buffer),
-                             bindBuffer(lv.leafRoots.buffer, c.firstRoot * sizeof(gpu::LayerLeafRoot), rootBytes),
+                             bindBuffer(lv.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes),
                              bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
                             push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts.
-    d.vk.CmdDrawIndexed(cmd, count * 3, 1, uint32_t(c.firstIndex) + first * 3, int32_t(c.firstVertex), 0);
+    d.vk.CmdDrawIndexed(cmd, count * 3, 1, uint32_t(indexAt), int32_t(vertexAt), 0);
     return Status();
   };
   if (parts) {
     for (const ChunkPart& p : *parts)
-      if (lv.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(lv.chunks[p.chunk], p.firstTriangle, p.triangleCount));
+      if (lv.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(lv.chunks[p.chunk], &p, p.firstTriangle, p.triangleCount));
     return Status();
   }
+  if (lv.streamed) return Status::error("layers: a streamed mesh is drawn in slices only");  // updateLayerView never asks
   for (const MeshChunk& c : lv.chunks)
-    if (c.foliage == foliage) CANOPY_TRY(draw(c, 0, c.triangleCount));
+    if (c.foliage == foliage) CANOPY_TRY(draw(c, nullptr, 0, c.triangleCount));
   return Status();
 }
 
@@ -745,6 +845,9 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
   CANOPY_TRY(validateLayerSettings(desc.settings));
   if (m.uvs.size() != m.positions.size() || m.indices.size() % 3 || m.triangleMaterial.size() != m.triangleCount())
     return Status::error("layers: inconsistent model arrays in " + m.path);
+  if (desc.stagingRingBytes < 1 || desc.stagingRingBytes > (4ull << 30))
+    return Status::error("layers: stagingRingBytes " + std::to_string(desc.stagingRingBytes) + " is outside [1, 4 GiB]");
+  const uint64_t liveAtStart = d.allocator->liveBytes;
   Status s = [&]() -> Status {
     const auto t0 = std::chrono::steady_clock::now();
     CANOPY_TRY(splitMaterials(m, desc.split, &lv.split));
@@ -783,8 +886,12 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     lv.leafRootPosition.resize(roots.leafCount());
     for (uint32_t l = 0; l < roots.leafCount(); ++l) lv.leafRootPosition[l] = m.positions[roots.leafRoot[l]];
     CANOPY_TRY(chooseDrawPath(lv, lv.settings, &lv.singlePass));
-    CANOPY_TRY(uploadMesh(lv, m, foliage, roots));
+    CompactMesh mesh;
+    CANOPY_TRY(buildMesh(lv, m, foliage, roots, &mesh));
+    CANOPY_TRY(uploadTextures(lv, m));
     CANOPY_TRY(createTargets(lv));
+    CANOPY_TRY(chooseMeshResidency(lv, liveAtStart, mesh.bytes()));
+    CANOPY_TRY(placeMesh(lv, std::move(mesh), liveAtStart));
     CANOPY_TRY(createPipelines(lv));
     lv.stats.singlePass = lv.singlePass;
     return Status();
@@ -814,7 +921,7 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   CANOPY_TRY(validateLayerSettings(s));
   bool single = false;
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
-  const bool spreadBefore = spreadEnabled(lv);
+  const bool nextSetBefore = usesNextSet(lv);
   const bool countChanged = s.layout.count() != lv.settings.layout.count();
   // How a re-slice is scheduled does not change what the layers hold: no re-slice for it.
   LayerSettings content = s;
@@ -831,7 +938,7 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   lv.singlePass = single;
   lv.stats.singlePass = single;
   lv.settingsChanged = lv.settingsChanged || contentChanged;
-  if (countChanged || spreadEnabled(lv) != spreadBefore) {
+  if (countChanged || usesNextSet(lv) != nextSetBefore) {
     destroyTargets(lv);
     CANOPY_TRY(createTargets(lv));
     if (targetsRecreated) *targetsRecreated = true;
@@ -895,19 +1002,46 @@ void updateSliceRate(LayeredVegetation& lv) {
 }
 
 // The next frame's draws of a spread re-slice: triangles from the cursor, as many as the budget
-// and the measured rate allow (at least 1024, so it always ends).
+// and the measured rate allow (at least 1024, so it always ends); a streamed mesh also stops at
+// what this frame's ring segment holds, and its parts are copied there now (the frame that reads
+// them is the one being recorded: docs/design.md "Layers: mesh budget and staging ring").
 void planSlice(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.spread;
-  const uint64_t want = lv.desc.fixedSliceTriangles
+  const uint64_t want = sp.immediate ? UINT64_MAX
+                        : lv.desc.fixedSliceTriangles
                             ? lv.desc.fixedSliceTriangles
                             : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.rate.trianglesPerMs));
   sp.slice.clear();
   sp.sliceClears = sp.cursorChunk == 0 && sp.cursorTriangle == 0;
+  MeshRing& r = lv.ring;
+  uint64_t segment = 0, usedV = 0, usedI = 0, usedR = 0;
+  if (lv.streamed) {
+    const Device& d = *lv.device;
+    segment = (d.anyFrame ? d.frameNumber : r.counter++) % r.segments;
+  }
   uint64_t drawn = 0;
   while (sp.cursorChunk < lv.chunks.size() && drawn < want) {
     const MeshChunk& c = lv.chunks[sp.cursorChunk];
-    const uint32_t count = uint32_t(std::min<uint64_t>(c.triangleCount - sp.cursorTriangle, want - drawn));
-    if (count) sp.slice.push_back({sp.cursorChunk, sp.cursorTriangle, count});
+    uint32_t count = uint32_t(std::min<uint64_t>(c.triangleCount - sp.cursorTriangle, want - drawn));
+    ChunkPart part{sp.cursorChunk, sp.cursorTriangle, count};
+    if (lv.streamed && count) {
+      const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment);
+      if (usedV + c.vertexCount > r.vertexCapacity || usedR + roots > r.rootCapacity || usedI + 3 > r.indexCapacity) break;
+      part.triangleCount = count = uint32_t(std::min<uint64_t>(count, (r.indexCapacity - usedI) / 3));
+      part.ringVertex = segment * r.vertexCapacity + usedV;
+      part.ringIndex = segment * roundUp(r.indexCapacity * 2, 4) / 2 + usedI;
+      part.ringRoot = segment * r.rootCapacity + usedR;
+      auto* v = static_cast<gpu::LayerVertex*>(lv.vertices.allocation.mapped);
+      auto* ix = static_cast<uint16_t*>(lv.indexBuffer.allocation.mapped);
+      auto* rt = static_cast<gpu::LayerLeafRoot*>(lv.leafRoots.allocation.mapped);
+      std::memcpy(v + part.ringVertex, r.host.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
+      std::memcpy(ix + part.ringIndex, r.host.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
+      std::memcpy(rt + part.ringRoot, r.host.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
+      usedV += c.vertexCount;
+      usedI += 3ull * count;
+      usedR += roots;
+    }
+    if (count) sp.slice.push_back(part);
     drawn += count;
     sp.cursorTriangle += count;
     if (sp.cursorTriangle >= c.triangleCount) {
@@ -916,7 +1050,8 @@ void planSlice(LayeredVegetation& lv) {
     }
   }
   lv.slicePending = true;
-  lv.rate.lastWork = SliceRateControl::Work::Slice;
+  // A slice sized by the ring alone says nothing about the drawing rate the budget sizes.
+  lv.rate.lastWork = sp.immediate ? SliceRateControl::Work::Other : SliceRateControl::Work::Slice;
   lv.rate.lastTriangles = drawn;
   lv.stats.lastSliceTriangles = drawn;
   lv.stats.maxSliceTriangles = std::max(lv.stats.maxSliceTriangles, drawn);
@@ -932,6 +1067,19 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
   return m;
 }
 
+// The frame of the last step (the copy of the next set): its placement becomes the visible one.
+void finishSpread(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.spread;
+  lv.frame = sp.job.frame;
+  lv.layers = std::move(sp.job.layers);
+  lv.stats.spreadRebuilds++;
+  lv.stats.lastSpreadFrames = sp.frames;
+  lv.stats.crossFade = 1.0f;
+  sp.phase = SpreadPhase::Idle;
+  sp.job = PlacementJob{};
+  sp.fadeFrom.clear();
+}
+
 // One frame of a spread re-slice: placement for up to the budget, then slices, then the fade.
 Status advanceSpread(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.spread;
@@ -942,18 +1090,36 @@ Status advanceSpread(LayeredVegetation& lv) {
       const auto deadlineTp = std::chrono::time_point_cast<Clock::duration>(deadline);
       bool done = false;
       const double before = sp.job.ms;
-      CANOPY_TRY(advancePlacement(lv, sp.job, &deadlineTp, &done));
+      CANOPY_TRY(advancePlacement(lv, sp.job, sp.immediate ? nullptr : &deadlineTp, &done));
       lv.rate.lastWork = SliceRateControl::Work::Placement;
       lv.rate.lastPlacementMs = sp.job.ms - before;
       if (done) {
         lv.stats.lastPlacementMs = sp.job.ms;
         sp.phase = SpreadPhase::Drawing;
+        // No visible placement of this layer count yet (the first view, or new layer images, of a
+        // streamed mesh): the new one describes the visible images, still empty, until the copy.
+        if (lv.layers.size() != sp.job.layers.size()) {
+          lv.layers = sp.job.layers;
+          lv.frame = sp.job.frame;
+        }
       }
-      break;
+      if (!done || !sp.immediate) break;
+      [[fallthrough]];  // asked at once: the first slice in the placement's frame
     }
     case SpreadPhase::Drawing:
       planSlice(lv);
-      if (sp.cursorChunk >= lv.chunks.size()) sp.phase = SpreadPhase::CrossFading;  // from the next frame
+      if (sp.cursorChunk < lv.chunks.size()) break;
+      if (!sp.immediate) {
+        sp.phase = SpreadPhase::CrossFading;  // from the next frame
+        break;
+      }
+      // Asked at once: the next set is copied in behind the last slice (the copy pass follows the
+      // slice pass), without a fade, and the occupancy recomputed in this frame.
+      sp.fadeCopy = true;
+      sp.fadeWeights.assign(lv.settings.layout.count() + 1, 0.0f);
+      lv.fadePending = true;
+      lv.occupancyRecomputeNow = true;
+      finishSpread(lv);
       break;
     case SpreadPhase::CrossFading: {
       lv.rate.lastWork = SliceRateControl::Work::Other;
@@ -985,14 +1151,8 @@ Status advanceSpread(LayeredVegetation& lv) {
       lv.fadePending = true;
       lv.stats.crossFade = share;
       if (sp.fadeCopy) {
-        lv.frame = sp.job.frame;
-        lv.layers = std::move(sp.job.layers);
-        lv.stats.spreadRebuilds++;
-        lv.stats.lastSpreadFrames = sp.frames;
         lv.occupancyRecomputeNext = true;
-        sp.phase = SpreadPhase::Idle;
-        sp.job = PlacementJob{};
-        sp.fadeFrom.clear();
+        finishSpread(lv);
       } else {
         for (size_t i = 0; i < lv.layers.size(); ++i) lv.layers[i] = mixLayerInfo(sp.fadeFrom[i], sp.job.layers[i], share);
       }
@@ -1008,7 +1168,7 @@ Status advanceSpread(LayeredVegetation& lv) {
 Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
   lv.stats.viewUpdates++;
   updateSliceRate(lv);
-  lv.rebuildPending = lv.slicePending = lv.fadePending = lv.occupancyUniteNext = false;
+  lv.rebuildPending = lv.slicePending = lv.fadePending = lv.occupancyUniteNext = lv.occupancyRecomputeNow = false;
   const bool recomputeOccupancy = lv.occupancyRecomputeNext;
   lv.occupancyRecomputeNext = false;
   std::string reason;
@@ -1037,7 +1197,10 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
       reason = "projection changed";
     }
   }
-  const bool atOnce = !lv.haveView || lv.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
+  const bool wantAtOnce = !lv.haveView || lv.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
+  // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
+  // allows, copied in without a fade (SpreadRebuild.immediate).
+  const bool atOnce = wantAtOnce && !lv.streamed;
   const bool spreading = lv.spread.phase != SpreadPhase::Idle;
   // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
   // re-slice or new settings restart it).
@@ -1058,6 +1221,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     } else {
       lv.spread = SpreadRebuild{};
       lv.spread.phase = SpreadPhase::Placing;
+      lv.spread.immediate = wantAtOnce;
       lv.stats.maxSliceTriangles = 0;
       beginPlacement(lv, view, lv.spread.job);
       lv.stats.crossFade = 0.0f;
@@ -1073,7 +1237,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   // a recompute in a fade frame. (Marking the views' whole footprint occupied instead was tried:
   // the composite then works through every footprint tile of every layer, 60-70 ms a fade frame
   // more at 80K faces on lavapipe.)
-  lv.occupancyDirty = lv.rebuildPending || recomputeOccupancy;
+  lv.occupancyDirty = lv.rebuildPending || recomputeOccupancy || lv.occupancyRecomputeNow;
   return Status();
 }
 

@@ -47,6 +47,13 @@ struct LayeredVegetationDesc {
   // Spread re-slicing: every drawing frame draws this many triangles instead of what the budget and
   // the measured drawing rate give (tests: a deterministic number of slices). 0: measured.
   uint32_t fixedSliceTriangles = 0;
+  // Device memory (issue 16; docs/design.md "Layers: mesh budget and staging ring"): the bytes of
+  // buffers and images this object may allocate; 0: no limit (the mesh is resident). When the
+  // compact mesh does not fit beside the textures and both layer sets, it stays in host memory and
+  // every re-slice streams it through a host-visible ring of about `stagingRingBytes` (one segment
+  // per frame in flight), a slice per frame.
+  uint64_t deviceMemoryBudget = 0;
+  uint64_t stagingRingBytes = 64ull << 20;
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
@@ -77,7 +84,6 @@ struct LayerTargetSet {
 // The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
 // bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
 struct PlacementJob {
-  LayerView view;
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
@@ -88,9 +94,25 @@ struct PlacementJob {
   double ms = 0;  // CPU time spent so far
 };
 
-// A part of a mesh chunk drawn by one spread slice.
+// A part of a mesh chunk drawn by one spread slice; a streamed mesh has the chunk's vertices,
+// the part's indices and the chunk's roots copied into this frame's ring segment at these element
+// offsets (vertexOffset, firstIndex, root-table binding).
 struct ChunkPart {
   uint32_t chunk = 0, firstTriangle = 0, triangleCount = 0;
+  uint64_t ringVertex = 0, ringIndex = 0, ringRoot = 0;
+};
+
+// The staging ring of a streamed mesh (docs/design.md "Layers: mesh budget and staging ring"):
+// lv.vertices, lv.indexBuffer and lv.leafRoots are host-visible rings of `segments` segments of
+// these capacities (elements); frame F writes segment F mod segments, which the embedding contract
+// (frames <= F - framesInFlight completed) leaves free.
+struct MeshRing {
+  CompactMesh host;                      // the whole compact mesh, host memory
+  uint32_t segments = 0;
+  uint64_t vertexCapacity = 0, indexCapacity = 0, rootCapacity = 0;  // per segment
+  uint32_t rootAlignment = 1;            // root blocks start at multiples of this many entries
+  uint64_t counter = 0;                  // segment choice when no host frame numbers are seen (tools)
+  uint64_t bytes = 0;                    // the three rings together
 };
 
 enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFading = 3 };  // = LayerStats.spreadPhase
@@ -106,6 +128,9 @@ struct SpreadRebuild {
   bool united = false;                 // the frame after the last slice unites the occupancy (no fade)
   uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade (the last copies)
   bool fadeCopy = false;               // this frame's step is the last: copy the next set
+  // Asked at once but the mesh is streamed: placement in one frame, slices as large as the ring
+  // segment allows, and the copy without a fade in the frame of the last slice.
+  bool immediate = false;
   std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
                                        // background; 0: not blended this frame
   std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
@@ -159,6 +184,8 @@ struct LayeredVegetation {
   bool settingsChanged = false;
   std::string forcedReason;  // re-slice at the next view update for this reason (a camera cut)
   bool forceImmediate = false;  // ... and at once
+  bool streamed = false;        // the mesh is not resident: re-slices stream it through `ring`
+  MeshRing ring;
   bool slicePending = false;    // this frame draws spread.slice into the next set
   bool fadePending = false;     // this frame runs a cross-fade step
   // Which tiles hold foliage may have changed this frame (the composite's occupancy): a re-slice at
@@ -167,6 +194,7 @@ struct LayeredVegetation {
   bool occupancyDirty = false;
   bool occupancyUniteNext = false;
   bool occupancyRecomputeNext = false;  // the last fade step asks the frame after it
+  bool occupancyRecomputeNow = false;   // a streamed re-slice asked at once copied its set in this frame
   SpreadRebuild spread;
   SliceRateControl rate;
   std::vector<PreparedWork> pendingClear;  // the targets' first clear, not yet recorded (host devices)

@@ -16,6 +16,7 @@
 #include "render/layers.h"
 #include "tests/gpu_test.h"
 #include "tools/own_device.h"
+#include "tools/scene_generator.h"
 
 #include "tests/assets.h"
 
@@ -134,12 +135,13 @@ uint32_t countStraddlers(const LayeredVegetation& lv) {
 
 // Compares two float images; on any difference writes a diff PNG (red = difference) and fails.
 void expectIdentical(const std::vector<float>& a, const std::vector<float>& b, uint32_t channels,
-                     const std::string& what) {
+                     const std::string& what, uint32_t width = kW) {
   ASSERT_EQ(a.size(), b.size());
   double maxDiff = 0;
   size_t differing = 0;
-  std::vector<uint8_t> diff(size_t(kW) * kH * 4, 0);
-  for (size_t p = 0; p < size_t(kW) * kH; ++p) {
+  const size_t pixels = a.size() / channels;
+  std::vector<uint8_t> diff(pixels * 4, 0);
+  for (size_t p = 0; p < pixels; ++p) {
     float d = 0;
     for (uint32_t c = 0; c < channels; ++c) d = std::max(d, std::abs(a[p * channels + c] - b[p * channels + c]));
     maxDiff = std::max<double>(maxDiff, d);
@@ -151,7 +153,7 @@ void expectIdentical(const std::vector<float>& a, const std::vector<float>& b, u
   if (differing) {
     std::filesystem::create_directories("failures");
     const std::string path = "failures/" + what + "_diff.png";
-    (void)writePng(path, kW, kH, diff);
+    (void)writePng(path, width, uint32_t(pixels / width), diff);
     ADD_FAILURE() << what << ": " << differing << " pixels differ, max difference " << maxDiff << " (diff image "
                   << std::filesystem::absolute(path) << ")";
   }
@@ -161,7 +163,7 @@ void expectIdentical(const std::vector<float>& a, const std::vector<float>& b, u
 // channel difference exceeds `tol`, as a share of the image, must stay within `maxShare`; on
 // failure a diff PNG (red = over tolerance) is written.
 void expectClose(const std::vector<glm::vec4>& a, const std::vector<glm::vec4>& b, float tol, double maxShare,
-                 const std::string& what) {
+                 const std::string& what, uint32_t width = kW) {
   ASSERT_EQ(a.size(), b.size());
   size_t over = 0;
   float maxDiff = 0;
@@ -179,7 +181,7 @@ void expectClose(const std::vector<glm::vec4>& a, const std::vector<glm::vec4>& 
   if (share > maxShare) {
     std::filesystem::create_directories("failures");
     const std::string path = "failures/" + what + "_diff.png";
-    (void)writePng(path, kW, kH, diff);
+    (void)writePng(path, width, uint32_t(a.size() / width), diff);
     ADD_FAILURE() << what << ": " << over << " pixels (" << 100.0 * share << " %) differ by more than " << tol
                   << " (allowed " << 100.0 * maxShare << " %), max " << maxDiff << "; diff image "
                   << std::filesystem::absolute(path);
@@ -198,8 +200,8 @@ void expectSameLayers(LayeredVegetation& x, LayeredVegetation& y, const std::str
     std::vector<float> fa(ca.size() * 4), fb(cb.size() * 4);
     std::memcpy(fa.data(), ca.data(), fa.size() * 4);
     std::memcpy(fb.data(), cb.data(), fb.size() * 4);
-    expectIdentical(fa, fb, 4, what + "_colour_layer" + std::to_string(l));
-    expectIdentical(da, db, 1, what + "_depth_layer" + std::to_string(l));
+    expectIdentical(fa, fb, 4, what + "_colour_layer" + std::to_string(l), x.desc.width);
+    expectIdentical(da, db, 1, what + "_depth_layer" + std::to_string(l), x.desc.width);
     if (x.desc.writeIds && y.desc.writeIds) {
       ASSERT_TRUE(readLayerIds(x, l, &ia).ok());
       ASSERT_TRUE(readLayerIds(y, l, &ib).ok());
@@ -670,4 +672,175 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   s = setLayerSettings(lv, bad);
   EXPECT_NE(s.message().find("crossFadeFrames"), std::string::npos) << s.message();
   destroyLayeredVegetation(lv);
+}
+
+namespace {
+
+// A view of the whole model from in front of it (+Z), at three radii.
+LayerView viewOfModel(const VegetationModel& m, uint32_t w, uint32_t h) {
+  const glm::vec3 c = 0.5f * (m.boundsMin + m.boundsMax);
+  const float r = std::max(0.5f * glm::length(m.boundsMax - m.boundsMin), 1e-3f);
+  LayerView v;
+  v.view = glm::lookAt(c + glm::vec3(0.0f, 0.2f * r, 3.0f * r), c, glm::vec3(0, 1, 0));
+  v.proj = perspectiveVulkan(glm::radians(45.0f), float(w) / float(h), 0.5f * r, 6.0f * r);
+  return v;
+}
+
+// Bytes of the three mesh buffers (resident: the mesh; streamed: the rings).
+uint64_t meshBufferBytes(const LayeredVegetation& lv) {
+  return lv.vertices.allocation.size + lv.indexBuffer.allocation.size + lv.leafRoots.allocation.size;
+}
+
+}  // namespace
+
+// issue 16: a mesh over the device-memory budget stays in host memory and reaches the GPU through
+// the staging ring, a slice a frame. The layers equal those of the resident mesh pixel for pixel
+// (both draw paths; chunks small enough that chunk borders fall inside leaves' neighbourhoods), for
+// a re-slice asked at once (the first view: slices as large as the ring allows, copied in without a
+// fade) and for a spread one; and the allocator's own counters stay within the budget.
+TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
+  struct Case {
+    std::string name;
+    VegetationModel model;
+    uint32_t width, height, chunkVertices;
+    const char* layout;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"grid", straddlingLeaves(12, 8, true), kW, kH, 16, "5(3-1-1)"});
+  {
+    SceneDesc sd;
+    sd.kind = SceneKind::Shrub;
+    sd.faces = 80000;
+    sd.seed = 5;
+    sd.textureSize = 32;
+    VegetationModel shrub;
+    ASSERT_TRUE(generateScene(sd, &shrub).ok());
+    cases.push_back({"shrub", std::move(shrub), 96, 72, 2048, "3(1-1-1)"});
+  }
+  for (Case& k : cases) {
+    for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+      const std::string what = "streamed_" + k.name + (mode == LayerDrawMode::SinglePass ? "_single_pass" : "_per_layer");
+      SCOPED_TRACE(what);
+      LayeredVegetationDesc d;
+      d.width = k.width;
+      d.height = k.height;
+      ASSERT_TRUE(parseLayerLayout(k.layout, &d.settings.layout).ok());
+      d.settings.draw = mode;
+      d.maxChunkVertices = k.chunkVertices;
+      // The resident reference, with both layer sets (what the budget plans for).
+      LayeredVegetationDesc rd = d;
+      rd.settings.rebuildBudgetMs = 2.0f;
+      const uint64_t before = dev.allocator->liveBytes;
+      LayeredVegetation y;
+      ASSERT_TRUE(createLayeredVegetation(dev, k.model, rd, &y).ok());
+      ASSERT_TRUE(y.stats.meshResident);
+      const uint64_t residentBytes = dev.allocator->liveBytes - before;
+      const uint64_t mesh = y.stats.meshBytes;
+      // Budget: everything but the mesh, plus half the mesh; the ring gets a quarter of the mesh.
+      const uint64_t otherBytes = residentBytes - meshBufferBytes(y);
+      d.deviceMemoryBudget = otherBytes + mesh / 2;
+      d.stagingRingBytes = mesh / 4;
+      if (k.name == "shrub") {
+        // The mesh several times what is left for it.
+        EXPECT_GT(mesh, 3 * (d.deviceMemoryBudget - otherBytes) / 2);
+      }
+      const LayerView a = viewOfModel(k.model, k.width, k.height);
+      ASSERT_TRUE(renderOnce(dev, y, a).ok());
+      dev.allocator->peakLiveBytes = dev.allocator->liveBytes;  // this test's peak from here
+      const uint64_t start = dev.allocator->liveBytes;
+      LayeredVegetation x;
+      Status made = createLayeredVegetation(dev, k.model, d, &x);
+      ASSERT_TRUE(made.ok()) << made.message();
+      EXPECT_FALSE(x.stats.meshResident);
+      EXPECT_TRUE(x.streamed);
+      EXPECT_GT(x.stats.meshRingBytes, 0u);
+      EXPECT_LT(x.stats.meshRingBytes, mesh) << "the ring is smaller than the mesh";
+      EXPECT_EQ(x.stats.meshBytes, mesh);
+      EXPECT_EQ(meshBufferBytes(x) >= x.stats.meshRingBytes, true);
+      rg::RenderGraph g;
+      ASSERT_TRUE(addLayerPasses(x, g, nullptr).ok());
+      ASSERT_TRUE(g.compile().ok());
+      ASSERT_TRUE(g.realize(dev).ok());
+      bool changed = false;
+      auto frame = [&](const LayerView& v) {
+        Status s = updateLayerView(x, v, &changed);
+        if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+        return s;
+      };
+      // The first view, asked at once: slices until the whole mesh is drawn, the copy with the last.
+      uint32_t frames = 0;
+      uint64_t drawn = 0;
+      do {
+        ASSERT_TRUE(frame(a).ok());
+        ++frames;
+        drawn += x.stats.lastSliceTriangles;
+        if (x.stats.spreadRebuilds == 0) EXPECT_FALSE(changed) << "frame " << frames << " changed the visible layers early";
+        ASSERT_LT(frames, 100000u);
+      } while (x.stats.spreadRebuilds == 0);
+      EXPECT_TRUE(changed) << "the last slice's frame copies the new layers in";
+      EXPECT_TRUE(x.occupancyDirty) << "and recomputes the occupancy in that frame";
+      EXPECT_GT(frames, 2u) << "the ring holds less than the mesh: several slices";
+      EXPECT_EQ(drawn, y.stats.foliageTriangles + y.stats.rigidTriangles);
+      EXPECT_EQ(x.stats.lastSpreadFrames, frames);
+      // Canopy's allocator: the streamed object never held more than its budget (checked before
+      // the readbacks, whose staging buffers are the test's).
+      EXPECT_LE(dev.allocator->peakLiveBytes - start, d.deviceMemoryBudget)
+          << "peak " << dev.allocator->peakLiveBytes - start << " bytes, budget " << d.deviceMemoryBudget;
+      expectSameLayers(x, y, what + "_at_once");
+      std::vector<glm::vec4> bx, by;
+      std::vector<float> zx, zy;
+      ASSERT_TRUE(readBackground(x, &bx, &zx).ok());
+      ASSERT_TRUE(readBackground(y, &by, &zy).ok());
+      expectClose(bx, by, 0.0f, 0.0, what + "_background", k.width);
+      expectIdentical(zx, zy, 1, what + "_background_depth", k.width);
+      for (uint32_t l = 0; l < x.settings.layout.count(); ++l) EXPECT_EQ(x.layers[l].slab.depth, y.layers[l].slab.depth);
+      // A spread re-slice (a 3-degree turn with a budget): the same layers once its fade is done.
+      LayerSettings s = x.settings;
+      s.rebuildBudgetMs = 2.0f;
+      s.crossFadeFrames = 3;
+      bool recreated = true;
+      ASSERT_TRUE(setLayerSettings(x, s, &recreated).ok());
+      EXPECT_FALSE(recreated) << "a streamed mesh has the second set already";
+      LayerView b = a;
+      b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+      dev.allocator->peakLiveBytes = dev.allocator->liveBytes;
+      frames = 0;
+      do {
+        ASSERT_TRUE(frame(b).ok());
+        ++frames;
+        ASSERT_LT(frames, 100000u);
+      } while (x.stats.spreadRebuilds == 1);
+      EXPECT_GT(x.stats.lastSpreadFrames, 3u);
+      EXPECT_LE(dev.allocator->peakLiveBytes - start, d.deviceMemoryBudget);
+      y.forceImmediate = true;  // the reference at once (it has spreading on for its second set)
+      ASSERT_TRUE(renderOnce(dev, y, b).ok());
+      expectSameLayers(x, y, what + "_spread");
+      g.release(dev);
+      destroyLayeredVegetation(x);
+      destroyLayeredVegetation(y);
+    }
+  }
+}
+
+// A budget the ring cannot fit in, and the id output over the budget, are refused naming the budget.
+TEST_F(LayersTest, MeshBudgetRefusals) {
+  const VegetationModel m = straddlingLeaves(12, 8, true);
+  LayeredVegetationDesc d = smallDesc();
+  d.writeIds = false;
+  d.deviceMemoryBudget = 1 << 20;  // less than the layer images
+  LayeredVegetation lv;
+  Status s = createLayeredVegetation(dev, m, d, &lv);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("deviceMemoryBudget 1.0 MiB"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("raise the budget"), std::string::npos) << s.message();
+  d.writeIds = true;
+  s = createLayeredVegetation(dev, m, d, &lv);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("id output"), std::string::npos) << s.message();
+  d.writeIds = false;
+  d.deviceMemoryBudget = 0;
+  d.stagingRingBytes = 0;
+  s = createLayeredVegetation(dev, m, d, &lv);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("stagingRingBytes"), std::string::npos) << s.message();
 }

@@ -442,6 +442,15 @@ struct CanopyDesc {
   std::string rootCacheDir;
   Progress progress;          // optional: called during createCanopy ("leaf roots", "vertices")
   CanopyParams params;        // the initial parameters
+  // Device memory this context may allocate, bytes (buffers and images; Canopy's own allocator
+  // rounds up to 64 MiB blocks): the default fits lavapipe's 2 GiB heap. When the compact foliage
+  // mesh does not fit beside the other resources (two layer sets included), it stays in host memory
+  // and every re-slice streams it through a staging ring of about meshStagingRingBytes, a slice a
+  // frame (a re-slice asked at once then takes several frames; docs/design.md "Layers: mesh budget
+  // and staging ring"). 0: no limit, the mesh is always resident. The budget is planned for the
+  // layer count and size at creation.
+  uint64_t deviceMemoryBudget = 1536ull << 20;
+  uint64_t meshStagingRingBytes = 64ull << 20;  // [1 MiB, 4 GiB]; at least the largest chunk per frame in flight
 };
 
 // Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh
@@ -519,7 +528,11 @@ struct LayerStats {
   std::string lastRebuildReason;
   double lastPlacementMs = 0; // CPU time of the last placement
   uint32_t meshChunks = 0;    // draws per layer rebuild (compact mesh chunks, foliage + rigid)
-  uint64_t meshBytes = 0;     // the compact mesh on the device: vertices, 16-bit indices, root tables
+  uint64_t meshBytes = 0;     // the compact mesh: vertices, 16-bit indices, root tables
+  // Whether the compact mesh is on the device (CanopyDesc.deviceMemoryBudget); when not, it stays in
+  // host memory and every re-slice streams it through a staging ring of meshRingBytes.
+  bool meshResident = true;
+  uint64_t meshRingBytes = 0;
   // Spread re-slicing (LayerSettings.rebuildBudgetMs):
   uint32_t spreadPhase = 0;          // 0 idle, 1 placing (CPU), 2 drawing the new set, 3 cross-fading
   uint64_t spreadRebuilds = 0;       // spread re-slices completed

@@ -281,6 +281,11 @@ RenderGraph::PassBuilder& RenderGraph::PassBuilder::sideEffect() {
   return *this;
 }
 
+RenderGraph::PassBuilder& RenderGraph::PassBuilder::when(std::function<bool()> enabled) {
+  graph_->passes_[pass_].enabled = std::move(enabled);
+  return *this;
+}
+
 // ---- compile ----------------------------------------------------------------------------------
 Status RenderGraph::compile() {
   if (!error_.empty()) return Status::error(error_);
@@ -360,13 +365,34 @@ Status RenderGraph::compile() {
   for (size_t i = 0; i < P; ++i)
     if (!passes_[i].culled) steps[size_t(level[i])].passes.push_back(uint32_t(i));
 
+  for (size_t i = 0; i < P; ++i) {
+    const Pass& p = passes_[i];
+    if (!p.enabled || p.culled) continue;
+    for (const AccessDecl& a : p.accesses)
+      if (!resources_[a.id].imported)
+        return Status::error("pass '" + p.name + "' runs only in some frames (when) but accesses the transient '" +
+                             resources_[a.id].name + "'");
+  }
+  // 3. Barriers, every pass enabled; record() plans other combinations of conditional passes.
+  planBarriers(std::vector<bool>(P, false), steps, final_);
+  steps_ = std::move(steps);
+  full_ = Plan{steps_, final_, std::vector<bool>(P, false)};
+  conditionalPlans_.clear();
+  compiled_ = true;
+  return Status();
+}
+
+void RenderGraph::planBarriers(const std::vector<bool>& skip, std::vector<Step>& steps, std::vector<Barrier>& fin) const {
+  const size_t R = resources_.size();
+  fin.clear();
   // 3. Barriers. Transients start each frame from the state the previous frame left them in
   //    (contents discarded: layout UNDEFINED), so frame N+1 never races frame N. That needs the
   //    end-of-frame state first, hence two sweeps.
-  auto sweep = [&](std::vector<Track> tracks, std::vector<Step>* out, std::vector<Barrier>* fin) {
+  auto sweep = [&](std::vector<Track> tracks, std::vector<Step>* out, std::vector<Barrier>* finOut) {
     for (size_t s = 0; s < steps.size(); ++s) {
       std::vector<Barrier> batch;
       for (uint32_t pi : steps[s].passes) {
+        if (skip[pi]) continue;
         for (const AccessDecl& a : passes_[pi].accesses) {
           Track& t = tracks[a.id];
           const Resource& r = resources_[a.id];
@@ -411,8 +437,8 @@ Status RenderGraph::compile() {
       const bool callerSynchronizes = res.isImage && res.final.stage == 0 && !layoutChange;
       if (!callerSynchronizes &&
           (layoutChange || (t.touched && pending) || (t.touched && t.writeStage && res.final.stage))) {
-        if (fin)
-          fin->push_back({ResourceId(r), t.writeStage | t.readStages, t.writeAccess, res.final.stage, res.final.access,
+        if (finOut)
+          finOut->push_back({ResourceId(r), t.writeStage | t.readStages, t.writeAccess, res.final.stage, res.final.access,
                           res.isImage ? t.layout : VK_IMAGE_LAYOUT_UNDEFINED, finalLayout});
       }
     }
@@ -433,10 +459,7 @@ Status RenderGraph::compile() {
     t.layout = VK_IMAGE_LAYOUT_UNDEFINED;
     init[r] = t;
   }
-  sweep(init, &steps, &final_);
-  steps_ = std::move(steps);
-  compiled_ = true;
-  return Status();
+  sweep(init, &steps, &fin);
 }
 
 std::string RenderGraph::describe() const {
@@ -592,10 +615,12 @@ Status RenderGraph::record(VkCommandBuffer cmd, GpuTimer* timer) {
     dep.pImageMemoryBarriers = ib.data();
     device_->cmdPipelineBarrier2(cmd, &dep);
   };
+  const Plan& plan = currentPlan();
   PassContext ctx{cmd, device_, this};
-  for (const Step& s : steps_) {
+  for (const Step& s : plan.steps) {
     emit(s.barriers);
     for (uint32_t pi : s.passes) {
+      if (plan.skipped[pi]) continue;
       Pass& p = passes_[pi];
       if (timer) timer->begin(cmd, p.name);
       Status st = p.fn ? p.fn(ctx) : Status();
@@ -603,8 +628,22 @@ Status RenderGraph::record(VkCommandBuffer cmd, GpuTimer* timer) {
       if (!st.ok()) return st.context("pass '" + p.name + "'");
     }
   }
-  emit(final_);
+  emit(plan.final);
   return Status();
+}
+
+const RenderGraph::Plan& RenderGraph::currentPlan() {
+  std::vector<bool> skip(passes_.size(), false);
+  bool any = false;
+  for (size_t i = 0; i < passes_.size(); ++i)
+    if (passes_[i].enabled && !passes_[i].culled && !passes_[i].enabled()) skip[i] = any = true;
+  if (!any) return full_;
+  for (const Plan& p : conditionalPlans_)
+    if (p.skipped == skip) return p;
+  Plan p{steps_, {}, skip};
+  planBarriers(skip, p.steps, p.final);
+  conditionalPlans_.push_back(std::move(p));
+  return conditionalPlans_.back();
 }
 
 }  // namespace canopy::rg

@@ -99,6 +99,11 @@ class RenderGraph {
     PassBuilder& access(ResourceId id, State state);
     // Never culled (e.g. a pass whose effect is outside the graph).
     PassBuilder& sideEffect();
+    // A pass that runs only in frames where `enabled` returns true (asked once per record()): in
+    // the others neither it nor its barriers are recorded, so a pass that works now and then (a
+    // re-slice) costs nothing in the frames between. It may access imported resources only (a
+    // transient's state would then differ from frame to frame); compile() refuses others.
+    PassBuilder& when(std::function<bool()> enabled);
 
    private:
     friend class RenderGraph;
@@ -149,6 +154,15 @@ class RenderGraph {
   // Records barriers and passes into `cmd`; with a timer each pass is wrapped in timestamps.
   Status record(VkCommandBuffer cmd, GpuTimer* timer = nullptr);
 
+  // The schedule record() would use now: the passes whose `when` is false left out, with the
+  // barriers planned without their accesses (planned once per combination, then cached).
+  struct Plan {
+    std::vector<Step> steps;
+    std::vector<Barrier> final;
+    std::vector<bool> skipped;  // per pass
+  };
+  const Plan& currentPlan();
+
  private:
   struct AccessDecl {
     ResourceId id;
@@ -160,6 +174,7 @@ class RenderGraph {
     std::vector<AccessDecl> accesses;
     bool sideEffect = false;
     bool culled = false;
+    std::function<bool()> enabled;  // null: every frame
   };
   struct Resource {
     std::string name;
@@ -176,11 +191,16 @@ class RenderGraph {
     bool owned = false;
   };
   void addAccess(uint32_t pass, ResourceId id, State s);
+  // Barriers of the schedule `steps` (passes already placed) with the accesses of the passes in
+  // `skip` left out: steps[i].barriers and `fin` are filled.
+  void planBarriers(const std::vector<bool>& skip, std::vector<Step>& steps, std::vector<Barrier>& fin) const;
 
   std::vector<Pass> passes_;
   std::vector<Resource> resources_;
   std::vector<Step> steps_;
   std::vector<Barrier> final_;
+  Plan full_;                              // every pass enabled (steps_/final_)
+  std::vector<Plan> conditionalPlans_;     // other combinations seen by record()
   bool compiled_ = false;
   Device* device_ = nullptr;
   std::string error_;  // first declaration error, reported by compile()

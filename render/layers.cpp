@@ -875,6 +875,10 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
         lv.stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
       }
     }
+    // Only the per-vertex leaf and the per-leaf root are used from here on: the per-vertex root
+    // goes now, and leafOfVertex moves into lv after the compact mesh is built (host memory at 50M
+    // faces: 7.4 bytes per face each for the generated shrub).
+    std::vector<uint32_t>().swap(roots.rootOfVertex);
     lv.stats.rootCacheHit = cached;
     lv.stats.leafCount = roots.leafCount();
     lv.stats.preprocessMs = msSince(t0);
@@ -882,12 +886,12 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     lv.boundsMin = m.boundsMin;
     lv.boundsMax = m.boundsMax;
     lv.positions = m.positions;
-    lv.leafOfVertex = roots.leafOfVertex;
     lv.leafRootPosition.resize(roots.leafCount());
     for (uint32_t l = 0; l < roots.leafCount(); ++l) lv.leafRootPosition[l] = m.positions[roots.leafRoot[l]];
     CANOPY_TRY(chooseDrawPath(lv, lv.settings, &lv.singlePass));
     CompactMesh mesh;
     CANOPY_TRY(buildMesh(lv, m, foliage, roots, &mesh));
+    lv.leafOfVertex = std::move(roots.leafOfVertex);
     CANOPY_TRY(uploadTextures(lv, m));
     CANOPY_TRY(createTargets(lv));
     CANOPY_TRY(chooseMeshResidency(lv, liveAtStart, mesh.bytes()));
@@ -1266,25 +1270,31 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   };
   // The frame block holds the placement being drawn: the visible one for a re-slice at once, the
   // spread re-slice's from its first slice on.
+  // Every layer pass runs only in the frames that have its work (rg `when`): a still frame records
+  // neither the passes nor their barriers (the layer images stay in their rest state).
   g.addPass("layers: frame constants", [p](rg::PassContext& c) {
      if (p->rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->frame);
      else if (p->slicePending && p->spread.sliceClears)
        c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->spread.job.frame);
      return Status();
-   }).write(frame, rg::Use::TransferDst);
+   })
+      .write(frame, rg::Use::TransferDst)
+      .when([p] { return p->rebuildPending || (p->slicePending && p->spread.sliceClears); });
   auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {
                     return p->rebuildPending ? recordFoliage(*p, c.cmd, visibleTargets(*p), true, nullptr) : Status();
                   });
   drawsMesh(foliage)
       .write(r.color, rg::Use::ColorAttachmentWrite)
-      .write(r.depth, rg::Use::DepthAttachmentWrite);
+      .write(r.depth, rg::Use::DepthAttachmentWrite)
+      .when([p] { return p->rebuildPending; });
   if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
   drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
      return p->rebuildPending && !p->rigidDraws.empty() ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
                                                         : Status();
    }))
       .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
-      .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite);
+      .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite)
+      .when([p] { return p->rebuildPending && !p->rigidDraws.empty(); });
   if (lv.next.color.image) {
     // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): this frame's slice into the
     // next set (loaded: earlier slices are kept), then a cross-fade step into the visible set.
@@ -1303,12 +1313,14 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .write(nextColor, rg::Use::ColorAttachmentReadWrite)
         .write(nextDepth, rg::Use::DepthAttachmentWrite)
         .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)
-        .write(nextBgDepth, rg::Use::DepthAttachmentWrite);
+        .write(nextBgDepth, rg::Use::DepthAttachmentWrite)
+        .when([p] { return p->slicePending; });
     const bool rigid = !lv.rigidDraws.empty();
     auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
       return p->fadePending && !p->spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();
     });
     blend.read(nextColor, rg::Use::FragmentSampled).write(r.color, rg::Use::ColorAttachmentReadWrite);
+    blend.when([p] { return p->fadePending && !p->spread.fadeCopy; });
     if (rigid) blend.read(nextBgColor, rg::Use::FragmentSampled).write(r.backgroundColor, rg::Use::ColorAttachmentReadWrite);
     g.addPass("layers: cross-fade (last step)", [p](rg::PassContext& c) {
        return p->fadePending && p->spread.fadeCopy ? recordFadeCopy(*p, c.cmd) : Status();
@@ -1320,7 +1332,8 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .write(r.color, rg::Use::TransferDst)
         .write(r.depth, rg::Use::TransferDst)
         .write(r.backgroundColor, rg::Use::TransferDst)
-        .write(r.backgroundDepth, rg::Use::TransferDst);
+        .write(r.backgroundDepth, rg::Use::TransferDst)
+        .when([p] { return p->fadePending && p->spread.fadeCopy; });
     r.nextColor = nextColor;
     r.nextBackgroundColor = nextBgColor;
     CANOPY_TRY(g.bindImage(nextColor, lv.next.color));

@@ -91,6 +91,26 @@ Status renderOnce(Device& dev, LayeredVegetation& lv, const LayerView& view) {
   return s;
 }
 
+// The layer passes of one LayeredVegetation in a graph kept across frames (a spread or streamed
+// re-slice runs over many), and one frame: the view update, then the passes recorded and waited for.
+struct LayerFrames {
+  Device& dev;
+  LayeredVegetation& lv;
+  rg::RenderGraph g;
+  bool changed = false;  // updateLayerView's: the frame changed the visible layers
+  LayerFrames(Device& d, LayeredVegetation& v) : dev(d), lv(v) {}
+  ~LayerFrames() { g.release(dev); }
+  Status init() {
+    CANOPY_TRY(addLayerPasses(lv, g, nullptr));
+    CANOPY_TRY(g.compile());
+    return g.realize(dev);
+  }
+  Status frame(const LayerView& v) {
+    CANOPY_TRY(updateLayerView(lv, v, &changed));
+    return submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+  }
+};
+
 LayeredVegetationDesc smallDesc(const char* layout = "5(3-1-1)") {
   LayeredVegetationDesc d;
   d.width = kW;
@@ -502,16 +522,10 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     ASSERT_TRUE(createLayeredVegetation(dev, m, once, &y).ok());
     ASSERT_NE(x.next.color.image, VkImage(VK_NULL_HANDLE)) << "spread re-slicing draws into a second layer set";
     EXPECT_EQ(y.next.color.image, VkImage(VK_NULL_HANDLE));
-    rg::RenderGraph g;
-    ASSERT_TRUE(addLayerPasses(x, g, nullptr).ok());
-    ASSERT_TRUE(g.compile().ok());
-    ASSERT_TRUE(g.realize(dev).ok());
-    bool changed = false;
-    auto frame = [&](const LayerView& v) {
-      Status s = updateLayerView(x, v, &changed);
-      if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-      return s;
-    };
+    auto run = std::make_unique<LayerFrames>(dev, x);
+    ASSERT_TRUE(run->init().ok());
+    const bool& changed = run->changed;
+    auto frame = [&](const LayerView& v) { return run->frame(v); };
     const uint32_t n = x.settings.layout.count();
     auto readAll = [&](LayeredVegetation& lv, std::vector<std::vector<glm::vec4>>* c) {
       c->resize(n);
@@ -596,7 +610,7 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
       EXPECT_EQ(x.layers[l].leaves, y.layers[l].leaves);
       EXPECT_EQ(x.layers[l].triangles, y.layers[l].triangles);
     }
-    g.release(dev);
+    run.reset();
     destroyLayeredVegetation(x);
     destroyLayeredVegetation(y);
   }
@@ -757,16 +771,10 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       EXPECT_LT(x.stats.meshRingBytes, mesh) << "the ring is smaller than the mesh";
       EXPECT_EQ(x.stats.meshBytes, mesh);
       EXPECT_EQ(meshBufferBytes(x) >= x.stats.meshRingBytes, true);
-      rg::RenderGraph g;
-      ASSERT_TRUE(addLayerPasses(x, g, nullptr).ok());
-      ASSERT_TRUE(g.compile().ok());
-      ASSERT_TRUE(g.realize(dev).ok());
-      bool changed = false;
-      auto frame = [&](const LayerView& v) {
-        Status s = updateLayerView(x, v, &changed);
-        if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-        return s;
-      };
+      auto run = std::make_unique<LayerFrames>(dev, x);
+      ASSERT_TRUE(run->init().ok());
+      const bool& changed = run->changed;
+      auto frame = [&](const LayerView& v) { return run->frame(v); };
       // The first view, asked at once: slices until the whole mesh is drawn, the copy with the last.
       uint32_t frames = 0;
       uint64_t drawn = 0;
@@ -815,7 +823,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       y.forceImmediate = true;  // the reference at once (it has spreading on for its second set)
       ASSERT_TRUE(renderOnce(dev, y, b).ok());
       expectSameLayers(x, y, what + "_spread");
-      g.release(dev);
+      run.reset();
       destroyLayeredVegetation(x);
       destroyLayeredVegetation(y);
     }

@@ -256,3 +256,41 @@ TEST(RenderGraphErrors, WrongDirectionIsRefused) {
   g.addPass("p", noop()).read(t, Use::ComputeStorageWrite).sideEffect();
   EXPECT_FALSE(g.compile().ok());
 }
+
+// A conditional pass (when): in a frame where it is off, neither it nor its barriers are in the
+// plan record() uses; on, the plan is compile()'s. Transients are refused for it.
+TEST(RenderGraphBarriers, ConditionalPassesLeaveOutTheirBarriers) {
+  RenderGraph g;
+  const State rest = stateOf(Use::FragmentSampled);
+  auto layers = g.importImage("layers", image64(), rest, rest);
+  auto out = g.importBuffer("out", 64, {}, stateOf(Use::HostRead));
+  bool on = false;
+  g.addPass("redraw", noop()).write(layers, Use::ColorAttachmentWrite).when([&] { return on; });
+  g.addPass("sample", noop()).read(layers, Use::ComputeSampled).write(out, Use::ComputeStorageWrite);
+  ASSERT_TRUE(g.compile().ok());
+  ASSERT_EQ(g.steps().size(), 2u);
+  const RenderGraph::Plan& off = g.currentPlan();
+  ASSERT_EQ(off.skipped, (std::vector<bool>{true, false}));
+  EXPECT_BARRIERS(off.steps[0].barriers);
+  // Only the read remains: the image arrives sampled by fragment shaders, compute samples it
+  // (no layout change, no write to wait for), and no final barrier is needed for it.
+  EXPECT_BARRIERS(off.steps[1].barriers);
+  EXPECT_BARRIERS(off.final, B(out, CS, SW, HOST, HR));
+  on = true;
+  const RenderGraph::Plan& full = g.currentPlan();
+  EXPECT_EQ(full.skipped, (std::vector<bool>{false, false}));
+  EXPECT_BARRIERS(full.steps[0].barriers, B(layers, FS, 0, COLOR, CW, SRO, CAO));
+  EXPECT_BARRIERS(full.steps[1].barriers, B(layers, COLOR, CW, CS, SAMPLED, CAO, SRO));
+  EXPECT_BARRIERS(full.final, B(layers, CS, 0, FS, SAMPLED, SRO, SRO), B(out, CS, SW, HOST, HR));
+  on = false;
+  EXPECT_EQ(&g.currentPlan(), &g.currentPlan()) << "a combination is planned once";
+
+  RenderGraph h;
+  auto t = h.createBuffer("t", {64});
+  auto o = h.importBuffer("o", 64, {}, stateOf(Use::HostRead));
+  h.addPass("sometimes", noop()).write(t, Use::ComputeStorageWrite).when([] { return true; });
+  h.addPass("read", noop()).read(t, Use::ComputeStorageRead).write(o, Use::ComputeStorageWrite);
+  const Status s = h.compile();
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("transient 't'"), std::string::npos) << s.message();
+}

@@ -262,12 +262,14 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   for (size_t t = 0; t < nt; ++t) start[(foliage[t] ? 0 : nm) + m.triangleMaterial[t] + 1]++;
   for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
   lv.indices.assign(nt * 3, 0);
-  lv.gpuToModelTriangle.assign(nt, 0);
+  // The id output's triangle ids are in GPU order; only it needs the way back (4 bytes a face).
+  const bool ids = lv.desc.writeIds;
+  if (ids) lv.gpuToModelTriangle.assign(nt, 0);
   std::vector<uint64_t> cursor(start.begin(), start.end() - 1);
   for (size_t t = 0; t < nt; ++t) {
     const uint64_t slot = cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++;
     std::memcpy(&lv.indices[slot * 3], &m.indices[t * 3], 12);
-    lv.gpuToModelTriangle[slot] = uint32_t(t);
+    if (ids) lv.gpuToModelTriangle[slot] = uint32_t(t);
   }
   for (size_t k = 0; k < 2 * nm; ++k) {
     if (start[k + 1] == start[k]) continue;

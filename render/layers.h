@@ -162,7 +162,7 @@ struct LayeredVegetation {
   std::vector<uint32_t> leafOfVertex;
   std::vector<glm::vec3> leafRootPosition;
   std::vector<uint32_t> indices;          // GPU order (foliage by material, then rigid)
-  std::vector<uint32_t> gpuToModelTriangle;
+  std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   std::vector<LayerDraw> foliageDraws, rigidDraws;  // per material, GPU order
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
   // GPU mesh and materials.

@@ -25,6 +25,34 @@ std::string modelName(const VegetationModel& m) { return m.path.empty() ? std::s
 
 uint64_t alignUp(uint64_t v, uint64_t a) { return (v + a - 1) / a * a; }
 
+// Chunk-local numbers of model vertices (or leaves): an open-addressing table of 2^17 slots for
+// the at most 65535 entries of one chunk, an entry valid only while its stamp is the current
+// chunk's. Its size does not depend on the model (issue 16: a bounded working set; per-vertex
+// arrays cost 15 bytes a face at 50M faces).
+class ChunkLocal {
+ public:
+  static constexpr uint32_t kBits = 17, kMask = (1u << kBits) - 1;
+  ChunkLocal() : key_(1u << kBits), stamp_(1u << kBits, 0), local_(1u << kBits) {}
+  // The chunk-local number of `x` in chunk `stamp`, or kNoLeaf when it has none yet.
+  uint32_t find(uint32_t x, uint32_t stamp) const {
+    for (uint32_t i = slot(x);; i = (i + 1) & kMask) {
+      if (stamp_[i] != stamp) return kNoLeaf;
+      if (key_[i] == x) return local_[i];
+    }
+  }
+  void insert(uint32_t x, uint32_t stamp, uint32_t local) {
+    uint32_t i = slot(x);
+    while (stamp_[i] == stamp) i = (i + 1) & kMask;
+    key_[i] = x;
+    stamp_[i] = stamp;
+    local_[i] = local;
+  }
+
+ private:
+  static uint32_t slot(uint32_t x) { return (x * 0x9E3779B1u) >> (32 - kBits); }
+  std::vector<uint32_t> key_, stamp_, local_;
+};
+
 }  // namespace
 
 glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v) {
@@ -50,11 +78,16 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
   const size_t nv = m.positions.size();
   if (roots.leafOfVertex.size() != nv || m.uvs.size() != nv)
     return Status::error("mesh chunks: " + modelName(m) + ": per-vertex arrays disagree with the vertex count");
-  // Chunk-local numbers by stamp: local[v] is valid while stamp[v] == the current chunk + 1, so the
-  // working set is two words per vertex and two per leaf, however many chunks there are.
-  std::vector<uint32_t> vStamp(nv, 0), vLocal(nv, 0);
-  std::vector<uint32_t> lStamp(roots.leafCount(), 0), lLocal(roots.leafCount(), 0);
+  // Chunk-local numbers of vertices and leaves (stamp = the current chunk + 1).
+  ChunkLocal vLocal, lLocal;
   std::vector<uint32_t> chunkVertices, chunkLeaves;
+  // The output's sizes, reserved so that growing them never holds two copies (2.2 GB at 50M faces):
+  // indices exactly; vertices and roots the model's, plus a margin for those repeated in two chunks.
+  uint64_t triangles = 0;
+  for (const TriangleRange& r : ranges) triangles += r.count;
+  out->indices.reserve(3 * triangles);
+  out->vertices.reserve(nv + nv / 32 + kMaxChunkVertices);
+  out->roots.reserve(roots.leafCount() + roots.leafCount() / 32 + 65536);
   uint32_t stamp = 0;
   MeshChunk cur;
   auto open = [&](const TriangleRange& r, uint64_t firstTriangle) {
@@ -82,7 +115,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
     cur.vertexCount = uint32_t(chunkVertices.size());
     for (uint32_t v : chunkVertices) {
       const glm::vec3 q = glm::clamp(glm::round((m.positions[v] - lo) * inv), glm::vec3(0.0f), glm::vec3(65535.0f));
-      const uint32_t leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_CHUNK_NO_LEAF : lLocal[roots.leafOfVertex[v]];
+      const uint32_t leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_CHUNK_NO_LEAF : lLocal.find(roots.leafOfVertex[v], stamp);
       const glm::vec2 uv = m.uvs[v];
       if (!(std::abs(uv.x) <= 65504.0f && std::abs(uv.y) <= 65504.0f))
         return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has texture coordinate (" +
@@ -121,11 +154,11 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
         if (v >= nv) return Status::error("mesh chunks: " + modelName(m) + ": index " + std::to_string(v) + " past the vertices");
         if (!std::isfinite(m.positions[v].x) || !std::isfinite(m.positions[v].y) || !std::isfinite(m.positions[v].z))
           return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has a non-finite position");
-        bool seen = vStamp[v] == stamp;
+        bool seen = vLocal.find(v, stamp) != kNoLeaf;
         for (int j = 0; j < k; ++j) seen = seen || gpuIndices[t * 3 + j] == v;
         newV += !seen;
         const uint32_t leaf = roots.leafOfVertex[v];
-        if (leaf != kNoLeaf && !seen && lStamp[leaf] != stamp) ++newL;  // over-counts a leaf new twice: harmless
+        if (leaf != kNoLeaf && !seen && lLocal.find(leaf, stamp) == kNoLeaf) ++newL;  // over-counts a leaf new twice: harmless
       }
       if (cur.triangleCount > 0 &&
           (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
@@ -134,18 +167,18 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
       }
       for (int k = 0; k < 3; ++k) {
         const uint32_t v = gpuIndices[t * 3 + k];
-        if (vStamp[v] != stamp) {
-          vStamp[v] = stamp;
-          vLocal[v] = uint32_t(chunkVertices.size());
+        uint32_t local = vLocal.find(v, stamp);
+        if (local == kNoLeaf) {
+          local = uint32_t(chunkVertices.size());
+          vLocal.insert(v, stamp, local);
           chunkVertices.push_back(v);
           const uint32_t leaf = roots.leafOfVertex[v];
-          if (leaf != kNoLeaf && lStamp[leaf] != stamp) {
-            lStamp[leaf] = stamp;
-            lLocal[leaf] = uint32_t(chunkLeaves.size());
+          if (leaf != kNoLeaf && lLocal.find(leaf, stamp) == kNoLeaf) {
+            lLocal.insert(leaf, stamp, uint32_t(chunkLeaves.size()));
             chunkLeaves.push_back(leaf);
           }
         }
-        out->indices.push_back(uint16_t(vLocal[v]));
+        out->indices.push_back(uint16_t(local));
       }
       cur.triangleCount++;
     }

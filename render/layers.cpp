@@ -291,7 +291,7 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, mesh, lv.desc.progress));
   lv.stats.meshChunks = uint32_t(mesh->chunks.size());
   lv.stats.meshBytes = mesh->bytes();
-  lv.chunks = mesh->chunks;
+  lv.chunks = std::move(mesh->chunks);  // the one chunk list (a streamed mesh's host copy keeps none)
   return Status();
 }
 
@@ -365,7 +365,7 @@ Status placeMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart
     MeshRing& r = lv.ring;
     r.segments = std::max<uint32_t>(d.framesInFlight, 1);
     uint64_t minV = 0, minR = 0, minI = 3;
-    for (const MeshChunk& c : mesh.chunks) {
+    for (const MeshChunk& c : lv.chunks) {
       minV = std::max<uint64_t>(minV, c.vertexCount);
       minR = std::max<uint64_t>(minR, roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment));
       minI = std::max<uint64_t>(minI, 3ull * std::min<uint32_t>(c.triangleCount, 1024));
@@ -1122,7 +1122,6 @@ Status advanceSpread(LayeredVegetation& lv) {
       // Asked at once: the next set is copied in behind the last slice (the copy pass follows the
       // slice pass), without a fade, and the occupancy recomputed in this frame.
       sp.fadeCopy = true;
-      sp.fadeWeights.assign(lv.settings.layout.count() + 1, 0.0f);
       lv.fadePending = true;
       lv.occupancyRecomputeNow = true;
       finishSpread(lv);

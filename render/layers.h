@@ -107,7 +107,7 @@ struct ChunkPart {
 // these capacities (elements); frame F writes segment F mod segments, which the embedding contract
 // (frames <= F - framesInFlight completed) leaves free.
 struct MeshRing {
-  CompactMesh host;                      // the whole compact mesh, host memory
+  CompactMesh host;                      // vertices, indices and root blocks in host memory (chunks: lv.chunks)
   uint32_t segments = 0;
   uint64_t vertexCapacity = 0, indexCapacity = 0, rootCapacity = 0;  // per segment
   uint32_t rootAlignment = 1;            // root blocks start at multiples of this many entries

@@ -1,8 +1,8 @@
 #pragma once
 // Strict number parsing for the command-line programs (demo/, bench/): the whole argument must be
 // a number in range, otherwise the caller prints a one-line reason.
-#include <cstdint>
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -73,8 +73,29 @@ inline uint64_t procKilobytes(const char* path, const char* key) {
 // ends the process, which no bad_alloc would report.
 inline uint64_t availableMemoryBytes() { return procKilobytes("/proc/meminfo", "MemAvailable"); }
 
-// The process's peak resident memory (VmHWM of /proc/self/status). On a CPU driver (lavapipe)
-// device memory is host memory too, so this includes it.
-inline uint64_t peakResidentBytes() { return procKilobytes("/proc/self/status", "VmHWM"); }
+// The peak before the last resetPeakResident(), so peakResidentBytes() stays the whole run's.
+inline uint64_t& carriedPeakBytes() {
+  static uint64_t peak = 0;
+  return peak;
+}
+
+// The process's peak resident memory (VmHWM of /proc/self/status, and any peak before a reset). On
+// a CPU driver (lavapipe) device memory is host memory too, so this includes it.
+inline uint64_t peakResidentBytes() {
+  return std::max(carriedPeakBytes(), procKilobytes("/proc/self/status", "VmHWM"));
+}
+
+// The resident memory now (VmRSS).
+inline uint64_t residentBytes() { return procKilobytes("/proc/self/status", "VmRSS"); }
+
+// Restarts VmHWM at the current resident size (Linux: "5" to /proc/self/clear_refs), so the peak
+// of one step can be read alone; false where the kernel does not allow it.
+inline bool resetPeakResident() {
+  carriedPeakBytes() = peakResidentBytes();
+  FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  const bool ok = std::fputs("5", f) >= 0;
+  return std::fclose(f) == 0 && ok;
+}
 
 }  // namespace canopy::cli

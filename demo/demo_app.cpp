@@ -244,10 +244,10 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
     *label = o.gltf;
     return Status();
   }
-  // Generating and preparing a scene peaks at about 250 bytes per face with the compact mesh
-  // (VmHWM of `canopy-demo --scene shrub --faces 50M`: 11.47 GiB; 10M: 2.38 GiB; on a CPU driver the
-  // GPU buffers are host memory too); 350 keeps a margin for other scenes and drivers. Refuse what
-  // cannot fit instead of being killed by the OOM killer half-way.
+  // Generating and preparing a scene peaks at 144 bytes per face for the 50M shrub (VmHWM of
+  // `canopy-demo --scene shrub --faces 50M`: 6.70 GiB) and 203 for 10M (1.89 GiB: a resident mesh
+  // counts twice on a CPU driver, whose GPU buffers are host memory); 350 keeps a margin for other
+  // scenes and drivers. Refuse what cannot fit instead of being killed by the OOM killer half-way.
   constexpr uint64_t kPeakBytesPerFace = 350;
   const uint64_t available = cli::availableMemoryBytes();
   if (available > 0 && o.faces * kPeakBytesPerFace > available)
@@ -464,6 +464,10 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.split = o.split;
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
+  // The preparation's own peak above what is resident before it (the model): issue 16's
+  // "bytes per face" of preparation, printed below.
+  const uint64_t residentBefore = cli::residentBytes();
+  const bool peakReset = cli::resetPeakResident();
   const auto t0 = std::chrono::steady_clock::now();
   cli::ProgressLine progress("preparing");
   if (model.triangleCount() >= 1'000'000) {
@@ -477,6 +481,17 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   if (model.triangleCount() >= 1'000'000)
     std::fprintf(stderr, "prepared %zu triangles (material split, leaf roots, GPU upload) in %.2f s (%.2fM/s)\n",
                  model.triangleCount(), s, double(model.triangleCount()) / std::max(s, 1e-6) / 1e6);
+  if (peakReset) {
+    const uint64_t peak = cli::procKilobytes("/proc/self/status", "VmHWM");
+    const double faces = double(std::max<size_t>(model.triangleCount(), 1));
+    std::fprintf(stderr,
+                 "preparation memory: model %.2f GiB resident before (%.1f bytes per face), peak %.2f GiB above it "
+                 "(%.1f bytes per face), %.1f bytes per face kept after it\n",
+                 double(residentBefore) / double(1ull << 30), double(residentBefore) / faces,
+                 double(peak - std::min(peak, residentBefore)) / double(1ull << 30),
+                 double(peak - std::min(peak, residentBefore)) / faces,
+                 double(cli::residentBytes() - std::min(cli::residentBytes(), residentBefore)) / faces);
+  }
   CANOPY_TRY(setCanopyParams(host.canopy, paramsFrom(o, canopyParams(host.canopy))));
   return Status();
 }

@@ -261,16 +261,11 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   std::vector<uint64_t> start(2 * nm + 1, 0);
   for (size_t t = 0; t < nt; ++t) start[(foliage[t] ? 0 : nm) + m.triangleMaterial[t] + 1]++;
   for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
-  lv.indices.assign(nt * 3, 0);
-  // The id output's triangle ids are in GPU order; only it needs the way back (4 bytes a face).
-  const bool ids = lv.desc.writeIds;
-  if (ids) lv.gpuToModelTriangle.assign(nt, 0);
+  // The GPU order as a permutation of the model's triangles (4 bytes a face, not a copy of the
+  // indices); the id output keeps it, since its triangle ids are in GPU order.
+  std::vector<uint32_t> order(nt);
   std::vector<uint64_t> cursor(start.begin(), start.end() - 1);
-  for (size_t t = 0; t < nt; ++t) {
-    const uint64_t slot = cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++;
-    std::memcpy(&lv.indices[slot * 3], &m.indices[t * 3], 12);
-    if (ids) lv.gpuToModelTriangle[slot] = uint32_t(t);
-  }
+  for (size_t t = 0; t < nt; ++t) order[cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++] = uint32_t(t);
   for (size_t k = 0; k < 2 * nm; ++k) {
     if (start[k + 1] == start[k]) continue;
     LayerDraw draw{uint32_t(k % nm), uint32_t(start[k] * 3), uint32_t((start[k + 1] - start[k]) * 3)};
@@ -288,10 +283,11 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
     return Status::error("layers: minStorageBufferOffsetAlignment " + std::to_string(align) + " is not a power of two");
   lv.ring.rootAlignment = co.rootAlignment;
-  CANOPY_TRY(buildCompactMesh(m, lv.indices, ranges, roots, co, mesh, lv.desc.progress));
+  CANOPY_TRY(buildCompactMesh(m, order, ranges, roots, co, mesh, lv.desc.progress));
+  if (lv.desc.writeIds) lv.gpuToModelTriangle = std::move(order);
   lv.stats.meshChunks = uint32_t(mesh->chunks.size());
   lv.stats.meshBytes = mesh->bytes();
-  lv.chunks = std::move(mesh->chunks);  // the one chunk list (a streamed mesh's host copy keeps none)
+  lv.chunks = std::move(mesh->chunks);  // the one chunk list (the host mesh keeps none)
   return Status();
 }
 
@@ -354,9 +350,11 @@ Status chooseMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t
   return createTargets(lv);
 }
 
-// Creates the resident buffers and fills them, or the staging rings (the mesh stays in lv.ring.host).
-Status placeMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart) {
+// Creates the resident buffers and fills them, or the staging rings; the mesh stays in lv.hostMesh.
+Status placeMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtStart) {
   Device& d = *lv.device;
+  lv.hostMesh = std::move(compact);
+  const CompactMesh& mesh = lv.hostMesh;
   const uint64_t budget = lv.desc.deviceMemoryBudget;
   if (lv.streamed) {
     // Per segment each ring holds at least the largest chunk (its vertices, its root block, and
@@ -394,7 +392,6 @@ Status placeMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart
     for (const Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots})
       if (!hostCoherentPointer(d, b->allocation))
         return Status::error("layers: the staging ring's memory is not host-visible and coherent");
-    r.host = std::move(mesh);
     lv.stats.meshResident = false;
     lv.stats.meshRingBytes = r.bytes;
     return Status();
@@ -452,7 +449,7 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   job.zMin = INFINITY;
   job.zMax = -INFINITY;
   job.bottom = -INFINITY;
-  job.leafDepth.resize(lv.leafRootPosition.size());
+  job.leafDepth.resize(lv.leafCount);
 }
 
 // Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
@@ -465,9 +462,24 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
   gpu::LayerFrame& f = job.frame;
   const bool geometric = s.slice == SliceMode::Geometry;
   auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
-  const size_t nLeaves = lv.leafRootPosition.size(), nVertices = lv.positions.size();
+  // Per vertex the placement reads the compact host mesh (decoded as the vertex shader decodes it),
+  // chunk by chunk: foliage chunks come first, each chunk's vertices and indices contiguous.
+  const CompactMesh& hm = lv.hostMesh;
+  const size_t nLeaves = lv.leafCount, nVertices = hm.vertices.size(), nChunks = lv.chunks.size();
   size_t foliageIndices = 0;
-  for (const LayerDraw& dr : lv.foliageDraws) foliageIndices = std::max<size_t>(foliageIndices, dr.firstIndex + dr.indexCount);
+  for (const MeshChunk& c : lv.chunks)
+    if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
+  auto chunkOf = [&](size_t item, bool index) -> const MeshChunk& {
+    for (;; ++job.chunk) {
+      const MeshChunk& c = lv.chunks[job.chunk];
+      if (job.chunk + 1 == lv.chunks.size() || item < (index ? c.firstIndex + 3ull * c.triangleCount : c.firstVertex + c.vertexCount))
+        return c;
+    }
+  };
+  auto leafOf = [&](const MeshChunk& c, const gpu::LayerVertex& v) {
+    const uint32_t l = chunkLeaf(v);
+    return l == LAYER_CHUNK_NO_LEAF ? kNoLeaf : hm.roots[c.firstRoot + l].leaf;
+  };
   const glm::vec4 rowY(f.viewProj[0][1], f.viewProj[1][1], f.viewProj[2][1], f.viewProj[3][1]);
   const glm::vec4 rowW(f.viewProj[0][3], f.viewProj[1][3], f.viewProj[2][3], f.viewProj[3][3]);
   const float h = float(lv.desc.height);
@@ -475,22 +487,29 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
   while (!*done) {
     size_t end = 0;
     switch (job.stage) {
-      case 0:  // the keys the layers are assigned by: leaf roots (or, below, every foliage vertex)
-        end = std::min(job.next + kBatch, nLeaves);
-        for (size_t i = job.next; i < end; ++i) {
-          job.leafDepth[i] = depthOf(lv.leafRootPosition[i]);
-          if (!geometric) {
-            job.zMin = std::min(job.zMin, job.leafDepth[i]);
-            job.zMax = std::max(job.zMax, job.leafDepth[i]);
+      case 0: {  // the keys the layers are assigned by: leaf roots (or, below, every foliage vertex),
+                 // read from the chunks' root tables (a leaf in two chunks is written twice, alike)
+        size_t roots = 0;
+        for (end = job.next; end < nChunks && roots < kBatch; ++end) {
+          const MeshChunk& c = lv.chunks[end];
+          for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i) {
+            const float z = depthOf(hm.roots[i].position);
+            job.leafDepth[hm.roots[i].leaf] = z;
+            if (!geometric) {
+              job.zMin = std::min(job.zMin, z);
+              job.zMax = std::max(job.zMax, z);
+            }
           }
+          roots += c.rootCount + 1;
         }
-        if (end == nLeaves) job.stage = geometric ? 1 : 2, end = 0;
+        if (end == nChunks) job.stage = geometric ? 1 : 2, end = 0;
         break;
+      }
       case 1:
         end = std::min(job.next + kBatch, nVertices);
         for (size_t v = job.next; v < end; ++v)
-          if (lv.leafOfVertex[v] != kNoLeaf) {
-            const float z = depthOf(lv.positions[v]);
+          if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
+            const float z = depthOf(decodePosition(chunkOf(v, false), hm.vertices[v]));
             job.zMin = std::min(job.zMin, z);
             job.zMax = std::max(job.zMax, z);
           }
@@ -522,14 +541,15 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
       case 4:  // the screen-space root line and per-layer tops (eq. 7)
         end = std::min(job.next + kBatch, nVertices);
         for (size_t v = job.next; v < end; ++v) {
-          const glm::vec4 p(lv.positions[v], 1.0f);
+          const MeshChunk& c = chunkOf(v, false);
+          const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
           const float w = glm::dot(rowW, p);
           if (w <= 1e-6f) continue;
           const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
           job.bottom = std::max(job.bottom, y);
-          const uint32_t leaf = lv.leafOfVertex[v];
+          const uint32_t leaf = leafOf(c, hm.vertices[v]);
           if (leaf == kNoLeaf) continue;
-          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : job.leafLayer[leaf];
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(f.depthRow, p)) : job.leafLayer[leaf];
           job.layers[layer].top = std::min(job.layers[layer].top, y);
         }
         if (end == nVertices) job.stage = 5, end = 0;
@@ -537,8 +557,9 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
       case 5:  // foliage triangles come first in GPU order: indices [0, foliageIndices)
         end = std::min(job.next + 3 * kBatch, foliageIndices);
         for (size_t k = job.next; k < end; k += 3) {
-          const uint32_t v = lv.indices[k];
-          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(lv.positions[v])) : job.leafLayer[lv.leafOfVertex[v]];
+          const MeshChunk& c = chunkOf(k, true);
+          const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(decodePosition(c, v))) : job.leafLayer[leafOf(c, v)];
           job.layers[layer].triangles++;
         }
         if (end == foliageIndices) job.stage = 6, end = 0;
@@ -558,6 +579,7 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
       }
     }
     job.next = end;
+    if (end == 0) job.chunk = 0;  // a new stage starts at the first chunk
     if (!*done && deadline && Clock::now() >= *deadline) break;
   }
   job.ms += msSince(t0);
@@ -877,9 +899,8 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
         lv.stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
       }
     }
-    // Only the per-vertex leaf and the per-leaf root are used from here on: the per-vertex root
-    // goes now, and leafOfVertex moves into lv after the compact mesh is built (host memory at 50M
-    // faces: 7.4 bytes per face each for the generated shrub).
+    // Only the per-vertex leaf and the per-leaf root are used from here on, by the compaction; the
+    // per-vertex root goes now and the rest after it (the placement reads the compact mesh).
     std::vector<uint32_t>().swap(roots.rootOfVertex);
     lv.stats.rootCacheHit = cached;
     lv.stats.leafCount = roots.leafCount();
@@ -887,13 +908,11 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     lv.materials = m.materials;
     lv.boundsMin = m.boundsMin;
     lv.boundsMax = m.boundsMax;
-    lv.positions = m.positions;
-    lv.leafRootPosition.resize(roots.leafCount());
-    for (uint32_t l = 0; l < roots.leafCount(); ++l) lv.leafRootPosition[l] = m.positions[roots.leafRoot[l]];
+    lv.leafCount = roots.leafCount();
     CANOPY_TRY(chooseDrawPath(lv, lv.settings, &lv.singlePass));
     CompactMesh mesh;
     CANOPY_TRY(buildMesh(lv, m, foliage, roots, &mesh));
-    lv.leafOfVertex = std::move(roots.leafOfVertex);
+    roots = LeafRoots{};
     CANOPY_TRY(uploadTextures(lv, m));
     CANOPY_TRY(createTargets(lv));
     CANOPY_TRY(chooseMeshResidency(lv, liveAtStart, mesh.bytes()));
@@ -1040,9 +1059,9 @@ void planSlice(LayeredVegetation& lv) {
       auto* v = static_cast<gpu::LayerVertex*>(lv.vertices.allocation.mapped);
       auto* ix = static_cast<uint16_t*>(lv.indexBuffer.allocation.mapped);
       auto* rt = static_cast<gpu::LayerLeafRoot*>(lv.leafRoots.allocation.mapped);
-      std::memcpy(v + part.ringVertex, r.host.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
-      std::memcpy(ix + part.ringIndex, r.host.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
-      std::memcpy(rt + part.ringRoot, r.host.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
+      std::memcpy(v + part.ringVertex, lv.hostMesh.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
+      std::memcpy(ix + part.ringIndex, lv.hostMesh.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
+      std::memcpy(rt + part.ringRoot, lv.hostMesh.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
       usedV += c.vertexCount;
       usedI += 3ull * count;
       usedR += roots;

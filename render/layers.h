@@ -90,7 +90,8 @@ struct PlacementJob {
   std::vector<uint8_t> leafLayer;
   float zMin = 0, zMax = 0, bottom = 0;
   uint32_t stage = 0;
-  size_t next = 0;
+  size_t next = 0;       // the stage's next item (chunk, leaf, or vertex / index of the host mesh)
+  uint32_t chunk = 0;    // the chunk holding item `next` (vertex and index stages)
   double ms = 0;  // CPU time spent so far
 };
 
@@ -107,7 +108,6 @@ struct ChunkPart {
 // these capacities (elements); frame F writes segment F mod segments, which the embedding contract
 // (frames <= F - framesInFlight completed) leaves free.
 struct MeshRing {
-  CompactMesh host;                      // vertices, indices and root blocks in host memory (chunks: lv.chunks)
   uint32_t segments = 0;
   uint64_t vertexCapacity = 0, indexCapacity = 0, rootCapacity = 0;  // per segment
   uint32_t rootAlignment = 1;            // root blocks start at multiples of this many entries
@@ -157,11 +157,11 @@ struct LayeredVegetation {
   MaterialSplit split;
   std::vector<ModelMaterial> materials;
   glm::vec3 boundsMin{0}, boundsMax{0};
-  // CPU copies for placement: positions, per-vertex leaf, per-leaf root position.
-  std::vector<glm::vec3> positions;
-  std::vector<uint32_t> leafOfVertex;
-  std::vector<glm::vec3> leafRootPosition;
-  std::vector<uint32_t> indices;          // GPU order (foliage by material, then rigid)
+  // The compact mesh in host memory (its chunks: `chunks`): the placement reads its decoded
+  // positions and leaves (so the CPU places what the GPU draws, and no per-vertex copy of the
+  // model is kept), and a streamed mesh's re-slices copy from it into the ring.
+  CompactMesh hostMesh;
+  uint32_t leafCount = 0;                 // model leaves (LayerLeafRoot.leaf < leafCount)
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   std::vector<LayerDraw> foliageDraws, rigidDraws;  // per material, GPU order
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each

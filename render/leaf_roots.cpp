@@ -18,13 +18,14 @@ uint32_t findRoot(std::vector<uint32_t>& parent, uint32_t x) {
   return x;
 }
 
-void unite(std::vector<uint32_t>& parent, std::vector<uint32_t>& size, uint32_t a, uint32_t b) {
+// Union by rank (a byte: ranks stay below 64) keeps the trees shallow at 1 byte a vertex, not 4.
+void unite(std::vector<uint32_t>& parent, std::vector<uint8_t>& rank, uint32_t a, uint32_t b) {
   a = findRoot(parent, a);
   b = findRoot(parent, b);
   if (a == b) return;
-  if (size[a] < size[b]) std::swap(a, b);
+  if (rank[a] < rank[b]) std::swap(a, b);
   parent[b] = a;
-  size[a] += size[b];
+  if (rank[a] == rank[b]) rank[a]++;
 }
 
 uint32_t floatKey(float f) {
@@ -72,62 +73,76 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
   auto report = [&](uint64_t done) {
     if (progress) progress("leaf roots", done, work);
   };
-  std::vector<uint32_t> parent(nv), size(nv, 1);
+  // Working memory (issue 16: preparation memory): parent (4 bytes a vertex, which becomes the
+  // output's rootOfVertex), rank and use (1 each) and the weld table (about 6 bytes a used vertex,
+  // freed before the roots are chosen). The result does not depend on the union order.
+  std::vector<uint32_t> parent(nv);
   for (size_t v = 0; v < nv; ++v) parent[v] = uint32_t(v);
   std::vector<uint8_t> used(nv, 0);
-  for (size_t t = 0; t < nt; ++t) {
-    if ((t & 0xfffff) == 0) report(t);
-    if (!foliage[t]) continue;
-    const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
-    if (a >= nv || b >= nv || c >= nv)
-      return Status::error("leaf roots: triangle " + std::to_string(t) + " indexes past the " + std::to_string(nv) + " vertices");
-    used[a] = used[b] = used[c] = 1;
-    unite(parent, size, a, b);
-    unite(parent, size, b, c);
-  }
-  if (o.weldPositions) {
-    size_t usedCount = 0;
-    for (uint8_t u : used) usedCount += u;
-    size_t cap = 16;
-    while (cap < usedCount * 2) cap <<= 1;
-    std::vector<uint32_t> table(cap, kNoLeaf);  // open addressing, linear probing: vertex index
-    for (size_t v = 0; v < nv; ++v) {
-      if ((v & 0xfffff) == 0) report(nt + v);
-      if (!used[v]) continue;
-      size_t slot = hashPosition(m.positions[v]) & (cap - 1);
-      for (;; slot = (slot + 1) & (cap - 1)) {
-        const uint32_t other = table[slot];
-        if (other == kNoLeaf) {
-          table[slot] = uint32_t(v);
-          break;
-        }
-        const glm::vec3 &p = m.positions[v], &q = m.positions[other];
-        if (floatKey(p.x) == floatKey(q.x) && floatKey(p.y) == floatKey(q.y) && floatKey(p.z) == floatKey(q.z)) {
-          unite(parent, size, uint32_t(v), other);
-          break;
+  {
+    std::vector<uint8_t> rank(nv, 0);
+    for (size_t t = 0; t < nt; ++t) {
+      if ((t & 0xfffff) == 0) report(t);
+      if (!foliage[t]) continue;
+      const uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+      if (a >= nv || b >= nv || c >= nv)
+        return Status::error("leaf roots: triangle " + std::to_string(t) + " indexes past the " + std::to_string(nv) + " vertices");
+      used[a] = used[b] = used[c] = 1;
+      unite(parent, rank, a, b);
+      unite(parent, rank, b, c);
+    }
+    if (o.weldPositions) {
+      size_t usedCount = 0;
+      for (uint8_t u : used) usedCount += u;
+      // Open addressing with linear probing at a load of at most 2/3; the slot is the hash scaled
+      // to the table (any size, not a power of two).
+      const uint64_t cap = std::max<uint64_t>(16, usedCount + usedCount / 2);
+      std::vector<uint32_t> table(cap, kNoLeaf);  // vertex index
+      for (size_t v = 0; v < nv; ++v) {
+        if ((v & 0xfffff) == 0) report(nt + v);
+        if (!used[v]) continue;
+        uint64_t slot = uint64_t((unsigned __int128)hashPosition(m.positions[v]) * cap >> 64);
+        for (;; slot = slot + 1 == cap ? 0 : slot + 1) {
+          const uint32_t other = table[slot];
+          if (other == kNoLeaf) {
+            table[slot] = uint32_t(v);
+            break;
+          }
+          const glm::vec3 &p = m.positions[v], &q = m.positions[other];
+          if (floatKey(p.x) == floatKey(q.x) && floatKey(p.y) == floatKey(q.y) && floatKey(p.z) == floatKey(q.z)) {
+            unite(parent, rank, uint32_t(v), other);
+            break;
+          }
         }
       }
     }
   }
-  // Root: smallest (u, v) in each component (u first, then v, then the lower index).
-  std::vector<uint32_t> best(nv, kNoLeaf);
+  // Every used vertex points at its component's representative, marked used = 2.
+  for (size_t v = 0; v < nv; ++v)
+    if (used[v]) {
+      const uint32_t c = findRoot(parent, uint32_t(v));
+      parent[v] = c;
+      used[c] = 2;
+    }
+  // Root: smallest (u, v) in each component (u first, then v, then the lower index), kept in the
+  // representative's own entry (it starts as the representative itself).
+  auto before = [&](uint32_t a, uint32_t b) {
+    const glm::vec2 ua = m.uvs[a], ub = m.uvs[b];
+    return ua.x < ub.x || (ua.x == ub.x && (ua.y < ub.y || (ua.y == ub.y && a < b)));
+  };
   for (size_t v = 0; v < nv; ++v) {
     if ((v & 0xfffff) == 0) report(nt + nv + v);
-    if (!used[v]) continue;
-    const uint32_t c = findRoot(parent, uint32_t(v));
-    const uint32_t b = best[c];
-    if (b == kNoLeaf) {
-      best[c] = uint32_t(v);
-      continue;
-    }
-    const glm::vec2 uv = m.uvs[v], ub = m.uvs[b];
-    if (uv.x < ub.x || (uv.x == ub.x && uv.y < ub.y)) best[c] = uint32_t(v);
+    if (used[v] != 1) continue;
+    const uint32_t c = parent[v];
+    if (before(uint32_t(v), parent[c])) parent[c] = uint32_t(v);
   }
-  out->rootOfVertex.assign(nv, kNoLeaf);
+  // In place: a representative's entry already holds its root; every other vertex takes it.
   for (size_t v = 0; v < nv; ++v) {
     if ((v & 0xfffff) == 0) report(nt + 2 * nv + v);
-    if (used[v]) out->rootOfVertex[v] = best[findRoot(parent, uint32_t(v))];
+    if (!used[v]) parent[v] = kNoLeaf;
+    else if (used[v] == 1) parent[v] = parent[parent[v]];
   }
+  out->rootOfVertex = std::move(parent);
   report(work);
   indexLeaves(out);
   return Status();

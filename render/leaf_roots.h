@@ -6,8 +6,10 @@
 // index. The vertex shader reads the root of each vertex's leaf and puts the whole leaf into the
 // layer of the root's depth, so no leaf is ever cut.
 //
-// Cost: linear time and memory (union-find with path halving and union by size over the index
-// buffer; welding through an open-addressing hash of positions). The result can be cached in a
+// Cost: linear time; memory 6 bytes a vertex plus about 6 a used vertex while welding, beside the
+// output (union-find with path halving and union by rank over the index buffer, its parent array
+// becoming rootOfVertex; welding through an open-addressing hash of positions). A leaf's triangles
+// may lie anywhere in a glTF index buffer, so the components need the whole mesh at once. The result can be cached in a
 // file next to the model, keyed by a hash of everything it depends on.
 #include <cstdint>
 #include <string>

@@ -66,7 +66,7 @@ glm::vec2 decodeUv(const gpu::LayerVertex& v) { return glm::unpackHalf2x16(v.uv)
 
 uint32_t chunkLeaf(const gpu::LayerVertex& v) { return v.positionZLeaf >> 16; }
 
-Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
+Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
                         const CompactMeshOptions& o, CompactMesh* out, const Progress& progress) {
   *out = CompactMesh{};
@@ -75,9 +75,17 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
                          std::to_string(kMaxChunkVertices));
   if (o.rootAlignment < 1 || o.rootAlignment > 4096)
     return Status::error("mesh chunks: rootAlignment " + std::to_string(o.rootAlignment) + " is outside 1..4096");
-  const size_t nv = m.positions.size();
+  const size_t nv = m.positions.size(), nt = m.indices.size() / 3;
   if (roots.leafOfVertex.size() != nv || m.uvs.size() != nv)
     return Status::error("mesh chunks: " + modelName(m) + ": per-vertex arrays disagree with the vertex count");
+  if (!triangleOrder.empty() && triangleOrder.size() != nt)
+    return Status::error("mesh chunks: the triangle order has " + std::to_string(triangleOrder.size()) + " entries for " +
+                         std::to_string(nt) + " triangles");
+  // Model vertex k (0..2) of GPU triangle t.
+  auto corner = [&](uint64_t t, int k) -> uint32_t {
+    const uint64_t mt = triangleOrder.empty() ? t : triangleOrder[t];
+    return mt < nt ? m.indices[mt * 3 + k] : uint32_t(nv);
+  };
   // Chunk-local numbers of vertices and leaves (stamp = the current chunk + 1).
   ChunkLocal vLocal, lLocal;
   std::vector<uint32_t> chunkVertices, chunkLeaves;
@@ -142,20 +150,20 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
     return Status();
   };
   for (const TriangleRange& r : ranges) {
-    if (r.first + r.count > gpuIndices.size() / 3)
+    if (r.first + r.count > nt)
       return Status::error("mesh chunks: triangle range past the index list");
     open(r, r.first);
     for (uint64_t t = r.first; t < r.first + r.count; ++t) {
-      if (progress && (t & 0xfffff) == 0) progress("vertices", t, gpuIndices.size() / 3);
+      if (progress && (t & 0xfffff) == 0) progress("vertices", t, nt);
       // New vertices and leaves this triangle would add to the chunk.
       uint32_t newV = 0, newL = 0;
       for (int k = 0; k < 3; ++k) {
-        const uint32_t v = gpuIndices[t * 3 + k];
+        const uint32_t v = corner(t, k);
         if (v >= nv) return Status::error("mesh chunks: " + modelName(m) + ": index " + std::to_string(v) + " past the vertices");
         if (!std::isfinite(m.positions[v].x) || !std::isfinite(m.positions[v].y) || !std::isfinite(m.positions[v].z))
           return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has a non-finite position");
         bool seen = vLocal.find(v, stamp) != kNoLeaf;
-        for (int j = 0; j < k; ++j) seen = seen || gpuIndices[t * 3 + j] == v;
+        for (int j = 0; j < k; ++j) seen = seen || corner(t, j) == v;
         newV += !seen;
         const uint32_t leaf = roots.leafOfVertex[v];
         if (leaf != kNoLeaf && !seen && lLocal.find(leaf, stamp) == kNoLeaf) ++newL;  // over-counts a leaf new twice: harmless
@@ -166,7 +174,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
         open(r, t);
       }
       for (int k = 0; k < 3; ++k) {
-        const uint32_t v = gpuIndices[t * 3 + k];
+        const uint32_t v = corner(t, k);
         uint32_t local = vLocal.find(v, stamp);
         if (local == kNoLeaf) {
           local = uint32_t(chunkVertices.size());
@@ -184,7 +192,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& g
     }
     CANOPY_TRY(close());
   }
-  if (progress) progress("vertices", gpuIndices.size() / 3, gpuIndices.size() / 3);
+  if (progress) progress("vertices", nt, nt);
   return Status();
 }
 

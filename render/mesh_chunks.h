@@ -61,15 +61,15 @@ struct TriangleRange {
   uint64_t first = 0, count = 0;
 };
 
-// Builds the compact mesh of model `m` whose triangles in GPU order are `gpuIndices` (3 per
-// triangle, model vertex indices) cut into `ranges`; `roots` from computeLeafRoots. Errors name the
-// model and the offending vertex (a texture coordinate outside the half-float range, a
-// non-finite position) or option. `progress` (optional) gets ("vertices", triangles done, total)
-// about every million triangles.
-Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& gpuIndices,
+// Builds the compact mesh of model `m` whose triangles in GPU order are `triangleOrder` (GPU
+// triangle -> model triangle; empty: the model's own order) cut into `ranges` (GPU triangle
+// numbers); `roots` from computeLeafRoots (its leafOfVertex and leafRoot). Errors name the model
+// and the offending vertex (a texture coordinate outside the half-float range, a non-finite
+// position) or option. `progress` (optional) gets ("vertices", triangles done, total) about every
+// million triangles. Working memory besides the output: two fixed tables of 2^17 slots.
+Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
                         const CompactMeshOptions& options, CompactMesh* out, const Progress& progress = {});
-
 // The decoding the vertex shader does (tests and tools): world position, unit normal, UV.
 glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v);
 glm::vec3 decodeNormal(const gpu::LayerVertex& v);

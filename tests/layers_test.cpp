@@ -140,14 +140,24 @@ Coverage readCoverage(LayeredVegetation& lv) {
   return c;
 }
 
+// Each leaf's root position, from the chunks' root tables.
+std::map<uint32_t, glm::vec3> rootPositions(const LayeredVegetation& lv) {
+  std::map<uint32_t, glm::vec3> r;
+  for (const MeshChunk& c : lv.chunks)
+    for (uint32_t i = 0; i < c.rootCount; ++i) r[lv.hostMesh.roots[c.firstRoot + i].leaf] = lv.hostMesh.roots[c.firstRoot + i].position;
+  return r;
+}
+
 // Leaves whose own vertices lie on both sides of a layer boundary.
 uint32_t countStraddlers(const LayeredVegetation& lv) {
   std::map<uint32_t, std::set<uint32_t>> layers;
-  for (size_t v = 0; v < lv.positions.size(); ++v) {
-    if (lv.leafOfVertex[v] == kNoLeaf) continue;
-    const float z = glm::dot(lv.frame.depthRow, glm::vec4(lv.positions[v], 1.0f));
-    layers[lv.leafOfVertex[v]].insert(gpu::layerOfDepth(lv.frame, z));
-  }
+  for (const MeshChunk& c : lv.chunks)
+    for (uint32_t i = 0; i < c.vertexCount; ++i) {
+      const gpu::LayerVertex& v = lv.hostMesh.vertices[c.firstVertex + i];
+      if (chunkLeaf(v) == LAYER_CHUNK_NO_LEAF) continue;
+      const float z = glm::dot(lv.frame.depthRow, glm::vec4(decodePosition(c, v), 1.0f));
+      layers[lv.hostMesh.roots[c.firstRoot + chunkLeaf(v)].leaf].insert(gpu::layerOfDepth(lv.frame, z));
+    }
   uint32_t n = 0;
   for (auto& [leaf, set] : layers) n += set.size() > 1;
   return n;
@@ -254,9 +264,10 @@ TEST_F(LayersTest, EveryLeafLandsWholeInTheLayerOfItsRoot) {
   EXPECT_EQ(c.layersOfLeaf.size(), leaves) << "every leaf is visible in some layer";
   EXPECT_EQ(c.layersOfTriangle.size(), 2u * leaves) << "every foliage triangle is visible in some layer";
   std::vector<uint32_t> perLayer(lv.settings.layout.count(), 0);
+  const std::map<uint32_t, glm::vec3> rootOf = rootPositions(lv);
   for (auto& [leaf, layers] : c.layersOfLeaf) {
     ASSERT_EQ(layers.size(), 1u) << "leaf " << leaf << " is cut across " << layers.size() << " layers";
-    const float rootDepth = glm::dot(lv.frame.depthRow, glm::vec4(lv.leafRootPosition[leaf], 1.0f));
+    const float rootDepth = glm::dot(lv.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
     EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(lv.frame, rootDepth)) << "leaf " << leaf;
     perLayer[*layers.begin()]++;
   }
@@ -422,9 +433,10 @@ TEST_F(LayersTest, ChunkBordersInsideLeavesCutNoLeaf) {
     ASSERT_TRUE(renderOnce(dev, y, frontView()).ok());
     Coverage c = readCoverage(y);
     EXPECT_EQ(c.layersOfLeaf.size(), 12u * 8u) << what;
+    const std::map<uint32_t, glm::vec3> rootOf = rootPositions(y);
     for (auto& [leaf, layers] : c.layersOfLeaf) {
       ASSERT_EQ(layers.size(), 1u) << what << ": leaf " << leaf << " is cut across " << layers.size() << " layers";
-      const float rootDepth = glm::dot(y.frame.depthRow, glm::vec4(y.leafRootPosition[leaf], 1.0f));
+      const float rootDepth = glm::dot(y.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
       EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(y.frame, rootDepth)) << what << ": leaf " << leaf;
     }
     Coverage cx = readCoverage(x);

@@ -66,7 +66,7 @@ Status build(const VegetationModel& m, CompactMeshOptions o, Built* b) {
   // The model's triangles are already foliage first, then rigid: one range each.
   const uint64_t nf = std::count(foliage.begin(), foliage.end(), uint8_t(1));
   b->ranges = {{0, true, 0, nf}, {1, false, nf, m.triangleCount() - nf}};
-  return buildCompactMesh(m, m.indices, b->ranges, b->roots, o, &b->mesh);
+  return buildCompactMesh(m, {}, b->ranges, b->roots, o, &b->mesh);
 }
 
 }  // namespace
@@ -164,7 +164,7 @@ TEST(MeshChunks, GeneratedSceneBytesPerFace) {
       ranges.push_back({m.triangleMaterial[t], foliage[t] != 0, t, 0});
     ranges.back().count++;
   }
-  ASSERT_TRUE(buildCompactMesh(m, m.indices, ranges, b.roots, CompactMeshOptions{}, &b.mesh).ok());
+  ASSERT_TRUE(buildCompactMesh(m, {}, ranges, b.roots, CompactMeshOptions{}, &b.mesh).ok());
   const double perFace = double(b.mesh.bytes()) / double(m.triangleCount());
   const double before = (28.0 * double(m.positions.size()) + 12.0 * double(m.triangleCount()) +
                          16.0 * double(b.roots.leafCount())) / double(m.triangleCount());

@@ -133,6 +133,71 @@ TEST(LeafRoots, RigidTrianglesAreNotLeavesAndTiesAreStable) {
   EXPECT_EQ(r.rootOfVertex[2], 0u);
 }
 
+// The in-place union-find (issue 16: 6 bytes a vertex) against a plain reference: components by
+// repeated relaxation over the triangles and welded positions, root = the first vertex in index
+// order with the smallest (u, v). Random meshes with many uv ties, welded duplicates, unused and
+// rigid-only vertices.
+TEST(LeafRoots, MatchesAPlainReferenceOnRandomMeshes) {
+  uint32_t state = 12345;
+  auto next = [&](uint32_t n) {
+    state = state * 1664525u + 1013904223u;
+    return (state >> 8) % n;
+  };
+  for (int round = 0; round < 40; ++round) {
+    VegetationModel m = twoMaterialModel();
+    const uint32_t nv = 20 + next(200), nt = 5 + next(150);
+    for (uint32_t v = 0; v < nv; ++v) {
+      m.positions.push_back(glm::vec3(float(next(12)), float(next(3)), 0.0f));  // many equal positions
+      m.normals.push_back({0, 0, 1});
+      m.uvs.push_back(glm::vec2(float(next(3)) * 0.5f, float(next(3)) * 0.5f));  // many equal uvs
+    }
+    std::vector<uint8_t> mask;
+    for (uint32_t t = 0; t < nt; ++t) {
+      for (int k = 0; k < 3; ++k) m.indices.push_back(next(nv));
+      mask.push_back(next(4) != 0);
+      m.triangleMaterial.push_back(mask.back() ? 0 : 1);
+    }
+    for (bool weld : {false, true}) {
+      LeafRootOptions o;
+      o.weldPositions = weld;
+      LeafRoots r;
+      ASSERT_TRUE(computeLeafRoots(m, mask, o, &r).ok());
+      std::vector<uint32_t> comp(nv);
+      std::vector<bool> used(nv, false);
+      for (uint32_t v = 0; v < nv; ++v) comp[v] = v;
+      for (uint32_t t = 0; t < nt; ++t)
+        if (mask[t])
+          for (int k = 0; k < 3; ++k) used[m.indices[3 * t + k]] = true;
+      for (bool changed = true; changed;) {  // smallest index of the component, by relaxation
+        changed = false;
+        auto join = [&](uint32_t a, uint32_t b) {
+          const uint32_t c = std::min(comp[a], comp[b]);
+          if (comp[a] != c || comp[b] != c) comp[a] = comp[b] = c, changed = true;
+        };
+        for (uint32_t t = 0; t < nt; ++t)
+          if (mask[t]) join(m.indices[3 * t], m.indices[3 * t + 1]), join(m.indices[3 * t + 1], m.indices[3 * t + 2]);
+        if (weld)
+          for (uint32_t a = 0; a < nv; ++a)
+            for (uint32_t b = a + 1; b < nv; ++b)
+              if (used[a] && used[b] && m.positions[a] == m.positions[b]) join(a, b);
+      }
+      for (uint32_t v = 0; v < nv; ++v) {
+        if (!used[v]) {
+          EXPECT_EQ(r.rootOfVertex[v], kNoLeaf);
+          continue;
+        }
+        uint32_t best = kNoLeaf;
+        for (uint32_t u = 0; u < nv; ++u)
+          if (used[u] && comp[u] == comp[v] &&
+              (best == kNoLeaf || m.uvs[u].x < m.uvs[best].x || (m.uvs[u].x == m.uvs[best].x && m.uvs[u].y < m.uvs[best].y)))
+            best = u;
+        ASSERT_EQ(r.rootOfVertex[v], best) << "round " << round << " weld " << weld << " vertex " << v;
+        EXPECT_EQ(r.leafRoot[r.leafOfVertex[v]], best);
+      }
+    }
+  }
+}
+
 TEST(LeafRoots, RefusesInconsistentInput) {
   VegetationModel m = twoMaterialModel();
   addQuad(m, {0, 0, 0}, {0, 0}, 0);

@@ -810,6 +810,47 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     mm.alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
     mm.alphaCutoff = float(src.alphaCutoff);
     mm.doubleSided = src.doubleSided;
+    // Leaf transmission: factors only (the colour and factor textures are not read).
+    auto shortNumber = [](float x) {
+      char b[32];
+      std::snprintf(b, sizeof b, "%g", double(x));
+      return std::string(b);
+    };
+    auto number = [&](const tinygltf::Value& ext, const char* extName, const char* key, float lo, float hi, float* out) -> Status {
+      if (!ext.Has(key)) return Status();
+      const tinygltf::Value& v = ext.Get(key);
+      const double x = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
+      if (!(x >= lo && x <= hi))
+        return Status::error(what + ": " + extName + "." + key + " must be a number in [" + shortNumber(lo) + ", " +
+                             shortNumber(hi) + "]");
+      *out = float(x);
+      return Status();
+    };
+    auto extension = src.extensions.find("KHR_materials_diffuse_transmission");
+    if (extension != src.extensions.end() && extension->second.IsObject()) {
+      const tinygltf::Value& ext = extension->second;
+      mm.transmissionFactor = 0.0f;  // the extension's default
+      s = number(ext, "KHR_materials_diffuse_transmission", "diffuseTransmissionFactor", 0.0f, 1.0f, &mm.transmissionFactor);
+      if (!s.ok()) return fail(s.message());
+      if (ext.Has("diffuseTransmissionColorFactor")) {
+        const tinygltf::Value& c = ext.Get("diffuseTransmissionColorFactor");
+        bool good = c.IsArray() && c.ArrayLen() == 3;
+        for (int k = 0; good && k < 3; ++k) {
+          const double x = c.Get(k).IsNumber() ? c.Get(k).GetNumberAsDouble() : NAN;
+          good = x >= 0.0 && x <= 1.0;
+          if (good) mm.transmissionColor[k] = float(x);
+        }
+        if (!good)
+          return fail(what + ": KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor must be 3 numbers in [0, 1]");
+      }
+      if (ext.Has("diffuseTransmissionTexture") || ext.Has("diffuseTransmissionColorTexture"))
+        out->warnings.push_back(what + ": KHR_materials_diffuse_transmission textures are not read; its factors are used");
+    } else if ((extension = src.extensions.find("KHR_materials_transmission")) != src.extensions.end() &&
+               extension->second.IsObject()) {
+      mm.transmissionFactor = 0.0f;
+      s = number(extension->second, "KHR_materials_transmission", "transmissionFactor", 0.0f, 1.0f, &mm.transmissionFactor);
+      if (!s.ok()) return fail(s.message());
+    }
     const bool used = materialUsedByTriangle[i];
     const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
     if (tex >= 0 && used) {

@@ -27,6 +27,12 @@ struct ModelMaterial {
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;
   bool doubleSided = false;
+  // Diffuse transmission of a leaf (docs/design.md "Layers: leaf shading"), from
+  // KHR_materials_diffuse_transmission (its factor and colour factor) or, where only that is
+  // present, KHR_materials_transmission's factor; -1 when the file has neither: a foliage material
+  // then takes LayerSettings.leafTransmission and glows in its own base colour.
+  float transmissionFactor = -1.0f;
+  glm::vec3 transmissionColor{1.0f};
 };
 
 struct ModelImage {

@@ -444,6 +444,12 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   const glm::vec3 l = glm::length(dir) > 0 ? glm::normalize(dir) : glm::vec3(0, 1, 0);
   f.lightDirection = glm::vec4(l, s.ambient);
   f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
+  // The viewer for the shading's view vector: the camera position, or for an orthographic
+  // projection (no perspective row) the direction towards the viewer.
+  const glm::mat4 cameraToWorld = glm::inverse(view.view);
+  const bool orthographic = view.proj[0][3] == 0.0f && view.proj[1][3] == 0.0f && view.proj[2][3] == 0.0f;
+  f.eye = orthographic ? glm::vec4(glm::normalize(glm::vec3(cameraToWorld[2])), 0.0f) : glm::vec4(glm::vec3(cameraToWorld[3]), 1.0f);
+  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f, 0.0f);
   f.layerCount = s.layout.count();
   f.sliceMode = s.slice == SliceMode::Geometry ? LAYER_SLICE_GEOMETRY : LAYER_SLICE_LEAF_ROOT;
   job.zMin = INFINITY;
@@ -620,6 +626,14 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     push.alphaCutoff = mat.alphaCutoff;
     push.alphaMode = uint32_t(mat.alphaMode);
     push.targetLayer = target;
+    // Leaf shading (shared/leaf_shading.h): foliage has the front's lobe and its transmission (the
+    // file's, else the settings' in the leaf's own colour); rigid parts neither.
+    push.specular = c.foliage ? 1.0f : 0.0f;
+    const bool fileTransmission = mat.transmissionFactor >= 0.0f;
+    push.transmission = !c.foliage ? glm::vec4(0.0f)
+                        : fileTransmission ? glm::vec4(mat.transmissionColor, mat.transmissionFactor)
+                                           : glm::vec4(1.0f, 1.0f, 1.0f, lv.settings.leafTransmission);
+    push.transmissionFromBase = c.foliage && !fileTransmission ? 1u : 0u;
     push.passKind = passKind;
     push.triangleBase = uint32_t(c.firstTriangle);
     const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
@@ -815,7 +829,8 @@ bool operator==(const LayerSettings& a, const LayerSettings& b) {
   return a.layout == b.layout && a.regions == b.regions && a.slice == b.slice && a.draw == b.draw && a.policy == b.policy &&
          a.moveThreshold == b.moveThreshold && a.turnThresholdDegrees == b.turnThresholdDegrees &&
          a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient &&
-         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
+         a.leafRefractiveIndex == b.leafRefractiveIndex && a.leafRoughness == b.leafRoughness &&
+         a.leafTransmission == b.leafTransmission && a.translucency == b.translucency && a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
 }
 
 Status validateLayerSettings(const LayerSettings& s) {
@@ -843,6 +858,15 @@ Status validateLayerSettings(const LayerSettings& s) {
     return Status::error("layer settings: crossFadeFrames " + std::to_string(s.crossFadeFrames) + " is outside [1, 240]");
   if (!(s.ambient >= 0 && s.ambient <= 1))
     return Status::error("layer settings: ambient " + std::to_string(s.ambient) + " is outside [0, 1]");
+  // The measured ranges Habel takes from Bousquet et al. (seed 004, III.B).
+  if (!(s.leafRefractiveIndex >= LEAF_IOR_MIN && s.leafRefractiveIndex <= LEAF_IOR_MAX))
+    return Status::error("layer settings: leafRefractiveIndex " + std::to_string(s.leafRefractiveIndex) +
+                         " is outside the measured range [1.2, 1.7]");
+  if (!(s.leafRoughness >= LEAF_ROUGHNESS_MIN && s.leafRoughness <= LEAF_ROUGHNESS_MAX))
+    return Status::error("layer settings: leafRoughness " + std::to_string(s.leafRoughness) +
+                         " is outside the measured range [0.078, 0.5]");
+  if (!(s.leafTransmission >= 0 && s.leafTransmission <= 1))
+    return Status::error("layer settings: leafTransmission " + std::to_string(s.leafTransmission) + " is outside [0, 1]");
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(toGlm(s.lightDirection)[i])) return Status::error("layer settings: lightDirection must be finite");
     if (!(toGlm(s.lightColor)[i] >= 0 && toGlm(s.lightColor)[i] <= 1000))

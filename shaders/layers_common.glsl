@@ -24,6 +24,7 @@ layout(location = 2) in vec2 inUv;
 layout(location = 0) out vec3 vNormal;
 layout(location = 1) out vec2 vUv;
 layout(location = 2) flat out uint vLeaf;
+layout(location = 3) out vec3 vWorld;
 
 float viewDepth(vec3 p) { return dot(f.depthRow, vec4(p, 1.0)); }
 
@@ -39,7 +40,8 @@ uint triangleLayer() {
 }
 
 void emitVertex() {
-  gl_Position = f.viewProj * vec4(vertexPosition(), 1.0);
+  vWorld = vertexPosition();
+  gl_Position = f.viewProj * vec4(vWorld, 1.0);
   vNormal = layerDecodeNormal(inNormalOct);
   vUv = inUv;
   vLeaf = hasLeaf() ? leafRoot[inPositionLeaf.w].leaf : LAYER_NO_LEAF;

@@ -42,6 +42,29 @@ TEST(GltfLoader, RealVegetationLoadsWithExpectedCounts) {
   }
 }
 
+// KHR_materials_diffuse_transmission (issue 17): the sample plant's leaves transmit 0.1 in white;
+// its other materials have no transmission from the file (-1: the layer settings decide).
+TEST(GltfLoader, DiffuseTransmissionFactorsAreRead) {
+  REQUIRE_ASSETS();
+  VegetationModel m;
+  Status s = loadGltf(kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf", {}, &m);
+  ASSERT_TRUE(s.ok()) << s.message();
+  bool leaves = false;
+  for (const ModelMaterial& mm : m.materials) {
+    if (mm.name == "leaves") {
+      leaves = true;
+      EXPECT_FLOAT_EQ(mm.transmissionFactor, 0.1f);
+      EXPECT_EQ(mm.transmissionColor, glm::vec3(1.0f));
+    } else {
+      EXPECT_EQ(mm.transmissionFactor, -1.0f) << mm.name;
+    }
+  }
+  EXPECT_TRUE(leaves);
+  bool warned = false;
+  for (const std::string& w : m.warnings) warned = warned || w.find("textures are not read") != std::string::npos;
+  EXPECT_TRUE(warned) << "the unread transmission texture is reported";
+}
+
 // Quaternius models carry node scale 100 and a -90 degree X rotation: applied, the tree stands up
 // (y extent larger than z) at a few metres, not hundreds.
 TEST(GltfLoader, NodeTransformsAreApplied) {
@@ -198,11 +221,15 @@ TEST(GltfLoader, HandMadeBrokenFilesAreRefused) {
       {"node loop", gltfJson("tri.bin", kPos, kIdxView, "", 4, R"([{"mesh":0,"children":[1]},{"children":[0]}])"), "nodes["},
       {"missing mesh", gltfJson("tri.bin", kPos, kIdxView, "", 4, R"([{"mesh":5}])"), "mesh 5"},
       {"broken texture", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],"textures":[{"source":0}],"images":[{"uri":"junk.png"}])"), "images[0]"},
+      {"transmission factor out of range", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_diffuse_transmission":{"diffuseTransmissionFactor":2}}}])"), "KHR_materials_diffuse_transmission.diffuseTransmissionFactor must be a number in [0, 1]"},
+      {"transmission colour not 3 numbers", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_diffuse_transmission":{"diffuseTransmissionColorFactor":[1,"x",1]}}}])"), "diffuseTransmissionColorFactor must be 3 numbers"},
+      {"transmission factor a string", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_transmission":{"transmissionFactor":"1"}}}])"), "KHR_materials_transmission.transmissionFactor"},
   };
   t.write("model/junk.png", "this is not a png");
   for (const Case& c : cases) {
     std::string json = c.json;
-    if (std::string(c.name) == "broken texture") json.replace(json.find(R"("indices":1)"), 11, R"("indices":1,"material":0)");
+    if (std::string(c.name) == "broken texture" || std::string(c.name).rfind("transmission", 0) == 0)
+      json.replace(json.find(R"("indices":1)"), 11, R"("indices":1,"material":0)");
     t.write("model/case.gltf", json);
     s = loadGltf(t.path + "/model/case.gltf", {}, &m);
     std::printf("  %-28s %s\n", c.name, s.ok() ? "LOADED" : s.message().c_str());

@@ -864,3 +864,120 @@ TEST_F(LayersTest, MeshBudgetRefusals) {
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("stagingRingBytes"), std::string::npos) << s.message();
 }
+
+// Leaf shading (issue 17, seed 004 section III; shared/leaf_shading.h): one large leaf quad seen
+// head-on through an orthographic camera, lit from several directions, against the CPU evaluation
+// of the same terms. Tolerance: 2e-3 relative plus 1e-3 (the R16G16B16A16_SFLOAT layer's rounding).
+namespace {
+
+VegetationModel oneLeaf(glm::vec3 normal) {
+  VegetationModel m = straddlingLeaves(1, 1, false);
+  const glm::vec3 p[4] = {{-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}};
+  for (size_t v = 0; v < 4; ++v) {
+    m.positions[v] = p[v];
+    m.normals[v] = normal;
+  }
+  m.boundsMin = glm::vec3(-2, -2, 0);
+  m.boundsMax = glm::vec3(2, 2, 0);
+  return m;
+}
+
+LayerView orthoFront() {
+  LayerView v;
+  v.view = glm::mat4(1.0f);
+  v.view[3][2] = -10.0f;  // camera at z = +10 looking down -Z
+  v.proj = glm::orthoRH_ZO(-4.0f, 4.0f, -3.0f, 3.0f, 1.0f, 30.0f);
+  v.proj[1][1] *= -1.0f;  // Vulkan: y down
+  return v;
+}
+
+}  // namespace
+
+TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
+  struct Case {
+    const char* what;
+    glm::vec3 normal, light;
+    float ior, roughness, transmission;  // transmission: LayerSettings.leafTransmission
+  };
+  const Case cases[] = {
+      {"front lit from above", {0, 0, 1}, {0.3f, 0.5f, 0.8f}, 1.45f, 0.25f, 0.35f},
+      {"front near the mirror direction, glossy", {0, 0, 1}, {0.15f, 0.0f, 1.0f}, 1.7f, 0.078f, 0.35f},
+      {"front near the mirror direction, rough", {0, 0, 1}, {0.15f, 0.0f, 1.0f}, 1.2f, 0.5f, 0.35f},
+      {"front at a grazing light", {0, 0, 1}, {0.95f, 0.0f, 0.2f}, 1.45f, 0.3f, 0.0f},
+      {"tilted leaf, front lit", {0, 0.6f, 0.8f}, {0.0f, -0.2f, 1.0f}, 1.45f, 0.15f, 0.5f},
+      {"front seen, light behind: transmission", {0, 0, 1}, {0.2f, 0.3f, -0.9f}, 1.45f, 0.25f, 0.6f},
+      {"back seen, light in front of it: diffuse only", {0, 0, -1}, {0.3f, 0.4f, 0.8f}, 1.45f, 0.25f, 0.35f},
+      {"back seen, light behind it: transmission", {0, 0, -1}, {-0.3f, 0.1f, -0.9f}, 1.45f, 0.25f, 0.8f},
+  };
+  for (const Case& k : cases) {
+    const VegetationModel m = oneLeaf(glm::normalize(k.normal));
+    LayeredVegetationDesc d = smallDesc("1");
+    d.settings.lightDirection = {k.light.x, k.light.y, k.light.z};
+    d.settings.lightColor = {1.5f, 1.2f, 1.0f};
+    d.settings.ambient = 0.2f;
+    d.settings.leafRefractiveIndex = k.ior;
+    d.settings.leafRoughness = k.roughness;
+    d.settings.leafTransmission = k.transmission;
+    LayeredVegetation lv;
+    Status s = createLayeredVegetation(dev, m, d, &lv);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
+    std::vector<glm::vec4> c;
+    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
+    const glm::vec4 got = c[(kH / 2) * kW + kW / 2];
+    // The CPU side: the same decoded normal the vertex shader reads, the viewer +Z.
+    glm::vec3 n = decodeNormal(lv.hostMesh.vertices[0]);
+    const glm::vec3 v(0, 0, 1), l = glm::normalize(k.light);
+    const bool front = glm::dot(n, v) >= 0.0f;
+    if (!front) n = -n;
+    const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
+    const glm::vec3 want = gpu::leafShade(base, n, front, v, l, glm::vec3(1.5f, 1.2f, 1.0f), 0.2f, k.ior, k.roughness, 1.0f,
+                                          k.transmission, base);
+    EXPECT_NEAR(got.a, 1.0f, 1e-3f) << k.what;
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(got[i], want[i], 2e-3f * std::max(1.0f, want[i]) + 1e-3f) << k.what << ", channel " << i;
+    destroyLayeredVegetation(lv);
+  }
+}
+
+TEST_F(LayersTest, ABacklitLeafGlowsOnItsUnlitSideAndOutOfRangeLeafParametersAreRefused) {
+  const VegetationModel m = oneLeaf({0, 0, 1});
+  auto centre = [&](bool translucency, float transmission, glm::vec4* out) {
+    LayeredVegetationDesc d = smallDesc("1");
+    d.settings.lightDirection = {0.1f, 0.2f, -1.0f};  // behind the leaf, seen from the front
+    d.settings.translucency = translucency;
+    d.settings.leafTransmission = transmission;
+    LayeredVegetation lv;
+    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
+    std::vector<glm::vec4> c;
+    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
+    *out = c[(kH / 2) * kW + kW / 2];
+    destroyLayeredVegetation(lv);
+  };
+  glm::vec4 on, off;
+  centre(true, 0.5f, &on);
+  centre(false, 0.5f, &off);
+  const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
+  // Without translucency the unlit side has the ambient term only.
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(off[i], base[i] * 0.35f, 2e-3f) << "channel " << i;
+  EXPECT_GT(on.g, 1.5f * off.g) << "the backlit leaf must glow";
+  // The measured ranges of Habel's section III.B, refused with the range.
+  LayerSettings s;
+  s.leafRefractiveIndex = 1.1f;
+  Status st = validateLayerSettings(s);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("leafRefractiveIndex 1.1"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("[1.2, 1.7]"), std::string::npos) << st.message();
+  s = LayerSettings{};
+  s.leafRoughness = 0.6f;
+  st = validateLayerSettings(s);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("[0.078, 0.5]"), std::string::npos) << st.message();
+  s = LayerSettings{};
+  s.leafRoughness = NAN;
+  EXPECT_FALSE(validateLayerSettings(s).ok());
+  s = LayerSettings{};
+  s.leafTransmission = -0.1f;
+  EXPECT_FALSE(validateLayerSettings(s).ok());
+}

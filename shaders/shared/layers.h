@@ -4,6 +4,7 @@
 #ifndef CANOPY_SHARED_LAYERS_H
 #define CANOPY_SHARED_LAYERS_H
 #include "interop.h"
+#include "leaf_shading.h"
 
 #define CANOPY_MAX_LAYERS 32
 #define LAYER_NO_LEAF 0xffffffffu
@@ -30,6 +31,12 @@ struct LayerFrame {
   vec4 depthRow;        // view depth of world point p: dot(depthRow, vec4(p, 1)), > 0 in front
   vec4 lightDirection;  // xyz: unit vector towards the light (world); w: ambient term 0..1
   vec4 lightColor;      // rgb; a unused
+  // The viewer, for the view vector of the leaf shading: xyz the camera position (w = 1) or, for an
+  // orthographic projection, the unit direction towards the viewer (w = 0).
+  vec4 eye;
+  // Leaf shading (shared/leaf_shading.h): x the effective refractive index n, y the Beckmann
+  // roughness sigma, z 1 with translucency (0: unlit sides get the ambient term only), w unused.
+  vec4 leafShading;
   uint layerCount;      // 1..CANOPY_MAX_LAYERS
   uint sliceMode;       // LAYER_SLICE_*
   uint pad0;
@@ -39,7 +46,7 @@ struct LayerFrame {
   float boundaries[CANOPY_MAX_LAYERS + 1];
   float pad2[3];
 };
-CANOPY_SIZE_CHECK(LayerFrame, 64 + 16 * 3 + 16 + 4 * (CANOPY_MAX_LAYERS + 4))
+CANOPY_SIZE_CHECK(LayerFrame, 64 + 16 * 5 + 16 + 4 * (CANOPY_MAX_LAYERS + 4))
 
 struct LayerDrawPush {
   vec4 baseColor;    // material base colour factor (linear RGBA)
@@ -52,11 +59,14 @@ struct LayerDrawPush {
   uint targetLayer;  // LAYER_PASS_ONE_LAYER: the layer this draw renders
   uint passKind;     // LAYER_PASS_*
   uint triangleBase; // index of the draw's first triangle in the mesh (id output only)
-  uint pad0;
-  uint pad1;
+  float specular;    // 1: the front side has the Cook-Torrance lobe (foliage); 0: none (rigid parts)
+  uint transmissionFromBase;  // 1: the transmission colour is multiplied by the base colour (no file value)
   uint pad2;
+  // Diffuse transmission (KHR_materials_diffuse_transmission): rgb its colour, a its factor 0..1
+  // (0: an opaque leaf; rigid parts).
+  vec4 transmission;
 };
-CANOPY_SIZE_CHECK(LayerDrawPush, 80)
+CANOPY_SIZE_CHECK(LayerDrawPush, 96)
 
 // One step of a spread re-slice's cross-fade (docs/design.md "Layers: spread re-slicing"): the
 // visible layer's (or background's) colour becomes visible * (1 - weight) + new * weight, with

@@ -333,6 +333,13 @@ struct LayerSettings {
   Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space, finite (normalised; zero: straight up)
   Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each in [0, 1000]
   float ambient = 0.35f;                 // [0, 1]
+  // Leaf shading (seed 004, Habel section III; docs/design.md "Layers: leaf shading"): on the side
+  // the light falls on, Lambert plus a Cook-Torrance lobe on the leaf's front; on the unlit side,
+  // diffuse transmission. Rigid parts are Lambert only. A change re-slices, like a light change.
+  float leafRefractiveIndex = 1.45f;     // effective refractive index n of the lobe, [1.2, 1.7] (Bousquet et al.)
+  float leafRoughness = 0.25f;           // Beckmann roughness sigma of the lobe, [0.078, 0.5]
+  float leafTransmission = 0.35f;        // diffuse transmission of foliage materials whose file gives none, [0, 1]
+  bool translucency = true;              // false: unlit sides get the ambient term only
   // Spread re-slicing (docs/design.md "Layers: spread re-slicing"). > 0: a re-slice caused by a
   // camera move, turn or projection change, a light change or requestCanopyRebuild(spread) is done
   // over several frames, each adding about this much work: the placement on the CPU (timed), then

@@ -314,6 +314,31 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(drain());
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
+    if (o.lightSheet) {
+      // Leaf shading (issue 17): the plant lit from the front (--light), from behind (that light
+      // turned 180 degrees about the vertical) and from behind without translucency; three more
+      // frames at the last frame's camera, each light change re-sliced at once.
+      std::vector<std::vector<uint8_t>> lit;
+      written = [&](uint32_t, const std::vector<uint8_t>& pixels) -> Status {
+        lit.push_back(pixels);
+        return Status();
+      };
+      const Float3 behind{-o.light.x, o.light.y, -o.light.z};
+      const struct { Float3 light; bool translucency; } variants[] = {{o.light, true}, {behind, true}, {behind, false}};
+      for (const auto& v : variants) {
+        CanopyParams p = canopyParams(host.canopy);
+        p.layers.lightDirection = v.light;
+        p.layers.translucency = v.translucency;
+        p.layers.rebuildBudgetMs = 0.0f;
+        CANOPY_TRY(setCanopyParams(host.canopy, p));
+        CANOPY_TRY(submit(frameAt(o.frames - 1), false, 0));
+        CANOPY_TRY(drain());
+      }
+      glm::uvec4 litCrop;
+      CANOPY_TRY(writeContactSheet(o.outDir + "/light_sheet.png", lit, o.width, o.height, sway.clear, &litCrop));
+      std::fprintf(stderr, "wrote %s/light_sheet.png: light towards (%g, %g, %g), then (%g, %g, %g) with and without translucency\n",
+                   o.outDir.c_str(), o.light.x, o.light.y, o.light.z, behind.x, behind.y, behind.z);
+    }
     const CanopyStats st = canopyStats(host.canopy);
     char head[2048];
     std::snprintf(head, sizeof head,

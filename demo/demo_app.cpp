@@ -40,6 +40,18 @@ void printHelp() {
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
+      "Light and leaf shading (Habel: specular front, diffuse back, transmission on the unlit side):\n"
+      "  --light X,Y,Z       direction towards the light, world space, y up; the camera looks from +Z\n"
+      "                      (default %g,%g,%g; behind the plant: e.g. 0.2,0.35,-1)\n"
+      "  --light-color R,G,B linear light colour, each [0, 1000] (default %g,%g,%g)\n"
+      "  --ambient A         ambient share of the light, [0, 1] (default %g)\n"
+      "  --leaf-ior N        effective refractive index of the leaf's specular lobe, [1.2, 1.7] (default %g)\n"
+      "  --leaf-roughness S  Beckmann roughness of the lobe, [0.078, 0.5] (default %g)\n"
+      "  --leaf-transmission T  diffuse transmission of leaves whose file gives none, [0, 1] (default %g)\n"
+      "  --no-translucency   unlit leaf sides get the ambient term only\n"
+      "  --light-sheet       headless: after the frames, write light_sheet.png: the last frame lit by --light,\n"
+      "                      by the light turned 180 degrees about the vertical (from behind), and by that\n"
+      "                      light without translucency\n"
       "Output:\n"
       "  --size WxH          frame size, 16..8192 each (default %ux%u)\n"
       "  --frames N          frames to render, 1..100000 (default %u)\n"
@@ -59,7 +71,8 @@ void printHelp() {
       "Window (needs a display; falls back to headless without one):\n"
       "  --window            open a window: left drag orbits, wheel zooms, right drag pushes the foliage;\n"
       "                      keys: arrows wind direction/strength, F/G frequency, L layout, D delay mode,\n"
-      "                      V debug view, space pause, O auto-orbit, P screenshot, Esc quit\n"
+      "                      V debug view, J/K turn the light, T translucency, space pause, O auto-orbit,\n"
+      "                      P screenshot, Esc quit\n"
       "  --vsync on|off      present with vsync (default on)\n"
       "  --screenshot FILE   window: write the last frame read back from the swapchain (fails if blank)\n"
       "  --resize-at N       window: resize the window after N frames (tests; default 0 = never)\n"
@@ -71,7 +84,9 @@ void printHelp() {
       "                      successful object creations (tools/fault_loader.h; reliability tests)\n"
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
-      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust, d.width,
+      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust,
+      d.light.x, d.light.y, d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, d.ambient, d.leafIor, d.leafRoughness,
+      d.leafTransmission, d.width,
       d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.deviceBudgetMiB, d.ringMiB, d.outDir.c_str());
 }
 
@@ -170,6 +185,27 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       else if (d == "velocity") o->debug = CompositeDebugView::Velocity;
       else if (d == "grid") o->debug = CompositeDebugView::Grid;
       else return bad(quoted(d) + " is not none, layers, velocity or grid");
+    } else if (a == "--light" || a == "--light-color") {
+      const bool colour = a == "--light-color";
+      const std::vector<std::string> parts = takes() ? cli::splitList(v) : std::vector<std::string>();
+      float x[3] = {0, 0, 0};
+      bool good = parts.size() == 3;
+      for (size_t k = 0; good && k < 3; ++k)
+        good = cli::parseFloat(parts[k].c_str(), &x[k]) && (colour ? x[k] >= 0 && x[k] <= 1000 : std::abs(x[k]) <= 1e6f);
+      if (!good) return bad(colour ? "needs R,G,B, each in [0, 1000]" : "needs X,Y,Z, three finite numbers");
+      (colour ? o->lightColor : o->light) = Float3{x[0], x[1], x[2]};
+    } else if (a == "--ambient") {
+      if (const int rc = number(0, 1, &o->ambient)) return rc;
+    } else if (a == "--leaf-ior") {
+      if (const int rc = number(1.2f, 1.7f, &o->leafIor)) return rc;
+    } else if (a == "--leaf-roughness") {
+      if (const int rc = number(0.078f, 0.5f, &o->leafRoughness)) return rc;
+    } else if (a == "--leaf-transmission") {
+      if (const int rc = number(0, 1, &o->leafTransmission)) return rc;
+    } else if (a == "--no-translucency") {
+      o->translucency = false;
+    } else if (a == "--light-sheet") {
+      o->lightSheet = true;
     } else if (a == "--size") {
       unsigned w = 0, h = 0;
       char tail = 0;
@@ -295,6 +331,13 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.simulation.wind.gust = o.windGust;
   p.dynamics.delay = o.delay;
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
+  p.layers.lightDirection = o.light;
+  p.layers.lightColor = o.lightColor;
+  p.layers.ambient = o.ambient;
+  p.layers.leafRefractiveIndex = o.leafIor;
+  p.layers.leafRoughness = o.leafRoughness;
+  p.layers.leafTransmission = o.leafTransmission;
+  p.layers.translucency = o.translucency;
   p.composite.debugView = o.debug;
   p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
   return p;

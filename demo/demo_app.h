@@ -38,6 +38,15 @@ struct Options {
   float warmupSeconds = 2.0f;          // headless: simulation time run before the first written frame
   DelayMode delay = DelayMode::Exact;
   CompositeDebugView debug = CompositeDebugView::None;
+  // Light and leaf shading (LayerSettings; docs/design.md "Layers: leaf shading")
+  Float3 light = LayerSettings{}.lightDirection;     // towards the light, world space
+  Float3 lightColor = LayerSettings{}.lightColor;
+  float ambient = LayerSettings{}.ambient;
+  float leafIor = LayerSettings{}.leafRefractiveIndex;
+  float leafRoughness = LayerSettings{}.leafRoughness;
+  float leafTransmission = LayerSettings{}.leafTransmission;
+  bool translucency = true;
+  bool lightSheet = false;             // also write light_sheet.png: lit from the front, from behind, from behind without translucency
   // Output
   uint32_t width = 640, height = 480;
   uint32_t frames = 60;

@@ -179,6 +179,18 @@ void onKey(GLFWwindow* win, int key, int, int action, int) {
       std::printf("debug view: %s\n", kDebugNames[v]);
       break;
     }
+    case GLFW_KEY_J:
+    case GLFW_KEY_K: {  // the light turns 15 degrees about the vertical
+      Float3& d = l.params.layers.lightDirection;
+      const float a = glm::radians(key == GLFW_KEY_K ? 15.0f : -15.0f), c = std::cos(a), s = std::sin(a);
+      d = Float3{c * d.x + s * d.z, d.y, -s * d.x + c * d.z};
+      std::printf("light towards (%.2f, %.2f, %.2f)\n", d.x, d.y, d.z);
+      break;
+    }
+    case GLFW_KEY_T:
+      l.params.layers.translucency = !l.params.layers.translucency;
+      std::printf("translucency %s\n", l.params.layers.translucency ? "on" : "off");
+      break;
     case GLFW_KEY_SPACE: l.paused = !l.paused; changed = false; std::printf(l.paused ? "paused\n" : "running\n"); break;
     case GLFW_KEY_O: l.autoOrbit = !l.autoOrbit; changed = false; break;
     case GLFW_KEY_P: l.screenshotRequested = true; changed = false; break;

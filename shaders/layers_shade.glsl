@@ -27,7 +27,7 @@ bool shade() {
   if (!front) n = -n;
   vec3 lit = leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
                        f.leafShading.x, f.leafShading.y, pc.specular, pc.transmission.a * f.leafShading.z,
-                       pc.transmission.rgb * (pc.transmissionFromBase != 0u ? base.rgb : vec3(1.0)));
+                       pc.transmission.rgb * (pc.transmissionFromBase != 0u ? leafTransmissionTint(base.rgb) : vec3(1.0)));
   outColor = vec4(lit * alpha, alpha);
   return true;
 }

@@ -932,7 +932,7 @@ TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
     if (!front) n = -n;
     const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
     const glm::vec3 want = gpu::leafShade(base, n, front, v, l, glm::vec3(1.5f, 1.2f, 1.0f), 0.2f, k.ior, k.roughness, 1.0f,
-                                          k.transmission, base);
+                                          k.transmission, gpu::leafTransmissionTint(base));
     EXPECT_NEAR(got.a, 1.0f, 1e-3f) << k.what;
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(got[i], want[i], 2e-3f * std::max(1.0f, want[i]) + 1e-3f) << k.what << ", channel " << i;

@@ -48,6 +48,13 @@ CANOPY_INLINE float leafCookTorrance(vec3 n, vec3 v, vec3 l, float ior, float ro
   return leafBeckmann(nh, roughness) * leafFresnel(vh, ior) * g / (4.0f * nl * nv);
 }
 
+// The transmission colour of a leaf whose material gives none: its base colour's hue at full value
+// (a leaf's transmitted light is about as saturated as its reflection but, seen against the sun,
+// far brighter; the base colour itself would make the glow as dark as the shade).
+CANOPY_INLINE vec3 leafTransmissionTint(vec3 base) {
+  return base / max(max(base.x, max(base.y, base.z)), 1e-3f);
+}
+
 // Outgoing radiance of a leaf fragment for a directional light of colour `light` (irradiance
 // scale) towards `l` and an ambient term `ambient` (0..1 of the light's colour), seen along `v`.
 // `n`: unit shading normal of the side facing the viewer; `front`: that side is the leaf's front

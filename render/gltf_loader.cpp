@@ -791,7 +791,7 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
   }
 
   // Materials (all of them keep their index; a default one is appended) and the images they use.
-  std::vector<int32_t> imageSlot(m.images.size(), -1);
+  std::vector<int32_t> imageSlot(m.images.size(), -1), linearImageSlot(m.images.size(), -1);
   std::vector<bool> materialUsedByTriangle(m.materials.size() + 1, false);
   for (uint32_t t : out->triangleMaterial) materialUsedByTriangle[t] = true;
   uint64_t pixelsLeft = opt.maxImagePixels;
@@ -810,7 +810,7 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     mm.alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
     mm.alphaCutoff = float(src.alphaCutoff);
     mm.doubleSided = src.doubleSided;
-    // Leaf transmission: factors only (the colour and factor textures are not read).
+    // Leaf transmission: the factors here, the textures with the others below.
     auto shortNumber = [](float x) {
       char b[32];
       std::snprintf(b, sizeof b, "%g", double(x));
@@ -843,8 +843,6 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
         if (!good)
           return fail(what + ": KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor must be 3 numbers in [0, 1]");
       }
-      if (ext.Has("diffuseTransmissionTexture") || ext.Has("diffuseTransmissionColorTexture"))
-        out->warnings.push_back(what + ": KHR_materials_diffuse_transmission textures are not read; its factors are used");
     } else if ((extension = src.extensions.find("KHR_materials_transmission")) != src.extensions.end() &&
                extension->second.IsObject()) {
       mm.transmissionFactor = 0.0f;
@@ -852,52 +850,80 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
       if (!s.ok()) return fail(s.message());
     }
     const bool used = materialUsedByTriangle[i];
-    const int tex = src.pbrMetallicRoughness.baseColorTexture.index;
-    if (tex >= 0 && used) {
-      if (size_t(tex) >= m.textures.size()) return fail(what + ": texture " + std::to_string(tex) + " does not exist");
+    // A texture of this material (texture index `tex`, coordinate set `texCoord`) as a slot of
+    // out->images, decoded once per image and colour space (`linear`: normal maps; else sRGB).
+    auto texture = [&](int tex, int texCoord, const char* role, bool linear, int32_t* slot) -> Status {
+      if (tex < 0 || !used) return Status();
+      if (size_t(tex) >= m.textures.size()) return Status::error(what + ": " + role + " texture " + std::to_string(tex) + " does not exist");
       const int img = m.textures[size_t(tex)].source;
       if (img < 0 || size_t(img) >= m.images.size())
-        return fail(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
-      if (src.pbrMetallicRoughness.baseColorTexture.texCoord != 0)
-        out->warnings.push_back(what + ": base colour uses TEXCOORD_" + std::to_string(src.pbrMetallicRoughness.baseColorTexture.texCoord) + "; TEXCOORD_0 is used");
-      if (opt.decodeImages) {
-        if (imageSlot[size_t(img)] < 0) {
-          const std::string iw = "images[" + std::to_string(img) + "]";
-          const tinygltf::Image& im = m.images[size_t(img)];
-          const unsigned char* data = nullptr;
-          uint64_t size = 0;
-          if (im.bufferView >= 0) {
-            uint32_t stride;
-            s = reader.view(im.bufferView, &data, &size, &stride);
-            if (!s.ok()) return fail(iw + ": " + s.message());
-          } else if (size_t(img) < images.encoded.size() && !images.encoded[size_t(img)].empty()) {
-            data = images.encoded[size_t(img)].data();
-            size = images.encoded[size_t(img)].size();
-          } else {
-            return fail(iw + " ('" + im.uri + "') could not be loaded" + (fs.lastError.empty() ? "" : ": " + fs.lastError));
-          }
-          int w = 0, h = 0, comp = 0;
-          if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
-            return fail(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
-          if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
-            return fail(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
-          const uint64_t pixels = uint64_t(w) * uint64_t(h);
-          if (pixels > pixelsLeft)
-            return fail(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
-                        std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
-          pixelsLeft -= pixels;
-          unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
-          if (!px) return fail(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
-          ModelImage mi;
-          mi.name = im.name.empty() ? im.uri : im.name;
-          mi.width = uint32_t(w);
-          mi.height = uint32_t(h);
-          mi.rgba.assign(px, px + size_t(w) * h * 4);
-          stbi_image_free(px);
-          imageSlot[size_t(img)] = int32_t(out->images.size());
-          out->images.push_back(std::move(mi));
+        return Status::error(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
+      if (texCoord != 0)
+        out->warnings.push_back(what + ": " + role + " uses TEXCOORD_" + std::to_string(texCoord) + "; TEXCOORD_0 is used");
+      if (!opt.decodeImages) return Status();
+      std::vector<int32_t>& slots = linear ? linearImageSlot : imageSlot;
+      if (slots[size_t(img)] < 0) {
+        const std::string iw = "images[" + std::to_string(img) + "]";
+        const tinygltf::Image& im = m.images[size_t(img)];
+        const unsigned char* data = nullptr;
+        uint64_t size = 0;
+        if (im.bufferView >= 0) {
+          uint32_t stride;
+          s = reader.view(im.bufferView, &data, &size, &stride);
+          if (!s.ok()) return Status::error(iw + ": " + s.message());
+        } else if (size_t(img) < images.encoded.size() && !images.encoded[size_t(img)].empty()) {
+          data = images.encoded[size_t(img)].data();
+          size = images.encoded[size_t(img)].size();
+        } else {
+          return Status::error(iw + " ('" + im.uri + "') could not be loaded" + (fs.lastError.empty() ? "" : ": " + fs.lastError));
         }
-        mm.baseColorImage = imageSlot[size_t(img)];
+        int w = 0, h = 0, comp = 0;
+        if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
+          return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+        if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
+          return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
+        const uint64_t pixels = uint64_t(w) * uint64_t(h);
+        if (pixels > pixelsLeft)
+          return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
+                      std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
+        pixelsLeft -= pixels;
+        unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
+        if (!px) return Status::error(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+        ModelImage mi;
+        mi.name = im.name.empty() ? im.uri : im.name;
+        mi.width = uint32_t(w);
+        mi.height = uint32_t(h);
+        mi.rgba.assign(px, px + size_t(w) * h * 4);
+        stbi_image_free(px);
+        mi.linear = linear;
+        slots[size_t(img)] = int32_t(out->images.size());
+        out->images.push_back(std::move(mi));
+      }
+      *slot = slots[size_t(img)];
+      return Status();
+    };
+    const auto& pbr = src.pbrMetallicRoughness;
+    if (!(s = texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, "base colour", false, &mm.baseColorImage)).ok() ||
+        !(s = texture(src.normalTexture.index, src.normalTexture.texCoord, "normal map", true, &mm.normalImage)).ok())
+      return fail(s.message());
+    if (mm.normalImage >= 0) {
+      mm.normalScale = float(src.normalTexture.scale);
+      if (!(std::abs(mm.normalScale) <= 100.0f))
+        return fail(what + ": normalTexture.scale must be a finite number in [-100, 100]");
+    }
+    // KHR_materials_diffuse_transmission's textures: the factor in the alpha channel, the colour in RGB.
+    extension = src.extensions.find("KHR_materials_diffuse_transmission");
+    if (extension != src.extensions.end() && extension->second.IsObject()) {
+      for (const char* key : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"}) {
+        if (!extension->second.Has(key)) continue;
+        const tinygltf::Value& info = extension->second.Get(key);
+        const bool colour = std::string(key) == "diffuseTransmissionColorTexture";
+        if (!info.IsObject() || !info.Has("index") || !info.Get("index").IsInt() || info.Get("index").GetNumberAsInt() < 0)
+          return fail(what + ": KHR_materials_diffuse_transmission." + key + ".index must be a texture index");
+        const int texCoord = info.Has("texCoord") && info.Get("texCoord").IsInt() ? info.Get("texCoord").GetNumberAsInt() : 0;
+        if (!(s = texture(info.Get("index").GetNumberAsInt(), texCoord, key, false,
+                          colour ? &mm.transmissionColorImage : &mm.transmissionImage)).ok())
+          return fail(s.message());
       }
     }
     out->materials.push_back(mm);

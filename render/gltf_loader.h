@@ -33,12 +33,17 @@ struct ModelMaterial {
   // then takes LayerSettings.leafTransmission and glows in its own base colour.
   float transmissionFactor = -1.0f;
   glm::vec3 transmissionColor{1.0f};
+  int32_t transmissionImage = -1;       // its factor texture (alpha channel), -1: none
+  int32_t transmissionColorImage = -1;  // its colour texture (RGB), -1: none
+  int32_t normalImage = -1;             // tangent-space normal map (glTF normalTexture), -1: none
+  float normalScale = 1.0f;             // glTF normalTexture.scale
 };
 
 struct ModelImage {
   std::string name;
   uint32_t width = 0, height = 0;
   std::vector<uint8_t> rgba;  // 8-bit RGBA, rows top to bottom
+  bool linear = false;        // data, not colour (normal maps): uploaded UNORM, not sRGB
 };
 
 struct VegetationModel {

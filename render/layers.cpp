@@ -207,8 +207,11 @@ Status createTargets(LayeredVegetation& lv) {
 Status createPipelines(LayeredVegetation& lv) {
   Device& d = *lv.device;
   GraphicsPipelineDesc p;
-  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
+  // shaders/layers_common.glsl: frame block, chunk root table, base colour, normal map,
+  // transmission factor and colour textures.
+  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
   p.pushConstantSize = sizeof(gpu::LayerDrawPush);
   p.vertexStride = sizeof(gpu::LayerVertex);
   p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0},  // quantised position, chunk-local leaf
@@ -302,7 +305,7 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
     static const uint8_t white[4] = {255, 255, 255, 255};
     const bool isWhite = i == m.images.size();
     ImageDesc t;
-    t.format = VK_FORMAT_R8G8B8A8_SRGB;
+    t.format = !isWhite && m.images[i].linear ? VK_FORMAT_R8G8B8A8_UNORM : VK_FORMAT_R8G8B8A8_SRGB;
     t.width = isWhite ? 1 : m.images[i].width;
     t.height = isWhite ? 1 : m.images[i].height;
     t.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
@@ -618,7 +621,8 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
   // is bound at its own offset (render/mesh_chunks.h).
   auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
     const ModelMaterial& mat = lv.materials[c.material];
-    const Image& tex = mat.baseColorImage >= 0 ? lv.textures[size_t(mat.baseColorImage)] : lv.textures.back();
+    auto textureOf = [&](int32_t image) -> const Image& { return image >= 0 ? lv.textures[size_t(image)] : lv.textures.back(); };
+    const Image& tex = textureOf(mat.baseColorImage);
     gpu::LayerDrawPush push{};
     push.baseColor = mat.baseColorFactor;
     push.chunkOrigin = glm::vec4(c.origin, 0.0f);
@@ -634,6 +638,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                         : fileTransmission ? glm::vec4(mat.transmissionColor, mat.transmissionFactor)
                                            : glm::vec4(1.0f, 1.0f, 1.0f, lv.settings.leafTransmission);
     push.transmissionFromBase = c.foliage && !fileTransmission ? 1u : 0u;
+    push.normalScale = mat.normalImage >= 0 ? mat.normalScale : 0.0f;
     push.passKind = passKind;
     push.triangleBase = uint32_t(c.firstTriangle);
     const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
@@ -645,7 +650,11 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
                             {bindBuffer(lv.frameBuffer.buffer),
                              bindBuffer(lv.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes),
-                             bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler)},
+                             bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
+                             bindImage(textureOf(mat.normalImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
+                             bindImage(textureOf(mat.transmissionImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
+                             bindImage(textureOf(mat.transmissionColorImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                                       lv.sampler)},
                             push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts.
@@ -893,6 +902,13 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
   CANOPY_TRY(validateLayerSettings(desc.settings));
   if (m.uvs.size() != m.positions.size() || m.indices.size() % 3 || m.triangleMaterial.size() != m.triangleCount())
     return Status::error("layers: inconsistent model arrays in " + m.path);
+  for (size_t i = 0; i < m.materials.size(); ++i) {
+    const ModelMaterial& mm = m.materials[i];
+    for (int32_t image : {mm.baseColorImage, mm.normalImage, mm.transmissionImage, mm.transmissionColorImage})
+      if (image < -1 || image >= int32_t(m.images.size()))
+        return Status::error("layers: material " + std::to_string(i) + " ('" + mm.name + "') names image " +
+                             std::to_string(image) + " of " + std::to_string(m.images.size()));
+  }
   if (desc.stagingRingBytes < 1 || desc.stagingRingBytes > (4ull << 30))
     return Status::error("layers: stagingRingBytes " + std::to_string(desc.stagingRingBytes) + " is outside [1, 4 GiB]");
   const uint64_t liveAtStart = d.allocator->liveBytes;

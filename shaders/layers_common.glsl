@@ -1,5 +1,5 @@
-// Bindings shared by the layer and background shaders (render/layers.cpp declares the same three
-// push-descriptor bindings for every pipeline).
+// Bindings shared by the layer and background shaders (render/layers.cpp declares the same six
+// push-descriptor bindings for every pipeline: createPipelines).
 #include "shared/layers.h"
 
 layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
@@ -8,6 +8,11 @@ layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
 // vertices carry their leaf's chunk-local index) and the leaf's model-wide index.
 layout(binding = 1, scalar) readonly buffer RootBuf { LayerLeafRoot leafRoot[]; };
 layout(binding = 2) uniform sampler2D baseColorTex;
+// Leaf shading's material textures (a white texel where the material has none): the tangent-space
+// normal map (linear), the diffuse transmission factor (alpha) and colour (RGB) textures.
+layout(binding = 3) uniform sampler2D normalTex;
+layout(binding = 4) uniform sampler2D transmissionTex;
+layout(binding = 5) uniform sampler2D transmissionColorTex;
 layout(push_constant, scalar) uniform Push { LayerDrawPush pc; };
 
 #ifdef CANOPY_VERTEX

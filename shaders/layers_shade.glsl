@@ -9,6 +9,23 @@ layout(location = 2) flat in uint vLeaf;
 layout(location = 3) in vec3 vWorld;
 layout(location = 0) out vec4 outColor;
 
+// Normal mapping without tangents, as the glTF sample viewer does for meshes that have none: dp/du
+// solved from the screen-space derivatives of position and UV (independent of the screen's
+// handedness, which Vulkan's y-down flips), made orthogonal to n; the bitangent n x t. `m`: the
+// map's unit-range vector.
+vec3 perturbNormal(vec3 n, vec3 p, vec2 uv, vec3 m, float scale) {
+  vec3 dp1 = dFdx(p), dp2 = dFdy(p);
+  vec2 duv1 = dFdx(uv), duv2 = dFdy(uv);
+  float det = duv1.x * duv2.y - duv2.x * duv1.y;
+  if (abs(det) < 1e-20) return n;  // no UV gradient: nothing to map
+  vec3 t = (dp1 * duv2.y - dp2 * duv1.y) / det;
+  t -= n * dot(n, t);
+  if (dot(t, t) < 1e-30) return n;  // no UV gradient: nothing to map
+  t = normalize(t);
+  vec3 b = cross(n, t);
+  return normalize(m.x * scale * t + m.y * scale * b + m.z * n);
+}
+
 // False when the fragment is discarded by its material's alpha.
 bool shade() {
   vec4 base = pc.baseColor * texture(baseColorTex, vUv);
@@ -24,10 +41,13 @@ bool shade() {
   // it faces them, else the back, lit with the flipped normal.
   vec3 n = normalize(vNormal);
   bool front = dot(n, v) >= 0.0;
+  if (pc.normalScale != 0.0) n = perturbNormal(n, vWorld, vUv, texture(normalTex, vUv).xyz * 2.0 - 1.0, pc.normalScale);
   if (!front) n = -n;
+  float t = pc.transmission.a * texture(transmissionTex, vUv).a * f.leafShading.z;
+  vec3 tc = pc.transmission.rgb * texture(transmissionColorTex, vUv).rgb *
+            (pc.transmissionFromBase != 0u ? leafTransmissionTint(base.rgb) : vec3(1.0));
   vec3 lit = leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
-                       f.leafShading.x, f.leafShading.y, pc.specular, pc.transmission.a * f.leafShading.z,
-                       pc.transmission.rgb * (pc.transmissionFromBase != 0u ? leafTransmissionTint(base.rgb) : vec3(1.0)));
+                       f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
   outColor = vec4(lit * alpha, alpha);
   return true;
 }

@@ -981,3 +981,61 @@ TEST_F(LayersTest, ABacklitLeafGlowsOnItsUnlitSideAndOutOfRangeLeafParametersAre
   s.leafTransmission = -0.1f;
   EXPECT_FALSE(validateLayerSettings(s).ok());
 }
+
+// Normal maps and the transmission textures (issue 17): a 1x1 normal map tilting the normal
+// towards +u and +v, and a transmission factor texture of alpha 0.5, against the CPU evaluation with the
+// tilted normal (t = +x along +u, b = n x t, as the shader builds them) and the halved factor.
+TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
+  VegetationModel m = oneLeaf({0, 0, 1});
+  const uint8_t enc[4] = {204, 166, 220, 255};  // about (0.6, 0.3, 0.73) in unit range
+  ModelImage normals;
+  normals.name = "normal map";
+  normals.width = normals.height = 1;
+  normals.rgba.assign(enc, enc + 4);
+  normals.linear = true;
+  ModelImage thickness;
+  thickness.name = "transmission factor";
+  thickness.width = thickness.height = 1;
+  thickness.rgba = {255, 255, 255, 128};
+  m.images = {normals, thickness};
+  m.materials[0].normalImage = 0;
+  m.materials[0].normalScale = 1.0f;
+  m.materials[0].transmissionImage = 1;
+  m.materials[0].transmissionFactor = 0.8f;
+  m.materials[0].transmissionColor = glm::vec3(0.9f, 1.0f, 0.5f);
+  const glm::vec3 mapped = glm::vec3(enc[0], enc[1], enc[2]) / 255.0f * 2.0f - 1.0f;
+  const glm::vec3 tilted = glm::normalize(mapped.x * glm::vec3(1, 0, 0) + mapped.y * glm::vec3(0, 1, 0) + mapped.z * glm::vec3(0, 0, 1));
+  const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
+  struct Case {
+    const char* what;
+    glm::vec3 light;
+  };
+  for (const Case& k : {Case{"front lit from +x+y: the tilted normal catches more light", {0.7f, 0.5f, 0.6f}},
+                        Case{"backlit: the factor texture halves the transmission", {0.2f, 0.1f, -1.0f}}}) {
+    LayeredVegetationDesc d = smallDesc("1");
+    d.settings.lightDirection = {k.light.x, k.light.y, k.light.z};
+    d.settings.ambient = 0.2f;
+    LayeredVegetation lv;
+    Status s = createLayeredVegetation(dev, m, d, &lv);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
+    std::vector<glm::vec4> c;
+    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
+    const glm::vec4 got = c[(kH / 2) * kW + kW / 2];
+    const float t = 0.8f * 128.0f / 255.0f;
+    const glm::vec3 want = gpu::leafShade(base, tilted, true, glm::vec3(0, 0, 1), glm::normalize(k.light), glm::vec3(1.0f), 0.2f,
+                                          1.45f, 0.25f, 1.0f, t, glm::vec3(0.9f, 1.0f, 0.5f));
+    const glm::vec3 flat = gpu::leafShade(base, glm::vec3(0, 0, 1), true, glm::vec3(0, 0, 1), glm::normalize(k.light), glm::vec3(1.0f),
+                                          0.2f, 1.45f, 0.25f, 1.0f, t, glm::vec3(0.9f, 1.0f, 0.5f));
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(got[i], want[i], 3e-3f * std::max(1.0f, want[i]) + 2e-3f) << k.what << ", channel " << i;
+    EXPECT_GT(std::abs(want.g - flat.g), 0.02f) << k.what << ": the case must tell a mapped normal from the flat one";
+    destroyLayeredVegetation(lv);
+  }
+  // A material naming an image the model does not have is refused, not read out of bounds.
+  m.materials[0].normalImage = 7;
+  LayeredVegetation bad;
+  Status s = createLayeredVegetation(dev, m, smallDesc("1"), &bad);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("names image 7 of 2"), std::string::npos) << s.message();
+}

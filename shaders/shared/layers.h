@@ -61,7 +61,7 @@ struct LayerDrawPush {
   uint triangleBase; // index of the draw's first triangle in the mesh (id output only)
   float specular;    // 1: the front side has the Cook-Torrance lobe (foliage); 0: none (rigid parts)
   uint transmissionFromBase;  // 1: the transmission colour is multiplied by leafTransmissionTint(base colour) (no file value)
-  uint pad2;
+  float normalScale; // the material's normal map scale (glTF normalTexture.scale); 0: no normal map
   // Diffuse transmission (KHR_materials_diffuse_transmission): rgb its colour, a its factor 0..1
   // (0: an opaque leaf; rigid parts).
   vec4 transmission;

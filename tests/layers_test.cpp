@@ -891,6 +891,21 @@ LayerView orthoFront() {
   return v;
 }
 
+// Draws `m` with `d` seen through orthoFront(): layer 0's centre pixel and the first vertex's normal
+// as the vertex shader decodes it.
+Status shadeCentre(Device& dev, const VegetationModel& m, const LayeredVegetationDesc& d, glm::vec4* pixel,
+                   glm::vec3* normal = nullptr) {
+  LayeredVegetation lv;
+  Status s = createLayeredVegetation(dev, m, d, &lv);
+  std::vector<glm::vec4> c;
+  if (s.ok()) s = renderOnce(dev, lv, orthoFront());
+  if (s.ok()) s = readLayerColor(lv, 0, &c);
+  if (s.ok()) *pixel = c[(kH / 2) * kW + kW / 2];
+  if (s.ok() && normal) *normal = decodeNormal(lv.hostMesh.vertices[0]);
+  destroyLayeredVegetation(lv);
+  return s;
+}
+
 }  // namespace
 
 TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
@@ -918,15 +933,10 @@ TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
     d.settings.leafRefractiveIndex = k.ior;
     d.settings.leafRoughness = k.roughness;
     d.settings.leafTransmission = k.transmission;
-    LayeredVegetation lv;
-    Status s = createLayeredVegetation(dev, m, d, &lv);
+    glm::vec4 got;
+    glm::vec3 n;  // the CPU side: the same decoded normal the vertex shader reads, the viewer +Z
+    const Status s = shadeCentre(dev, m, d, &got, &n);
     ASSERT_TRUE(s.ok()) << s.message();
-    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
-    std::vector<glm::vec4> c;
-    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
-    const glm::vec4 got = c[(kH / 2) * kW + kW / 2];
-    // The CPU side: the same decoded normal the vertex shader reads, the viewer +Z.
-    glm::vec3 n = decodeNormal(lv.hostMesh.vertices[0]);
     const glm::vec3 v(0, 0, 1), l = glm::normalize(k.light);
     const bool front = glm::dot(n, v) >= 0.0f;
     if (!front) n = -n;
@@ -936,7 +946,6 @@ TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
     EXPECT_NEAR(got.a, 1.0f, 1e-3f) << k.what;
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(got[i], want[i], 2e-3f * std::max(1.0f, want[i]) + 1e-3f) << k.what << ", channel " << i;
-    destroyLayeredVegetation(lv);
   }
 }
 
@@ -947,13 +956,8 @@ TEST_F(LayersTest, ABacklitLeafGlowsOnItsUnlitSideAndOutOfRangeLeafParametersAre
     d.settings.lightDirection = {0.1f, 0.2f, -1.0f};  // behind the leaf, seen from the front
     d.settings.translucency = translucency;
     d.settings.leafTransmission = transmission;
-    LayeredVegetation lv;
-    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
-    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
-    std::vector<glm::vec4> c;
-    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
-    *out = c[(kH / 2) * kW + kW / 2];
-    destroyLayeredVegetation(lv);
+    const Status s = shadeCentre(dev, m, d, out);
+    ASSERT_TRUE(s.ok()) << s.message();
   };
   glm::vec4 on, off;
   centre(true, 0.5f, &on);
@@ -1015,13 +1019,9 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
     LayeredVegetationDesc d = smallDesc("1");
     d.settings.lightDirection = {k.light.x, k.light.y, k.light.z};
     d.settings.ambient = 0.2f;
-    LayeredVegetation lv;
-    Status s = createLayeredVegetation(dev, m, d, &lv);
+    glm::vec4 got;
+    const Status s = shadeCentre(dev, m, d, &got);
     ASSERT_TRUE(s.ok()) << s.message();
-    ASSERT_TRUE(renderOnce(dev, lv, orthoFront()).ok());
-    std::vector<glm::vec4> c;
-    ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
-    const glm::vec4 got = c[(kH / 2) * kW + kW / 2];
     const float t = 0.8f * 128.0f / 255.0f;
     const glm::vec3 want = gpu::leafShade(base, tilted, true, glm::vec3(0, 0, 1), glm::normalize(k.light), glm::vec3(1.0f), 0.2f,
                                           1.45f, 0.25f, 1.0f, t, glm::vec3(0.9f, 1.0f, 0.5f));
@@ -1030,7 +1030,6 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(got[i], want[i], 3e-3f * std::max(1.0f, want[i]) + 2e-3f) << k.what << ", channel " << i;
     EXPECT_GT(std::abs(want.g - flat.g), 0.02f) << k.what << ": the case must tell a mapped normal from the flat one";
-    destroyLayeredVegetation(lv);
   }
   // A material naming an image the model does not have is refused, not read out of bounds.
   m.materials[0].normalImage = 7;

@@ -637,7 +637,9 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     push.transmission = !c.foliage ? glm::vec4(0.0f)
                         : fileTransmission ? glm::vec4(mat.transmissionColor, mat.transmissionFactor)
                                            : glm::vec4(1.0f, 1.0f, 1.0f, lv.settings.leafTransmission);
-    push.transmissionFromBase = c.foliage && !fileTransmission ? 1u : 0u;
+    push.shadingFlags = (c.foliage && !fileTransmission ? LAYER_SHADE_TINT_FROM_BASE : 0u) |
+                        (mat.transmissionImage >= 0 ? LAYER_SHADE_TRANSMISSION_TEXTURE : 0u) |
+                        (mat.transmissionColorImage >= 0 ? LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE : 0u);
     push.normalScale = mat.normalImage >= 0 ? mat.normalScale : 0.0f;
     push.passKind = passKind;
     push.triangleBase = uint32_t(c.firstTriangle);

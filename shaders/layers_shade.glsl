@@ -43,9 +43,11 @@ bool shade() {
   bool front = dot(n, v) >= 0.0;
   if (pc.normalScale != 0.0) n = perturbNormal(n, vWorld, vUv, texture(normalTex, vUv).xyz * 2.0 - 1.0, pc.normalScale);
   if (!front) n = -n;
-  float t = pc.transmission.a * texture(transmissionTex, vUv).a * f.leafShading.z;
-  vec3 tc = pc.transmission.rgb * texture(transmissionColorTex, vUv).rgb *
-            (pc.transmissionFromBase != 0u ? leafTransmissionTint(base.rgb) : vec3(1.0));
+  float t = pc.transmission.a * f.leafShading.z;
+  vec3 tc = pc.transmission.rgb;
+  if ((pc.shadingFlags & LAYER_SHADE_TRANSMISSION_TEXTURE) != 0u) t *= texture(transmissionTex, vUv).a;
+  if ((pc.shadingFlags & LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE) != 0u) tc *= texture(transmissionColorTex, vUv).rgb;
+  if ((pc.shadingFlags & LAYER_SHADE_TINT_FROM_BASE) != 0u) tc *= leafTransmissionTint(base.rgb);
   vec3 lit = leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
                        f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
   outColor = vec4(lit * alpha, alpha);

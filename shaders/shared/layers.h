@@ -24,6 +24,12 @@
 #define LAYER_ALPHA_MASK 1u
 #define LAYER_ALPHA_BLEND 2u
 
+// LayerDrawPush.shadingFlags. A texture the material lacks is not sampled (a sample costs more
+// than the BRDF on a CPU driver).
+#define LAYER_SHADE_TINT_FROM_BASE 1u           // transmission colour x leafTransmissionTint(base colour) (no file value)
+#define LAYER_SHADE_TRANSMISSION_TEXTURE 2u     // sample transmissionTex (alpha)
+#define LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE 4u  // sample transmissionColorTex (RGB)
+
 CANOPY_NAMESPACE_BEGIN
 
 struct LayerFrame {
@@ -60,7 +66,7 @@ struct LayerDrawPush {
   uint passKind;     // LAYER_PASS_*
   uint triangleBase; // index of the draw's first triangle in the mesh (id output only)
   float specular;    // 1: the front side has the Cook-Torrance lobe (foliage); 0: none (rigid parts)
-  uint transmissionFromBase;  // 1: the transmission colour is multiplied by leafTransmissionTint(base colour) (no file value)
+  uint shadingFlags;  // LAYER_SHADE_*: which material inputs this draw has
   float normalScale; // the material's normal map scale (glTF normalTexture.scale); 0: no normal map
   // Diffuse transmission (KHR_materials_diffuse_transmission): rgb its colour, a its factor 0..1
   // (0: an opaque leaf; rigid parts).

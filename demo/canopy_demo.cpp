@@ -314,6 +314,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(drain());
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
+    const CanopyStats st = canopyStats(host.canopy);  // the sequence's, before the light sheet's re-slices
     if (o.lightSheet) {
       // Leaf shading (issue 17): the plant lit from the front (--light), from behind (that light
       // turned 180 degrees about the vertical) and from behind without translucency; three more
@@ -339,7 +340,6 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       std::fprintf(stderr, "wrote %s/light_sheet.png: light towards (%g, %g, %g), then (%g, %g, %g) with and without translucency\n",
                    o.outDir.c_str(), o.light.x, o.light.y, o.light.z, behind.x, behind.y, behind.z);
     }
-    const CanopyStats st = canopyStats(host.canopy);
     char head[2048];
     std::snprintf(head, sizeof head,
                   "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "

@@ -513,7 +513,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
                            a.layerCount == c->last.layerCount;
   const VkRect2D footprint = layerFootprint(c->layers);
-  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, !c->layers.rigidDraws.empty(), c->layers.occupancyDirty,
+  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.hasRigid, c->layers.occupancyDirty,
                               motionValid, &footprint, c->layers.occupancyUniteNext));
   c->last = a;
   c->layersRebuilt = rebuild;

@@ -811,26 +811,22 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     mm.alphaCutoff = float(src.alphaCutoff);
     mm.doubleSided = src.doubleSided;
     // Leaf transmission: the factors here, the textures with the others below.
-    auto shortNumber = [](float x) {
-      char b[32];
-      std::snprintf(b, sizeof b, "%g", double(x));
-      return std::string(b);
-    };
-    auto number = [&](const tinygltf::Value& ext, const char* extName, const char* key, float lo, float hi, float* out) -> Status {
+    // A glTF factor: a number in [0, 1].
+    auto factor = [&](const tinygltf::Value& ext, const char* extName, const char* key, float* out) -> Status {
       if (!ext.Has(key)) return Status();
       const tinygltf::Value& v = ext.Get(key);
       const double x = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
-      if (!(x >= lo && x <= hi))
-        return Status::error(what + ": " + extName + "." + key + " must be a number in [" + shortNumber(lo) + ", " +
-                             shortNumber(hi) + "]");
+      if (!(x >= 0.0 && x <= 1.0)) return Status::error(what + ": " + extName + "." + key + " must be a number in [0, 1]");
       *out = float(x);
       return Status();
     };
+    const tinygltf::Value* diffuseTransmission = nullptr;  // KHR_materials_diffuse_transmission, if present
     auto extension = src.extensions.find("KHR_materials_diffuse_transmission");
     if (extension != src.extensions.end() && extension->second.IsObject()) {
       const tinygltf::Value& ext = extension->second;
+      diffuseTransmission = &ext;
       mm.transmissionFactor = 0.0f;  // the extension's default
-      s = number(ext, "KHR_materials_diffuse_transmission", "diffuseTransmissionFactor", 0.0f, 1.0f, &mm.transmissionFactor);
+      s = factor(ext, "KHR_materials_diffuse_transmission", "diffuseTransmissionFactor", &mm.transmissionFactor);
       if (!s.ok()) return fail(s.message());
       if (ext.Has("diffuseTransmissionColorFactor")) {
         const tinygltf::Value& c = ext.Get("diffuseTransmissionColorFactor");
@@ -846,7 +842,7 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     } else if ((extension = src.extensions.find("KHR_materials_transmission")) != src.extensions.end() &&
                extension->second.IsObject()) {
       mm.transmissionFactor = 0.0f;
-      s = number(extension->second, "KHR_materials_transmission", "transmissionFactor", 0.0f, 1.0f, &mm.transmissionFactor);
+      s = factor(extension->second, "KHR_materials_transmission", "transmissionFactor", &mm.transmissionFactor);
       if (!s.ok()) return fail(s.message());
     }
     const bool used = materialUsedByTriangle[i];
@@ -912,11 +908,10 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
         return fail(what + ": normalTexture.scale must be a finite number in [-100, 100]");
     }
     // KHR_materials_diffuse_transmission's textures: the factor in the alpha channel, the colour in RGB.
-    extension = src.extensions.find("KHR_materials_diffuse_transmission");
-    if (extension != src.extensions.end() && extension->second.IsObject()) {
+    if (diffuseTransmission) {
       for (const char* key : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"}) {
-        if (!extension->second.Has(key)) continue;
-        const tinygltf::Value& info = extension->second.Get(key);
+        if (!diffuseTransmission->Has(key)) continue;
+        const tinygltf::Value& info = diffuseTransmission->Get(key);
         const bool colour = std::string(key) == "diffuseTransmissionColorTexture";
         if (!info.IsObject() || !info.Has("index") || !info.Get("index").IsInt() || info.Get("index").GetNumberAsInt() < 0)
           return fail(what + ": KHR_materials_diffuse_transmission." + key + ".index must be a texture index");

@@ -269,16 +269,13 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   std::vector<uint32_t> order(nt);
   std::vector<uint64_t> cursor(start.begin(), start.end() - 1);
   for (size_t t = 0; t < nt; ++t) order[cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++] = uint32_t(t);
-  for (size_t k = 0; k < 2 * nm; ++k) {
-    if (start[k + 1] == start[k]) continue;
-    LayerDraw draw{uint32_t(k % nm), uint32_t(start[k] * 3), uint32_t((start[k + 1] - start[k]) * 3)};
-    (k < nm ? lv.foliageDraws : lv.rigidDraws).push_back(draw);
-  }
   // The compact chunked mesh (render/mesh_chunks.h): 16-byte vertices, 16-bit indices and a
-  // leaf-root table per chunk, so no buffer is indexed past the device's storage range.
+  // leaf-root table per chunk, so no buffer is indexed past the device's storage range; one
+  // triangle range per (foliage or rigid, material) run of the GPU order.
   std::vector<TriangleRange> ranges;
-  for (const LayerDraw& dr : lv.foliageDraws) ranges.push_back({dr.material, true, dr.firstIndex / 3, dr.indexCount / 3});
-  for (const LayerDraw& dr : lv.rigidDraws) ranges.push_back({dr.material, false, dr.firstIndex / 3, dr.indexCount / 3});
+  for (size_t k = 0; k < 2 * nm; ++k)
+    if (start[k + 1] > start[k]) ranges.push_back({uint32_t(k % nm), k < nm, start[k], start[k + 1] - start[k]});
+  lv.hasRigid = start[2 * nm] > start[nm];
   CompactMeshOptions co;
   co.maxChunkVertices = lv.desc.maxChunkVertices;
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
@@ -813,7 +810,7 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   const std::vector<float>& w = lv.spread.fadeWeights;
   const uint32_t n = lv.settings.layout.count();
   for (uint32_t i = 0; i < n; ++i) CANOPY_TRY(step(lv.fade, lv.colorLayerViews[i], lv.next.color, i, w[i]));
-  if (lv.rigidDraws.empty()) return Status();  // both backgrounds stay cleared
+  if (!lv.hasRigid) return Status();  // both backgrounds stay cleared
   return step(lv.fadeBackground, lv.backgroundColor.view, lv.next.backgroundColor, 0, w[n]);
 }
 
@@ -841,7 +838,8 @@ bool operator==(const LayerSettings& a, const LayerSettings& b) {
          a.moveThreshold == b.moveThreshold && a.turnThresholdDegrees == b.turnThresholdDegrees &&
          a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient &&
          a.leafRefractiveIndex == b.leafRefractiveIndex && a.leafRoughness == b.leafRoughness &&
-         a.leafTransmission == b.leafTransmission && a.translucency == b.translucency && a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
+         a.leafTransmission == b.leafTransmission && a.translucency == b.translucency &&
+         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
 }
 
 Status validateLayerSettings(const LayerSettings& s) {
@@ -1351,12 +1349,12 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
       .when([p] { return p->rebuildPending; });
   if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
   drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
-     return p->rebuildPending && !p->rigidDraws.empty() ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
+     return p->rebuildPending && p->hasRigid ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
                                                         : Status();
    }))
       .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
       .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite)
-      .when([p] { return p->rebuildPending && !p->rigidDraws.empty(); });
+      .when([p] { return p->rebuildPending && p->hasRigid; });
   if (lv.next.color.image) {
     // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): this frame's slice into the
     // next set (loaded: earlier slices are kept), then a cross-fade step into the visible set.
@@ -1368,7 +1366,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
        if (!p->slicePending) return Status();
        const bool clear = p->spread.sliceClears;
        if (clear || sliceHas(*p, true)) CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
-       if (!p->rigidDraws.empty() && (clear || sliceHas(*p, false)))
+       if (p->hasRigid && (clear || sliceHas(*p, false)))
          CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->spread.slice));
        return Status();
      }))
@@ -1377,7 +1375,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)
         .write(nextBgDepth, rg::Use::DepthAttachmentWrite)
         .when([p] { return p->slicePending; });
-    const bool rigid = !lv.rigidDraws.empty();
+    const bool rigid = lv.hasRigid;
     auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
       return p->fadePending && !p->spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();
     });

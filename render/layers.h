@@ -69,11 +69,6 @@ struct LayerInfo {
   uint64_t triangles = 0;
 };
 
-struct LayerDraw {
-  uint32_t material = 0;
-  uint32_t firstIndex = 0, indexCount = 0;
-};
-
 // The second layer set a spread re-slice draws into (LayerSettings.rebuildBudgetMs > 0), rested
 // in FragmentSampled for the cross-fade that copies it into the visible set.
 struct LayerTargetSet {
@@ -163,7 +158,7 @@ struct LayeredVegetation {
   CompactMesh hostMesh;
   uint32_t leafCount = 0;                 // model leaves (LayerLeafRoot.leaf < leafCount)
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
-  std::vector<LayerDraw> foliageDraws, rigidDraws;  // per material, GPU order
+  bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
   // GPU mesh and materials.
   Buffer vertices, indexBuffer, leafRoots, frameBuffer;

@@ -38,6 +38,8 @@ void printHelp() {
       "                      strength * (1 + b sin(2 pi f t)) * (1 + G * noise travelling along the side)\n"
       "  --gust G            gust noise amplitude G, [0, 1] (default %g)\n"
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
+      "  --method M          2d (the paper's layers) or per-vertex (the 3D baseline: every vertex bent through\n"
+      "                      its branch hierarchy each frame, Habel); the window switches with M (default 2d)\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
       "Light and leaf shading (Habel: specular front, diffuse back, transmission on the unlit side):\n"
@@ -71,7 +73,8 @@ void printHelp() {
       "Window (needs a display; falls back to headless without one):\n"
       "  --window            open a window: left drag orbits, wheel zooms, right drag pushes the foliage;\n"
       "                      keys: arrows wind direction/strength, F/G frequency, L layout, D delay mode,\n"
-      "                      V debug view, J/K turn the light, T translucency, space pause, O auto-orbit,\n"
+      "                      V debug view, M method (2D / per-vertex), J/K turn the light, T translucency,\n"
+      "                      space pause, O auto-orbit,\n"
       "                      P screenshot, Esc quit\n"
       "  --vsync on|off      present with vsync (default on)\n"
       "  --screenshot FILE   window: write the last frame read back from the swapchain (fails if blank)\n"
@@ -177,6 +180,11 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (std::string(v) == "exact") o->delay = DelayMode::Exact;
       else if (std::string(v) == "approx" || std::string(v) == "approximate") o->delay = DelayMode::Approximate;
       else return bad(quoted(v) + " is not exact or approx");
+    } else if (a == "--method") {
+      if (!takes()) return bad("needs 2d or per-vertex");
+      if (std::string(v) == "2d") o->method = AnimationMode::Layers2D;
+      else if (std::string(v) == "per-vertex") o->method = AnimationMode::PerVertex;
+      else return bad(quoted(v) + " is not 2d or per-vertex");
     } else if (a == "--debug") {
       if (!takes()) return bad("needs none, layers, velocity or grid");
       const std::string d = v;
@@ -295,6 +303,7 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
   d.kind = o.scene;
   d.faces = o.faces;
   d.seed = o.seed;
+  d.hierarchy = bothMethods(o);
   SceneStats st;
   cli::ProgressLine progress(std::string("generating ") + sceneName(o.scene));
   CANOPY_TRY(generateScene(d, model, &st, o.faces >= 1'000'000 ? SceneProgress(std::ref(progress)) : SceneProgress()));
@@ -330,6 +339,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.simulation.wind.modulation = o.windModulation;
   p.simulation.wind.gust = o.windGust;
   p.dynamics.delay = o.delay;
+  p.animation = o.method;
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
   p.layers.lightDirection = o.light;
   p.layers.lightColor = o.lightColor;
@@ -507,6 +517,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.split = o.split;
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
+  desc.allowPerVertex = bothMethods(o);
   // The preparation's own peak above what is resident before it (the model): issue 16's
   // "bytes per face" of preparation, printed below.
   const uint64_t residentBefore = cli::residentBytes();

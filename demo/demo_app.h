@@ -38,6 +38,9 @@ struct Options {
   float warmupSeconds = 2.0f;          // headless: simulation time run before the first written frame
   DelayMode delay = DelayMode::Exact;
   CompositeDebugView debug = CompositeDebugView::None;
+  // The 2D method or the per-vertex baseline (Habel), on the same scene; the window can switch
+  // (key M) when the context allows both, which it does in window mode and with per-vertex.
+  AnimationMode method = AnimationMode::Layers2D;
   // Light and leaf shading (LayerSettings; docs/design.md "Layers: leaf shading")
   Float3 light = LayerSettings{}.lightDirection;     // towards the light, world space
   Float3 lightColor = LayerSettings{}.lightColor;
@@ -68,6 +71,10 @@ struct Options {
   std::string device;
   std::string injectFault;  // "oom:N" / "lost:N" (tools/fault_loader.h), empty: none
 };
+
+// Whether the context is created with both methods (CanopyDesc.allowPerVertex; the scene then
+// carries its branch hierarchy).
+inline bool bothMethods(const Options& o) { return o.window || o.method == AnimationMode::PerVertex; }
 
 // Parses the command line. Returns 0 to run, 1 when --help was printed, 2 on an error (the
 // one-line reason is in *error).

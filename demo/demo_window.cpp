@@ -187,6 +187,10 @@ void onKey(GLFWwindow* win, int key, int, int action, int) {
       std::printf("light towards (%.2f, %.2f, %.2f)\n", d.x, d.y, d.z);
       break;
     }
+    case GLFW_KEY_M:
+      l.params.animation = l.params.animation == AnimationMode::Layers2D ? AnimationMode::PerVertex : AnimationMode::Layers2D;
+      std::printf("%s\n", l.params.animation == AnimationMode::PerVertex ? "per-vertex baseline (Habel)" : "2D layers");
+      break;
     case GLFW_KEY_T:
       l.params.layers.translucency = !l.params.layers.translucency;
       std::printf("translucency %s\n", l.params.layers.translucency ? "on" : "off");

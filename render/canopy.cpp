@@ -10,6 +10,7 @@
 
 #include "engine/memory.h"
 #include "render/material_split.h"
+#include "render/per_vertex.h"
 
 namespace canopy {
 
@@ -53,6 +54,7 @@ struct CanopyContext {
   bool holdStep = false;  // this context's record of the simulation step: nothing (see SharedSimulation)
   LayerDynamics dynamics;
   Compositor compositor;
+  PerVertexAnimation perVertex;  // CanopyDesc.allowPerVertex only
   bool planeFixed = false;
   SimulationPlane plane;
   uint64_t generation = 0;
@@ -101,6 +103,11 @@ Status validateParams(const CanopyContext& c, const CanopyParams& p) {
                          " is below CanopyDesc.minCellSize = " + std::to_string(c.desc.minCellSize));
   CANOPY_TRY(validateCompositeParams(p.composite));
   if (p.customPlane) CANOPY_TRY(validatePlane(p.plane));
+  if (p.animation != AnimationMode::Layers2D && p.animation != AnimationMode::PerVertex)
+    return Status::error("CanopyParams.animation = " + std::to_string(uint32_t(p.animation)) + " is outside 0..1");
+  if (p.animation == AnimationMode::PerVertex && !c.desc.allowPerVertex)
+    return Status::error("CanopyParams.animation = PerVertex needs CanopyDesc.allowPerVertex at creation");
+  CANOPY_TRY(validatePerVertexParams(p.perVertex));
   return Status();
 }
 
@@ -211,6 +218,7 @@ void destroyNow(CanopyContext* c) {
     dropPreparedWork(*c->device, c->pending);
     for (RecordGraph& g : c->graphs) g.graph->release(*c->device);
     destroyCompositor(c->compositor);
+    destroyPerVertex(c->perVertex);
     destroyLayerDynamics(c->dynamics);
     destroyLayeredVegetation(c->layers);
   }
@@ -222,6 +230,9 @@ void destroyNow(CanopyContext* c) {
 // render-graph path and canopyPassGroupUses).
 Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTargets& targets) {
   CanopyContext* c = &ctx;
+  // The per-vertex baseline replaces every pass of the 2D method (a mode change bumps the
+  // generation, so graphs are rebuilt).
+  if (c->params.animation == AnimationMode::PerVertex) return addPerVertexPasses(c->perVertex, c->layers, g, targets);
   SimulationResources sr;
   CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
   LayerResources lr;
@@ -331,6 +342,10 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
+    if (desc.allowPerVertex) {
+      CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
+      ld.keepBend = true;
+    }
     // The split is cheap; knowing there is nothing to animate before leaf roots and the mesh
     // upload saves a big model's preparation.
     MaterialSplit split;
@@ -369,8 +384,24 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     {
       DeferInto defer(d, &c->pending);
       CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+      if (desc.allowPerVertex) {
+        PerVertexDesc pd;
+        pd.width = desc.width;
+        pd.height = desc.height;
+        pd.colorFormat = desc.colorFormat;
+        pd.depthFormat = desc.depthFormat;
+        pd.motionFormat = desc.motionFormat;
+        pd.reverseZ = desc.depthConvention == DepthConvention::Reverse;
+        CANOPY_TRY(createPerVertex(d, c->layers, model.branches, pd, &c->perVertex));
+      }
     }
-    return computeGroupUses(*c);
+    // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
+    // written, motion) are among them.
+    const AnimationMode mode = c->params.animation;
+    c->params.animation = AnimationMode::Layers2D;
+    Status uses = computeGroupUses(*c);
+    c->params.animation = mode;
+    return uses;
   }();
   if (!s.ok()) {
     destroyNow(c);
@@ -410,6 +441,16 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
       CANOPY_TRY(setLayerSettings(c->layers, p.layers, &recreated));
       if (recreated) c->generation++;  // new layer images
     }
+    if (p.animation != c->params.animation) {
+      c->generation++;  // other passes: graphs are rebuilt
+      if (p.animation == AnimationMode::Layers2D) {
+        // Back to the layers: they are as old as the last 2D frame; re-slice at once, and no
+        // motion vectors against a displacement from before the switch.
+        c->layers.forcedReason = "animation mode";
+        c->layers.forceImmediate = true;
+        c->last = gpu::AnimFrame{};
+      }
+    }
     if (p.customPlane) {
       c->plane = p.plane;
       c->planeFixed = true;
@@ -434,6 +475,8 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
     retire(*c, true, true);  // no wait: the old objects go once the frames using them completed
     c->desc.width = width;
     c->desc.height = height;
+    c->perVertex.desc.width = width;
+    c->perVertex.desc.height = height;
     Status s = [&]() -> Status {
       CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
       CompositorDesc cd = before;
@@ -448,6 +491,18 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
     c->generation++;
     return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
   });
+}
+
+// docs/design.md: unless the host set one, the plane of the first view, one tile over the region
+// visible at the vegetation's centre depth.
+static void fixPlane(CanopyContext& c, const LayerView& view) {
+  if (c.planeFixed) return;
+  const LayeredVegetation& lv = c.layers;
+  const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
+  const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
+  const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
+  c.plane = simulationPlaneFromView(view, std::max(depth, std::max(radius, 1e-3f)));
+  c.planeFixed = true;
 }
 
 Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
@@ -467,6 +522,16 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   // 0: the next frame (one context per host frame); otherwise the host's own counter.
   const uint64_t frameNumber = f.frameNumber ? f.frameNumber : (d.anyFrame ? d.frameNumber + 1 : 1);
   CANOPY_TRY(beginDeviceFrame(d, frameNumber));
+  if (c->params.animation == AnimationMode::PerVertex) {
+    // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's
+    // direction comes from the simulation plane, fixed as the 2D method fixes it.
+    fixPlane(*c, standardView(*c, f.camera));
+    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, c->params, c->plane, f.camera, f.dt));
+    c->cut = f.cameraCut;
+    c->layersRebuilt = false;
+    c->frames++;
+    return Status();
+  }
   SharedSimulation& sh = *c->shared;
   Simulation& sim = sh.sim;
   // One step per host frame for a shared simulation, by the first context recorded in it.
@@ -486,16 +551,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   }
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
-  if (!c->planeFixed) {
-    // docs/design.md: the plane of the first view, one tile over the region visible at the
-    // vegetation's centre depth.
-    const LayeredVegetation& lv = c->layers;
-    const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
-    const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
-    const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
-    c->plane = simulationPlaneFromView(view, std::max(depth, std::max(radius, 1e-3f)));
-    c->planeFixed = true;
-  }
+  fixPlane(*c, view);
   DynamicsFrameDesc fd;
   fd.view = view;
   fd.plane = c->plane;

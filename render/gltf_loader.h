@@ -15,6 +15,8 @@
 
 #include <glm/glm.hpp>
 
+#include "shared/bend.h"
+
 #include "engine/status.h"
 
 namespace canopy {
@@ -56,6 +58,11 @@ struct VegetationModel {
   std::vector<ModelMaterial> materials;    // the file's materials, then one default material last
   std::vector<ModelImage> images;          // decoded base-colour images (only those used)
   glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};
+  // Optional branch hierarchy for the per-vertex wind baseline (shared/bend.h): per vertex its
+  // innermost branch and Habel's w, and the branch table (parents before children). Empty: none
+  // (glTF files; the baseline then derives a trunk and radial branches from the positions).
+  std::vector<gpu::BendVertex> bend;
+  std::vector<gpu::BendBranch> branches;
   std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
   size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -278,6 +278,7 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   lv.hasRigid = start[2 * nm] > start[nm];
   CompactMeshOptions co;
   co.maxChunkVertices = lv.desc.maxChunkVertices;
+  co.bend = lv.desc.keepBend && !m.bend.empty();
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
@@ -338,6 +339,11 @@ Status chooseMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t
   if (!lv.next.color.image)
     for (const Image* img : {&lv.color, &lv.depth, &lv.backgroundColor, &lv.backgroundDepth}) nextSet += img->allocation.size;
   if (used + nextSet + meshBytes + 3 * 256 <= budget) return Status();
+  if (lv.desc.keepBend)
+    return Status::error("layers: the per-vertex wind baseline (CanopyDesc.allowPerVertex) draws the whole mesh every "
+                         "frame and needs it resident: the compact mesh with its branch hierarchy (" + mib(meshBytes) +
+                         ") with the layer images and textures (" + mib(used + nextSet) + ") is over deviceMemoryBudget " +
+                         mib(budget) + "; raise it (or 0: no limit)");
   if (lv.desc.writeIds)
     return Status::error("layers: the id output draws the mesh at once and needs it resident: the compact mesh (" +
                          mib(meshBytes) + ") with the layer images and textures (" + mib(used + nextSet) +
@@ -416,6 +422,9 @@ Status placeMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtSt
                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
   CANOPY_TRY(upload(lv.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
                     rg::Use::IndexBuffer, "layers: indices"));
+  if (!mesh.bend.empty())
+    CANOPY_TRY(upload(lv.bendVertices, mesh.bend.data(), mesh.bend.size() * sizeof(gpu::BendVertex),
+                      VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "per-vertex: branch and w per vertex"));
   return upload(lv.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots");
 }
@@ -438,18 +447,7 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   job = PlacementJob{};
   const LayerSettings& s = lv.settings;
   gpu::LayerFrame& f = job.frame;
-  f.viewProj = view.proj * view.view;
-  f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
-  const glm::vec3 dir = toGlm(s.lightDirection);
-  const glm::vec3 l = glm::length(dir) > 0 ? glm::normalize(dir) : glm::vec3(0, 1, 0);
-  f.lightDirection = glm::vec4(l, s.ambient);
-  f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
-  // The viewer for the shading's view vector: the camera position, or for an orthographic
-  // projection (no perspective row) the direction towards the viewer.
-  const glm::mat4 cameraToWorld = glm::inverse(view.view);
-  const bool orthographic = view.proj[0][3] == 0.0f && view.proj[1][3] == 0.0f && view.proj[2][3] == 0.0f;
-  f.eye = orthographic ? glm::vec4(glm::normalize(glm::vec3(cameraToWorld[2])), 0.0f) : glm::vec4(glm::vec3(cameraToWorld[3]), 1.0f);
-  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f, 0.0f);
+  f = cameraFrame(s, view);
   f.layerCount = s.layout.count();
   f.sliceMode = s.slice == SliceMode::Geometry ? LAYER_SLICE_GEOMETRY : LAYER_SLICE_LEAF_ROOT;
   job.zMin = INFINITY;
@@ -607,8 +605,11 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 // Binds the mesh and draws its foliage or rigid chunks with `pipe` (`parts`: only those parts of
 // chunks; null: every chunk whole); the push constants say how the vertex shader routes triangles
 // (passKind, targetLayer).
+// `perVertex`: the per-vertex baseline's frame block (binding 0) and its three bindings after the
+// six of the layers (render/per_vertex.cpp).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
-                     uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts) {
+                     uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
+                     const PerVertexBindings* perVertex = nullptr) {
   const Device& d = *lv.device;
   const VkDeviceSize zero = 0;
   d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
@@ -646,15 +647,19 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     const uint64_t rootAt = ring ? part->ringRoot : c.firstRoot;
     const uint64_t indexAt = ring ? part->ringIndex : c.firstIndex + 3ull * first;
     const uint64_t vertexAt = ring ? part->ringVertex : c.firstVertex;
-    CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                            {bindBuffer(lv.frameBuffer.buffer),
-                             bindBuffer(lv.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes),
-                             bindImage(tex.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
-                             bindImage(textureOf(mat.normalImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
-                             bindImage(textureOf(mat.transmissionImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.sampler),
-                             bindImage(textureOf(mat.transmissionColorImage).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                                       lv.sampler)},
-                            push));
+    const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+    const Binding frame = bindBuffer(perVertex ? perVertex->frame : lv.frameBuffer.buffer);
+    const Binding roots = bindBuffer(lv.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes);
+    const Binding base = bindImage(tex.view, ro, lv.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, lv.sampler),
+                  trans = bindImage(textureOf(mat.transmissionImage).view, ro, lv.sampler),
+                  transColor = bindImage(textureOf(mat.transmissionColorImage).view, ro, lv.sampler);
+    if (perVertex)
+      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
+                              {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
+                               bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices)},
+                              push));
+    else
+      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts.
     d.vk.CmdDrawIndexed(cmd, count * 3, 1, uint32_t(indexAt), int32_t(vertexAt), 0);
@@ -748,6 +753,29 @@ bool sliceHas(const LayeredVegetation& lv, bool foliage) {
 }
 
 }  // namespace
+
+gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
+  gpu::LayerFrame f{};
+  f.viewProj = view.proj * view.view;
+  f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
+  const glm::vec3 dir = toGlm(s.lightDirection);
+  const glm::vec3 l = glm::length(dir) > 0 ? glm::normalize(dir) : glm::vec3(0, 1, 0);
+  f.lightDirection = glm::vec4(l, s.ambient);
+  f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
+  // The viewer for the shading's view vector: the camera position, or for an orthographic
+  // projection (no perspective row) the direction towards the viewer.
+  const glm::mat4 cameraToWorld = glm::inverse(view.view);
+  const bool orthographic = view.proj[0][3] == 0.0f && view.proj[1][3] == 0.0f && view.proj[2][3] == 0.0f;
+  f.eye = orthographic ? glm::vec4(glm::normalize(glm::vec3(cameraToWorld[2])), 0.0f) : glm::vec4(glm::vec3(cameraToWorld[3]), 1.0f);
+  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f, 0.0f);
+  return f;
+}
+
+Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+                     const PerVertexBindings& bindings) {
+  CANOPY_TRY(drawMaterials(lv, cmd, pipe, true, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings));
+  return lv.hasRigid ? drawMaterials(lv, cmd, pipe, false, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings) : Status();
+}
 
 VkRect2D layerFootprint(const LayeredVegetation& lv) {
   const float w = float(lv.desc.width), h = float(lv.desc.height);
@@ -977,7 +1005,7 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   for (Image& t : lv.textures) destroyImage(d, t);
   for (VkSampler smp : {lv.sampler, lv.nearestSampler})
     if (smp) d.vk.DestroySampler(d.device, smp, d.allocationCallbacks);
-  for (Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots, &lv.frameBuffer}) destroyBuffer(d, *b);
+  for (Buffer* b : {&lv.vertices, &lv.indexBuffer, &lv.leafRoots, &lv.frameBuffer, &lv.bendVertices}) destroyBuffer(d, *b);
   lv = LayeredVegetation{};
 }
 

@@ -55,6 +55,9 @@ struct LayeredVegetationDesc {
   uint64_t deviceMemoryBudget = 0;
   uint64_t stagingRingBytes = 64ull << 20;
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
+  // Keep the model's branch hierarchy with the compact mesh (CompactMesh::bend) for the per-vertex
+  // wind baseline; the mesh must then be resident (refused, naming the budget, otherwise).
+  bool keepBend = false;
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
@@ -162,6 +165,7 @@ struct LayeredVegetation {
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
   // GPU mesh and materials.
   Buffer vertices, indexBuffer, leafRoots, frameBuffer;
+  Buffer bendVertices;                    // hostMesh.bend on the device (desc.keepBend and a hierarchy)
   std::vector<Image> textures;            // per model image (sRGB), plus a white one last
   VkSampler sampler = VK_NULL_HANDLE;
   // Targets: persistent between rebuilds.
@@ -225,6 +229,22 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
 // model's bounding box projected by the placements' views, 2 pixels of margin; the whole target
 // when a corner is behind a camera.
 VkRect2D layerFootprint(const LayeredVegetation& lv);
+
+// The frame block's camera and lighting for `view` (no placement): the layers' start and the
+// per-vertex baseline's every frame.
+gpu::LayerFrame cameraFrame(const LayerSettings& settings, const LayerView& view);
+
+// What the per-vertex baseline binds besides the layers' mesh and textures (render/per_vertex.cpp).
+struct PerVertexBindings {
+  VkBuffer frame = VK_NULL_HANDLE;         // its gpu::LayerFrame (binding 0, in place of the layers')
+  VkBuffer bendFrame = VK_NULL_HANDLE;     // gpu::BendFrame (binding 6)
+  VkBuffer branches = VK_NULL_HANDLE;      // gpu::BendBranch table (binding 7)
+  VkBuffer bendVertices = VK_NULL_HANDLE;  // gpu::BendVertex per compact-mesh vertex (binding 8)
+};
+// Draws every chunk of the (resident) mesh, foliage then rigid, with `pipe` inside the caller's
+// rendering: the per-vertex baseline's frame.
+Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+                     const PerVertexBindings& bindings);
 
 struct LayerResources {
   rg::ResourceId color = rg::kInvalidResource, depth = rg::kInvalidResource, ids = rg::kInvalidResource;

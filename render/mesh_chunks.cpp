@@ -78,6 +78,9 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   const size_t nv = m.positions.size(), nt = m.indices.size() / 3;
   if (roots.leafOfVertex.size() != nv || m.uvs.size() != nv)
     return Status::error("mesh chunks: " + modelName(m) + ": per-vertex arrays disagree with the vertex count");
+  if (o.bend && m.bend.size() != nv)
+    return Status::error("mesh chunks: " + modelName(m) + ": the branch hierarchy has " + std::to_string(m.bend.size()) +
+                         " vertices for " + std::to_string(nv));
   if (!triangleOrder.empty() && triangleOrder.size() != nt)
     return Status::error("mesh chunks: the triangle order has " + std::to_string(triangleOrder.size()) + " entries for " +
                          std::to_string(nt) + " triangles");
@@ -95,6 +98,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   for (const TriangleRange& r : ranges) triangles += r.count;
   out->indices.reserve(3 * triangles);
   out->vertices.reserve(nv + nv / 32 + kMaxChunkVertices);
+  if (o.bend) out->bend.reserve(out->vertices.capacity());
   out->roots.reserve(roots.leafCount() + roots.leafCount() / 32 + 65536);
   uint32_t stamp = 0;
   MeshChunk cur;
@@ -135,6 +139,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
       x.normal = glm::packSnorm2x16(octahedral(v < m.normals.size() ? m.normals[v] : glm::vec3(0, 0, 1)));
       x.uv = glm::packHalf2x16(uv);
       out->vertices.push_back(x);
+      if (o.bend) out->bend.push_back(m.bend[v]);
     }
     // Root blocks start aligned so each chunk's block can be bound at its own offset; a chunk
     // without leaves still gets one (unused) entry, since a binding's range cannot be 0.

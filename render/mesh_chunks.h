@@ -44,14 +44,19 @@ struct CompactMesh {
   std::vector<uint16_t> indices;
   std::vector<gpu::LayerLeafRoot> roots;  // per chunk, each chunk's block aligned (bind offsets)
   std::vector<MeshChunk> chunks;          // foliage chunks first, then rigid, in GPU triangle order
+  // With CompactMeshOptions::bend: the model's branch index and w per vertex, parallel to `vertices`
+  // (the per-vertex wind baseline reads it at gl_VertexIndex).
+  std::vector<gpu::BendVertex> bend;
   uint64_t bytes() const {
-    return vertices.size() * sizeof(gpu::LayerVertex) + indices.size() * 2 + roots.size() * sizeof(gpu::LayerLeafRoot);
+    return vertices.size() * sizeof(gpu::LayerVertex) + indices.size() * 2 + roots.size() * sizeof(gpu::LayerLeafRoot) +
+           bend.size() * sizeof(gpu::BendVertex);
   }
 };
 
 struct CompactMeshOptions {
   uint32_t maxChunkVertices = kMaxChunkVertices;  // 3..65535
   uint32_t rootAlignment = 1;  // chunk root blocks start at multiples of this many entries (>= 1)
+  bool bend = false;           // also CompactMesh::bend (the model must have VegetationModel::bend)
 };
 
 // One draw range of the GPU order: `count` triangles from `first`, all of `material`.

@@ -207,6 +207,30 @@ uint32_t facesPerLeaf(LeafShape s) {
 struct Attach {
   glm::vec3 pos, dir;
   float size;  // local scale: the length of the internode it sits on
+  // Where it sits in the branch hierarchy (per-vertex baseline): the L-system branch and the arc
+  // length along it; BEND_LEAF_ONLY where there is none (kelp stems).
+  uint32_t branch = BEND_LEAF_ONLY;
+  float arc = 0.0f;
+  gpu::BendVertex bend{BEND_LEAF_ONLY, 0};  // filled by finishHierarchy
+};
+
+// The branch hierarchy the turtle builds (shared/bend.h; docs/design.md "Per-vertex wind
+// baseline"): each PUSH that starts a branch at bracket depth < BEND_LEVELS opens a table branch;
+// deeper brackets stay part of their depth-3 branch, carried at the arc where they leave it.
+struct BranchBuild {
+  glm::vec3 origin{0.0f}, tip{0.0f}, dir0{0.0f, 1.0f, 0.0f};
+  float length = 0.0f;     // arc length drawn along it (turtle units)
+  float attachArc = 0.0f;  // arc along the parent where it starts
+  uint32_t parent = BEND_NO_PARENT, level = 0;
+};
+// Two rings of a cylinder: `ringVertices` vertices at arc0, then as many at arc1, on `branch`.
+struct RigidRun {
+  uint32_t firstVertex, ringVertices, branch;
+  float arc0, arc1;
+};
+struct HierarchyBuild {
+  std::vector<BranchBuild> branches;
+  std::vector<RigidRun> runs;
 };
 
 struct LeafBatch {
@@ -226,6 +250,7 @@ struct LeafBatch {
 struct Plan {
   VegetationModel model;  // materials + rigid geometry
   std::vector<LeafBatch> batches;
+  HierarchyBuild hierarchy;
   SceneStats stats;
 };
 
@@ -315,13 +340,27 @@ std::string deriveWithin(const LSystem& ls, uint64_t rigidBudget, PlantShape* sh
 struct TurtleState {
   glm::vec3 pos, h, l, u;
   uint32_t level;
+  uint32_t branch = 0;  // table branch (HierarchyBuild) the turtle draws on
+  float arc = 0.0f;     // arc length along it
+  bool deep = false;    // past BEND_LEVELS: the arc stays where this subtree leaves `branch`
 };
 
 // Interprets `s`: wood into the model, leaf clusters into `attach`.
 void interpret(const std::string& s, const PlantShape& shape, const Placement& place, uint64_t seed, VegetationModel& m,
-               std::vector<Attach>& attach) {
+               std::vector<Attach>& attach, HierarchyBuild& hier) {
   Rng rng(seed);
   TurtleState t{glm::vec3(0.0f), {0, 1, 0}, {-1, 0, 0}, {0, 0, 1}, 0};
+  auto openBranch = [&](uint32_t parent, uint32_t level, float attachArc) {
+    BranchBuild b;
+    b.origin = b.tip = place.apply(t.pos);
+    b.dir0 = place.direction(t.h);
+    b.parent = parent;
+    b.level = level;
+    b.attachArc = attachArc;
+    hier.branches.push_back(b);
+    return uint32_t(hier.branches.size() - 1);
+  };
+  t.branch = openBranch(BEND_NO_PARENT, 0, 0.0f);  // the trunk (zero length for plants without T)
   std::vector<TurtleState> stack;
   const float delta = shape.angle * kPi / 180.0f;
   auto turn = [&](glm::vec3& a, glm::vec3& b, const glm::vec3& axis, float sign) {
@@ -339,8 +378,19 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
         const float r0 = trunk ? shape.trunkRadius : shape.radius * std::pow(shape.radiusDecay, float(t.level));
         const float r1 = trunk ? r0 * 0.95f : r0 * 0.85f;
         const glm::vec3 end = t.pos + t.h * len;
+        const uint32_t first = uint32_t(m.positions.size());
         addCylinder(m, kBark, place.apply(t.pos), place.apply(end), r0 * place.scale, r1 * place.scale,
                     place.direction(t.l), place.direction(t.u), shape.sides);
+        const float a1 = t.deep ? t.arc : t.arc + len;
+        hier.runs.push_back({first, shape.sides + 1, t.branch, t.arc, a1});
+        if (!t.deep) {
+          t.arc = a1;
+          BranchBuild& b = hier.branches[t.branch];
+          if (a1 >= b.length) {
+            b.length = a1;
+            b.tip = place.apply(end);
+          }
+        }
         t.pos = end;
         if (!trunk && shape.tropism > 0) {  // bend toward +Y, keep the frame orthonormal
           const glm::vec3 h = glm::normalize(t.h + shape.tropism * glm::vec3(0, 1, 0));
@@ -356,7 +406,7 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
       case 'A':
         if (t.level >= shape.leafMinLevel)
           attach.push_back({place.apply(t.pos), place.direction(t.h),
-                            shape.length * std::pow(shape.lengthDecay, float(t.level)) * place.scale});
+                            shape.length * std::pow(shape.lengthDecay, float(t.level)) * place.scale, t.branch, t.arc});
         break;
       case '+': turn(t.h, t.l, t.u, 1.0f); break;
       case '-': turn(t.h, t.l, t.u, -1.0f); break;
@@ -367,6 +417,12 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
       case '[':
         stack.push_back(t);
         t.level++;
+        if (!t.deep && t.level < BEND_LEVELS) {
+          t.branch = openBranch(t.branch, t.level, t.arc);
+          t.arc = 0.0f;
+        } else {
+          t.deep = true;
+        }
         break;
       case ']':
         if (!stack.empty()) {
@@ -426,7 +482,7 @@ void planPlant(Plan& p, SceneKind kind, uint64_t faces, const Placement& place, 
   p.stats.lsystemIterations = std::max(p.stats.lsystemIterations, iterations);
   const size_t rigidBefore = p.model.triangleMaterial.size();
   LeafBatch b;
-  interpret(s, shape, place, seed, p.model, b.attach);
+  interpret(s, shape, place, seed, p.model, b.attach, p.hierarchy);
   const uint64_t rigid = p.model.triangleMaterial.size() - rigidBefore;
   if (b.attach.empty()) b.attach.push_back({place.apply({0, shape.length, 0}), {0, 1, 0}, shape.length * place.scale});
   b.shape = LeafShape::Card;
@@ -543,6 +599,45 @@ void planField(Plan& p, uint64_t faces, uint64_t seed, uint32_t* lsysIterations)
 }
 
 // ---------------------------------------------------------------------------------------------
+// The branch hierarchy as the model carries it (shared/bend.h).
+
+// Habel's w of a point `arc` along `branch`: its coordinate on that branch, then, up the chain,
+// the coordinate at which each ancestor carries the branch below it.
+uint32_t packW(const HierarchyBuild& h, uint32_t branch, float arc) {
+  uint32_t w = 0;
+  for (uint32_t b = branch; b != BEND_NO_PARENT;) {
+    const BranchBuild& B = h.branches[b];
+    const float x = B.length > 0.0f ? std::clamp(arc / B.length, 0.0f, 1.0f) : 0.0f;
+    w |= uint32_t(std::lround(x * 255.0f)) << (8 * B.level);
+    arc = B.attachArc;
+    b = B.parent;
+  }
+  return w;
+}
+
+// The branch table, the rigid vertices' bend records (others: BEND_LEAF_ONLY) and the attachments'.
+void finishHierarchy(Plan& p) {
+  VegetationModel& m = p.model;
+  const HierarchyBuild& h = p.hierarchy;
+  m.branches.clear();
+  for (const BranchBuild& b : h.branches) {
+    const glm::vec3 chord = b.tip - b.origin;
+    const glm::vec3 axis = glm::length(chord) > 1e-6f ? glm::normalize(chord) : glm::normalize(b.dir0);
+    m.branches.push_back(gpu::BendBranch{b.origin, b.parent, axis, b.level});
+  }
+  m.bend.assign(m.positions.size(), gpu::BendVertex{BEND_LEAF_ONLY, 0});
+  for (const RigidRun& r : h.runs)
+    for (uint32_t ring = 0; ring < 2; ++ring) {
+      const gpu::BendVertex v{r.branch, packW(h, r.branch, ring ? r.arc1 : r.arc0)};
+      std::fill(m.bend.begin() + r.firstVertex + ring * r.ringVertices,
+                m.bend.begin() + r.firstVertex + (ring + 1) * r.ringVertices, v);
+    }
+  for (LeafBatch& b : p.batches)
+    for (Attach& a : b.attach)
+      if (a.branch != BEND_LEAF_ONLY) a.bend = gpu::BendVertex{a.branch, packW(h, a.branch, a.arc)};
+}
+
+// ---------------------------------------------------------------------------------------------
 // Writing leaves.
 
 struct Arrays {
@@ -551,6 +646,7 @@ struct Arrays {
   glm::vec2* uv;
   uint32_t* idx;
   uint32_t* mat;
+  gpu::BendVertex* bend;  // null: no hierarchy asked for
 };
 
 void writeCard(const LeafBatch& b, uint64_t j, Rng& rng, glm::vec3* P, glm::vec3* N, glm::vec2* T) {
@@ -635,6 +731,11 @@ void writeLeaves(const LeafBatch& b, uint64_t first, uint64_t last, const Arrays
     if (b.shape == LeafShape::Card) writeCard(b, j, rng, P, N, T);
     else if (b.shape == LeafShape::Blade) writeBlade(b, rng, P, N, T);
     else writeRibbon(b, j, rng, P, N, T);
+    // A card rides its twig rigidly (it turns about its own root in the leaf level); blades and
+    // ribbons have only the leaf level.
+    if (out.bend)
+      std::fill(out.bend + v0, out.bend + v0 + nv,
+                b.shape == LeafShape::Card ? b.attach[j % b.attach.size()].bend : gpu::BendVertex{BEND_LEAF_ONLY, 0});
     uint32_t* I = out.idx + b.firstIndex + j * nf * 3;
     const uint32_t base = uint32_t(v0);
     if (b.shape == LeafShape::Card) {
@@ -762,6 +863,7 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
     }
     // Layout: rigid geometry first, then each batch's leaves at fixed offsets.
     VegetationModel& m = p.model;
+    if (desc.hierarchy) finishHierarchy(p);
     const uint64_t rigidVertices = m.positions.size(), rigidTriangles = m.triangleMaterial.size();
     uint64_t vertices = rigidVertices, triangles = rigidTriangles, leaves = 0;
     for (LeafBatch& b : p.batches) {
@@ -779,7 +881,9 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
     m.uvs.resize(vertices);
     m.indices.resize(triangles * 3);
     m.triangleMaterial.resize(triangles);
-    const Arrays arrays{m.positions.data(), m.normals.data(), m.uvs.data(), m.indices.data(), m.triangleMaterial.data()};
+    if (desc.hierarchy) m.bend.resize(vertices);
+    const Arrays arrays{m.positions.data(), m.normals.data(), m.uvs.data(), m.indices.data(), m.triangleMaterial.data(),
+                        desc.hierarchy ? m.bend.data() : nullptr};
 
     // Jobs of up to 64K leaves, taken by the workers in order; each leaf has its own random stream.
     struct Job {
@@ -857,6 +961,9 @@ uint64_t modelHash(const VegetationModel& m) {
     h = hashBytes(h, wh, sizeof(wh));
     h = hashBytes(h, img.rgba.data(), img.rgba.size());
   }
+  // The hierarchy only where there is one: models without keep their hashes.
+  if (!m.bend.empty()) h = hashBytes(h, m.bend.data(), m.bend.size() * sizeof(gpu::BendVertex));
+  if (!m.branches.empty()) h = hashBytes(h, m.branches.data(), m.branches.size() * sizeof(gpu::BendBranch));
   return h;
 }
 

@@ -32,6 +32,10 @@ struct SceneDesc {
   uint32_t seed = 1;          // any value; the same seed gives the same model
   uint32_t textureSize = 128; // leaf texture side, pixels: a power of two in [16, 2048]
   uint32_t threads = 0;       // worker threads for the leaves; 0: all hardware threads
+  // Also the branch hierarchy for the per-vertex wind baseline (VegetationModel::bend and
+  // ::branches, 8 bytes a vertex): from the L-system's brackets for plants; grass blades and kelp
+  // ribbons get the leaf level only, ground and rock stay still.
+  bool hierarchy = false;
 };
 inline constexpr uint64_t kMinSceneFaces = 2000;
 inline constexpr uint64_t kMaxSceneFaces = 200'000'000;

@@ -402,7 +402,35 @@ struct SimulationPlane {
   float tileSize = 1.0f;            // world units covered by one tile, > 0
 };
 
+// How the vegetation is animated (docs/design.md "Per-vertex wind baseline"). A host switches
+// between the two on the same context and scene (CanopyDesc.allowPerVertex) to compare them.
+enum class AnimationMode : uint32_t {
+  Layers2D = 0,   // the paper's method: depth layers, 2D wind simulation, inverse warp, composite (default)
+  PerVertex = 1,  // the "3D" baseline (seed 004, Habel IV-VI): the whole mesh drawn every frame into
+                  // the host's targets, every vertex bent through its branch hierarchy in the vertex
+                  // shader; no simulation, layers or composite run
+};
+// The per-vertex baseline's hierarchical bending. The wind is SimulationParams.wind's: its speed
+// profile strength * (baseline + modulation sin(2 pi frequency t)), its direction from the source
+// sides on the simulation plane, its gust as the relative amplitude of the spectral sway noise.
+// Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root.
+struct PerVertexParams {
+  // Tip bend at referenceSpeed, rad, each in [0, 100]; drag makes it grow with the speed squared.
+  float flexibility[4] = {0.02f, 0.035f, 0.05f, 0.06f};
+  float leafFlexibility = 0.15f;
+  // Sway frequency at referenceSpeed (it scales as 0.5 + 0.5 speed / referenceSpeed), Hz, [0, 100].
+  float frequency[4] = {0.35f, 0.8f, 1.6f, 2.6f};
+  float leafFrequency = 4.0f;
+  float referenceSpeed = 2.0f;  // the mean wind speed the two above are given at, domain units/s, (0, 1000]
+  float lateral = 0.4f;         // sway across the wind relative to the sway along it, [0, 1]
+  float maxAngle = 0.5f;        // saturation of any one bend, rad, (0, 1.5]
+  float taper = 1.5f;           // the rotation at coordinate x along a branch is tip * x^taper, [0.5, 4]
+  uint32_t seed = 1;            // noise phases
+};
+
 struct CanopyParams {
+  AnimationMode animation = AnimationMode::Layers2D;  // PerVertex needs CanopyDesc.allowPerVertex
+  PerVertexParams perVertex;
   LayerSettings layers;
   SimulationParams simulation;  // ignored by a context that shares another's simulation
   DynamicsParams dynamics;
@@ -458,6 +486,10 @@ struct CanopyDesc {
   // layer count and size at creation.
   uint64_t deviceMemoryBudget = 1536ull << 20;
   uint64_t meshStagingRingBytes = 64ull << 20;  // [1 MiB, 4 GiB]; at least the largest chunk per frame in flight
+  // Lets CanopyParams.animation be AnimationMode::PerVertex: keeps the model's branch hierarchy
+  // (8 bytes a vertex, host and device) and the per-vertex pipeline; the mesh must then be
+  // resident (createCanopy refuses a model whose mesh would be streamed, naming the budget).
+  bool allowPerVertex = false;
 };
 
 // Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh

@@ -1,0 +1,267 @@
+#include "render/per_vertex.h"
+
+#include <cmath>
+#include <string>
+
+#include "engine/camera.h"
+#include "engine/device.h"
+#include "engine/transfer.h"
+
+namespace canopy {
+namespace {
+
+// The frame blocks are read by the vertex stage (matrices, bend frame) and the fragment stage (light).
+const rg::State kFrameRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                           VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+
+Status checkField(const std::string& name, float v, float lo, float hi, bool openLow = false) {
+  if (!std::isfinite(v) || v > hi || (openLow ? v <= lo : v < lo))
+    return Status::error("CanopyParams.perVertex." + name + " = " + std::to_string(v) + " is outside " +
+                         (openLow ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return Status();
+}
+
+}  // namespace
+
+Status validatePerVertexParams(const PerVertexParams& p) {
+  for (int i = 0; i < 4; ++i) {
+    CANOPY_TRY(checkField("flexibility[" + std::to_string(i) + "]", p.flexibility[i], 0.0f, 100.0f));
+    CANOPY_TRY(checkField("frequency[" + std::to_string(i) + "]", p.frequency[i], 0.0f, 100.0f));
+  }
+  CANOPY_TRY(checkField("leafFlexibility", p.leafFlexibility, 0.0f, 100.0f));
+  CANOPY_TRY(checkField("leafFrequency", p.leafFrequency, 0.0f, 100.0f));
+  CANOPY_TRY(checkField("referenceSpeed", p.referenceSpeed, 0.0f, 1000.0f, true));
+  CANOPY_TRY(checkField("lateral", p.lateral, 0.0f, 1.0f));
+  CANOPY_TRY(checkField("maxAngle", p.maxAngle, 0.0f, 1.5f, true));
+  CANOPY_TRY(checkField("taper", p.taper, 0.5f, 4.0f));
+  return Status();
+}
+
+Status validateBendHierarchy(const std::vector<gpu::BendVertex>& bend, const std::vector<gpu::BendBranch>& branches,
+                             size_t vertexCount, const std::string& what) {
+  if (bend.empty() && branches.empty()) return Status();
+  if (bend.size() != vertexCount)
+    return Status::error(Result::InvalidModel, what + ": the branch hierarchy has " + std::to_string(bend.size()) +
+                                                   " vertices for " + std::to_string(vertexCount));
+  for (size_t i = 0; i < branches.size(); ++i) {
+    const gpu::BendBranch& b = branches[i];
+    const std::string name = what + ": branch " + std::to_string(i);
+    if (b.parent == BEND_NO_PARENT ? b.level != 0 : (b.parent >= i || b.level != branches[b.parent].level + 1))
+      return Status::error(Result::InvalidModel, name + " has parent " + std::to_string(int64_t(int32_t(b.parent))) +
+                                                     " and level " + std::to_string(b.level) +
+                                                     " (parents come first; a level is its parent's + 1)");
+    if (b.level >= BEND_LEVELS)
+      return Status::error(Result::InvalidModel, name + " is at level " + std::to_string(b.level) + ", past the " +
+                                                     std::to_string(BEND_LEVELS) + " levels a vertex carries");
+    const float len = glm::length(b.axis);
+    if (!std::isfinite(b.origin.x + b.origin.y + b.origin.z) || !(std::abs(len - 1.0f) < 1e-3f))
+      return Status::error(Result::InvalidModel, name + " needs a finite origin and a unit axis");
+  }
+  for (size_t v = 0; v < bend.size(); ++v)
+    if (bend[v].branch < BEND_LEAF_ONLY && bend[v].branch >= branches.size())
+      return Status::error(Result::InvalidModel, what + ": vertex " + std::to_string(v) + " names branch " +
+                                                     std::to_string(bend[v].branch) + " of " + std::to_string(branches.size()));
+  return Status();
+}
+
+gpu::BendChain bendChainOf(const std::vector<gpu::BendBranch>& branches, uint32_t branch) {
+  gpu::BendChain c{};
+  if (branch >= BEND_LEAF_ONLY) return c;
+  uint32_t ids[BEND_LEVELS];
+  uint32_t n = 0;
+  for (uint32_t b = branch; b != BEND_NO_PARENT && n < BEND_LEVELS; b = branches[b].parent) ids[n++] = b;
+  for (uint32_t i = 0; i < n; ++i) {
+    c.id[i] = ids[n - 1 - i];
+    c.b[i] = branches[c.id[i]];
+  }
+  c.count = n;
+  return c;
+}
+
+gpu::BendFrame makeBendFrame(const PerVertexParams& p, const WindParams& wind, const SimulationPlane& plane,
+                             const glm::vec3& boundsMin, const glm::vec3& boundsMax, float time, float previousTime) {
+  gpu::BendFrame f{};
+  // The wind's direction on the simulation plane as the 2D method's sources blow it (a source on
+  // the left blows towards +x, on the top towards -y), in world space.
+  glm::vec2 d(0.0f);
+  if (wind.sides & kWindFromLeft) d.x += 1.0f;
+  if (wind.sides & kWindFromRight) d.x -= 1.0f;
+  if (wind.sides & kWindFromBottom) d.y += 1.0f;
+  if (wind.sides & kWindFromTop) d.y -= 1.0f;
+  glm::vec3 dir = d.x * toGlm(plane.right) + d.y * toGlm(plane.up);
+  const float dl = glm::length(dir);
+  const bool blows = dl > 1e-6f;
+  dir = blows ? dir / dl : glm::vec3(1, 0, 0);
+  const glm::vec3 up(0.0f, 1.0f, 0.0f);  // glTF's up: the fallback trunk's axis
+  glm::vec3 lateral = glm::cross(up, dir);
+  lateral = glm::length(lateral) > 1e-4f ? glm::normalize(lateral) : toGlm(plane.right);
+  f.wind = glm::vec4(dir, wind.strength * wind.baseline);
+  f.lateral = glm::vec4(lateral, p.lateral);
+  const glm::vec3 centre = 0.5f * (boundsMin + boundsMax);
+  const glm::vec2 halfXZ(0.5f * (boundsMax.x - boundsMin.x), 0.5f * (boundsMax.z - boundsMin.z));
+  f.up = glm::vec4(up, std::max(boundsMax.y - boundsMin.y, 1e-6f));
+  f.root = glm::vec4(centre.x, boundsMin.y, centre.z, std::max(glm::length(halfXZ), 1e-6f));
+  f.flexibility = glm::vec4(p.flexibility[0], p.flexibility[1], p.flexibility[2], p.flexibility[3]);
+  f.frequency = glm::vec4(p.frequency[0], p.frequency[1], p.frequency[2], p.frequency[3]);
+  f.leafFlexibility = p.leafFlexibility;
+  f.leafFrequency = p.leafFrequency;
+  f.referenceSpeed = p.referenceSpeed;
+  f.maxAngle = p.maxAngle;
+  // No source side (or opposite sides cancelling): no wind.
+  f.strength = blows ? wind.strength : 0.0f;
+  f.baseline = wind.baseline;
+  f.modulation = wind.modulation;
+  f.windFrequency = wind.frequency;
+  f.gust = wind.gust;
+  f.taper = p.taper;
+  f.time = time;
+  f.previousTime = previousTime;
+  f.seed = p.seed;
+  return f;
+}
+
+Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector<gpu::BendBranch>& branches,
+                       const PerVertexDesc& desc, PerVertexAnimation* out) {
+  *out = PerVertexAnimation{};
+  PerVertexAnimation& pv = *out;
+  pv.device = &d;
+  pv.desc = desc;
+  pv.hierarchy = lv.bendVertices.buffer != VK_NULL_HANDLE;
+  if (lv.streamed)
+    return Status::error("per-vertex baseline: the mesh is streamed (deviceMemoryBudget); the baseline draws it whole "
+                         "every frame and needs it resident");
+  const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
+  GraphicsPipelineDesc p;
+  // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's three.
+  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+  p.pushConstantSize = sizeof(gpu::LayerDrawPush);
+  p.vertexStride = sizeof(gpu::LayerVertex);
+  p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0}, {1, VK_FORMAT_R16G16_SNORM, 8}, {2, VK_FORMAT_R16G16_SFLOAT, 12}};
+  p.colorFormats = {desc.colorFormat};
+  if (motion) p.colorFormats.push_back(desc.motionFormat);
+  p.depthFormat = desc.depthFormat;
+  p.blend = BlendMode::PremultipliedOver;
+  p.blendedAttachments = 1;
+  p.depthCompare = desc.reverseZ ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
+  p.vertexShader = motion ? "per_vertex_motion.vert" : "per_vertex.vert";
+  p.fragmentShader = motion ? "per_vertex_motion.frag" : "layers.frag";
+  CANOPY_TRY(createGraphicsPipeline(d, p, &pv.pipeline));
+  const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), usage, MemoryUsage::DeviceLocal, &pv.frame, "per-vertex: frame"));
+  CANOPY_TRY(createBuffer(d, sizeof(gpu::BendFrame), usage, MemoryUsage::DeviceLocal, &pv.bendFrame, "per-vertex: bend frame"));
+  pv.branchCount = uint32_t(branches.size());
+  const VkDeviceSize branchBytes = std::max<VkDeviceSize>(branches.size() * sizeof(gpu::BendBranch), sizeof(gpu::BendBranch));
+  CANOPY_TRY(createBuffer(d, branchBytes, usage, MemoryUsage::DeviceLocal, &pv.branches, "per-vertex: branches"));
+  std::vector<gpu::BendBranch> table = branches;
+  if (table.empty()) table.push_back(gpu::BendBranch{glm::vec3(0), BEND_NO_PARENT, glm::vec3(0, 1, 0), 0});  // never read
+  CANOPY_TRY(uploadBuffer(d, pv.branches, table.data(), branchBytes, rg::stateOf(rg::Use::VertexStorageRead)));
+  if (!pv.hierarchy) {
+    CANOPY_TRY(createBuffer(d, 16, usage, MemoryUsage::DeviceLocal, &pv.dummy, "per-vertex: no hierarchy"));
+    const uint32_t zero[4] = {};
+    CANOPY_TRY(uploadBuffer(d, pv.dummy, zero, sizeof zero, rg::stateOf(rg::Use::VertexStorageRead)));
+  }
+  return Status();
+}
+
+void destroyPerVertex(PerVertexAnimation& pv) {
+  if (!pv.device) return;
+  Device& d = *pv.device;
+  destroyGraphicsPipeline(d, pv.pipeline);
+  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy}) destroyBuffer(d, *b);
+  pv = PerVertexAnimation{};
+}
+
+Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
+                        const SimulationPlane& plane, const CanopyCamera& camera, float dt) {
+  if (!pv.device) return Status::error("per-vertex baseline: not created (CanopyDesc.allowPerVertex)");
+  const double before = pv.time;
+  pv.time += dt;
+  // The host's own projection (its depth convention: the pipeline compares accordingly).
+  LayerView view;
+  view.view = toGlm(camera.view);
+  view.proj = toGlm(camera.proj);
+  pv.layerFrame = cameraFrame(params.layers, view);
+  // The 2D method multiplies the composited colour by the exposure; here the light does.
+  const float e = params.composite.exposure;
+  pv.layerFrame.lightColor *= glm::vec4(e, e, e, 1.0f);
+  pv.layerFrame.lightDirection.w *= e;
+  pv.current = makeBendFrame(params.perVertex, params.simulation.wind, plane, lv.boundsMin, lv.boundsMax, float(pv.time),
+                             float(pv.frames > 0 ? before : pv.time));
+  pv.current.targetSize = glm::vec2(float(pv.desc.width), float(pv.desc.height));
+  pv.current.flags = pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u;
+  pv.frames++;
+  return Status();
+}
+
+Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::RenderGraph& g, const CompositeTargets& t) {
+  if (!pv.device) return Status::error("per-vertex baseline: not created (CanopyDesc.allowPerVertex)");
+  const auto frame = g.importBuffer("per-vertex: frame", pv.frame.size, kFrameRead, kFrameRead);
+  const auto bendFrame = g.importBuffer("per-vertex: bend frame", pv.bendFrame.size, kFrameRead, kFrameRead);
+  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
+                  vs = rg::stateOf(rg::Use::VertexStorageRead);
+  const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
+  const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
+  const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, vs, vs);
+  PerVertexAnimation* p = &pv;
+  g.addPass("per-vertex: constants", [p](rg::PassContext& c) {
+     c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::LayerFrame), &p->layerFrame);
+     c.device->vk.CmdUpdateBuffer(c.cmd, p->bendFrame.buffer, 0, sizeof(gpu::BendFrame), &p->current);
+     return Status();
+   })
+      .write(frame, rg::Use::TransferDst)
+      .write(bendFrame, rg::Use::TransferDst);
+  const bool motion = pv.desc.motionFormat != VK_FORMAT_UNDEFINED;
+  LayeredVegetation* l = &lv;
+  auto draw = g.addPass("per-vertex: draw", [p, l, t, motion](rg::PassContext& x) {
+    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+    colors[0].imageView = x.graph->image(t.color).view;
+    colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+    colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    if (motion) {
+      colors[1] = colors[0];
+      colors[1].imageView = x.graph->image(t.motion).view;
+    }
+    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    depth.imageView = x.graph->image(t.depth).view;
+    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {p->desc.width, p->desc.height}};
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = motion ? 2 : 1;
+    ri.pColorAttachments = colors;
+    ri.pDepthAttachment = &depth;
+    x.device->cmdBeginRendering(x.cmd, &ri);
+    PerVertexBindings b;
+    b.frame = p->frame.buffer;
+    b.bendFrame = p->bendFrame.buffer;
+    b.branches = p->branches.buffer;
+    b.bendVertices = p->hierarchy ? l->bendVertices.buffer : p->dummy.buffer;
+    Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b);
+    x.device->cmdEndRendering(x.cmd);
+    return s;
+  });
+  draw.access(frame, kFrameRead)
+      .read(bendFrame, rg::Use::VertexStorageRead)
+      .read(vertices, rg::Use::VertexBuffer)
+      .read(indices, rg::Use::IndexBuffer)
+      .read(leafRoots, rg::Use::VertexStorageRead)
+      .write(t.color, rg::Use::ColorAttachmentReadWrite)
+      .write(t.depth, rg::Use::DepthAttachmentWrite);
+  if (motion) draw.write(t.motion, rg::Use::ColorAttachmentReadWrite);
+  CANOPY_TRY(g.bindBuffer(frame, pv.frame.buffer));
+  CANOPY_TRY(g.bindBuffer(bendFrame, pv.bendFrame.buffer));
+  CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
+  CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
+  CANOPY_TRY(g.bindBuffer(leafRoots, lv.leafRoots.buffer));
+  return Status();
+}
+
+}  // namespace canopy

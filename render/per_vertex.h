@@ -1,0 +1,64 @@
+#pragma once
+// The per-vertex wind baseline (seed 004, Habel IV-VI; docs/design.md "Per-vertex wind baseline"):
+// the "3D" way the 2D method is measured against. Every frame the whole compact mesh is drawn into
+// the host's colour and depth with the layers' shading, each vertex bent in the vertex shader
+// through its branch hierarchy (shaders/shared/bend.h) by spectral noise that follows the wind.
+#include <vector>
+
+#include "engine/graphics_pipeline.h"
+#include "engine/memory.h"
+#include "engine/render_graph.h"
+#include "render/composite.h"
+#include <canopy/canopy.h>
+#include "render/layers.h"
+#include "shared/bend.h"
+
+namespace canopy {
+
+struct PerVertexDesc {
+  uint32_t width = 0, height = 0;
+  VkFormat colorFormat = VK_FORMAT_UNDEFINED, depthFormat = VK_FORMAT_UNDEFINED;
+  VkFormat motionFormat = VK_FORMAT_UNDEFINED;  // UNDEFINED: no motion vectors
+  bool reverseZ = false;
+};
+
+struct PerVertexAnimation {
+  Device* device = nullptr;
+  PerVertexDesc desc;
+  GraphicsPipeline pipeline;
+  Buffer frame, bendFrame, branches, dummy;  // dummy: binding 8 when the model has no hierarchy
+  uint32_t branchCount = 0;
+  bool hierarchy = false;
+  gpu::LayerFrame layerFrame{};
+  gpu::BendFrame current{};
+  double time = 0.0;   // the baseline's own clock, s (advanced by CanopyFrame.dt)
+  uint64_t frames = 0;
+};
+
+// Checks PerVertexParams' ranges; the message names the field and its range.
+Status validatePerVertexParams(const PerVertexParams& params);
+// Checks a branch table and per-vertex hierarchy (parents before children, levels = parent's + 1
+// below BEND_LEVELS, unit finite axes, branch indices in range); `what` names the model.
+Status validateBendHierarchy(const std::vector<gpu::BendVertex>& bend, const std::vector<gpu::BendBranch>& branches,
+                             size_t vertexCount, const std::string& what);
+
+// Creates the pipeline and uploads the branch table (`branches` may be empty: the fallback).
+Status createPerVertex(Device& device, const LayeredVegetation& lv, const std::vector<gpu::BendBranch>& branches,
+                       const PerVertexDesc& desc, PerVertexAnimation* out);
+void destroyPerVertex(PerVertexAnimation& pv);
+
+// The bend frame for the wind and parameters at time t (the model's bounds give the fallback
+// trunk: the vertical through the bounds' centre, from their bottom).
+gpu::BendFrame makeBendFrame(const PerVertexParams& params, const WindParams& wind, const SimulationPlane& plane,
+                             const glm::vec3& boundsMin, const glm::vec3& boundsMax, float time, float previousTime);
+// Advances the clock by dt and fills this frame's constants (camera, light, bend frame).
+Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
+                        const SimulationPlane& plane, const CanopyCamera& camera, float dt);
+// "per-vertex: constants" and "per-vertex: draw" (into the host's colour and depth, and motion).
+Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::RenderGraph& graph,
+                          const CompositeTargets& targets);
+
+// The CPU twin of shaders/per_vertex_common.glsl's fetchChain.
+gpu::BendChain bendChainOf(const std::vector<gpu::BendBranch>& branches, uint32_t branch);
+
+}  // namespace canopy

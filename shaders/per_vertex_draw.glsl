@@ -1,0 +1,35 @@
+// The per-vertex wind baseline (seed 004, Habel IV-VI; docs/design.md "Per-vertex wind baseline"):
+// the whole mesh drawn every frame into the host's targets, each vertex bent through its branch
+// hierarchy (shared/bend.h), shaded by the layers' fragment shader.
+#define CANOPY_VERTEX
+#define PER_VERTEX_BINDING_BASE 6
+#include "layers_common.glsl"
+#include "per_vertex_common.glsl"
+
+#ifdef PER_VERTEX_MOTION
+// Object motion in pixels, this frame's position minus last frame's under this frame's camera (the
+// 2D method's convention: warp displacement now minus before).
+layout(location = 4) out vec2 vMotion;
+#endif
+
+void main() {
+  BendFrame bf = bendIn;
+  vec3 rest = vertexPosition();
+  BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
+  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) bv = bendVertex[gl_VertexIndex];
+  BendChain chain = fetchChain(bv.branch);
+  bool leaf = hasLeaf();
+  LayerLeafRoot lr = leaf ? leafRoot[inPositionLeaf.w] : LayerLeafRoot(rest, 0u);
+  vec3 n = layerDecodeNormal(inNormalOct);
+  vWorld = bendPosition(bf, chain, bv, leaf, lr.position, lr.leaf, rest, bf.time, n);
+  vNormal = n;
+  vUv = inUv;
+  vLeaf = leaf ? lr.leaf : LAYER_NO_LEAF;
+  gl_Position = f.viewProj * vec4(vWorld, 1.0);
+#ifdef PER_VERTEX_MOTION
+  vec3 n0 = n;
+  vec3 before = bendPosition(bf, chain, bv, leaf, lr.position, lr.leaf, rest, bf.previousTime, n0);
+  vec4 c0 = f.viewProj * vec4(before, 1.0);
+  vMotion = (gl_Position.xy / gl_Position.w - c0.xy / c0.w) * 0.5 * bf.targetSize;
+#endif
+}

@@ -1,0 +1,209 @@
+// The per-vertex wind baseline (seed 004, Habel sections IV-VI; docs/design.md "Per-vertex wind
+// baseline"): every vertex displaced each frame by hierarchical bending. Each vertex carries the
+// index of its innermost branch and Habel's vector w (its normalised coordinate along that branch
+// and, propagated down the hierarchy, the coordinate at which each ancestor carries it); each
+// branch bends as a beam whose rotation grows along it (the tip more flexible: tapered), driven by
+// spectral noise whose frequencies follow the wind. The same functions run in the vertex shader
+// (shaders/per_vertex.vert), in the probe kernel the tests read back, and on the CPU.
+#ifndef CANOPY_SHARED_BEND_H
+#define CANOPY_SHARED_BEND_H
+#include "interop.h"
+
+#define BEND_LEVELS 4                 // branch levels a vertex carries (trunk, branch, twig, level 3)
+#define BEND_NO_BRANCH 0xffffffffu    // no hierarchy: a trunk and a radial branch from the position (fallback)
+#define BEND_LEAF_ONLY 0xfffffffeu    // only the leaf level moves (grass blades; ground, rock: nothing)
+#define BEND_NO_PARENT 0xffffffffu
+
+// BendFrame.flags
+#define BEND_FLAG_HIERARCHY 1u  // the per-vertex BendVertex buffer is bound (else every vertex is BEND_NO_BRANCH)
+
+// What the two languages spell differently: an in-out parameter, the cross product, atan2.
+#ifdef __cplusplus
+#define BEND_INOUT(T) T&
+#define bendCross glm::cross
+#define bendAtan2 std::atan2
+#define bendTanh std::tanh
+#else
+#define BEND_INOUT(T) inout T
+#define bendCross cross
+#define bendAtan2 atan
+#define bendTanh tanh
+#endif
+
+CANOPY_NAMESPACE_BEGIN
+
+// Per vertex of the compact mesh (a buffer parallel to its vertices, read at gl_VertexIndex).
+struct BendVertex {
+  uint branch;  // innermost branch (index into the branch table), BEND_NO_BRANCH or BEND_LEAF_ONLY
+  uint w;       // Habel's w: 4 x unorm8, level k in bits 8k..8k+7 (levels past the chain's are 0)
+};
+CANOPY_SIZE_CHECK(BendVertex, 8)
+
+struct BendBranch {
+  vec3 origin;  // rest position of the branch's base, world
+  uint parent;  // BEND_NO_PARENT for a trunk (level 0)
+  vec3 axis;    // unit rest direction from the base to the tip
+  uint level;   // 0..BEND_LEVELS-1: the parent's + 1
+};
+CANOPY_SIZE_CHECK(BendBranch, 32)
+
+struct BendFrame {
+  vec4 wind;          // xyz: unit world direction the wind blows towards; w: mean speed S*b (domain units/s)
+  vec4 lateral;       // xyz: unit, across the wind (horizontal); w: lateral share of the sway
+  vec4 up;            // xyz: world up (fallback trunk axis); w: fallback trunk height H (world)
+  vec4 root;          // xyz: fallback trunk root; w: fallback crown radius R (world)
+  vec4 flexibility;   // levels 0..3: tip bend at the reference wind speed (drag: ~ speed^2), rad
+  vec4 frequency;     // levels 0..3: sway frequency at the reference wind speed, Hz
+  float leafFlexibility;  // the leaf level's (a leaf turning about its root)
+  float leafFrequency;
+  float referenceSpeed;   // wind speed at which the frequencies are the given ones, units/s
+  float maxAngle;         // bend saturation, rad
+  float strength;         // WindParams: speed(t) = strength * (baseline + modulation sin(2 pi frequency t))
+  float baseline;
+  float modulation;
+  float windFrequency;
+  float gust;             // relative amplitude of the spectral noise about the mean bend
+  float taper;            // exponent p: the rotation at coordinate x along a branch is tip * x^p
+  float time;             // seconds
+  float previousTime;     // last frame's time (motion vectors)
+  vec2 targetSize;        // pixels (motion vectors)
+  uint seed;
+  uint flags;             // BEND_FLAG_*
+};
+CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 8)
+
+// One rest vertex for the probe kernel (shaders/per_vertex_probe.comp; tests).
+#define BEND_NO_LEAF 0xffffffffu
+struct BendProbeVertex {
+  vec3 position;
+  uint leaf;      // model-wide leaf index, BEND_NO_LEAF for rigid parts
+  vec3 leafRoot;  // the leaf's root vertex (rest)
+  uint pad0;
+  vec3 normal;
+  uint pad1;
+};
+CANOPY_SIZE_CHECK(BendProbeVertex, 48)
+
+// A vertex's branch chain, trunk first (b[0]) to its innermost branch (b[count - 1]).
+struct BendChain {
+  BendBranch b[BEND_LEVELS];
+  uint id[BEND_LEVELS];
+  uint count;
+};
+
+CANOPY_INLINE uint bendHashU(uint x) {
+  x ^= x >> 16u;
+  x *= 0x7feb352du;
+  x ^= x >> 15u;
+  x *= 0x846ca68bu;
+  x ^= x >> 16u;
+  return x;
+}
+CANOPY_INLINE float bendHash(uint x) { return float(bendHashU(x) >> 8u) * (1.0f / 16777216.0f); }
+
+// Spectral noise of unit RMS (Habel VI: noise with the frequency distribution of observed sway, in
+// place of integrating the oscillators): four sinusoids at 0.5, 1, 1.9 and 3.3 times the sway
+// frequency f, amplitudes following a Kolmogorov spectrum S(f) ~ f^(-5/3) (amplitude ~ f^(-5/6)),
+// phases hashed from `key` so every branch has its own.
+CANOPY_INLINE float bendNoise(float t, float f, uint key) {
+  const float tau = 6.2831853f;
+  uint k = bendHashU(key) * 4u;
+  float s = 1.1680f * sin(tau * (0.5f * f * t + bendHash(k)));
+  s += 0.6554f * sin(tau * (1.0f * f * t + bendHash(k + 1u)));
+  s += 0.3842f * sin(tau * (1.9f * f * t + bendHash(k + 2u)));
+  s += 0.2424f * sin(tau * (3.3f * f * t + bendHash(k + 3u)));
+  return s;
+}
+
+// Wind speed at time t: the 2D method's boundary-wind profile (WindParams), without its gust
+// noise, which the spectral noise replaces.
+CANOPY_INLINE float bendWindSpeed(BendFrame f, float t) {
+  return f.strength * (f.baseline + f.modulation * sin(6.2831853f * f.windFrequency * t));
+}
+
+// The tip bend of one branch (or leaf) as a vector: its direction the way the branch leans, its
+// length the angle in radians. Drag grows with the square of the speed (the flexibility is the
+// bend at the reference speed); the noise frequencies
+// scale with the mean speed (a stronger wind sways faster); a lateral noise sways across the wind.
+CANOPY_INLINE vec3 bendTip(BendFrame f, float t, float flexibility, float frequency, uint key) {
+  float u = bendWindSpeed(f, t) / max(f.referenceSpeed, 1e-6f);
+  float drag = flexibility * u * abs(u);
+  float fr = frequency * (0.5f + 0.5f * abs(f.wind.w) / max(f.referenceSpeed, 1e-6f));
+  float along = drag * (1.0f + f.gust * bendNoise(t, fr, key * 2u + f.seed));
+  float across = abs(drag) * f.gust * f.lateral.w * bendNoise(t, fr, key * 2u + 1u + f.seed * 7919u);
+  vec3 b = along * vec3(f.wind) + across * vec3(f.lateral);
+  float a = sqrt(dot(b, b));
+  if (a <= 0.0f) return vec3(0.0f);
+  // Saturation: large winds lean a branch towards maxAngle, never past it.
+  return b * (f.maxAngle * bendTanh(a / f.maxAngle) / a);
+}
+
+// Rotation of v about the unit axis k by angle a, returned as the change v' - v (Rodrigues), so a
+// zero angle changes nothing, exactly.
+CANOPY_INLINE vec3 bendRotateDelta(vec3 v, vec3 k, float a) {
+  float c = cos(a), s = sin(a);
+  return v * (c - 1.0f) + bendCross(k, v) * s + k * (dot(k, v) * (1.0f - c));
+}
+
+// Rotates point p (and direction n) about the line through `pivot` so that `axis` leans towards
+// the tip-bend vector `tip` by |tip| * x^taper.
+CANOPY_INLINE void bendAbout(vec3 pivot, vec3 axis, vec3 tip, float x, float taper, BEND_INOUT(vec3) p, BEND_INOUT(vec3) n) {
+  float a = sqrt(dot(tip, tip));
+  if (a <= 0.0f || x <= 0.0f) return;
+  vec3 k = bendCross(axis, tip);
+  float kl = sqrt(dot(k, k));
+  if (kl <= 1e-6f * a) return;  // the branch points along the wind: no lean
+  k = k / kl;
+  float angle = a * pow(x, taper);
+  p = p + bendRotateDelta(p - pivot, k, angle);
+  n = n + bendRotateDelta(n, k, angle);
+}
+
+CANOPY_INLINE float bendW(uint w, uint level) { return float((w >> (8u * level)) & 255u) * (1.0f / 255.0f); }
+
+// The displaced position of rest point p (n: its normal, rotated alike) at time t. Innermost level
+// first, each in its parent's rest frame, so the composition is the hierarchy's: a twig leans about
+// its base, then the branch carrying it turns the twig with it as it bends at the twig's w, then the
+// trunk. `leafRoot` / `leaf`: the vertex's leaf (hasLeaf), which first turns about its root.
+CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool hasLeaf, vec3 leafRoot, uint leaf,
+                                vec3 p, float t, BEND_INOUT(vec3) n) {
+  vec3 up = vec3(f.up);
+  if (hasLeaf) {
+    vec3 tip = bendTip(f, t, f.leafFlexibility, f.leafFrequency, 0x9e3779b9u ^ leaf);
+    bendAbout(leafRoot, up, tip, 1.0f, 1.0f, p, n);
+  }
+  if (v.branch == BEND_LEAF_ONLY) return p;
+  if (v.branch == BEND_NO_BRANCH) {
+    // Fallback (a model without a hierarchy): a radial branch from the trunk axis at the height of
+    // the vertex's leaf root (its own position for rigid parts) out to it, w = distance / R, then
+    // the trunk, w = height / H. The radial branch's noise is shifted in time by a smooth function
+    // of its azimuth, so neighbouring parts sway together and nothing tears.
+    vec3 ref = hasLeaf ? leafRoot : p;
+    vec3 rel = ref - vec3(f.root);
+    float h = dot(rel, up);
+    vec3 radial = rel - h * up;
+    float r = sqrt(dot(radial, radial));
+    if (r > 1e-6f * max(f.root.w, 1e-6f)) {
+      vec3 dir = radial / r;
+      float az = bendAtan2(dot(dir, vec3(f.lateral)), dot(dir, vec3(f.wind)));
+      float shift = (0.6f * sin(az) + 0.4f * cos(2.0f * az)) / max(f.frequency.y, 1e-3f);
+      vec3 tip = bendTip(f, t + shift, f.flexibility.y, f.frequency.y, 1u);
+      bendAbout(vec3(f.root) + h * up, dir, tip, clamp(r / max(f.root.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
+    }
+    vec3 tip0 = bendTip(f, t, f.flexibility.x, f.frequency.x, 0u);
+    bendAbout(vec3(f.root), up, tip0, clamp(h / max(f.up.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
+    return p;
+  }
+  for (int i = int(chain.count) - 1; i >= 0; --i) {
+    BendBranch b = chain.b[i];
+    uint level = min(b.level, uint(BEND_LEVELS - 1));
+    float flex = level == 0u ? f.flexibility.x : level == 1u ? f.flexibility.y : level == 2u ? f.flexibility.z : f.flexibility.w;
+    float freq = level == 0u ? f.frequency.x : level == 1u ? f.frequency.y : level == 2u ? f.frequency.z : f.frequency.w;
+    vec3 tip = bendTip(f, t, flex, freq, chain.id[i] + 2u);
+    bendAbout(b.origin, b.axis, tip, bendW(v.w, level), f.taper, p, n);
+  }
+  return p;
+}
+
+CANOPY_NAMESPACE_END
+#endif

@@ -16,10 +16,18 @@ void main() {
   BendFrame bf = bendIn;
   vec3 rest = vertexPosition();
   BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
-  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) bv = bendVertex[gl_VertexIndex];
+  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) {
+    bv.branch = bendVertex[gl_VertexIndex].branch;
+    bv.w = bendVertex[gl_VertexIndex].w;
+  }
   BendChain chain = fetchChain(bv.branch);
   bool leaf = hasLeaf();
-  LayerLeafRoot lr = leaf ? leafRoot[inPositionLeaf.w] : LayerLeafRoot(rest, 0u);
+  // Field by field: a buffer struct and a constructed one are different SPIR-V types.
+  LayerLeafRoot lr = LayerLeafRoot(rest, 0u);
+  if (leaf) {
+    lr.position = leafRoot[inPositionLeaf.w].position;
+    lr.leaf = leafRoot[inPositionLeaf.w].leaf;
+  }
   vec3 n = layerDecodeNormal(inNormalOct);
   vWorld = bendPosition(bf, chain, bv, leaf, lr.position, lr.leaf, rest, bf.time, n);
   vNormal = n;

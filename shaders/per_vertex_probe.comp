@@ -16,7 +16,10 @@ void main() {
   BendProbeVertex v = probeIn[i];
   BendFrame bf = bendIn;
   BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
-  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) bv = bendVertex[i];
+  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) {
+    bv.branch = bendVertex[i].branch;
+    bv.w = bendVertex[i].w;
+  }
   vec3 n = v.normal;
   probeOut[i] = vec4(bendPosition(bf, fetchChain(bv.branch), bv, v.leaf != BEND_NO_LEAF, v.leafRoot, v.leaf,
                                   v.position, bf.time, n), 0.0);

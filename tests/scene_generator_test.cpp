@@ -196,3 +196,71 @@ TEST(SceneGenerator, WriterRefusesInconsistentModels) {
   EXPECT_FALSE(writeGlb("/tmp/canopy_never_written.glb", m).ok());
   EXPECT_FALSE(std::filesystem::exists("/tmp/canopy_never_written.glb"));
 }
+
+// The per-vertex baseline's hierarchy (SceneDesc::hierarchy; shared/bend.h): the same geometry,
+// a branch table in the L-system's bracket structure (parents first, each a level below its
+// parent, at most BEND_LEVELS deep), the wood on its branches with w growing along them, leaf cards
+// riding branches, grass blades and ground with the leaf level only.
+TEST(SceneGenerator, HierarchyFollowsTheLSystemBrackets) {
+  for (SceneKind kind : {SceneKind::Shrub, SceneKind::TreeCrown, SceneKind::GrassField, SceneKind::Field}) {
+    SCOPED_TRACE(sceneName(kind));
+    SceneDesc d;
+    d.kind = kind;
+    d.faces = 30000;
+    VegetationModel plain, m;
+    ASSERT_TRUE(generateScene(d, &plain).ok());
+    d.hierarchy = true;
+    ASSERT_TRUE(generateScene(d, &m).ok());
+    EXPECT_TRUE(plain.bend.empty() && plain.branches.empty());
+    ASSERT_EQ(m.positions, plain.positions) << "the hierarchy changes no geometry";
+    ASSERT_EQ(m.bend.size(), m.positions.size());
+    for (size_t i = 0; i < m.branches.size(); ++i) {
+      const gpu::BendBranch& b = m.branches[i];
+      ASSERT_LT(b.level, uint32_t(BEND_LEVELS));
+      if (b.parent == BEND_NO_PARENT) {
+        EXPECT_EQ(b.level, 0u);
+      } else {
+        ASSERT_LT(b.parent, i) << "parents come first";
+        EXPECT_EQ(b.level, m.branches[b.parent].level + 1);
+      }
+      EXPECT_NEAR(glm::length(b.axis), 1.0f, 1e-4f);
+    }
+    MaterialSplit split;
+    ASSERT_TRUE(splitMaterials(m, {}, &split).ok());
+    size_t onBranches = 0, leafOnly = 0;
+    struct Ends {
+      uint32_t minW = 256, maxW = 0;
+      float alongMin = 0, alongMax = 0;
+    };
+    std::map<uint32_t, Ends> ends;
+    for (size_t t = 0; t < m.triangleCount(); ++t) {
+      const bool rigid = split.role[m.triangleMaterial[t]] == MaterialRole::Rigid;
+      for (int k = 0; k < 3; ++k) {
+        const gpu::BendVertex& v = m.bend[m.indices[3 * t + k]];
+        if (v.branch == BEND_LEAF_ONLY) {
+          ++leafOnly;
+          continue;
+        }
+        ASSERT_LT(v.branch, m.branches.size());
+        ++onBranches;
+        // The wood of a branch lies along it: its w grows towards the tip.
+        if (rigid) {
+          const gpu::BendBranch& b = m.branches[v.branch];
+          const uint32_t w = (v.w >> (8 * b.level)) & 255u;
+          const float along = glm::dot(m.positions[m.indices[3 * t + k]] - b.origin, b.axis);
+          Ends& e = ends[v.branch];
+          if (w < e.minW) e.minW = w, e.alongMin = along;
+          if (w > e.maxW || (w == e.maxW && along > e.alongMax)) e.maxW = w, e.alongMax = along;
+        }
+      }
+    }
+    for (const auto& [branch, e] : ends)
+      if (e.maxW > e.minW + 64) EXPECT_GT(e.alongMax, e.alongMin) << "branch " << branch;
+    if (kind == SceneKind::GrassField) {
+      EXPECT_EQ(onBranches, 0u) << "grass has no branches";
+    } else {
+      EXPECT_GT(onBranches, leafOnly) << "plants: leaves and wood ride branches";
+      EXPECT_GE(m.branches.size(), 4u);
+    }
+  }
+}

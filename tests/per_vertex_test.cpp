@@ -1,0 +1,353 @@
+// The per-vertex wind baseline (seed 004, Habel IV-VI; render/per_vertex.h): the bend of every
+// vertex read back from the GPU (shaders/per_vertex_probe.comp runs the vertex shader's
+// bendPosition and chain walk) against the same header evaluated on the CPU; zero wind moves
+// nothing, exactly; the trunk's root never moves; displacement grows with the hierarchy level;
+// deterministic for a seed and a time; the fallback for models without a hierarchy; the mode
+// through the public API (images, switching back, reverse-Z) and its refusals. Validation and
+// synchronization validation are on (GpuTest).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "engine/pipeline.h"
+#include "engine/transfer.h"
+#include "render/leaf_roots.h"
+#include "render/material_split.h"
+#include "render/per_vertex.h"
+#include "tests/gpu_test.h"
+#include "tests/test_host.h"
+#include "tools/leaf_cloud.h"
+#include "tools/scene_generator.h"
+
+using namespace canopy;
+using canopy::test::GpuTest;
+
+namespace {
+
+VegetationModel treeWithHierarchy(uint64_t faces, SceneKind kind = SceneKind::TreeCrown) {
+  SceneDesc d;
+  d.kind = kind;
+  d.faces = faces;
+  d.hierarchy = true;
+  d.threads = 1;
+  VegetationModel m;
+  Status s = generateScene(d, &m);
+  EXPECT_TRUE(s.ok()) << s.message();
+  return m;
+}
+
+// The rest vertices as the probe reads them: position, normal, model-wide leaf and its root (the
+// leaf roots the layers compute).
+std::vector<gpu::BendProbeVertex> probeVertices(const VegetationModel& m) {
+  MaterialSplit split;
+  EXPECT_TRUE(splitMaterials(m, {}, &split).ok());
+  std::vector<uint8_t> foliage(m.triangleCount());
+  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
+  LeafRoots roots;
+  EXPECT_TRUE(computeLeafRoots(m, foliage, {}, &roots).ok());
+  std::vector<gpu::BendProbeVertex> v(m.positions.size());
+  for (size_t i = 0; i < v.size(); ++i) {
+    v[i].position = m.positions[i];
+    v[i].normal = m.normals[i];
+    v[i].leaf = roots.leafOfVertex[i] == kNoLeaf ? BEND_NO_LEAF : roots.leafOfVertex[i];
+    v[i].leafRoot = v[i].leaf == BEND_NO_LEAF ? m.positions[i] : m.positions[roots.leafRoot[v[i].leaf]];
+  }
+  return v;
+}
+
+gpu::BendFrame windFrame(const VegetationModel& m, float strength, float t, uint32_t seed = 1) {
+  PerVertexParams p;
+  p.seed = seed;
+  WindParams w;
+  w.strength = strength;
+  w.frequency = 0.5f;
+  w.modulation = 0.8f;
+  w.gust = 0.3f;
+  SimulationPlane plane;  // wind from the left blows towards +x
+  gpu::BendFrame f = makeBendFrame(p, w, plane, m.boundsMin, m.boundsMax, t, t);
+  f.flags = m.bend.empty() ? 0u : BEND_FLAG_HIERARCHY;
+  return f;
+}
+
+glm::vec3 cpuBend(const gpu::BendFrame& f, const VegetationModel& m, const gpu::BendProbeVertex& v, size_t i) {
+  const gpu::BendVertex bv = (f.flags & BEND_FLAG_HIERARCHY) ? m.bend[i] : gpu::BendVertex{BEND_NO_BRANCH, 0};
+  glm::vec3 n = v.normal;
+  return gpu::bendPosition(f, bendChainOf(m.branches, bv.branch), bv, v.leaf != BEND_NO_LEAF, v.leafRoot, v.leaf,
+                           v.position, f.time, n);
+}
+
+class PerVertexTest : public GpuTest {
+ protected:
+  // Runs the probe kernel over the model's vertices for frame `f`.
+  std::vector<glm::vec3> gpuBend(const VegetationModel& m, const std::vector<gpu::BendProbeVertex>& in,
+                                 const gpu::BendFrame& f) {
+    ComputePipeline pipe;
+    const VkDescriptorType sb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", {sb, sb, sb, sb, sb}, sizeof(uint32_t)}, &pipe);
+    EXPECT_TRUE(s.ok()) << s.message();
+    const VkBufferUsageFlags usage =
+        VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
+    Buffer frame, branches, bend, input, output;
+    const rg::State read = rg::stateOf(rg::Use::ComputeStorageRead), write = rg::stateOf(rg::Use::ComputeStorageWrite);
+    std::vector<gpu::BendBranch> table = m.branches;
+    if (table.empty()) table.push_back(gpu::BendBranch{});
+    std::vector<gpu::BendVertex> perVertex = m.bend;
+    if (perVertex.empty()) perVertex.push_back(gpu::BendVertex{});
+    auto make = [&](Buffer& b, const void* data, size_t bytes, const char* name) {
+      if (s.ok()) s = createBuffer(dev, bytes, usage, MemoryUsage::DeviceLocal, &b, name);
+      if (s.ok() && data) s = uploadBuffer(dev, b, data, bytes, read);
+    };
+    make(frame, &f, sizeof f, "probe frame");
+    make(branches, table.data(), table.size() * sizeof(gpu::BendBranch), "probe branches");
+    make(bend, perVertex.data(), perVertex.size() * sizeof(gpu::BendVertex), "probe bend");
+    make(input, in.data(), in.size() * sizeof(gpu::BendProbeVertex), "probe input");
+    make(output, nullptr, in.size() * sizeof(glm::vec4), "probe output");
+    std::vector<glm::vec4> out(in.size());
+    if (s.ok()) {
+      rg::RenderGraph g;
+      const auto id = g.importBuffer("probe output", output.size, {}, write);
+      const uint32_t count = uint32_t(in.size());
+      g.addPass("probe", [&](rg::PassContext& c) {
+         return dispatch(dev, c.cmd, pipe, count, 1, 1,
+                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(bend.buffer),
+                          bindBuffer(input.buffer), bindBuffer(c.buffer(id))},
+                         count);
+       }).write(id, rg::Use::ComputeStorageWrite);
+      s = g.compile();
+      if (s.ok()) s = g.realize(dev);
+      if (s.ok()) s = g.bindBuffer(id, output.buffer);
+      if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+      if (s.ok()) s = readbackBuffer(dev, output, out.data(), out.size() * sizeof(glm::vec4), write);
+    }
+    EXPECT_TRUE(s.ok()) << s.message();
+    for (Buffer* b : {&frame, &branches, &bend, &input, &output}) destroyBuffer(dev, *b);
+    destroyComputePipeline(dev, pipe);
+    std::vector<glm::vec3> p;
+    for (const glm::vec4& v : out) p.push_back(glm::vec3(v));
+    return p;
+  }
+};
+
+float extent(const VegetationModel& m) { return glm::length(m.boundsMax - m.boundsMin); }
+
+}  // namespace
+
+TEST_F(PerVertexTest, TheGpuBendMatchesTheCpuAndZeroWindMovesNothingExactly) {
+  const VegetationModel m = treeWithHierarchy(20000);
+  ASSERT_FALSE(m.branches.empty());
+  const std::vector<gpu::BendProbeVertex> in = probeVertices(m);
+  // With wind: the GPU's sin/cos/pow/tanh against the CPU's, within 1e-5 of the model's size.
+  for (float t : {0.7f, 2.3f}) {
+    const gpu::BendFrame f = windFrame(m, 2.0f, t);
+    const std::vector<glm::vec3> gpu = gpuBend(m, in, f);
+    ASSERT_EQ(gpu.size(), in.size());
+    float worst = 0.0f, moved = 0.0f;
+    for (size_t i = 0; i < in.size(); ++i) {
+      worst = std::max(worst, glm::length(gpu[i] - cpuBend(f, m, in[i], i)));
+      moved = std::max(moved, glm::length(gpu[i] - in[i].position));
+    }
+    EXPECT_LE(worst, 1e-5f * extent(m)) << "t = " << t;
+    EXPECT_GT(moved, 1e-2f * extent(m)) << "t = " << t << ": the wind moved nothing";
+  }
+  // Zero wind, and wind with no source side: every vertex where it was, bit for bit.
+  for (const auto& [strength, sides] : {std::pair<float, uint32_t>{0.0f, kWindFromLeft}, {3.0f, 0u}}) {
+    PerVertexParams p;
+    WindParams w;
+    w.strength = strength;
+    w.sides = sides;
+    w.gust = 1.0f;
+    gpu::BendFrame f = makeBendFrame(p, w, SimulationPlane{}, m.boundsMin, m.boundsMax, 1.7f, 1.7f);
+    f.flags = BEND_FLAG_HIERARCHY;
+    const std::vector<glm::vec3> gpu = gpuBend(m, in, f);
+    size_t differ = 0;
+    for (size_t i = 0; i < in.size(); ++i) differ += std::memcmp(&gpu[i], &in[i].position, sizeof(glm::vec3)) != 0;
+    EXPECT_EQ(differ, 0u) << "strength " << strength << ", sides " << sides;
+  }
+}
+
+TEST_F(PerVertexTest, TheTrunkRootNeverMovesAndTheBendIsDeterministic) {
+  const VegetationModel m = treeWithHierarchy(20000);
+  const std::vector<gpu::BendProbeVertex> in = probeVertices(m);
+  // The trunk's base ring: on branch 0 (the trunk) at w = 0.
+  std::vector<size_t> root;
+  for (size_t i = 0; i < m.bend.size(); ++i)
+    if (m.bend[i].branch == 0 && (m.bend[i].w & 255u) == 0 && in[i].leaf == BEND_NO_LEAF) root.push_back(i);
+  ASSERT_GE(root.size(), 3u);
+  std::vector<glm::vec3> first;
+  for (float t : {0.3f, 1.1f, 4.9f}) {
+    const std::vector<glm::vec3> gpu = gpuBend(m, in, windFrame(m, 6.0f, t));
+    for (size_t i : root) EXPECT_EQ(std::memcmp(&gpu[i], &in[i].position, sizeof(glm::vec3)), 0) << "vertex " << i << ", t " << t;
+    if (first.empty()) first = gpu;
+  }
+  // The same seed and time give the same bits; another seed other phases.
+  const std::vector<glm::vec3> again = gpuBend(m, in, windFrame(m, 6.0f, 0.3f));
+  EXPECT_EQ(std::memcmp(again.data(), first.data(), again.size() * sizeof(glm::vec3)), 0);
+  const std::vector<glm::vec3> other = gpuBend(m, in, windFrame(m, 6.0f, 0.3f, 7));
+  EXPECT_NE(std::memcmp(other.data(), first.data(), other.size() * sizeof(glm::vec3)), 0);
+}
+
+TEST_F(PerVertexTest, DisplacementGrowsWithTheHierarchyLevel) {
+  const VegetationModel m = treeWithHierarchy(20000);
+  const std::vector<gpu::BendProbeVertex> in = probeVertices(m);
+  // Mean displacement of the wood by its innermost branch's level, and of the leaves, over a few
+  // seconds of the same wind.
+  double sum[BEND_LEVELS + 1] = {}, count[BEND_LEVELS + 1] = {};
+  for (float t = 0.25f; t < 4.0f; t += 0.5f) {
+    const std::vector<glm::vec3> gpu = gpuBend(m, in, windFrame(m, 2.0f, t));
+    for (size_t i = 0; i < in.size(); ++i) {
+      if (m.bend[i].branch >= BEND_LEAF_ONLY) continue;
+      const uint32_t level = in[i].leaf != BEND_NO_LEAF ? BEND_LEVELS : m.branches[m.bend[i].branch].level;
+      sum[level] += glm::length(gpu[i] - in[i].position);
+      count[level] += 1;
+    }
+  }
+  double mean[BEND_LEVELS + 1];
+  for (uint32_t l = 0; l <= BEND_LEVELS; ++l) {
+    ASSERT_GT(count[l], 0) << "level " << l;
+    mean[l] = sum[l] / count[l];
+  }
+  for (uint32_t l = 1; l < BEND_LEVELS; ++l)
+    EXPECT_GT(mean[l], mean[l - 1]) << "wood of level " << l << " against level " << l - 1;
+  EXPECT_GT(mean[BEND_LEVELS], mean[1]) << "leaves against level-1 wood";
+}
+
+TEST_F(PerVertexTest, AModelWithoutHierarchyBendsFromItsTrunkAxis) {
+  const VegetationModel m = makeLeafCloud(6000, 3, true);
+  ASSERT_TRUE(m.bend.empty());
+  const std::vector<gpu::BendProbeVertex> in = probeVertices(m);
+  const gpu::BendFrame still = windFrame(m, 0.0f, 1.0f);
+  const std::vector<glm::vec3> rest = gpuBend(m, in, still);
+  for (size_t i = 0; i < in.size(); ++i) ASSERT_EQ(std::memcmp(&rest[i], &in[i].position, sizeof(glm::vec3)), 0) << i;
+  const gpu::BendFrame f = windFrame(m, 2.0f, 1.3f);
+  const std::vector<glm::vec3> gpu = gpuBend(m, in, f);
+  const float h = m.boundsMax.y - m.boundsMin.y;
+  double low = 0, high = 0, nLow = 0, nHigh = 0;
+  float worst = 0.0f;
+  for (size_t i = 0; i < in.size(); ++i) {
+    worst = std::max(worst, glm::length(gpu[i] - cpuBend(f, m, in[i], i)));
+    const float y = (in[i].position.y - m.boundsMin.y) / h;
+    const double d = glm::length(gpu[i] - in[i].position);
+    if (y < 0.2f) low += d, nLow += 1;
+    if (y > 0.8f) high += d, nHigh += 1;
+  }
+  EXPECT_LE(worst, 1e-5f * extent(m));
+  ASSERT_GT(nLow, 0);
+  ASSERT_GT(nHigh, 0);
+  EXPECT_GT(high / nHigh, 3.0 * low / nLow) << "the top of the crown sways more than its base";
+}
+
+namespace {
+
+struct Frames {
+  std::vector<std::vector<glm::vec4>> color;
+};
+
+// Fraction of pixels more than 2/255 apart.
+double differing(const std::vector<glm::vec4>& a, const std::vector<glm::vec4>& b) {
+  size_t n = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const glm::vec4 d = glm::abs(a[i] - b[i]);
+    n += std::max(std::max(d.x, d.y), d.z) > 2.0f / 255.0f;
+  }
+  return double(n) / double(a.size());
+}
+
+}  // namespace
+
+TEST_F(PerVertexTest, TheModeRendersThroughThePublicApiAndSwitchesBack) {
+  const VegetationModel m = treeWithHierarchy(8000);
+  uint64_t frame = 1;  // the device's frame numbers never decrease
+  for (bool reverse : {false, true}) {
+    SCOPED_TRACE(reverse ? "reverse-Z" : "standard depth");
+    test::Host host;
+    host.w = 96;
+    host.h = 72;
+    host.reverse = reverse;
+    ASSERT_TRUE(host.create(dev, 2).ok());
+    CanopyDesc desc;
+    desc.width = host.w;
+    desc.height = host.h;
+    desc.colorFormat = host.colorFormat;
+    desc.depthConvention = reverse ? DepthConvention::Reverse : DepthConvention::Standard;
+    desc.allowPerVertex = true;
+    desc.params.animation = AnimationMode::PerVertex;
+    desc.params.simulation.wind.strength = 0.0f;
+    CanopyContext* ctx = nullptr;
+    Status s = createCanopy(dev, m, desc, &ctx);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const LayerView view = orbitView(m.boundsMin, m.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 72.0f, 1.0f);
+    std::vector<glm::vec4> a, b, c;
+    std::vector<float> z;
+    auto run = [&](int frames, std::vector<glm::vec4>* out) {
+      for (int i = 0; i < frames && s.ok(); ++i) s = host.frame(frame++, {ctx}, view, 0.4f);
+      if (s.ok()) s = host.read(out, &z);
+      EXPECT_TRUE(s.ok()) << s.message();
+    };
+    run(1, &a);
+    run(3, &b);  // 1.2 s later, still no wind: the same image
+    EXPECT_EQ(differing(a, b), 0.0) << "zero wind moved the plant";
+    size_t drawn = 0;
+    for (const glm::vec4& p : a) drawn += glm::length(glm::vec3(p) - glm::vec3(test::kSky)) > 0.05f;
+    EXPECT_GT(drawn, a.size() / 20) << "the plant covers the frame";
+    CanopyParams p = canopyParams(ctx);
+    p.simulation.wind.strength = 3.0f;
+    ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+    run(2, &c);
+    EXPECT_GT(differing(a, c), 0.01) << "wind bends the plant";
+    EXPECT_EQ(canopyStats(ctx).layers.rebuilds, 0u) << "the baseline never slices layers";
+    // Back to the 2D method on the same context: it re-slices at once and animates.
+    p.animation = AnimationMode::Layers2D;
+    ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+    run(2, &c);
+    EXPECT_GE(canopyStats(ctx).layers.rebuilds, 1u);
+    host.destroy();
+    destroyCanopy(ctx);
+    waitIdle();
+  }
+}
+
+TEST_F(PerVertexTest, WhatTheModeNeedsIsRefusedWithTheReason) {
+  const VegetationModel m = treeWithHierarchy(4000);
+  CanopyDesc desc;
+  desc.width = 64;
+  desc.height = 48;
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, m, desc, &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.animation = AnimationMode::PerVertex;
+  s = setCanopyParams(ctx, p);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("allowPerVertex"), std::string::npos) << s.message();
+  destroyCanopy(ctx);
+  desc.allowPerVertex = true;
+  ASSERT_TRUE(createCanopy(dev, m, desc, &ctx).ok());
+  p = canopyParams(ctx);
+  p.perVertex.taper = 9.0f;
+  s = setCanopyParams(ctx, p);
+  EXPECT_NE(s.message().find("perVertex.taper"), std::string::npos) << s.message();
+  p = canopyParams(ctx);
+  p.perVertex.maxAngle = 0.0f;
+  s = setCanopyParams(ctx, p);
+  EXPECT_NE(s.message().find("perVertex.maxAngle"), std::string::npos) << s.message();
+  destroyCanopy(ctx);
+  // A hierarchy whose branch comes before its parent, or a vertex naming a missing branch.
+  VegetationModel bad = m;
+  bad.branches[1].parent = 5;
+  s = createCanopy(dev, bad, desc, &ctx);
+  EXPECT_EQ(s.code(), Result::InvalidModel);
+  EXPECT_NE(s.message().find("branch 1"), std::string::npos) << s.message();
+  bad = m;
+  bad.bend[10].branch = uint32_t(m.branches.size()) + 3;
+  s = createCanopy(dev, bad, desc, &ctx);
+  EXPECT_NE(s.message().find("vertex 10"), std::string::npos) << s.message();
+  // The baseline draws the whole mesh every frame: a budget that would stream it is refused.
+  const VegetationModel big = treeWithHierarchy(200000);
+  desc.deviceMemoryBudget = 8ull << 20;
+  s = createCanopy(dev, big, desc, &ctx);
+  EXPECT_FALSE(s.ok());
+  if (s.ok()) destroyCanopy(ctx);
+  EXPECT_NE(s.message().find("resident"), std::string::npos) << s.message();
+  waitIdle();
+}

@@ -43,5 +43,10 @@ int runTable1Bench(Device& dev, const Table1Options& options);
 // `spreadMaxFaces`), per face count.
 int runRebuildBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, float budgetMs,
                     int rebuilds, uint32_t width, uint32_t height, uint64_t spreadMaxFaces, uint64_t deviceMemoryBudget);
+
+// The 2D method against the per-vertex wind baseline (issue 17), same scene, context, resolution
+// and camera, per face count; `csvPath` (empty: none) for scripts/plot_bench.py --pervertex.
+int runPerVertexBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int frames,
+                      uint32_t width, uint32_t height, uint64_t deviceMemoryBudget, const std::string& csvPath);
 }
 }  // namespace canopy

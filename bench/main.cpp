@@ -6,6 +6,7 @@
 //                [--orbit DEG] [--pair-frames N] [--series] [--series-faces LIST] [--csv-dir DIR] [--json FILE]
 //   canopy-bench rebuild [--faces 80000,10000000] [--scene shrub] [--budget MS] [--rebuilds N] [--size WxH]
 //                [--spread-max-faces N] [--device-budget MIB]
+//   canopy-bench pervertex [--faces 80000,1000000,10000000] [--scene shrub] [--frames N] [--size WxH] [--csv FILE]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -31,6 +32,8 @@ static int usage(const char* why) {
                "                 NaN/Inf, RSS, device allocations, frame time (--frames default 100000)\n"
                "  rebuild        re-slicing: at once vs spread over frames (--budget MS, default 4), per face count;\n"
                "                 spread only up to --spread-max-faces (default 10000000)\n"
+               "  pervertex      the 2D method against the per-vertex wind baseline (Habel) on the same scene and\n"
+               "                 camera, per face count (default 80000,1000000,10000000), as ratios; --csv FILE\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -75,7 +78,8 @@ int main(int argc, char** argv) {
     return !out->empty();
   };
   uint32_t rebuildEvery = 100;
-  bool runRebuild = false;
+  bool runRebuild = false, runPerVertex = false;
+  std::string csvPath;
   float budgetMs = 4.0f;
   uint64_t spreadMaxFaces = 10000000;
   std::vector<uint64_t> faces = {80000, 10000000};
@@ -94,6 +98,12 @@ int main(int argc, char** argv) {
     else if (a == "soak") runSoak = true;
     else if (a == "table1") runTable1 = true;
     else if (a == "rebuild") runRebuild = true;
+    else if (a == "pervertex") runPerVertex = true;
+    else if (a == "--csv") {
+      const char* v = next();
+      if (!v) return usage("--csv needs a file name");
+      csvPath = v;
+    }
     else if (a == "--spread-max-faces") {
       uint32_t n = 0;
       if (!cli::parseUint(next(), 0, 100000000, &n)) return usage("--spread-max-faces needs an integer in [0, 100000000]");
@@ -197,7 +207,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex) runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
@@ -212,6 +222,10 @@ int main(int argc, char** argv) {
   if (rc == 0 && runRebuild)
     rc = bench::runRebuildBench(dev, faces, scene.empty() ? "shrub" : scene, budgetMs, int(rebuilds),
                                 t1.width, t1.height, spreadMaxFaces, t1.deviceMemoryBudget);
+  if (rc == 0 && runPerVertex)
+    rc = bench::runPerVertexBench(dev, facesGiven ? faces : std::vector<uint64_t>{80000, 1000000, 10000000},
+                                  scene.empty() ? "shrub" : scene, frames ? frames : 24, t1.width, t1.height,
+                                  t1.deviceMemoryBudget, csvPath);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

@@ -5,7 +5,12 @@ Debian's python3-matplotlib (apt-get install python3-matplotlib).
     /usr/bin/python3 scripts/plot_bench.py DIR OUT_PREFIX [TITLE]
 
 writes OUT_PREFIX_faces.png, OUT_PREFIX_layers.png and OUT_PREFIX_resolution.png: the whole-frame
-median (line) and p95 (shaded up to it) against face count, layer count and pixel count."""
+median (line) and p95 (shaded up to it) against face count, layer count and pixel count.
+
+    /usr/bin/python3 scripts/plot_bench.py --pervertex CSV OUT_PNG [TITLE]
+
+draws canopy-bench pervertex's CSV (--csv): the 2D method (still and turning camera) and the
+per-vertex baseline against face count, and the baseline / 2D ratios."""
 import csv
 import sys
 
@@ -21,7 +26,46 @@ SERIES = {
 }
 
 
+def plot_pervertex(path, out, title):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    faces = [float(r["faces"]) for r in rows]
+    fig, (ax, rx) = plt.subplots(1, 2, figsize=(9.0, 3.6), dpi=100)
+    for key, label in (("2d_still", "2D method, still camera"), ("2d_turning", "2D method, camera turning (re-slice every frame)"),
+                       ("per_vertex", "per-vertex baseline (Habel)")):
+        med = [float(r[key + "_ms"]) for r in rows]
+        p95 = [float(r[key + "_p95"]) for r in rows]
+        ax.plot(faces, med, marker="o", label=label)
+        ax.fill_between(faces, med, p95, alpha=0.2)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("faces (log scale)")
+    ax.set_ylabel("whole frame, ms (wall, log scale)")
+    ax.set_title("%s: frame vs faces" % title, fontsize=9)
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize=7)
+    still = [float(r["per_vertex_ms"]) / float(r["2d_still_ms"]) for r in rows]
+    turning = [float(r["per_vertex_ms"]) / float(r["2d_turning_ms"]) for r in rows]
+    rx.plot(faces, still, marker="o", label="per-vertex / 2D still")
+    rx.plot(faces, turning, marker="s", label="per-vertex / 2D turning")
+    for xi, yi in zip(faces, still):
+        rx.annotate("%.1fx" % yi, (xi, yi), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=7)
+    rx.axhline(1.0, color="grey", lw=0.8)
+    rx.set_xscale("log")
+    rx.set_xlabel("faces (log scale)")
+    rx.set_ylabel("baseline / 2D (> 1: the 2D method is cheaper)")
+    rx.set_ylim(bottom=0)
+    rx.grid(True, alpha=0.3)
+    rx.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out)
+    print("wrote", out)
+
+
 def main():
+    if len(sys.argv) >= 4 and sys.argv[1] == "--pervertex":
+        plot_pervertex(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "canopy-bench pervertex")
+        return
     if len(sys.argv) < 3:
         print(__doc__)
         sys.exit(2)

@@ -91,6 +91,15 @@ std::vector<Field> fields() {
       {"debugVelocityScale", [](CanopyParams& p, float f, uint32_t u) { p.composite.debugVelocityScale = f, p.composite.skipEmptyTiles = u & 1; }},
       {"plane", [](CanopyParams& p, float f, uint32_t) { p.customPlane = true, p.plane.tileSize = f; }},
       {"plane", [](CanopyParams& p, float f, uint32_t) { p.customPlane = true, p.plane.right.x = f; }},
+      {"animation", [](CanopyParams& p, float, uint32_t u) { p.animation = AnimationMode(u); }},
+      {"perVertex.flexibility", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.flexibility[u % 4] = f; }},
+      {"perVertex.frequency", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.frequency[u % 4] = f; }},
+      {"perVertex.leafFlexibility", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.leafFlexibility = f; }},
+      {"perVertex.leafFrequency", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.leafFrequency = f; }},
+      {"perVertex.referenceSpeed", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.referenceSpeed = f; }},
+      {"perVertex.lateral", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.lateral = f; }},
+      {"perVertex.maxAngle", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.maxAngle = f; }},
+      {"perVertex.taper", [](CanopyParams& p, float f, uint32_t u) { p.animation = AnimationMode(u & 1), p.perVertex.taper = f, p.perVertex.seed = u; }},
   };
 }
 
@@ -120,6 +129,7 @@ TEST_F(ParamFuzzTest, HostileValuesAreRefusedNamingTheFieldOrAppliedAndFramesSta
   desc.colorFormat = host.colorFormat;  // RGBA16F: a NaN would survive into the readback
   desc.depthFormat = host.depthFormat;
   desc.maxLayers = 8;
+  desc.allowPerVertex = true;  // the baseline's parameters and mode switches are fuzzed too
   CanopyContext* ctx = nullptr;
   Status made = createCanopy(dev, model, desc, &ctx);
   ASSERT_TRUE(made.ok()) << made.message();

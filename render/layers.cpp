@@ -605,7 +605,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 // Binds the mesh and draws its foliage or rigid chunks with `pipe` (`parts`: only those parts of
 // chunks; null: every chunk whole); the push constants say how the vertex shader routes triangles
 // (passKind, targetLayer).
-// `perVertex`: the per-vertex baseline's frame block (binding 0) and its three bindings after the
+// `perVertex`: the per-vertex baseline's frame block (binding 0) and its four bindings after the
 // six of the layers (render/per_vertex.cpp).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
                      uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
@@ -656,7 +656,8 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     if (perVertex)
       CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
                               {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
-                               bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices)},
+                               bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
+                               bindBuffer(perVertex->tips)},
                               push));
     else
       CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));

@@ -240,6 +240,7 @@ struct PerVertexBindings {
   VkBuffer bendFrame = VK_NULL_HANDLE;     // gpu::BendFrame (binding 6)
   VkBuffer branches = VK_NULL_HANDLE;      // gpu::BendBranch table (binding 7)
   VkBuffer bendVertices = VK_NULL_HANDLE;  // gpu::BendVertex per compact-mesh vertex (binding 8)
+  VkBuffer tips = VK_NULL_HANDLE;          // the motion table (binding 9)
 };
 // Draws every chunk of the (resident) mesh, foliage then rigid, with `pipe` inside the caller's
 // rendering: the per-vertex baseline's frame.

@@ -1,5 +1,6 @@
 #include "render/per_vertex.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -132,12 +133,12 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
                          "every frame and needs it resident");
   const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
   GraphicsPipelineDesc p;
-  // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's three.
+  // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's four.
   p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                 VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                 VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                 VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
+                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
   p.pushConstantSize = sizeof(gpu::LayerDrawPush);
   p.vertexStride = sizeof(gpu::LayerVertex);
   p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0}, {1, VK_FORMAT_R16G16_SNORM, 8}, {2, VK_FORMAT_R16G16_SFLOAT, 12}};
@@ -154,6 +155,12 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), usage, MemoryUsage::DeviceLocal, &pv.frame, "per-vertex: frame"));
   CANOPY_TRY(createBuffer(d, sizeof(gpu::BendFrame), usage, MemoryUsage::DeviceLocal, &pv.bendFrame, "per-vertex: bend frame"));
   pv.branchCount = uint32_t(branches.size());
+  pv.leafCount = lv.leafCount;
+  const VkDescriptorType sb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  CANOPY_TRY(createComputePipeline(d, {"per_vertex_tips.comp", {sb, sb, sb}, 0}, &pv.tipsPipeline));
+  const VkDeviceSize tipBytes = (uint64_t(pv.branchCount) + pv.leafCount) * sizeof(glm::vec3) * (motion ? 2 : 1);
+  CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(tipBytes, 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                          MemoryUsage::DeviceLocal, &pv.tips, "per-vertex: motion table"));
   const VkDeviceSize branchBytes = std::max<VkDeviceSize>(branches.size() * sizeof(gpu::BendBranch), sizeof(gpu::BendBranch));
   CANOPY_TRY(createBuffer(d, branchBytes, usage, MemoryUsage::DeviceLocal, &pv.branches, "per-vertex: branches"));
   std::vector<gpu::BendBranch> table = branches;
@@ -171,7 +178,8 @@ void destroyPerVertex(PerVertexAnimation& pv) {
   if (!pv.device) return;
   Device& d = *pv.device;
   destroyGraphicsPipeline(d, pv.pipeline);
-  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy}) destroyBuffer(d, *b);
+  destroyComputePipeline(d, pv.tipsPipeline);
+  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy, &pv.tips}) destroyBuffer(d, *b);
   pv = PerVertexAnimation{};
 }
 
@@ -192,7 +200,10 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.current = makeBendFrame(params.perVertex, params.simulation.wind, plane, lv.boundsMin, lv.boundsMax, float(pv.time),
                              float(pv.frames > 0 ? before : pv.time));
   pv.current.targetSize = glm::vec2(float(pv.desc.width), float(pv.desc.height));
-  pv.current.flags = pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u;
+  pv.current.flags = (pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u) |
+                     (pv.desc.motionFormat != VK_FORMAT_UNDEFINED ? BEND_FLAG_PREVIOUS : 0u);
+  pv.current.branchCount = pv.branchCount;
+  pv.current.tipCount = pv.branchCount + pv.leafCount;
   pv.frames++;
   return Status();
 }
@@ -201,6 +212,8 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   if (!pv.device) return Status::error("per-vertex baseline: not created (CanopyDesc.allowPerVertex)");
   const auto frame = g.importBuffer("per-vertex: frame", pv.frame.size, kFrameRead, kFrameRead);
   const auto bendFrame = g.importBuffer("per-vertex: bend frame", pv.bendFrame.size, kFrameRead, kFrameRead);
+  const rg::State tipRest = rg::stateOf(rg::Use::VertexStorageRead);
+  const auto tips = g.importBuffer("per-vertex: motion table", pv.tips.size, tipRest, tipRest);
   const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
                   vs = rg::stateOf(rg::Use::VertexStorageRead);
   const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
@@ -214,6 +227,15 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
    })
       .write(frame, rg::Use::TransferDst)
       .write(bendFrame, rg::Use::TransferDst);
+  g.addPass("per-vertex: branch motion", [p](rg::PassContext& c) {
+     const uint32_t n = std::min<uint32_t>(p->current.tipCount, 64u * 4096u);  // the shader strides over the rest
+     if (n == 0) return Status();
+     return dispatch(*c.device, c.cmd, p->tipsPipeline, n, 1, 1,
+                     {bindBuffer(p->bendFrame.buffer), bindBuffer(p->branches.buffer), bindBuffer(p->tips.buffer)},
+                     nullptr, 0);
+   })
+      .read(bendFrame, rg::Use::ComputeStorageRead)
+      .write(tips, rg::Use::ComputeStorageWrite);
   const bool motion = pv.desc.motionFormat != VK_FORMAT_UNDEFINED;
   LayeredVegetation* l = &lv;
   auto draw = g.addPass("per-vertex: draw", [p, l, t, motion](rg::PassContext& x) {
@@ -244,12 +266,14 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
     b.bendFrame = p->bendFrame.buffer;
     b.branches = p->branches.buffer;
     b.bendVertices = p->hierarchy ? l->bendVertices.buffer : p->dummy.buffer;
+    b.tips = p->tips.buffer;
     Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b);
     x.device->cmdEndRendering(x.cmd);
     return s;
   });
   draw.access(frame, kFrameRead)
       .read(bendFrame, rg::Use::VertexStorageRead)
+      .read(tips, rg::Use::VertexStorageRead)
       .read(vertices, rg::Use::VertexBuffer)
       .read(indices, rg::Use::IndexBuffer)
       .read(leafRoots, rg::Use::VertexStorageRead)
@@ -258,6 +282,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   if (motion) draw.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   CANOPY_TRY(g.bindBuffer(frame, pv.frame.buffer));
   CANOPY_TRY(g.bindBuffer(bendFrame, pv.bendFrame.buffer));
+  CANOPY_TRY(g.bindBuffer(tips, pv.tips.buffer));
   CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
   CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
   CANOPY_TRY(g.bindBuffer(leafRoots, lv.leafRoots.buffer));

@@ -7,6 +7,7 @@
 
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
+#include "engine/pipeline.h"
 #include "engine/render_graph.h"
 #include "render/composite.h"
 #include <canopy/canopy.h>
@@ -26,8 +27,10 @@ struct PerVertexAnimation {
   Device* device = nullptr;
   PerVertexDesc desc;
   GraphicsPipeline pipeline;
+  ComputePipeline tipsPipeline;              // shaders/per_vertex_tips.comp: the motion table
   Buffer frame, bendFrame, branches, dummy;  // dummy: binding 8 when the model has no hierarchy
-  uint32_t branchCount = 0;
+  Buffer tips;                               // the motion table: a vec3 per branch and leaf (twice with motion)
+  uint32_t branchCount = 0, leafCount = 0;
   bool hierarchy = false;
   gpu::LayerFrame layerFrame{};
   gpu::BendFrame current{};
@@ -54,7 +57,8 @@ gpu::BendFrame makeBendFrame(const PerVertexParams& params, const WindParams& wi
 // Advances the clock by dt and fills this frame's constants (camera, light, bend frame).
 Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
                         const SimulationPlane& plane, const CanopyCamera& camera, float dt);
-// "per-vertex: constants" and "per-vertex: draw" (into the host's colour and depth, and motion).
+// "per-vertex: constants", "per-vertex: branch motion" (the motion table) and "per-vertex: draw"
+// (into the host's colour and depth, and motion).
 Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::RenderGraph& graph,
                           const CompositeTargets& targets);
 

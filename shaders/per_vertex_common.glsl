@@ -1,11 +1,13 @@
 // The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the six layer
-// bindings of layers_common.glsl): the bend frame, the branch table and the per-vertex branch
-// index and w (shared/bend.h), and the walk from a vertex's branch up to its trunk.
+// bindings of layers_common.glsl): the bend frame, the branch table, the per-vertex branch index
+// and w, and the motion table of tip bends (shared/bend.h); the walk from a vertex's branch up to
+// its trunk and the gathering of its tips.
 #include "shared/bend.h"
 
 layout(binding = PER_VERTEX_BINDING_BASE, scalar) readonly buffer BendFrameBuf { BendFrame bendIn; };
 layout(binding = PER_VERTEX_BINDING_BASE + 1, scalar) readonly buffer BranchBuf { BendBranch branches[]; };
 layout(binding = PER_VERTEX_BINDING_BASE + 2, scalar) readonly buffer BendVertexBuf { BendVertex bendVertex[]; };
+layout(binding = PER_VERTEX_BINDING_BASE + 3, scalar) readonly buffer TipBuf { vec3 tipTable[]; };
 
 // The chain of `branch`, trunk first (render/per_vertex.cpp's bendChainOf is the CPU twin).
 BendChain fetchChain(uint branch) {
@@ -21,4 +23,14 @@ BendChain fetchChain(uint branch) {
   }
   c.count = n;
   return c;
+}
+
+// The tips of a vertex's leaf and chain from the motion table; `set` 0: this frame's, 1: the
+// previous frame's (BEND_FLAG_PREVIOUS).
+BendTips fetchTips(BendFrame f, BendChain c, bool hasLeaf, uint leaf, uint set) {
+  uint base = set * f.tipCount;
+  BendTips t;
+  t.leaf = hasLeaf ? tipTable[base + f.branchCount + leaf] : vec3(0.0);
+  for (uint i = 0u; i < BEND_LEVELS; ++i) t.level[i] = i < c.count ? tipTable[base + c.id[i]] : vec3(0.0);
+  return t;
 }

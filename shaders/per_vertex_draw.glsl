@@ -29,14 +29,15 @@ void main() {
     lr.leaf = leafRoot[inPositionLeaf.w].leaf;
   }
   vec3 n = layerDecodeNormal(inNormalOct);
-  vWorld = bendPosition(bf, chain, bv, leaf, lr.position, lr.leaf, rest, bf.time, n);
+  vWorld = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, 0u), bv, leaf, lr.position, rest, bf.time, n);
   vNormal = n;
   vUv = inUv;
   vLeaf = leaf ? lr.leaf : LAYER_NO_LEAF;
   gl_Position = f.viewProj * vec4(vWorld, 1.0);
 #ifdef PER_VERTEX_MOTION
   vec3 n0 = n;
-  vec3 before = bendPosition(bf, chain, bv, leaf, lr.position, lr.leaf, rest, bf.previousTime, n0);
+  vec3 before = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, 1u), bv, leaf, lr.position, rest,
+                          bf.previousTime, n0);
   vec4 c0 = f.viewProj * vec4(before, 1.0);
   vMotion = (gl_Position.xy / gl_Position.w - c0.xy / c0.w) * 0.5 * bf.targetSize;
 #endif

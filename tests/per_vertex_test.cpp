@@ -1,6 +1,7 @@
 // The per-vertex wind baseline (seed 004, Habel IV-VI; render/per_vertex.h): the bend of every
-// vertex read back from the GPU (shaders/per_vertex_probe.comp runs the vertex shader's
-// bendPosition and chain walk) against the same header evaluated on the CPU; zero wind moves
+// vertex read back from the GPU (shaders/per_vertex_tips.comp writes the motion table, then
+// shaders/per_vertex_probe.comp runs the vertex shader's chain walk and bendApply) against the same
+// header evaluated on the CPU (bendPosition: the tips synthesised in place); zero wind moves
 // nothing, exactly; the trunk's root never moves; displacement grows with the hierarchy level;
 // deterministic for a seed and a time; the fallback for models without a hierarchy; the mode
 // through the public API (images, switching back, reverse-Z) and its refusals. Validation and
@@ -9,6 +10,8 @@
 
 #include <cmath>
 #include <cstring>
+
+#include <glm/gtc/packing.hpp>
 
 #include "engine/pipeline.h"
 #include "engine/transfer.h"
@@ -38,14 +41,15 @@ VegetationModel treeWithHierarchy(uint64_t faces, SceneKind kind = SceneKind::Tr
 }
 
 // The rest vertices as the probe reads them: position, normal, model-wide leaf and its root (the
-// leaf roots the layers compute).
-std::vector<gpu::BendProbeVertex> probeVertices(const VegetationModel& m) {
+// leaf roots the layers compute). `leaves`: how many leaves the model has.
+std::vector<gpu::BendProbeVertex> probeVertices(const VegetationModel& m, uint32_t* leaves = nullptr) {
   MaterialSplit split;
   EXPECT_TRUE(splitMaterials(m, {}, &split).ok());
   std::vector<uint8_t> foliage(m.triangleCount());
   for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
   LeafRoots roots;
   EXPECT_TRUE(computeLeafRoots(m, foliage, {}, &roots).ok());
+  if (leaves) *leaves = roots.leafCount();
   std::vector<gpu::BendProbeVertex> v(m.positions.size());
   for (size_t i = 0; i < v.size(); ++i) {
     v[i].position = m.positions[i];
@@ -79,16 +83,24 @@ glm::vec3 cpuBend(const gpu::BendFrame& f, const VegetationModel& m, const gpu::
 
 class PerVertexTest : public GpuTest {
  protected:
-  // Runs the probe kernel over the model's vertices for frame `f`.
+  // Runs the motion kernel (the table of tip bends) and then the probe kernel (the vertex shader's
+  // bend from the table) over the model's vertices for frame `frame`.
   std::vector<glm::vec3> gpuBend(const VegetationModel& m, const std::vector<gpu::BendProbeVertex>& in,
-                                 const gpu::BendFrame& f) {
-    ComputePipeline pipe;
+                                 const gpu::BendFrame& given) {
+    uint32_t leaves = 0;
+    for (const gpu::BendProbeVertex& v : in)
+      if (v.leaf != BEND_NO_LEAF) leaves = std::max(leaves, v.leaf + 1);
+    gpu::BendFrame f = given;
+    f.branchCount = uint32_t(m.branches.size());
+    f.tipCount = f.branchCount + leaves;
+    ComputePipeline pipe, tipsPipe;
     const VkDescriptorType sb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", {sb, sb, sb, sb, sb}, sizeof(uint32_t)}, &pipe);
+    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", {sb, sb, sb, sb, sb, sb}, sizeof(uint32_t)}, &pipe);
+    if (s.ok()) s = createComputePipeline(dev, {"per_vertex_tips.comp", {sb, sb, sb}, 0}, &tipsPipe);
     EXPECT_TRUE(s.ok()) << s.message();
     const VkBufferUsageFlags usage =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
-    Buffer frame, branches, bend, input, output;
+    Buffer frame, branches, bend, input, output, tips;
     const rg::State read = rg::stateOf(rg::Use::ComputeStorageRead), write = rg::stateOf(rg::Use::ComputeStorageWrite);
     std::vector<gpu::BendBranch> table = m.branches;
     if (table.empty()) table.push_back(gpu::BendBranch{});
@@ -103,26 +115,36 @@ class PerVertexTest : public GpuTest {
     make(bend, perVertex.data(), perVertex.size() * sizeof(gpu::BendVertex), "probe bend");
     make(input, in.data(), in.size() * sizeof(gpu::BendProbeVertex), "probe input");
     make(output, nullptr, in.size() * sizeof(glm::vec4), "probe output");
+    make(tips, nullptr, std::max<size_t>(f.tipCount, 1) * sizeof(glm::vec3), "probe motion table");
     std::vector<glm::vec4> out(in.size());
     if (s.ok()) {
       rg::RenderGraph g;
       const auto id = g.importBuffer("probe output", output.size, {}, write);
+      const auto table = g.importBuffer("probe motion table", tips.size, {}, read);
       const uint32_t count = uint32_t(in.size());
+      g.addPass("motion table", [&](rg::PassContext& c) {
+         return dispatch(dev, c.cmd, tipsPipe, f.tipCount, 1, 1,
+                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(c.buffer(table))}, nullptr, 0);
+       }).write(table, rg::Use::ComputeStorageWrite);
       g.addPass("probe", [&](rg::PassContext& c) {
          return dispatch(dev, c.cmd, pipe, count, 1, 1,
                          {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(bend.buffer),
-                          bindBuffer(input.buffer), bindBuffer(c.buffer(id))},
+                          bindBuffer(c.buffer(table)), bindBuffer(input.buffer), bindBuffer(c.buffer(id))},
                          count);
-       }).write(id, rg::Use::ComputeStorageWrite);
+       })
+          .read(table, rg::Use::ComputeStorageRead)
+          .write(id, rg::Use::ComputeStorageWrite);
       s = g.compile();
       if (s.ok()) s = g.realize(dev);
       if (s.ok()) s = g.bindBuffer(id, output.buffer);
+      if (s.ok()) s = g.bindBuffer(table, tips.buffer);
       if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
       if (s.ok()) s = readbackBuffer(dev, output, out.data(), out.size() * sizeof(glm::vec4), write);
     }
     EXPECT_TRUE(s.ok()) << s.message();
-    for (Buffer* b : {&frame, &branches, &bend, &input, &output}) destroyBuffer(dev, *b);
+    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips}) destroyBuffer(dev, *b);
     destroyComputePipeline(dev, pipe);
+    destroyComputePipeline(dev, tipsPipe);
     std::vector<glm::vec3> p;
     for (const glm::vec4& v : out) p.push_back(glm::vec3(v));
     return p;
@@ -350,4 +372,98 @@ TEST_F(PerVertexTest, WhatTheModeNeedsIsRefusedWithTheReason) {
   if (s.ok()) destroyCanopy(ctx);
   EXPECT_NE(s.message().find("resident"), std::string::npos) << s.message();
   waitIdle();
+}
+
+// With a motion target (CanopyDesc.motionFormat) the baseline also bends at last frame's time and
+// writes the difference in pixels: zero with no wind, non-zero and finite with wind.
+TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
+  const VegetationModel m = treeWithHierarchy(6000);
+  const uint32_t w = 80, h = 60;
+  Image color, depth, motion;
+  ImageDesc c;
+  c.width = w;
+  c.height = h;
+  c.format = VK_FORMAT_R16G16B16A16_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  ASSERT_TRUE(createImage(dev, c, &color, "host colour").ok());
+  c.format = VK_FORMAT_R16G16_SFLOAT;
+  ASSERT_TRUE(createImage(dev, c, &motion, "host motion").ok());
+  c.format = VK_FORMAT_D32_SFLOAT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  ASSERT_TRUE(createImage(dev, c, &depth, "host depth").ok());
+  CanopyDesc desc;
+  desc.width = w;
+  desc.height = h;
+  desc.colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+  desc.motionFormat = VK_FORMAT_R16G16_SFLOAT;
+  desc.allowPerVertex = true;
+  desc.params.animation = AnimationMode::PerVertex;
+  desc.params.simulation.wind.strength = 0.0f;
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, m, desc, &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  const LayerView view = orbitView(m.boundsMin, m.boundsMax, 20.0f, 10.0f, 40.0f, float(w) / float(h), 1.0f);
+  const rg::State colorRW = rg::stateOf(rg::Use::ColorAttachmentReadWrite), depthW = rg::stateOf(rg::Use::DepthAttachmentWrite),
+                  src = rg::stateOf(rg::Use::TransferSrc);
+  uint64_t number = 0;
+  // One frame: the host clears its three images (its own graph), then Canopy; the largest motion.
+  auto frame = [&](float* largest) {
+    rg::RenderGraph g;
+    const rg::State before = number == 0 ? rg::State{} : src;
+    const auto ci = g.importImage("colour", descOf(color), before, colorRW);
+    const auto mi = g.importImage("motion", descOf(motion), before, colorRW);
+    const auto di = g.importImage("depth", descOf(depth), number == 0 ? rg::State{} : depthW, depthW);
+    g.addPass("host clear", [&](rg::PassContext& x) {
+       VkClearColorValue cv{};
+       const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+       vkCmdClearColorImage(x.cmd, x.image(ci).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+       vkCmdClearColorImage(x.cmd, x.image(mi).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
+       VkClearDepthStencilValue dv{1.0f, 0};
+       vkCmdClearDepthStencilImage(x.cmd, x.image(di).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+       return Status();
+     })
+        .write(ci, rg::Use::TransferDst)
+        .write(mi, rg::Use::TransferDst)
+        .write(di, rg::Use::TransferDst);
+    s = g.bindImage(ci, color);
+    if (s.ok()) s = g.bindImage(mi, motion);
+    if (s.ok()) s = g.bindImage(di, depth);
+    if (s.ok()) s = g.compile();
+    if (s.ok()) s = g.realize(dev);
+    CanopyFrameInputs in;
+    in.frame = makeCanopyFrame(view, 0.1f, ++number);
+    in.color = {color.image, color.view, colorRW, src};
+    in.motion = {motion.image, motion.view, colorRW, src};
+    in.depth = {depth.image, depth.view, depthW, depthW};
+    if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) -> Status {
+      CANOPY_TRY(g.record(cmd));
+      return recordCanopy(ctx, cmd, in);
+    });
+    g.release(dev);
+    std::vector<uint32_t> px(size_t(w) * h);
+    if (s.ok()) s = readbackImage(dev, motion, 0, 4, px.data(), src);
+    ASSERT_TRUE(s.ok()) << s.message();
+    *largest = 0.0f;
+    for (uint32_t v : px) {
+      const glm::vec2 mv = glm::unpackHalf2x16(v);
+      ASSERT_TRUE(std::isfinite(mv.x) && std::isfinite(mv.y));
+      *largest = std::max(*largest, glm::length(mv));
+    }
+  };
+  float still = -1.0f, windy = -1.0f;
+  frame(&still);
+  frame(&still);
+  EXPECT_EQ(still, 0.0f) << "no wind, no motion";
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 4.0f;
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  frame(&windy);
+  frame(&windy);
+  EXPECT_GT(windy, 0.05f) << "the bend moves pixels between frames";
+  EXPECT_LT(windy, float(w)) << "and by less than the frame";
+  destroyCanopy(ctx);
+  waitIdle();
+  destroyImage(dev, color);
+  destroyImage(dev, depth);
+  destroyImage(dev, motion);
 }

@@ -16,6 +16,7 @@
 
 // BendFrame.flags
 #define BEND_FLAG_HIERARCHY 1u  // the per-vertex BendVertex buffer is bound (else every vertex is BEND_NO_BRANCH)
+#define BEND_FLAG_PREVIOUS 2u   // the motion table also holds last frame's tips (motion vectors)
 
 // What the two languages spell differently: an in-out parameter, the cross product, atan2.
 #ifdef __cplusplus
@@ -69,8 +70,13 @@ struct BendFrame {
   vec2 targetSize;        // pixels (motion vectors)
   uint seed;
   uint flags;             // BEND_FLAG_*
+  // The motion table (shaders/per_vertex_tips.comp): entries [0, branchCount) the branches' tip
+  // bends, then the leaves'; tipCount entries at this frame's time, then (BEND_FLAG_PREVIOUS) as
+  // many at the previous frame's.
+  uint branchCount;
+  uint tipCount;
 };
-CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 8)
+CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16)
 
 // One rest vertex for the probe kernel (shaders/per_vertex_probe.comp; tests).
 #define BEND_NO_LEAF 0xffffffffu
@@ -161,23 +167,40 @@ CANOPY_INLINE void bendAbout(vec3 pivot, vec3 axis, vec3 tip, float x, float tap
 
 CANOPY_INLINE float bendW(uint w, uint level) { return float((w >> (8u * level)) & 255u) * (1.0f / 255.0f); }
 
-// The displaced position of rest point p (n: its normal, rotated alike) at time t. Innermost level
-// first, each in its parent's rest frame, so the composition is the hierarchy's: a twig leans about
-// its base, then the branch carrying it turns the twig with it as it bends at the twig's w, then the
-// trunk. `leafRoot` / `leaf`: the vertex's leaf (hasLeaf), which first turns about its root.
-CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool hasLeaf, vec3 leafRoot, uint leaf,
-                                vec3 p, float t, BEND_INOUT(vec3) n) {
+// The tip bend of branch `id` (at `level`) and of leaf `leaf` at time t: what the motion kernel
+// (shaders/per_vertex_tips.comp) writes once per branch and leaf each frame, so the vertex shader
+// reads a branch's motion instead of synthesising it for each of its vertices.
+CANOPY_INLINE vec3 bendBranchTip(BendFrame f, float t, uint level, uint id) {
+  uint l = min(level, uint(BEND_LEVELS - 1));
+  float flex = l == 0u ? f.flexibility.x : l == 1u ? f.flexibility.y : l == 2u ? f.flexibility.z : f.flexibility.w;
+  float freq = l == 0u ? f.frequency.x : l == 1u ? f.frequency.y : l == 2u ? f.frequency.z : f.frequency.w;
+  return bendTip(f, t, flex, freq, id + 2u);
+}
+CANOPY_INLINE vec3 bendLeafTip(BendFrame f, float t, uint leaf) {
+  return bendTip(f, t, f.leafFlexibility, f.leafFrequency, 0x9e3779b9u ^ leaf);
+}
+
+// A vertex's tip bends: its leaf's, and each branch of its chain's (chain order, trunk first).
+struct BendTips {
+  vec3 leaf;
+  vec3 level[BEND_LEVELS];
+};
+
+// The displaced position of rest point p (n: its normal, rotated alike) at time t from its tips.
+// Innermost level first, each in its parent's rest frame, so the composition is the hierarchy's: a
+// leaf turns about its root, a twig leans about its base, then the branch carrying it turns the
+// twig with it as it bends at the twig's w, then the trunk.
+CANOPY_INLINE vec3 bendApply(BendFrame f, BendChain chain, BendTips tips, BendVertex v, bool hasLeaf, vec3 leafRoot,
+                             vec3 p, float t, BEND_INOUT(vec3) n) {
   vec3 up = vec3(f.up);
-  if (hasLeaf) {
-    vec3 tip = bendTip(f, t, f.leafFlexibility, f.leafFrequency, 0x9e3779b9u ^ leaf);
-    bendAbout(leafRoot, up, tip, 1.0f, 1.0f, p, n);
-  }
+  if (hasLeaf) bendAbout(leafRoot, up, tips.leaf, 1.0f, 1.0f, p, n);
   if (v.branch == BEND_LEAF_ONLY) return p;
   if (v.branch == BEND_NO_BRANCH) {
     // Fallback (a model without a hierarchy): a radial branch from the trunk axis at the height of
     // the vertex's leaf root (its own position for rigid parts) out to it, w = distance / R, then
     // the trunk, w = height / H. The radial branch's noise is shifted in time by a smooth function
-    // of its azimuth, so neighbouring parts sway together and nothing tears.
+    // of its azimuth, so neighbouring parts sway together and nothing tears (evaluated here: it
+    // depends on the vertex's position, not on a branch).
     vec3 ref = hasLeaf ? leafRoot : p;
     vec3 rel = ref - vec3(f.root);
     float h = dot(rel, up);
@@ -196,13 +219,20 @@ CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool
   }
   for (int i = int(chain.count) - 1; i >= 0; --i) {
     BendBranch b = chain.b[i];
-    uint level = min(b.level, uint(BEND_LEVELS - 1));
-    float flex = level == 0u ? f.flexibility.x : level == 1u ? f.flexibility.y : level == 2u ? f.flexibility.z : f.flexibility.w;
-    float freq = level == 0u ? f.frequency.x : level == 1u ? f.frequency.y : level == 2u ? f.frequency.z : f.frequency.w;
-    vec3 tip = bendTip(f, t, flex, freq, chain.id[i] + 2u);
-    bendAbout(b.origin, b.axis, tip, bendW(v.w, level), f.taper, p, n);
+    bendAbout(b.origin, b.axis, tips.level[i], bendW(v.w, min(b.level, uint(BEND_LEVELS - 1))), f.taper, p, n);
   }
   return p;
+}
+
+// The same with the tips synthesised in place: the CPU reference of what the motion kernel and the
+// vertex shader compute together.
+CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool hasLeaf, vec3 leafRoot, uint leaf,
+                                vec3 p, float t, BEND_INOUT(vec3) n) {
+  BendTips tips;
+  tips.leaf = hasLeaf ? bendLeafTip(f, t, leaf) : vec3(0.0f);
+  for (uint i = 0u; i < uint(BEND_LEVELS); ++i)
+    tips.level[i] = i < chain.count ? bendBranchTip(f, t, chain.b[i].level, chain.id[i]) : vec3(0.0f);
+  return bendApply(f, chain, tips, v, hasLeaf, leafRoot, p, t, n);
 }
 
 CANOPY_NAMESPACE_END

@@ -528,7 +528,13 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
     std::fprintf(stderr, "preparing %zu triangles (material split, leaf roots, GPU upload) ...\n", model.triangleCount());
     desc.progress = std::ref(progress);
   }
-  const Status made = createCanopy(d, model, desc, &host.canopy);
+  Status made = createCanopy(d, model, desc, &host.canopy);
+  if (!made.ok() && desc.allowPerVertex && o.method != AnimationMode::PerVertex) {
+    // The window offers both methods; a mesh the baseline cannot keep resident runs 2D only.
+    std::fprintf(stderr, "canopy-demo: the per-vertex baseline is off for this scene (%s)\n", made.message().c_str());
+    desc.allowPerVertex = false;
+    made = createCanopy(d, model, desc, &host.canopy);
+  }
   if (!made.ok())
     return made.context(std::to_string(w) + "x" + std::to_string(h) + " frame, " + std::to_string(desc.maxLayers) + " layers at most");
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -48,13 +48,14 @@ def plot_pervertex(path, out, title):
     turning = [float(r["per_vertex_ms"]) / float(r["2d_turning_ms"]) for r in rows]
     rx.plot(faces, still, marker="o", label="per-vertex / 2D still")
     rx.plot(faces, turning, marker="s", label="per-vertex / 2D turning")
-    for xi, yi in zip(faces, still):
-        rx.annotate("%.1fx" % yi, (xi, yi), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=7)
+    for series in (still, turning):
+        for xi, yi in zip(faces, series):
+            rx.annotate("%.2fx" % yi, (xi, yi), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=7)
     rx.axhline(1.0, color="grey", lw=0.8)
     rx.set_xscale("log")
+    rx.set_yscale("log")
     rx.set_xlabel("faces (log scale)")
-    rx.set_ylabel("baseline / 2D (> 1: the 2D method is cheaper)")
-    rx.set_ylim(bottom=0)
+    rx.set_ylabel("baseline / 2D (log; > 1: 2D cheaper)")
     rx.grid(True, alpha=0.3)
     rx.legend(fontsize=7)
     fig.tight_layout()

@@ -50,6 +50,16 @@ echo "sway over 24 frames at 320x240: wind $wind px, no wind $calm px"
   --validate --no-mp4 --out "$out/kelp" >"$out/stdout2" 2>"$out/stderr2" || fail "kelp.glb: exit $? ($(tail -5 "$out/stderr2"))"
 [ -s "$out/kelp/contact_sheet.png" ] || fail "kelp contact sheet missing"
 
+# The per-vertex baseline on the same scene (validation on): it sways in the wind and stands still without.
+"$demo" --method per-vertex --frames 24 --size 320x240 --warmup 1 --validate --no-mp4 --out "$out/pv" >/dev/null 2>"$out/stderr4" ||
+  fail "per-vertex run: exit $? ($(tail -5 "$out/stderr4"))"
+"$demo" --method per-vertex --frames 24 --size 320x240 --warmup 1 --strength 0 --no-mp4 --out "$out/pvcalm" >/dev/null 2>&1 ||
+  fail "per-vertex calm run: exit $?"
+pv=$(sway_range "$out/pv") pvcalm=$(sway_range "$out/pvcalm")
+awk -v w="$pv" -v c="$pvcalm" 'BEGIN { exit !(w >= 1.0 && c == 0) }' ||
+  fail "per-vertex sway: wind $pv px (expected >= 1), no wind $pvcalm px (expected 0)"
+echo "per-vertex sway over 24 frames at 320x240: wind $pv px, no wind $pvcalm px"
+
 # No display: --window says so and renders headless.
 env -u DISPLAY -u WAYLAND_DISPLAY "$demo" --window --frames 2 --size 96x72 --no-mp4 --out "$out/fallback" \
   >/dev/null 2>"$out/stderr3" || fail "fallback: exit $?"
@@ -74,6 +84,7 @@ expect_refusal "--strength" --strength -1
 expect_refusal "--gust" --gust 2
 expect_refusal "--warmup" --warmup -1
 expect_refusal "--bogus" --bogus
+expect_refusal "--method" --method 3d
 "$demo" --help | grep -q -- "--frames N .*default 60" || fail "--help does not document --frames with its default"
 "$demo" --help | grep -q -- "--warmup S .*" || fail "--help does not document --warmup"
 "$demo" --gltf "$out/absent.glb" --frames 1 >/dev/null 2>"$out/err" && fail "a missing glTF file was accepted"

@@ -25,34 +25,6 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
   return Status();
 }
 
-// Rendering into the host's targets with their contents kept (colour and motion blended over,
-// depth written): the fragment path's composite and the compute path's resolve.
-void beginHostRendering(const Compositor& c, rg::PassContext& x, const CompositeTargets& t, bool motion) {
-  VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
-                                         {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
-  colors[0].imageView = x.graph->image(t.color).view;
-  colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
-  colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  if (motion) {
-    colors[1] = colors[0];
-    colors[1].imageView = x.graph->image(t.motion).view;
-  }
-  VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  depth.imageView = x.graph->image(t.depth).view;
-  depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
-  depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, {c.desc.width, c.desc.height}};
-  ri.layerCount = 1;
-  ri.colorAttachmentCount = motion ? 2 : 1;
-  ri.pColorAttachments = colors;
-  ri.pDepthAttachment = &depth;
-  x.device->cmdBeginRendering(x.cmd, &ri);
-  setViewportScissor(*x.device, x.cmd, c.desc.width, c.desc.height);
-}
-
 // The compute path (CompositePath::Compute; docs/performance.md): displacement image, tile list
 // reset, classification, the tile kernel (indirect dispatch) and the resolve draw (indirect).
 Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l, rg::ResourceId displacement,
@@ -122,7 +94,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
   const bool hasMotion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   auto resolve = g.addPass("composite: resolve", [cp, t, hasMotion, ro](rg::PassContext& x) {
     if (!cp->computeThisFrame) return Status();
-    beginHostRendering(*cp, x, t, hasMotion);
+    beginHostRendering(x, t, cp->desc.width, cp->desc.height, hasMotion);
     Status s = bindGraphics(*x.device, x.cmd, cp->resolve,
                             {bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, ro, cp->nearest)},
                             cp->push);
@@ -140,6 +112,34 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
 }
 
 }  // namespace
+
+// Rendering into the host's targets with their contents kept (colour and motion blended over,
+// depth written): the fragment path's composite and the compute path's resolve.
+void beginHostRendering(rg::PassContext& x, const CompositeTargets& t, uint32_t width, uint32_t height, bool motion) {
+  VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
+                                         {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
+  colors[0].imageView = x.graph->image(t.color).view;
+  colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+  colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  if (motion) {
+    colors[1] = colors[0];
+    colors[1].imageView = x.graph->image(t.motion).view;
+  }
+  VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  depth.imageView = x.graph->image(t.depth).view;
+  depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+  depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {width, height}};
+  ri.layerCount = 1;
+  ri.colorAttachmentCount = motion ? 2 : 1;
+  ri.pColorAttachments = colors;
+  ri.pDepthAttachment = &depth;
+  x.device->cmdBeginRendering(x.cmd, &ri);
+  setViewportScissor(*x.device, x.cmd, width, height);
+}
 
 Status validateCompositeParams(const CompositeParams& p) {
   if (p.path != CompositePath::Compute && p.path != CompositePath::Fragment)
@@ -429,7 +429,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
         depth.extent.width != cp->desc.width || depth.extent.height != cp->desc.height)
       return Status::error("composite: the host targets are not " + std::to_string(cp->desc.width) + "x" +
                            std::to_string(cp->desc.height));
-    beginHostRendering(*cp, x, t, motion);
+    beginHostRendering(x, t, cp->desc.width, cp->desc.height, motion);
     const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     Status s = bindGraphics(
         *x.device, x.cmd, cp->composite,

@@ -95,6 +95,12 @@ struct CompositeDebugSources {
   rg::ResourceId animFrame = rg::kInvalidResource;
   rg::ResourceId tiled = rg::kInvalidResource;
 };
+// Begins dynamic rendering into the host's targets with their contents kept (colour and motion
+// blended over, depth tested and written) and sets a full viewport: the composite's resolve and
+// fragment path, and the per-vertex baseline's draw.
+void beginHostRendering(rg::PassContext& pass, const CompositeTargets& targets, uint32_t width, uint32_t height,
+                        bool motion);
+
 // Adds "composite: occupancy", then the fragment path ("composite: scene depth", "composite: warp +
 // composite") and the compute path ("composite: displacement image", "composite: tile list reset",
 // "composite: classify", "composite: warp + composite (tiles)", "composite: resolve"); each frame

@@ -239,28 +239,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   const bool motion = pv.desc.motionFormat != VK_FORMAT_UNDEFINED;
   LayeredVegetation* l = &lv;
   auto draw = g.addPass("per-vertex: draw", [p, l, t, motion](rg::PassContext& x) {
-    VkRenderingAttachmentInfo colors[2] = {{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO},
-                                           {VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}};
-    colors[0].imageView = x.graph->image(t.color).view;
-    colors[0].imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-    colors[0].loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
-    colors[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    if (motion) {
-      colors[1] = colors[0];
-      colors[1].imageView = x.graph->image(t.motion).view;
-    }
-    VkRenderingAttachmentInfo depth{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    depth.imageView = x.graph->image(t.depth).view;
-    depth.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
-    depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    ri.renderArea = {{0, 0}, {p->desc.width, p->desc.height}};
-    ri.layerCount = 1;
-    ri.colorAttachmentCount = motion ? 2 : 1;
-    ri.pColorAttachments = colors;
-    ri.pDepthAttachment = &depth;
-    x.device->cmdBeginRendering(x.cmd, &ri);
+    beginHostRendering(x, t, p->desc.width, p->desc.height, motion);
     PerVertexBindings b;
     b.frame = p->frame.buffer;
     b.bendFrame = p->bendFrame.buffer;

@@ -238,6 +238,11 @@ std::string titleOf(const std::string& label, double fps, const std::vector<Pass
   std::map<std::string, double> groups;  // by the pass name's prefix: "sim", "layers", "dynamics", "composite"
   for (const PassTiming& p : t) groups[p.name.substr(0, p.name.find(':'))] += p.milliseconds;
   char b[512];
+  if (l.params.animation == AnimationMode::PerVertex) {
+    std::snprintf(b, sizeof b, "Canopy - %s - %.1f FPS - per-vertex baseline - %.2f ms%s", label.c_str(), fps,
+                  groups["per-vertex"], l.paused ? " - paused" : "");
+    return b;
+  }
   std::snprintf(b, sizeof b, "Canopy - %s - %.1f FPS - %s - sim %.2f, layers %.2f, dynamics %.2f, composite %.2f ms%s",
                 label.c_str(), fps, toString(l.params.layers.layout).c_str(), groups["sim"], groups["layers"],
                 groups["dynamics"], groups["composite"], l.paused ? " - paused" : "");

@@ -689,6 +689,10 @@ Status createModel(const MeshDesc& desc, Model** out) {
     if (desc.triangleMaterials && (desc.materialCount == 0 || !desc.materials))
       return Status::error(Result::InvalidModel, what + ": triangleMaterials needs materials (materialCount >= 1)");
     if (desc.imageCount && !desc.images) return Status::error(Result::InvalidModel, what + ": imageCount without images");
+    if ((desc.vertexBranches != nullptr) != (desc.vertexW != nullptr) || (desc.vertexBranches && !desc.branches) ||
+        (desc.branchCount && !desc.branches))
+      return Status::error(Result::InvalidModel,
+                           what + ": a branch hierarchy needs vertexBranches, vertexW and branches (branchCount >= 1) together");
     auto m = std::unique_ptr<Model>(new (std::nothrow) Model());
     if (!m) return Status::error(Result::OutOfHostMemory, "createModel: out of host memory");
     VegetationModel& v = m->data;
@@ -771,6 +775,26 @@ Status createModel(const MeshDesc& desc, Model** out) {
                                                            std::to_string(desc.triangleMaterials[t]) +
                                                            " is not below materialCount " + std::to_string(desc.materialCount));
           v.triangleMaterial[t] = desc.triangleMaterials[t];
+        }
+      }
+      if (desc.vertexBranches) {
+        // Checked for consistency (parents, levels, axes, indices) by createCanopy's
+        // validateBendHierarchy; here only what the packing needs.
+        for (uint32_t i = 0; i < desc.branchCount; ++i) {
+          const MeshBranch& b = desc.branches[i];
+          v.branches.push_back(gpu::BendBranch{toGlm(b.origin), b.parent, toGlm(b.axis), b.level});
+        }
+        v.bend.resize(desc.vertexCount);
+        for (uint32_t i = 0; i < desc.vertexCount; ++i) {
+          uint32_t w = 0;
+          for (uint32_t k = 0; k < 4; ++k) {
+            const float x = desc.vertexW[4 * i + k];
+            if (!(x >= 0.0f && x <= 1.0f))
+              return Status::error(Result::InvalidModel, what + ": vertexW[" + std::to_string(4 * i + k) + "] = " +
+                                                             std::to_string(x) + " is outside [0, 1]");
+            w |= uint32_t(std::lround(x * 255.0f)) << (8 * k);
+          }
+          v.bend[i] = gpu::BendVertex{desc.vertexBranches[i] == kNoBranch ? BEND_LEAF_ONLY : desc.vertexBranches[i], w};
         }
       }
     } catch (const std::bad_alloc&) {

@@ -15,6 +15,7 @@
 
 #include "engine/pipeline.h"
 #include "engine/transfer.h"
+#include "render/canopy.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
 #include "render/per_vertex.h"
@@ -466,4 +467,47 @@ TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
   destroyImage(dev, color);
   destroyImage(dev, depth);
   destroyImage(dev, motion);
+}
+
+// A host's own mesh carries its hierarchy through MeshDesc (vertexBranches, vertexW, branches): the
+// generator's hierarchy passed that way arrives as the generator made it; inconsistent inputs are
+// refused naming the field.
+TEST(PerVertexHierarchy, AHostMeshCarriesItsHierarchyThroughMeshDesc) {
+  const VegetationModel m = treeWithHierarchy(4000);
+  std::vector<float> positions, uvs, w;
+  for (const glm::vec3& p : m.positions) positions.insert(positions.end(), {p.x, p.y, p.z});
+  for (const glm::vec2& t : m.uvs) uvs.insert(uvs.end(), {t.x, t.y});
+  std::vector<uint32_t> vertexBranches;
+  for (const gpu::BendVertex& b : m.bend) {
+    vertexBranches.push_back(b.branch == BEND_LEAF_ONLY ? kNoBranch : b.branch);
+    for (uint32_t k = 0; k < 4; ++k) w.push_back(float((b.w >> (8 * k)) & 255u) / 255.0f);
+  }
+  std::vector<MeshBranch> branches;
+  for (const gpu::BendBranch& b : m.branches)
+    branches.push_back(MeshBranch{toFloat3(b.origin), toFloat3(b.axis), b.parent, b.level});
+  MeshDesc d;
+  d.positions = positions.data();
+  d.uvs = uvs.data();
+  d.vertexCount = uint32_t(m.positions.size());
+  d.indices = m.indices.data();
+  d.indexCount = m.indices.size();
+  d.vertexBranches = vertexBranches.data();
+  d.vertexW = w.data();
+  d.branches = branches.data();
+  d.branchCount = uint32_t(branches.size());
+  Model* model = nullptr;
+  Status s = createModel(d, &model);
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_EQ(model->data.bend.size(), m.bend.size());
+  EXPECT_EQ(std::memcmp(model->data.bend.data(), m.bend.data(), m.bend.size() * sizeof(gpu::BendVertex)), 0);
+  ASSERT_EQ(model->data.branches.size(), m.branches.size());
+  EXPECT_EQ(std::memcmp(model->data.branches.data(), m.branches.data(), m.branches.size() * sizeof(gpu::BendBranch)), 0);
+  destroyModel(model);
+  w[4 * 7 + 2] = 1.5f;
+  s = createModel(d, &model);
+  EXPECT_EQ(s.code(), Result::InvalidModel);
+  EXPECT_NE(s.message().find("vertexW[30]"), std::string::npos) << s.message();
+  d.vertexW = nullptr;
+  s = createModel(d, &model);
+  EXPECT_NE(s.message().find("vertexBranches, vertexW and branches"), std::string::npos) << s.message();
 }

@@ -193,6 +193,17 @@ struct MeshImage {
   uint32_t width = 0, height = 0;      // 1..16384
   const uint8_t* rgba = nullptr;       // width * height sRGB-encoded RGBA8 texels, rows top to bottom
 };
+// One branch of a host's branch hierarchy for the per-vertex wind baseline (AnimationMode::PerVertex;
+// docs/design.md "Per-vertex wind baseline"). Branches come parents first.
+inline constexpr uint32_t kNoBranch = 0xffffffffu;  // MeshBranch.parent of a trunk
+inline constexpr uint32_t kMaxBranchLevels = 4;     // trunk, branch, twig, finer
+struct MeshBranch {
+  Float3 origin;                 // rest position of the branch's base, world
+  Float3 axis{0.0f, 1.0f, 0.0f}; // unit rest direction from the base to the tip
+  uint32_t parent = kNoBranch;   // index of an earlier branch, or kNoBranch (level 0)
+  uint32_t level = 0;            // the parent's + 1, below kMaxBranchLevels
+};
+
 // A triangle mesh in world space from the host's own arrays (copied).
 struct MeshDesc {
   const float* positions = nullptr;    // 3 floats per vertex
@@ -206,6 +217,15 @@ struct MeshDesc {
   uint32_t materialCount = 0;          // at least 1 when triangleMaterials is set
   const MeshImage* images = nullptr;
   uint32_t imageCount = 0;
+  // Optional branch hierarchy (per-vertex baseline; without it a trunk and radial branches are
+  // derived from the positions): per vertex the index of its innermost branch (kNoBranch: only the
+  // leaf level moves it, e.g. ground) and Habel's w, 4 values in [0, 1] per vertex: its coordinate
+  // along its level-L branch in w[L], and for each ancestor level the coordinate where the chain
+  // leaves that ancestor. Checked at createCanopy with allowPerVertex.
+  const uint32_t* vertexBranches = nullptr;
+  const float* vertexW = nullptr;      // 4 per vertex
+  const MeshBranch* branches = nullptr;
+  uint32_t branchCount = 0;
   std::string name = "mesh";           // used in messages
 };
 Status createModel(const MeshDesc& desc, Model** out);
@@ -416,8 +436,8 @@ enum class AnimationMode : uint32_t {
 // Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root.
 struct PerVertexParams {
   // Tip bend at referenceSpeed, rad, each in [0, 100]; drag makes it grow with the speed squared.
-  float flexibility[4] = {0.02f, 0.035f, 0.05f, 0.06f};
-  float leafFlexibility = 0.15f;
+  float flexibility[4] = {0.036f, 0.063f, 0.09f, 0.108f};
+  float leafFlexibility = 0.27f;
   // Sway frequency at referenceSpeed (it scales as 0.5 + 0.5 speed / referenceSpeed), Hz, [0, 100].
   float frequency[4] = {0.35f, 0.8f, 1.6f, 2.6f};
   float leafFrequency = 4.0f;

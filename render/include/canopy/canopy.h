@@ -436,6 +436,8 @@ enum class AnimationMode : uint32_t {
 // Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root.
 struct PerVertexParams {
   // Tip bend at referenceSpeed, rad, each in [0, 100]; drag makes it grow with the speed squared.
+  // The defaults sway the demo's shrub as much as the 2D method does in the same wind
+  // (docs/performance.md "The 2D method against the per-vertex baseline").
   float flexibility[4] = {0.036f, 0.063f, 0.09f, 0.108f};
   float leafFlexibility = 0.27f;
   // Sway frequency at referenceSpeed (it scales as 0.5 + 0.5 speed / referenceSpeed), Hz, [0, 100].

@@ -385,14 +385,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       DeferInto defer(d, &c->pending);
       CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
       if (desc.allowPerVertex) {
-        PerVertexDesc pd;
-        pd.width = desc.width;
-        pd.height = desc.height;
-        pd.colorFormat = desc.colorFormat;
-        pd.depthFormat = desc.depthFormat;
-        pd.motionFormat = desc.motionFormat;
-        pd.reverseZ = desc.depthConvention == DepthConvention::Reverse;
-        CANOPY_TRY(createPerVertex(d, c->layers, model.branches, pd, &c->perVertex));
+        CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex));
       }
     }
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and

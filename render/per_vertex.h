@@ -16,12 +16,9 @@
 
 namespace canopy {
 
-struct PerVertexDesc {
-  uint32_t width = 0, height = 0;
-  VkFormat colorFormat = VK_FORMAT_UNDEFINED, depthFormat = VK_FORMAT_UNDEFINED;
-  VkFormat motionFormat = VK_FORMAT_UNDEFINED;  // UNDEFINED: no motion vectors
-  bool reverseZ = false;
-};
+// The host's targets as the compositor sees them (size, formats, depth convention; motionFormat
+// UNDEFINED: no motion vectors): the baseline draws into the same targets.
+using PerVertexDesc = CompositorDesc;
 
 struct PerVertexAnimation {
   Device* device = nullptr;

@@ -154,6 +154,18 @@ class PerVertexTest : public GpuTest {
 
 float extent(const VegetationModel& m) { return glm::length(m.boundsMax - m.boundsMin); }
 
+// A context description in the per-vertex mode, no wind yet.
+CanopyDesc perVertexDesc(uint32_t w, uint32_t h, VkFormat color) {
+  CanopyDesc desc;
+  desc.width = w;
+  desc.height = h;
+  desc.colorFormat = color;
+  desc.allowPerVertex = true;
+  desc.params.animation = AnimationMode::PerVertex;
+  desc.params.simulation.wind.strength = 0.0f;
+  return desc;
+}
+
 }  // namespace
 
 TEST_F(PerVertexTest, TheGpuBendMatchesTheCpuAndZeroWindMovesNothingExactly) {
@@ -288,14 +300,8 @@ TEST_F(PerVertexTest, TheModeRendersThroughThePublicApiAndSwitchesBack) {
     host.h = 72;
     host.reverse = reverse;
     ASSERT_TRUE(host.create(dev, 2).ok());
-    CanopyDesc desc;
-    desc.width = host.w;
-    desc.height = host.h;
-    desc.colorFormat = host.colorFormat;
+    CanopyDesc desc = perVertexDesc(host.w, host.h, host.colorFormat);
     desc.depthConvention = reverse ? DepthConvention::Reverse : DepthConvention::Standard;
-    desc.allowPerVertex = true;
-    desc.params.animation = AnimationMode::PerVertex;
-    desc.params.simulation.wind.strength = 0.0f;
     CanopyContext* ctx = nullptr;
     Status s = createCanopy(dev, m, desc, &ctx);
     ASSERT_TRUE(s.ok()) << s.message();
@@ -392,14 +398,8 @@ TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
   c.format = VK_FORMAT_D32_SFLOAT;
   c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   ASSERT_TRUE(createImage(dev, c, &depth, "host depth").ok());
-  CanopyDesc desc;
-  desc.width = w;
-  desc.height = h;
-  desc.colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+  CanopyDesc desc = perVertexDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
   desc.motionFormat = VK_FORMAT_R16G16_SFLOAT;
-  desc.allowPerVertex = true;
-  desc.params.animation = AnimationMode::PerVertex;
-  desc.params.simulation.wind.strength = 0.0f;
   CanopyContext* ctx = nullptr;
   Status s = createCanopy(dev, m, desc, &ctx);
   ASSERT_TRUE(s.ok()) << s.message();

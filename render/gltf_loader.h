@@ -63,6 +63,11 @@ struct VegetationModel {
   // (glTF files; the baseline then derives a trunk and radial branches from the positions).
   std::vector<gpu::BendVertex> bend;
   std::vector<gpu::BendBranch> branches;
+  // Optional bounding-box hierarchy of the foliage (Lluch et al.; render/foliage_boxes.h): each
+  // box's parent (an earlier box, or 0xffffffff), and per triangle the box that owns it (foliage
+  // triangles; others 0xffffffff). Empty: none (a k-d split of the leaf roots stands in).
+  std::vector<uint32_t> boxParent;
+  std::vector<uint32_t> triangleBox;
   std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
   size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -212,6 +212,7 @@ struct Attach {
   uint32_t branch = BEND_LEAF_ONLY;
   float arc = 0.0f;
   gpu::BendVertex bend{BEND_LEAF_ONLY, 0};  // filled by finishHierarchy
+  uint32_t box = 0;  // the innermost box open where it was attached (SceneDesc::boxes)
 };
 
 // The branch hierarchy the turtle builds (shared/bend.h; docs/design.md "Per-vertex wind
@@ -245,12 +246,14 @@ struct LeafBatch {
   glm::vec3 flow{1, 0, 0};     // Ribbon: the current's direction
   uint64_t count = 0, seed = 0;
   uint64_t firstVertex = 0, firstIndex = 0, firstTriangle = 0;
+  uint32_t box = 0;            // Blade, Ribbon: the batch's box (SceneDesc::boxes)
 };
 
 struct Plan {
   VegetationModel model;  // materials + rigid geometry
   std::vector<LeafBatch> batches;
   HierarchyBuild hierarchy;
+  std::vector<uint32_t> boxParent{0xffffffffu};  // box 0: the scene
   SceneStats stats;
 };
 
@@ -347,8 +350,11 @@ struct TurtleState {
 
 // Interprets `s`: wood into the model, leaf clusters into `attach`.
 void interpret(const std::string& s, const PlantShape& shape, const Placement& place, uint64_t seed, VegetationModel& m,
-               std::vector<Attach>& attach, HierarchyBuild& hier) {
+               std::vector<Attach>& attach, HierarchyBuild& hier, std::vector<uint32_t>& boxParent, uint64_t* pushes) {
   Rng rng(seed);
+  // Lluch et al. section 3: the plant's box, then a box per PUSH under the innermost open one.
+  boxParent.push_back(0);
+  std::vector<uint32_t> openBoxes{uint32_t(boxParent.size() - 1)};
   TurtleState t{glm::vec3(0.0f), {0, 1, 0}, {-1, 0, 0}, {0, 0, 1}, 0};
   auto openBranch = [&](uint32_t parent, uint32_t level, float attachArc) {
     BranchBuild b;
@@ -406,7 +412,8 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
       case 'A':
         if (t.level >= shape.leafMinLevel)
           attach.push_back({place.apply(t.pos), place.direction(t.h),
-                            shape.length * std::pow(shape.lengthDecay, float(t.level)) * place.scale, t.branch, t.arc});
+                            shape.length * std::pow(shape.lengthDecay, float(t.level)) * place.scale, t.branch, t.arc,
+                            gpu::BendVertex{BEND_LEAF_ONLY, 0}, openBoxes.back()});
         break;
       case '+': turn(t.h, t.l, t.u, 1.0f); break;
       case '-': turn(t.h, t.l, t.u, -1.0f); break;
@@ -417,6 +424,9 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
       case '[':
         stack.push_back(t);
         t.level++;
+        boxParent.push_back(openBoxes.back());
+        openBoxes.push_back(uint32_t(boxParent.size() - 1));
+        ++*pushes;
         if (!t.deep && t.level < BEND_LEVELS) {
           t.branch = openBranch(t.branch, t.level, t.arc);
           t.arc = 0.0f;
@@ -428,6 +438,7 @@ void interpret(const std::string& s, const PlantShape& shape, const Placement& p
         if (!stack.empty()) {
           t = stack.back();
           stack.pop_back();
+          openBoxes.pop_back();
         }
         break;
       default: break;
@@ -482,9 +493,11 @@ void planPlant(Plan& p, SceneKind kind, uint64_t faces, const Placement& place, 
   p.stats.lsystemIterations = std::max(p.stats.lsystemIterations, iterations);
   const size_t rigidBefore = p.model.triangleMaterial.size();
   LeafBatch b;
-  interpret(s, shape, place, seed, p.model, b.attach, p.hierarchy);
+  interpret(s, shape, place, seed, p.model, b.attach, p.hierarchy, p.boxParent, &p.stats.pushes);
   const uint64_t rigid = p.model.triangleMaterial.size() - rigidBefore;
-  if (b.attach.empty()) b.attach.push_back({place.apply({0, shape.length, 0}), {0, 1, 0}, shape.length * place.scale});
+  if (b.attach.empty())
+    b.attach.push_back({place.apply({0, shape.length, 0}), {0, 1, 0}, shape.length * place.scale, BEND_LEAF_ONLY, 0.0f,
+                        gpu::BendVertex{BEND_LEAF_ONLY, 0}, uint32_t(p.boxParent.size() - 1)});
   b.shape = LeafShape::Card;
   b.material = kLeaf;
   b.spread = kind == SceneKind::TreeCrown ? 0.9f : 0.7f;
@@ -647,6 +660,7 @@ struct Arrays {
   uint32_t* idx;
   uint32_t* mat;
   gpu::BendVertex* bend;  // null: no hierarchy asked for
+  uint32_t* box;          // per triangle; null: no boxes asked for
 };
 
 void writeCard(const LeafBatch& b, uint64_t j, Rng& rng, glm::vec3* P, glm::vec3* N, glm::vec2* T) {
@@ -748,6 +762,9 @@ void writeLeaves(const LeafBatch& b, uint64_t first, uint64_t last, const Arrays
       }
     }
     std::fill(out.mat + b.firstTriangle + j * nf, out.mat + b.firstTriangle + (j + 1) * nf, b.material);
+    if (out.box)
+      std::fill(out.box + b.firstTriangle + j * nf, out.box + b.firstTriangle + (j + 1) * nf,
+                b.shape == LeafShape::Card ? b.attach[j % b.attach.size()].box : b.box);
   }
 }
 
@@ -882,8 +899,18 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
     m.indices.resize(triangles * 3);
     m.triangleMaterial.resize(triangles);
     if (desc.hierarchy) m.bend.resize(vertices);
+    if (desc.boxes) {
+      // Cards take their attachment's box; a blade or ribbon batch gets one box under the scene's.
+      for (LeafBatch& b : p.batches)
+        if (b.shape != LeafShape::Card) {
+          p.boxParent.push_back(0);
+          b.box = uint32_t(p.boxParent.size() - 1);
+        }
+      m.triangleBox.assign(triangles, 0xffffffffu);
+      m.boxParent = p.boxParent;
+    }
     const Arrays arrays{m.positions.data(), m.normals.data(), m.uvs.data(), m.indices.data(), m.triangleMaterial.data(),
-                        desc.hierarchy ? m.bend.data() : nullptr};
+                        desc.hierarchy ? m.bend.data() : nullptr, desc.boxes ? m.triangleBox.data() : nullptr};
 
     // Jobs of up to 64K leaves, taken by the workers in order; each leaf has its own random stream.
     struct Job {
@@ -964,6 +991,8 @@ uint64_t modelHash(const VegetationModel& m) {
   // The hierarchy only where there is one: models without keep their hashes.
   if (!m.bend.empty()) h = hashBytes(h, m.bend.data(), m.bend.size() * sizeof(gpu::BendVertex));
   if (!m.branches.empty()) h = hashBytes(h, m.branches.data(), m.branches.size() * sizeof(gpu::BendBranch));
+  if (!m.boxParent.empty()) h = hashBytes(h, m.boxParent.data(), m.boxParent.size() * sizeof(uint32_t));
+  if (!m.triangleBox.empty()) h = hashBytes(h, m.triangleBox.data(), m.triangleBox.size() * sizeof(uint32_t));
   return h;
 }
 

@@ -36,6 +36,11 @@ struct SceneDesc {
   // ::branches, 8 bytes a vertex): from the L-system's brackets for plants; grass blades and kelp
   // ribbons get the leaf level only, ground and rock stay still.
   bool hierarchy = false;
+  // Also the bounding-box hierarchy of the foliage (VegetationModel::boxParent, ::triangleBox, 4
+  // bytes a face; seed 002 section 3): box 0 bounds the scene, each plant has a box under it and
+  // every PUSH of its L-system opens a box under the enclosing one, closed by its POP; a leaf card
+  // belongs to the box open where it is attached; grass and kelp blades to their patch's box.
+  bool boxes = false;
 };
 inline constexpr uint64_t kMinSceneFaces = 2000;
 inline constexpr uint64_t kMaxSceneFaces = 200'000'000;
@@ -47,6 +52,7 @@ struct SceneStats {
   uint64_t leaves = 0;       // connected foliage components
   uint32_t plants = 0;       // plants placed (trees, shrubs, kelp stems; grass counts as one patch)
   uint32_t lsystemIterations = 0;  // derivation depth of the (largest) L-system plant, 0 for none
+  uint64_t pushes = 0;       // PUSH modules ([) interpreted over all L-system plants
 };
 
 // Called from the calling thread while leaves are generated: (stage, done, total).

@@ -11,8 +11,11 @@
 namespace canopy {
 namespace {
 
-// The frame blocks are read by the vertex stage (matrices, bend frame) and the fragment stage (light).
-const rg::State kFrameRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+// How the frame blocks and the branch table rest between frames: read by the motion kernel (bend
+// frame, branch levels), the vertex stage (matrices, bend frame, branch chains) and the fragment
+// stage (light). Resting in all three makes the next frame's update wait for every reader.
+const rg::State kFrameRead{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT |
+                               VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
 
 Status checkField(const std::string& name, float v, float lo, float hi, bool openLow = false) {
@@ -128,9 +131,6 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   pv.device = &d;
   pv.desc = desc;
   pv.hierarchy = lv.bendVertices.buffer != VK_NULL_HANDLE;
-  if (lv.streamed)
-    return Status::error("per-vertex baseline: the mesh is streamed (deviceMemoryBudget); the baseline draws it whole "
-                         "every frame and needs it resident");
   const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
   GraphicsPipelineDesc p;
   // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's four.
@@ -165,7 +165,7 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   CANOPY_TRY(createBuffer(d, branchBytes, usage, MemoryUsage::DeviceLocal, &pv.branches, "per-vertex: branches"));
   std::vector<gpu::BendBranch> table = branches;
   if (table.empty()) table.push_back(gpu::BendBranch{glm::vec3(0), BEND_NO_PARENT, glm::vec3(0, 1, 0), 0});  // never read
-  CANOPY_TRY(uploadBuffer(d, pv.branches, table.data(), branchBytes, rg::stateOf(rg::Use::VertexStorageRead)));
+  CANOPY_TRY(uploadBuffer(d, pv.branches, table.data(), branchBytes, kFrameRead));
   if (!pv.hierarchy) {
     CANOPY_TRY(createBuffer(d, 16, usage, MemoryUsage::DeviceLocal, &pv.dummy, "per-vertex: no hierarchy"));
     const uint32_t zero[4] = {};

@@ -19,6 +19,7 @@
 #include "tests/host_device.h"
 #include "tests/test_host.h"
 #include "tools/leaf_cloud.h"
+#include "tools/scene_generator.h"
 
 using namespace canopy;
 using canopy::test::GpuTest;
@@ -359,3 +360,44 @@ TEST_F(EmbeddingTest, ACameraCutReslicesAtOnceAndDropsMotionVectors) {
 }
 
 }  // namespace
+
+// The per-vertex baseline embedded like the 2D method: on a device that records its uploads into
+// the host's first frame (the branch table and motion table then share a command buffer with their
+// readers), with three frames in flight and as one pass of the host's graph, sync-validation clean,
+// each giving the image of serial frames.
+TEST_F(EmbeddingTest, ThePerVertexBaselineEmbedsLikeThe2DMethod) {
+  SceneDesc sd;
+  sd.kind = SceneKind::TreeCrown;
+  sd.faces = 6000;
+  sd.hierarchy = true;
+  sd.threads = 1;
+  ASSERT_TRUE(generateScene(sd, &model).ok());
+  view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 64.0f, 1.05f);
+  std::vector<glm::vec4> images[3];
+  std::vector<float> z;
+  for (int variant = 0; variant < 3; ++variant) {  // serial; three in flight; a pass of the host's graph
+    SCOPED_TRACE(variant);
+    Host host;
+    host.passGroup = variant == 2;
+    ASSERT_TRUE(host.create(*target, variant == 0 ? 1 : 3).ok());
+    CanopyDesc d;
+    d.width = host.w;
+    d.height = host.h;
+    d.colorFormat = host.colorFormat;
+    d.depthFormat = host.depthFormat;
+    d.allowPerVertex = true;
+    d.params.animation = AnimationMode::PerVertex;
+    d.params.simulation.wind.strength = 2.0f;
+    CanopyContext* ctx = nullptr;
+    Status s = createCanopy(*target, model, d, &ctx);
+    ASSERT_TRUE(s.ok()) << s.message();
+    for (int i = 0; i < 12 && s.ok(); ++i) s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
+    if (s.ok()) s = host.read(&images[variant], &z);
+    EXPECT_TRUE(s.ok()) << s.message();
+    destroyCanopy(ctx);
+    host.destroy();
+  }
+  EXPECT_LE(differing(images[0], images[1], 3.0f / 255.0f), 0.005);
+  EXPECT_LE(differing(images[0], images[2], 3.0f / 255.0f), 0.005);
+  EXPECT_GT(differing(images[0], std::vector<glm::vec4>(images[0].size(), kSky), 0.05f), 0.05) << "the tree is drawn";
+}

@@ -304,6 +304,19 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
                          " is outside [1 MiB, 4 GiB]");
   if (desc.depthConvention != DepthConvention::Standard && desc.depthConvention != DepthConvention::Reverse)
     return Status::error("CanopyDesc.depthConvention = " + std::to_string(uint32_t(desc.depthConvention)) + " is outside 0..1");
+  if (desc.impostors.enable) {
+    const ImpostorDesc& im = desc.impostors;
+    if (im.tilePixels < 8 || im.tilePixels > 512 || (im.tilePixels & (im.tilePixels - 1)))
+      return Status::error("CanopyDesc.impostors.tilePixels = " + std::to_string(im.tilePixels) +
+                           " is not a power of two in [8, 512]");
+    CANOPY_TRY(checkRange("CanopyDesc.impostors.maxLevel", im.maxLevel, 0, 64));
+    CANOPY_TRY(checkRange("CanopyDesc.impostors.maxLeavesPerBox", im.maxLeavesPerBox, 1, 1u << 30));
+    if (im.maxBoxTriangles < 1 || im.maxBoxTriangles > (1ull << 40))
+      return Status::error("CanopyDesc.impostors.maxBoxTriangles = " + std::to_string(im.maxBoxTriangles) + " is outside [1, 2^40]");
+    if (im.memoryBudget < (1ull << 20) || im.memoryBudget > (16ull << 30))
+      return Status::error("CanopyDesc.impostors.memoryBudget = " + std::to_string(im.memoryBudget) +
+                           " is outside [1 MiB, 16 GiB]");
+  }
   if (desc.shareSimulationWith && desc.shareSimulationWith->device != &d)
     return Status::error("CanopyDesc.shareSimulationWith belongs to another Device");
   // Nothing to animate is a mistake in the input (a glTF whose scene reaches no triangle mesh),
@@ -342,6 +355,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
+    ld.impostors = desc.impostors;
     if (desc.allowPerVertex) {
       CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
       ld.keepBend = true;

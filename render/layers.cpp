@@ -80,6 +80,19 @@ Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) 
   return Status();
 }
 
+// What impostors on (LayerSettings.impostors.mode) need of the object and the other settings.
+Status checkImpostorSettings(const LayeredVegetation& lv, const LayerSettings& s) {
+  if (s.impostors.mode == ImpostorMode::Off) return Status();
+  if (!lv.imp.enabled)
+    return Status::error("LayerSettings.impostors.mode: impostors need CanopyDesc.impostors.enable at creation (the box "
+                         "hierarchy and its baked views)");
+  if (s.rebuildBudgetMs > 0)
+    return Status::error("LayerSettings.impostors.mode: impostors are drawn by re-slices at once; rebuildBudgetMs must be 0 "
+                         "(it is " + std::to_string(s.rebuildBudgetMs) + ")");
+  if (lv.desc.writeIds) return Status::error("LayerSettings.impostors.mode: the id output draws every leaf; impostors are off with it");
+  return Status();
+}
+
 // The cross-fade pipelines and their sampler (texel fetches only), for the next set.
 Status createFadePipelines(LayeredVegetation& lv) {
   Device& d = *lv.device;
@@ -269,6 +282,13 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   std::vector<uint32_t> order(nt);
   std::vector<uint64_t> cursor(start.begin(), start.end() - 1);
   for (size_t t = 0; t < nt; ++t) order[cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++] = uint32_t(t);
+  // With impostors the foliage of each material is laid out box by box, depth first
+  // (render/impostors.h), so a box's subtree is one run per material.
+  if (lv.desc.impostors.enable) {
+    CANOPY_TRY(buildImpostorOrder(m, foliage, roots, lv.desc.impostors, start, &lv.imp, &order));
+    CANOPY_TRY(planImpostorAtlas(lv.desc.impostors, d.properties.limits.maxImageDimension2D,
+                                 d.properties.limits.maxImageArrayLayers, &lv.imp));
+  }
   // The compact chunked mesh (render/mesh_chunks.h): 16-byte vertices, 16-bit indices and a
   // leaf-root table per chunk, so no buffer is indexed past the device's storage range; one
   // triangle range per (foliage or rigid, material) run of the GPU order.
@@ -590,6 +610,38 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Cl
   return Status();
 }
 
+// The impostor cut of the visible placement (LayerSettings.impostors; render/impostors.h): which
+// boxes are drawn as impostors, with which weight, and the remaining foliage as chunk parts.
+void planImpostorCut(LayeredVegetation& lv, const LayerView& view) {
+  const auto t0 = Clock::now();
+  lv.cut = ImpostorCut{};
+  lv.cutParts.clear();
+  lv.cutInstances.clear();
+  lv.cutOpaque = 0;
+  const LayerSettings& s = lv.settings;
+  if (s.impostors.mode == ImpostorMode::Off || !lv.imp.enabled) return;
+  ImpostorCutInput in;
+  in.settings = s.impostors;
+  in.depthRow = lv.frame.depthRow;
+  in.perspective = view.proj[2][3] != 0.0f;
+  in.pixelScale = std::abs(view.proj[1][1]) * 0.5f * float(lv.desc.height);
+  // The far region begins at the first far layer's near boundary (none: no far region); boxes ramp
+  // in over band x the mean layer thickness before it.
+  const LayerLayout& l = s.layout;
+  const uint32_t n = l.count();
+  in.farStart = l.region[2] ? lv.frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
+  in.farBand = s.impostors.band * (lv.frame.boundaries[n] - lv.frame.boundaries[0]) / float(n);
+  impostorCut(lv.imp, in, &lv.cut);
+  for (const ImpostorCut::Run& r : lv.cut.geometry) appendRunParts(lv, r.first, r.count, r.weight, r.level, &lv.cutParts);
+  lv.cutInstances = lv.cut.opaque;
+  lv.cutOpaque = uint32_t(lv.cut.opaque.size());
+  lv.cutInstances.insert(lv.cutInstances.end(), lv.cut.fading.begin(), lv.cut.fading.end());
+  lv.stats.lastImpostors = uint32_t(lv.cutInstances.size());
+  lv.stats.lastFadingBoxes = uint32_t(lv.cut.fading.size());
+  lv.stats.lastDrawnTriangles = lv.cut.triangles;
+  lv.stats.lastPlacementMs += msSince(t0);
+}
+
 // The whole placement for `view` at once, made the visible one.
 Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   PlacementJob job;
@@ -599,6 +651,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   lv.frame = job.frame;
   lv.layers = std::move(job.layers);
   lv.stats.lastPlacementMs = job.ms;
+  planImpostorCut(lv, view);
   return Status();
 }
 
@@ -609,12 +662,14 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 // six of the layers (render/per_vertex.cpp).
 Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
                      uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
-                     const PerVertexBindings* perVertex = nullptr) {
+                     const PerVertexBindings* perVertex = nullptr, const MeshDrawOptions* options = nullptr) {
   const Device& d = *lv.device;
   const VkDeviceSize zero = 0;
+  const MeshDrawOptions plain;
+  const MeshDrawOptions& o = options ? *options : plain;
   d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.vertices.buffer, &zero);
   d.vk.CmdBindIndexBuffer(cmd, lv.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
-  setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+  if (!o.keepViewport) setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
   // is bound at its own offset (render/mesh_chunks.h).
   auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
@@ -640,6 +695,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                         (mat.transmissionColorImage >= 0 ? LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE : 0u);
     push.normalScale = mat.normalImage >= 0 ? mat.normalScale : 0.0f;
     push.passKind = passKind;
+    push.lod = glm::vec4(part ? part->weight : 1.0f, o.debugLevels ? float((part ? part->level : 0u) + 1u) : 0.0f, 0.0f, 0.0f);
     push.triangleBase = uint32_t(c.firstTriangle);
     const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
     // A streamed mesh's part sits in this frame's ring segment (planSlice copied it there).
@@ -648,7 +704,8 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     const uint64_t indexAt = ring ? part->ringIndex : c.firstIndex + 3ull * first;
     const uint64_t vertexAt = ring ? part->ringVertex : c.firstVertex;
     const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    const Binding frame = bindBuffer(perVertex ? perVertex->frame : lv.frameBuffer.buffer);
+    const Binding frame = o.frame ? bindBuffer(o.frame, o.frameOffset, sizeof(gpu::LayerFrame))
+                                  : bindBuffer(perVertex ? perVertex->frame : lv.frameBuffer.buffer);
     const Binding roots = bindBuffer(lv.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes);
     const Binding base = bindImage(tex.view, ro, lv.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, lv.sampler),
                   trans = bindImage(textureOf(mat.transmissionImage).view, ro, lv.sampler),
@@ -729,9 +786,18 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
         attachment(lv.singlePass ? t.color : (*t.colorLayers)[i], false, clear),
         attachment(ids ? (lv.singlePass ? t.ids : (*t.idsLayers)[i]) : VK_NULL_HANDLE, false, clear)};
     const VkRenderingAttachmentInfo depth = attachment(lv.singlePass ? t.depth : (*t.depthLayers)[i], true, clear);
-    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&] {
-      return lv.singlePass ? drawMaterials(lv, cmd, lv.layered, true, LAYER_PASS_LAYERED, 0, parts)
-                           : drawMaterials(lv, cmd, lv.perLayer, true, LAYER_PASS_ONE_LAYER, i, parts);
+    // With an impostor cut (a re-slice at once): the opaque impostors, the foliage left, then the
+    // impostors fading in over their fading leaves (docs/design.md "Impostors").
+    const bool cut = lv.cut.active && !parts;
+    MeshDrawOptions o;
+    o.debugLevels = cut && lv.settings.impostors.debugView;
+    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
+      if (cut) CANOPY_TRY(recordImpostors(lv, cmd, false, i));
+      const std::vector<ChunkPart>* drawn = cut ? &lv.cutParts : parts;
+      if (!cut || !lv.cutParts.empty())
+        CANOPY_TRY(lv.singlePass ? drawMaterials(lv, cmd, lv.layered, true, LAYER_PASS_LAYERED, 0, drawn, nullptr, &o)
+                                 : drawMaterials(lv, cmd, lv.perLayer, true, LAYER_PASS_ONE_LAYER, i, drawn, nullptr, &o));
+      return cut ? recordImpostors(lv, cmd, true, i) : Status();
     }));
   }
   return Status();
@@ -754,6 +820,38 @@ bool sliceHas(const LayeredVegetation& lv, bool foliage) {
 }
 
 }  // namespace
+
+Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImageView* out) {
+  return layerView(device, image, layer, out);
+}
+
+Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
+                     uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options) {
+  return drawMaterials(lv, cmd, pipe, true, passKind, target, &parts, nullptr, &options);
+}
+
+void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
+                    std::vector<ChunkPart>* out) {
+  // Chunks are in GPU triangle order and never span materials: find the one holding `first`.
+  auto it = std::upper_bound(lv.chunks.begin(), lv.chunks.end(), first,
+                             [](uint64_t t, const MeshChunk& c) { return t < c.firstTriangle; });
+  if (it == lv.chunks.begin()) return;
+  for (size_t c = size_t(it - lv.chunks.begin()) - 1; count > 0 && c < lv.chunks.size(); ++c) {
+    const MeshChunk& ch = lv.chunks[c];
+    const uint64_t local = first - ch.firstTriangle;
+    if (local >= ch.triangleCount) continue;
+    const uint64_t take = std::min<uint64_t>(count, ch.triangleCount - local);
+    ChunkPart p;
+    p.chunk = uint32_t(c);
+    p.firstTriangle = uint32_t(local);
+    p.triangleCount = uint32_t(take);
+    p.weight = weight;
+    p.level = level;
+    out->push_back(p);
+    first += take;
+    count -= take;
+  }
+}
 
 gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
   gpu::LayerFrame f{};
@@ -868,7 +966,7 @@ bool operator==(const LayerSettings& a, const LayerSettings& b) {
          a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient &&
          a.leafRefractiveIndex == b.leafRefractiveIndex && a.leafRoughness == b.leafRoughness &&
          a.leafTransmission == b.leafTransmission && a.translucency == b.translucency &&
-         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames;
+         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames && a.impostors == b.impostors;
 }
 
 Status validateLayerSettings(const LayerSettings& s) {
@@ -911,6 +1009,13 @@ Status validateLayerSettings(const LayerSettings& s) {
       return Status::error("layer settings: lightColor[" + std::to_string(i) + "] = " + std::to_string(toGlm(s.lightColor)[i]) +
                            " is outside [0, 1000]");
   }
+  const ImpostorSettings& im = s.impostors;
+  if (uint32_t(im.mode) > uint32_t(ImpostorMode::ByProjectedSize))
+    return Status::error("layer settings: impostors.mode " + std::to_string(uint32_t(im.mode)) + " is not an ImpostorMode");
+  if (!(im.switchPixels >= 1.0f && im.switchPixels <= 4096.0f))
+    return Status::error("layer settings: impostors.switchPixels " + std::to_string(im.switchPixels) + " is outside [1, 4096]");
+  if (!(im.band >= 0.0f && im.band <= 4.0f))
+    return Status::error("layer settings: impostors.band " + std::to_string(im.band) + " is outside [0, 4]");
   return Status();
 }
 
@@ -987,6 +1092,19 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     CANOPY_TRY(chooseMeshResidency(lv, liveAtStart, mesh.bytes()));
     CANOPY_TRY(placeMesh(lv, std::move(mesh), liveAtStart));
     CANOPY_TRY(createPipelines(lv));
+    if (lv.imp.enabled) {
+      if (lv.streamed)
+        return Status::error("impostors (CanopyDesc.impostors.enable) bake from the resident mesh and cut it into draw "
+                             "ranges: the mesh (" + mib(lv.stats.meshBytes) + ") is streamed under deviceMemoryBudget " +
+                             mib(desc.deviceMemoryBudget) + "; raise it (or 0: no limit)");
+      CANOPY_TRY(createImpostors(lv));
+      lv.stats.impostorBoxes = uint32_t(lv.imp.nodes.size());
+      lv.stats.impostorBakedBoxes = lv.imp.baked;
+      lv.stats.impostorTilePixels = lv.imp.tileSize;
+      lv.stats.impostorBytes = lv.imp.bytes;
+      lv.stats.impostorBakeMs = lv.imp.bakeMs;
+    }
+    CANOPY_TRY(checkImpostorSettings(lv, lv.settings));
     lv.stats.singlePass = lv.singlePass;
     return Status();
   }();
@@ -1001,6 +1119,7 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
   destroyTargets(lv);
+  destroyImpostors(lv);
   for (GraphicsPipeline* p : {&lv.layered, &lv.perLayer, &lv.background, &lv.fade, &lv.fadeBackground})
     destroyGraphicsPipeline(d, *p);
   for (Image& t : lv.textures) destroyImage(d, t);
@@ -1013,6 +1132,7 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* targetsRecreated) {
   if (targetsRecreated) *targetsRecreated = false;
   CANOPY_TRY(validateLayerSettings(s));
+  CANOPY_TRY(checkImpostorSettings(lv, s));
   bool single = false;
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
   const bool nextSetBefore = usesNextSet(lv);
@@ -1349,6 +1469,20 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
   const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, roots, roots);
   const auto frame = g.importBuffer("layers: frame", lv.frameBuffer.size, kFrameRead, kFrameRead);
+  // Impostors (render/impostor_gpu.cpp): the re-slice's list, the box table and the baked atlas.
+  rg::ResourceId impostorList = rg::kInvalidResource, impostorBoxes = rg::kInvalidResource,
+                 atlasColor = rg::kInvalidResource, atlasDepth = rg::kInvalidResource;
+  if (lv.imp.enabled) {
+    const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+    impostorList = g.importBuffer("impostors: instances", lv.imp.instances.size, kFrameRead, kFrameRead);
+    impostorBoxes = g.importBuffer("impostors: boxes", lv.imp.boxTable.size, kFrameRead, kFrameRead);
+    atlasColor = g.importImage("impostors: colour atlas", descOf(lv.imp.color), sampled, sampled);
+    atlasDepth = g.importImage("impostors: depth atlas", descOf(lv.imp.depth), sampled, sampled);
+    CANOPY_TRY(g.bindBuffer(impostorList, lv.imp.instances.buffer));
+    CANOPY_TRY(g.bindBuffer(impostorBoxes, lv.imp.boxTable.buffer));
+    CANOPY_TRY(g.bindImage(atlasColor, lv.imp.color));
+    CANOPY_TRY(g.bindImage(atlasDepth, lv.imp.depth));
+  }
   LayeredVegetation* p = &lv;
   // What every mesh draw reads: the frame block and the chunked mesh.
   auto drawsMesh = [&](rg::RenderGraph::PassBuilder b) {
@@ -1361,14 +1495,22 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   // spread re-slice's from its first slice on.
   // Every layer pass runs only in the frames that have its work (rg `when`): a still frame records
   // neither the passes nor their barriers (the layer images stay in their rest state).
-  g.addPass("layers: frame constants", [p](rg::PassContext& c) {
+  auto constants = g.addPass("layers: frame constants", [p](rg::PassContext& c) {
      if (p->rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->frame);
+     // The cut's impostor list, in vkCmdUpdateBuffer's 64 KiB pieces.
+     if (p->rebuildPending && !p->cutInstances.empty()) {
+       const size_t bytes = p->cutInstances.size() * sizeof(gpu::ImpostorInstance);
+       for (size_t at = 0; at < bytes; at += 65536)
+         c.device->vk.CmdUpdateBuffer(c.cmd, p->imp.instances.buffer, at, std::min<size_t>(65536, bytes - at),
+                                      reinterpret_cast<const uint8_t*>(p->cutInstances.data()) + at);
+     }
      else if (p->slicePending && p->spread.sliceClears)
        c.device->vk.CmdUpdateBuffer(c.cmd, p->frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->spread.job.frame);
      return Status();
    })
       .write(frame, rg::Use::TransferDst)
       .when([p] { return p->rebuildPending || (p->slicePending && p->spread.sliceClears); });
+  if (impostorList != rg::kInvalidResource) constants.write(impostorList, rg::Use::TransferDst);
   auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {
                     return p->rebuildPending ? recordFoliage(*p, c.cmd, visibleTargets(*p), true, nullptr) : Status();
                   });
@@ -1377,6 +1519,11 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
       .write(r.depth, rg::Use::DepthAttachmentWrite)
       .when([p] { return p->rebuildPending; });
   if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
+  if (lv.imp.enabled)
+    foliage.access(impostorList, kFrameRead)
+        .access(impostorBoxes, kFrameRead)
+        .read(atlasColor, rg::Use::FragmentSampled)
+        .read(atlasDepth, rg::Use::FragmentSampled);
   drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
      return p->rebuildPending && p->hasRigid ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
                                                         : Status();

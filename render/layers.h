@@ -22,6 +22,7 @@
 #include "engine/transfer.h"
 #include "engine/camera.h"
 #include "render/gltf_loader.h"
+#include "render/impostors.h"
 #include "render/layer_layout.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
@@ -58,6 +59,8 @@ struct LayeredVegetationDesc {
   // Keep the model's branch hierarchy with the compact mesh (CompactMesh::bend) for the per-vertex
   // wind baseline; the mesh must then be resident (refused, naming the budget, otherwise).
   bool keepBend = false;
+  // The foliage's box hierarchy and its baked views (render/impostors.h; needs a resident mesh).
+  ImpostorDesc impostors;
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
@@ -99,6 +102,16 @@ struct PlacementJob {
 struct ChunkPart {
   uint32_t chunk = 0, firstTriangle = 0, triangleCount = 0;
   uint64_t ringVertex = 0, ringIndex = 0, ringRoot = 0;
+  float weight = 1.0f;  // LayerDrawPush.lod.x: below 1 for a box fading towards its impostor
+  uint32_t level = 0;   // the part's foliage box level (the debug view)
+};
+
+// How drawMaterials differs from a layer draw (the impostor bake, the debug view).
+struct MeshDrawOptions {
+  VkBuffer frame = VK_NULL_HANDLE;  // another frame block (binding 0) at frameOffset; null: the layers'
+  VkDeviceSize frameOffset = 0;
+  bool keepViewport = false;        // the caller has set viewport and scissor
+  bool debugLevels = false;         // colour each part by its level (LayerDrawPush.lod.y)
 };
 
 // The staging ring of a streamed mesh (docs/design.md "Layers: mesh budget and staging ring"):
@@ -198,6 +211,14 @@ struct LayeredVegetation {
   SliceRateControl rate;
   std::vector<PreparedWork> pendingClear;  // the targets' first clear, not yet recorded (host devices)
   LayerView lastRebuildView;
+  // Impostors (CanopyDesc.impostors; render/impostors.h): the hierarchy and atlas, and what the
+  // visible placement draws: its cut, the cut's foliage as chunk parts, its impostor list (the
+  // opaque ones first, uploaded with the frame block).
+  Impostors imp;
+  ImpostorCut cut;
+  std::vector<ChunkPart> cutParts;
+  std::vector<gpu::ImpostorInstance> cutInstances;
+  uint32_t cutOpaque = 0;
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   LayerStats stats;
@@ -246,6 +267,20 @@ struct PerVertexBindings {
 // rendering: the per-vertex baseline's frame.
 Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
                      const PerVertexBindings& bindings);
+
+// For render/impostor_gpu.cpp: a 2D view of one layer of an array image; the mesh draw with chunk
+// parts (drawMaterials); a GPU-order foliage triangle run cut at chunk borders into parts.
+Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImageView* out);
+Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
+                     uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options);
+void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
+                    std::vector<ChunkPart>* out);
+// render/impostor_gpu.cpp: the atlas, its pipelines and the bake (lv.imp planned); the draw of the
+// cut's opaque or fading impostors inside the caller's rendering of the layers (`layer`: the
+// per-layer path's layer, ignored by the single pass).
+Status createImpostors(LayeredVegetation& lv);
+void destroyImpostors(LayeredVegetation& lv);
+Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer);
 
 struct LayerResources {
   rg::ResourceId color = rg::kInvalidResource, depth = rg::kInvalidResource, ids = rg::kInvalidResource;

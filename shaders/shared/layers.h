@@ -71,8 +71,12 @@ struct LayerDrawPush {
   // Diffuse transmission (KHR_materials_diffuse_transmission): rgb its colour, a its factor 0..1
   // (0: an opaque leaf; rigid parts).
   vec4 transmission;
+  // Levels of detail (issue 18; docs/design.md "Impostors"): x the draw's weight, multiplying its
+  // premultiplied output (1: as drawn; below 1: a box fading out towards its impostor); y the debug
+  // view: 0 material colours, else the hierarchy level + 1 of the draw's box (colour by level).
+  vec4 lod;
 };
-CANOPY_SIZE_CHECK(LayerDrawPush, 96)
+CANOPY_SIZE_CHECK(LayerDrawPush, 112)
 
 // One step of a spread re-slice's cross-fade (docs/design.md "Layers: spread re-slicing"): the
 // visible layer's (or background's) colour becomes visible * (1 - weight) + new * weight, with
@@ -116,6 +120,17 @@ CANOPY_INLINE vec3 layerDecodeNormal(vec2 e) {
   if (n.z < 0.0f)
     n = vec3((1.0f - abs(e.y)) * (e.x >= 0.0f ? 1.0f : -1.0f), (1.0f - abs(e.x)) * (e.y >= 0.0f ? 1.0f : -1.0f), n.z);
   return normalize(n);
+}
+
+// The debug view's colour of hierarchy level `level` (geometry and impostors alike).
+CANOPY_INLINE vec3 lodLevelColor(uint level) {
+  uint k = level % 6u;
+  if (k == 0u) return vec3(0.9f, 0.2f, 0.2f);
+  if (k == 1u) return vec3(0.95f, 0.75f, 0.1f);
+  if (k == 2u) return vec3(0.2f, 0.8f, 0.25f);
+  if (k == 3u) return vec3(0.15f, 0.75f, 0.9f);
+  if (k == 4u) return vec3(0.3f, 0.35f, 0.95f);
+  return vec3(0.85f, 0.3f, 0.9f);
 }
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {

@@ -21,7 +21,7 @@
 // The version this header declares. createCanopy() refuses a library of another major version, or
 // an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
 #define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 4
+#define CANOPY_VERSION_MINOR 5
 #define CANOPY_VERSION_PATCH 0
 #define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
 #define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)
@@ -342,6 +342,47 @@ enum class SliceMode {
 enum class LayerDrawMode { Auto, SinglePass, PerLayer };  // Auto: single pass when the device can
 enum class ReslicePolicy { OnViewChange, EveryFrame };
 
+// Image-based levels of detail for the foliage (seed 002, Lluch et al.; docs/design.md
+// "Impostors"): at a re-slice, boxes of the foliage's box hierarchy are drawn as textured polygons
+// (their baked views, CanopyDesc.impostors) instead of their leaves.
+enum class ImpostorMode {
+  Off,              // every leaf drawn (default)
+  FarRegion,        // boxes whose root lies in the far region (LayerSettings.regions) and whose
+                    // projected size is below switchPixels; the share ramps in over band x (the
+                    // foliage's depth range / the layer count) before the far region's start
+  ByProjectedSize,  // any box whose projected size is below switchPixels, whatever its depth
+};
+struct ImpostorSettings {
+  ImpostorMode mode = ImpostorMode::Off;  // not Off: needs CanopyDesc.impostors.enable, rebuildBudgetMs 0
+                                          // and a resident mesh
+  // A box is an impostor where its projected size (bounding-sphere diameter, pixels of the layer
+  // images) is at most switchPixels; its leaves fade out and its impostor in while the size falls
+  // from switchPixels x (1 + band) to switchPixels (a distance band: size ~ 1 / distance). At
+  // switchPixels = CanopyDesc.impostors.tilePixels the views are shown 1:1 (Lluch et al. 4.1).
+  float switchPixels = 64.0f;             // [1, 4096]
+  float band = 0.5f;                      // [0, 4]; 0: a hard switch
+  bool debugView = false;                 // colour leaves and impostors by their box's hierarchy level
+};
+inline bool operator==(const ImpostorSettings& a, const ImpostorSettings& b) {
+  return a.mode == b.mode && a.switchPixels == b.switchPixels && a.band == b.band && a.debugView == b.debugView;
+}
+// Fixed at creation: the foliage's box hierarchy and its baked views.
+struct ImpostorDesc {
+  bool enable = false;        // build the hierarchy and bake the views (ImpostorSettings.mode may then be on)
+  uint32_t tilePixels = 64;   // side of each view's image, a power of two in [8, 512]
+  // Boxes of hierarchy levels 0..maxLevel get views (12 each: six faces, six diagonal planes), level
+  // by level from the top while memoryBudget allows; a box over maxBoxTriangles (its subtree's
+  // leaves) gets none (its children do). [0, 64]
+  uint32_t maxLevel = 3;
+  uint64_t maxBoxTriangles = 4'000'000;    // [1, 2^40]
+  // The views' colour (RGBA8) and depth (32-bit) in bytes; when not even the top level fits, the
+  // tiles are halved (down to 8 pixels) before the creation is refused. [1 MiB, 16 GiB]
+  uint64_t memoryBudget = 256ull << 20;
+  // Models without a box hierarchy of their own (glTF): a k-d split of the leaf roots with at most
+  // this many leaves per box. [1, 2^30]
+  uint32_t maxLeavesPerBox = 256;
+};
+
 struct LayerSettings {
   LayerLayout layout;                    // default 5(3-1-1), at most CanopyDesc.maxLayers layers
   RegionSplit regions;
@@ -370,6 +411,7 @@ struct LayerSettings {
   // at once. ms, [0, 1000].
   float rebuildBudgetMs = 0.0f;
   uint32_t crossFadeFrames = 8;          // frames a spread re-slice fades in over, [1, 240]
+  ImpostorSettings impostors;            // a change re-slices
 };
 bool operator==(const LayerSettings& a, const LayerSettings& b);
 
@@ -512,6 +554,8 @@ struct CanopyDesc {
   // (8 bytes a vertex, host and device) and the per-vertex pipeline; the mesh must then be
   // resident (createCanopy refuses a model whose mesh would be streamed, naming the budget).
   bool allowPerVertex = false;
+  // The foliage's box hierarchy and its baked views, for LayerSettings.impostors (issue 18).
+  ImpostorDesc impostors;
 };
 
 // Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh
@@ -602,6 +646,15 @@ struct LayerStats {
   uint64_t maxSliceTriangles = 0;    // the most one drawing frame of the last (or running) one drew
   double trianglesPerMs = 0;         // the drawing-rate estimate that sizes the slices (measured)
   float crossFade = 1.0f;            // the newest set's share of the visible layers, [0, 1]
+  // Impostors (CanopyDesc.impostors): the box hierarchy, what was baked, and the last re-slice.
+  uint32_t impostorBoxes = 0;        // boxes in the hierarchy
+  uint32_t impostorBakedBoxes = 0;   // of which have views
+  uint32_t impostorTilePixels = 0;   // the views' side after the budget
+  uint64_t impostorBytes = 0;        // the views' colour and depth
+  double impostorBakeMs = 0;         // wall clock of the bake (creation)
+  uint32_t lastImpostors = 0;        // boxes drawn as impostors by the last re-slice
+  uint32_t lastFadingBoxes = 0;      // of which inside the transition band
+  uint64_t lastDrawnTriangles = 0;   // foliage triangles the last re-slice drew
 };
 struct SimulationStats {
   uint64_t steps = 0;

@@ -1,0 +1,278 @@
+// The GPU side of the impostors (render/impostors.h; docs/design.md "Impostors"): the atlas, the
+// bake (each baked box's twelve views drawn with the layers' own pipeline and shading, orthographic,
+// into its tiles) and the draw of a cut's impostors into the layers.
+#include <cstring>
+#include <memory>
+
+#include "engine/device.h"
+#include "engine/pipeline.h"
+#include "engine/transfer.h"
+#include "render/layers.h"
+
+namespace canopy {
+namespace {
+
+constexpr VkFormat kAtlasColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkFormat kAtlasDepthFormat = VK_FORMAT_D32_SFLOAT;
+// The box table and the instance list are read by both stages (the fragment stage reads the box).
+const rg::State kImpostorRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+
+uint64_t roundUpTo(uint64_t x, uint64_t a) { return (x + a - 1) / a * a; }
+
+Status createDrawPipelines(LayeredVegetation& lv) {
+  Device& d = *lv.device;
+  Impostors& imp = lv.imp;
+  GraphicsPipelineDesc p;
+  // shaders/layers_impostor_common.glsl: frame block, box table, instance list, colour and depth atlas.
+  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
+  p.pushConstantSize = sizeof(gpu::ImpostorPush);
+  p.colorFormats = {lv.desc.colorFormat};
+  p.depthFormat = VK_FORMAT_D32_SFLOAT;
+  p.blend = BlendMode::PremultipliedOver;
+  p.fragmentShader = "layers_impostor.frag";
+  // Boxes fading in (inside the transition band) are drawn after the leaves without writing depth,
+  // so that the fading leaves of the same box are not hidden behind their own impostor.
+  for (bool write : {true, false}) {
+    p.depthWrite = write;
+    if (d.shaderOutputLayer) {
+      p.vertexShader = "layers_impostor.vert";
+      CANOPY_TRY(createGraphicsPipeline(d, p, write ? &imp.layered : &imp.layeredFade));
+    }
+    if (d.shaderClipDistance) {
+      p.vertexShader = "layers_impostor_clip.vert";
+      CANOPY_TRY(createGraphicsPipeline(d, p, write ? &imp.perLayer : &imp.perLayerFade));
+    }
+  }
+  // The bake: the background path of the layers (every triangle, no slicing), into the atlas formats.
+  GraphicsPipelineDesc b;
+  b.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
+  b.pushConstantSize = sizeof(gpu::LayerDrawPush);
+  b.vertexStride = sizeof(gpu::LayerVertex);
+  b.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0}, {1, VK_FORMAT_R16G16_SNORM, 8}, {2, VK_FORMAT_R16G16_SFLOAT, 12}};
+  b.colorFormats = {kAtlasColorFormat};
+  b.depthFormat = kAtlasDepthFormat;
+  b.blend = BlendMode::PremultipliedOver;
+  b.vertexShader = "layers_clip.vert";
+  b.fragmentShader = "layers.frag";
+  return createGraphicsPipeline(d, b, &imp.bake);
+}
+
+// The bake's frame block of each tile: the layers' lighting, the view's orthographic camera.
+std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
+  const Impostors& imp = lv.imp;
+  std::vector<uint8_t> bytes(size_t(imp.tiles) * stride, 0);
+  const gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
+  for (const ImpostorNode& n : imp.nodes) {
+    if (n.firstTile == kNoTile) continue;
+    for (uint32_t k = 0; k < IMPOSTOR_VIEWS; ++k) {
+      gpu::LayerFrame f = base;
+      f.viewProj = impostorViewProj(n, k);
+      const glm::vec3 dir = gpu::impostorDirection(k);
+      f.eye = glm::vec4(dir, 0.0f);
+      f.depthRow = glm::vec4(-dir, glm::dot(n.center, dir));
+      f.layerCount = 1;
+      std::memcpy(bytes.data() + size_t(n.firstTile + k) * stride, &f, sizeof f);
+    }
+  }
+  return bytes;
+}
+
+Status bake(LayeredVegetation& lv) {
+  Device& d = *lv.device;
+  Impostors& imp = lv.imp;
+  const auto t0 = std::chrono::steady_clock::now();
+  const uint64_t align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 16);
+  const uint64_t stride = roundUpTo(sizeof(gpu::LayerFrame), align);
+  const std::vector<uint8_t> frames = bakeFrames(lv, stride);
+  PreparedWork work;
+  Buffer frameBuf;
+  CANOPY_TRY(createBuffer(d, std::max<uint64_t>(frames.size(), 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::Upload,
+                          &frameBuf, "impostors: bake frames"));
+  work.staging.push_back(frameBuf);  // released with the work
+  void* mapped = hostCoherentPointer(d, frameBuf.allocation);
+  if (!mapped) return Status::error("impostors: the bake's frame buffer is not host-visible and coherent");
+  std::memcpy(mapped, frames.data(), frames.size());
+  work.graph = std::make_shared<rg::RenderGraph>();
+  rg::RenderGraph& g = *work.graph;
+  const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+  const auto color = g.importImage("impostors: colour atlas", descOf(imp.color), {}, sampled);
+  const auto depth = g.importImage("impostors: depth atlas", descOf(imp.depth), {}, sampled);
+  const auto frameId = g.importBuffer("impostors: bake frames", frameBuf.size, kImpostorRead, kImpostorRead);
+  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
+                  rootState = rg::stateOf(rg::Use::VertexStorageRead);
+  const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
+  const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
+  const auto roots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, rootState, rootState);
+  LayeredVegetation* p = &lv;
+  const VkBuffer frameHandle = frameBuf.buffer;
+  g.addPass("impostors: bake", [p, frameHandle, stride](rg::PassContext& c) -> Status {
+     Impostors& im = p->imp;
+     const Device& dev = *c.device;
+     const uint32_t T = im.tileSize, perLayer = im.tilesPerLayer();
+     std::vector<std::vector<ChunkPart>> parts(im.nodes.size());
+     for (uint32_t layer = 0; layer < im.atlasLayers; ++layer) {
+       VkRenderingAttachmentInfo ca{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+       ca.imageView = im.colorLayerViews[layer];
+       ca.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+       ca.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+       ca.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+       VkRenderingAttachmentInfo da = ca;
+       da.imageView = im.depthLayerViews[layer];
+       da.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+       da.clearValue.depthStencil = {1.0f, 0};
+       VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+       ri.renderArea = {{0, 0}, {im.tilesPerRow * T, im.rowsPerLayer * T}};
+       ri.layerCount = 1;
+       ri.colorAttachmentCount = 1;
+       ri.pColorAttachments = &ca;
+       ri.pDepthAttachment = &da;
+       dev.cmdBeginRendering(c.cmd, &ri);
+       Status s;
+       for (uint32_t i = 0; i < im.nodes.size() && s.ok(); ++i) {
+         const ImpostorNode& n = im.nodes[i];
+         if (n.firstTile == kNoTile) continue;
+         for (uint32_t k = 0; k < IMPOSTOR_VIEWS && s.ok(); ++k) {
+           const uint32_t tile = n.firstTile + k;
+           if (tile / perLayer != layer) continue;
+           if (parts[i].empty())
+             for (uint32_t m = 0; m < im.materials; ++m)
+               appendRunParts(*p, im.ownFirst(i, m), im.subtreeEnd(i, m) - im.ownFirst(i, m), 1.0f, n.level, &parts[i]);
+           const uint32_t x = (tile % perLayer) % im.tilesPerRow, y = (tile % perLayer) / im.tilesPerRow;
+           const VkViewport vp{float(x * T), float(y * T), float(T), float(T), 0.0f, 1.0f};
+           const VkRect2D sc{{int32_t(x * T), int32_t(y * T)}, {T, T}};
+           dev.vk.CmdSetViewport(c.cmd, 0, 1, &vp);
+           dev.vk.CmdSetScissor(c.cmd, 0, 1, &sc);
+           MeshDrawOptions o;
+           o.frame = frameHandle;
+           o.frameOffset = uint64_t(tile) * stride;
+           o.keepViewport = true;
+           s = drawMeshParts(*p, c.cmd, im.bake, LAYER_PASS_BACKGROUND, 0, parts[i], o);
+         }
+       }
+       dev.cmdEndRendering(c.cmd);
+       CANOPY_TRY(s);
+     }
+     return Status();
+   })
+      .write(color, rg::Use::ColorAttachmentWrite)
+      .write(depth, rg::Use::DepthAttachmentWrite)
+      .access(frameId, kImpostorRead)
+      .read(vertices, rg::Use::VertexBuffer)
+      .read(indices, rg::Use::IndexBuffer)
+      .read(roots, rg::Use::VertexStorageRead);
+  CANOPY_TRY(g.bindImage(color, imp.color));
+  CANOPY_TRY(g.bindImage(depth, imp.depth));
+  CANOPY_TRY(g.bindBuffer(frameId, frameBuf.buffer));
+  CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
+  CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
+  CANOPY_TRY(g.bindBuffer(roots, lv.leafRoots.buffer));
+  CANOPY_TRY(submitOrDefer(d, std::move(work)));
+  imp.bakeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return Status();
+}
+
+}  // namespace
+
+Status createImpostors(LayeredVegetation& lv) {
+  Device& d = *lv.device;
+  Impostors& imp = lv.imp;
+  if (!d.shaderClipDistance)
+    return Status::error("impostors: the bake needs shaderClipDistance (the layers' background path)");
+  ImageDesc c;
+  c.format = kAtlasColorFormat;
+  c.width = imp.tilesPerRow * imp.tileSize;
+  c.height = imp.rowsPerLayer * imp.tileSize;
+  c.layers = imp.atlasLayers;
+  c.arrayView = true;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  CANOPY_TRY(createImage(d, c, &imp.color, "impostors: colour atlas"));
+  ImageDesc z = c;
+  z.format = kAtlasDepthFormat;
+  z.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  CANOPY_TRY(createImage(d, z, &imp.depth, "impostors: depth atlas"));
+  for (uint32_t l = 0; l < imp.atlasLayers; ++l) {
+    VkImageView v;
+    CANOPY_TRY(imageLayerView(d, imp.color, l, &v));
+    imp.colorLayerViews.push_back(v);
+    CANOPY_TRY(imageLayerView(d, imp.depth, l, &v));
+    imp.depthLayerViews.push_back(v);
+  }
+  VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  si.magFilter = si.minFilter = VK_FILTER_LINEAR;
+  si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
+  si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &imp.linearSampler));
+  si.magFilter = si.minFilter = VK_FILTER_NEAREST;
+  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &imp.nearestSampler));
+  // The box table (baked boxes, in gpuIndex order) and room for a cut that draws every one of them.
+  std::vector<gpu::ImpostorBox> table(std::max<uint32_t>(imp.baked, 1));
+  for (const ImpostorNode& n : imp.nodes) {
+    if (n.gpuIndex == kNoTile) continue;
+    gpu::ImpostorBox& b = table[n.gpuIndex];
+    b.center = glm::vec4(n.center, 0.0f);
+    b.halfExtent = glm::vec4(n.half, float(n.level));
+    b.root = glm::vec4(n.root, 1.0f);
+    b.firstTile = n.firstTile;
+  }
+  const VkDeviceSize tableBytes = table.size() * sizeof(gpu::ImpostorBox);
+  CANOPY_TRY(createBuffer(d, tableBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          MemoryUsage::DeviceLocal, &imp.boxTable, "impostors: boxes"));
+  CANOPY_TRY(uploadBuffer(d, imp.boxTable, table.data(), tableBytes, kImpostorRead));
+  imp.instanceCapacity = std::max<uint32_t>(imp.baked, 1);
+  CANOPY_TRY(createBuffer(d, imp.instanceCapacity * sizeof(gpu::ImpostorInstance),
+                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
+                          &imp.instances, "impostors: instances"));
+  CANOPY_TRY(createDrawPipelines(lv));
+  return imp.baked ? bake(lv) : Status();
+}
+
+void destroyImpostors(LayeredVegetation& lv) {
+  if (!lv.device) return;
+  Device& d = *lv.device;
+  Impostors& imp = lv.imp;
+  for (VkImageView v : imp.colorLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
+  for (VkImageView v : imp.depthLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
+  imp.colorLayerViews.clear();
+  imp.depthLayerViews.clear();
+  destroyImage(d, imp.color);
+  destroyImage(d, imp.depth);
+  destroyBuffer(d, imp.boxTable);
+  destroyBuffer(d, imp.instances);
+  for (GraphicsPipeline* p : {&imp.bake, &imp.layered, &imp.layeredFade, &imp.perLayer, &imp.perLayerFade})
+    destroyGraphicsPipeline(d, *p);
+  for (VkSampler s : {imp.linearSampler, imp.nearestSampler})
+    if (s) d.vk.DestroySampler(d.device, s, d.allocationCallbacks);
+  imp = Impostors{};
+}
+
+Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer) {
+  const Impostors& imp = lv.imp;
+  const uint32_t total = uint32_t(lv.cutInstances.size());
+  const uint32_t first = fading ? lv.cutOpaque : 0, count = fading ? total - lv.cutOpaque : lv.cutOpaque;
+  if (!count) return Status();
+  const GraphicsPipeline& pipe =
+      lv.singlePass ? (fading ? imp.layeredFade : imp.layered) : (fading ? imp.perLayerFade : imp.perLayer);
+  const Device& d = *lv.device;
+  setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+  gpu::ImpostorPush push{};
+  push.passKind = lv.singlePass ? LAYER_PASS_LAYERED : LAYER_PASS_ONE_LAYER;
+  push.targetLayer = layer;
+  push.tileSize = imp.tileSize;
+  push.tilesPerRow = imp.tilesPerRow;
+  push.rowsPerLayer = imp.rowsPerLayer;
+  push.fading = fading ? 1u : 0u;
+  push.debugLevels = lv.settings.impostors.debugView ? 1u : 0u;
+  const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
+  CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
+                          {bindBuffer(lv.frameBuffer.buffer), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
+                           bindImage(imp.color.view, ro, imp.linearSampler), bindImage(imp.depth.view, ro, imp.nearestSampler)},
+                          push));
+  d.vk.CmdDraw(cmd, 6, count, 0, first);
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,102 @@
+#pragma once
+// Image-based multiresolution foliage (seed 002, Lluch et al.; issue 18; docs/design.md
+// "Impostors"). At creation (CanopyDesc.impostors.enable):
+//   1. the foliage's box hierarchy (render/foliage_boxes.h: the generator's L-system boxes, else a
+//      k-d split of the leaf roots), and the foliage's GPU triangle order laid out box by box in
+//      depth-first order, so that every box's own leaves and every box's subtree are one contiguous
+//      triangle run per material (a cut through the hierarchy is a short list of draw ranges);
+//   2. the bake: per box of the top levels, twelve orthographic views of its subtree's leaves
+//      (shared/impostor.h: six faces, six diagonal planes), colour and depth, drawn once on the GPU
+//      with the layers' own shading into a tiled atlas within a memory budget.
+// At a re-slice (LayerSettings.impostors): the cut for the view (impostorCut), its impostors drawn
+// into the layers (each in the layer of its box's root depth), then the leaves of the boxes left.
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <vulkan/vulkan.h>
+
+#include <canopy/canopy.h>
+
+#include "engine/graphics_pipeline.h"
+#include "engine/memory.h"
+#include "engine/status.h"
+#include "render/gltf_loader.h"
+#include "render/leaf_roots.h"
+#include "shared/impostor.h"
+
+namespace canopy {
+
+constexpr uint32_t kNoTile = 0xffffffffu;
+
+struct ImpostorNode {
+  uint32_t parent = 0xffffffffu;  // an earlier node (depth-first preorder); none for the root
+  uint32_t level = 0;
+  uint32_t subtreeEnd = 0;        // the first node after its subtree (preorder)
+  glm::vec3 center{0}, half{0};   // bounds of its subtree's foliage
+  glm::vec3 root{0};              // mean of its subtree's leaf roots (its layer)
+  float radius = 0;               // half the bounds' diagonal
+  uint32_t firstTile = kNoTile;   // baked views, or kNoTile
+  uint32_t gpuIndex = kNoTile;    // its ImpostorBox entry (baked nodes only)
+};
+
+struct Impostors {
+  bool enabled = false;
+  std::vector<ImpostorNode> nodes;       // depth-first preorder
+  uint32_t materials = 0;                // model materials (runs are per material)
+  // Per node and material: own leaves' run [ownFirst, ownFirst + ownCount) and the subtree's run
+  // [ownFirst, subtreeEnd) in GPU triangle numbers (3 values per node and material).
+  std::vector<uint64_t> runs;
+  uint64_t ownFirst(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 0]; }
+  uint64_t ownCount(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 1]; }
+  uint64_t subtreeEnd(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 2]; }
+  uint32_t baked = 0, tileSize = 0, tilesPerRow = 0, rowsPerLayer = 0, atlasLayers = 0, tiles = 0;
+  uint32_t tilesPerLayer() const { return tilesPerRow * rowsPerLayer; }
+  Image color, depth;                                   // the atlas (2D arrays)
+  std::vector<VkImageView> colorLayerViews, depthLayerViews;
+  Buffer boxTable, instances;                            // gpu::ImpostorBox per baked node; this re-slice's list
+  uint32_t instanceCapacity = 0;
+  GraphicsPipeline bake, layered, layeredFade, perLayer, perLayerFade;
+  VkSampler linearSampler = VK_NULL_HANDLE, nearestSampler = VK_NULL_HANDLE;
+  double bakeMs = 0;
+  uint64_t bytes = 0;
+};
+
+// What a re-slice draws with impostors on (computed by impostorCut with the placement).
+struct ImpostorCut {
+  bool active = false;
+  std::vector<gpu::ImpostorInstance> opaque, fading;  // weight 1 / inside the band
+  struct Run { uint32_t material; uint64_t first, count; float weight; uint32_t level; };
+  std::vector<Run> geometry;                          // foliage runs to draw (GPU triangle numbers)
+  uint64_t triangles = 0;
+};
+
+// Step 1: the hierarchy and the foliage's GPU order. `materialStart[m]` is where material m's
+// foliage triangles start in GPU order; `order` (GPU -> model triangle) gets its foliage part
+// rewritten box by box. Errors name the model and what is wrong.
+Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                          const ImpostorDesc& desc, const std::vector<uint64_t>& materialStart, Impostors* imp,
+                          std::vector<uint32_t>* order);
+
+// Which nodes get views within desc's budget and tile size: fills firstTile, gpuIndex, baked,
+// tiles, tileSize, tilesPerRow, rowsPerLayer, atlasLayers, bytes (the atlas as allocated, within
+// the budget). Errors name the budget.
+Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32_t maxArrayLayers, Impostors* imp);
+
+// The orthographic view-projection of node `box`'s view k (Vulkan clip space, depth 0 at the
+// side the view looks from): the bake's camera, and what the tests render directly.
+glm::mat4 impostorViewProj(const ImpostorNode& box, uint32_t k);
+
+struct ImpostorCutInput {
+  ImpostorSettings settings;
+  glm::vec4 depthRow{0};    // view depth of a world point
+  float pixelScale = 1;     // pixels per world unit at view depth 1 (perspective) or everywhere (orthographic)
+  bool perspective = true;
+  float farStart = 0, farBand = 0;  // FarRegion: depth ramp
+};
+// The cut through the hierarchy for one view: per node its impostor share a (size and, for
+// FarRegion, depth ramps; 0 for nodes without views), W = a x (what its ancestors left), its own
+// leaves drawn with what is left after it; subtrees left with nothing are skipped.
+void impostorCut(const Impostors& imp, const ImpostorCutInput& in, ImpostorCut* out);
+
+}  // namespace canopy

@@ -1,0 +1,58 @@
+// Bindings and the shared vertex stage of the impostor draws (render/impostor_gpu.cpp declares the
+// same five push-descriptor bindings; shared/impostor.h the structs and view frames): one polygon
+// per box facing the viewer, textured from the box's two views nearest the viewer's direction
+// (Lluch et al.: the box's images alpha-blended against popping), in the layer of the box's root.
+#include "shared/layers.h"
+#include "shared/impostor.h"
+
+layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
+layout(binding = 1, scalar) readonly buffer BoxBuf { ImpostorBox boxes[]; };
+layout(binding = 2, scalar) readonly buffer InstanceBuf { ImpostorInstance instances[]; };
+layout(binding = 3) uniform sampler2DArray atlasColor;  // premultiplied linear RGBA per view tile
+layout(binding = 4) uniform sampler2DArray atlasDepth;  // 0 at the side the view looks from, 1 at the far side
+layout(push_constant, scalar) uniform Push { ImpostorPush pc; };
+
+// Towards the viewer from p: the camera position, or an orthographic camera's direction.
+vec3 towardsViewer(vec3 p) { return f.eye.w > 0.0 ? normalize(f.eye.xyz - p) : f.eye.xyz; }
+
+#ifdef CANOPY_VERTEX
+layout(location = 0) out vec3 vWorld;
+layout(location = 1) flat out uvec4 vBoxViews;  // box, first view, second view, level
+layout(location = 2) flat out vec2 vWeights;    // the first view's share, the instance's weight
+
+// Half the box's extent along unit axis a.
+float support(vec3 h, vec3 a) { return abs(h.x * a.x) + abs(h.y * a.y) + abs(h.z * a.z); }
+
+uint impostorVertex() {
+  ImpostorInstance inst = instances[gl_InstanceIndex];
+  ImpostorBox b = boxes[inst.box];
+  vec3 c = b.center.xyz, h = b.halfExtent.xyz;
+  vec3 w = towardsViewer(c);
+  // The two views that face the viewer best; the first's share falls to 1/2 as the second catches up.
+  uint k1 = 0u, k2 = 1u;
+  float s1 = -2.0, s2 = -2.0;
+  for (uint k = 0u; k < IMPOSTOR_VIEWS; ++k) {
+    float s = impostorViewScore(k, w);
+    if (s > s1) { s2 = s1; k2 = k1; s1 = s; k1 = k; }
+    else if (s > s2) { s2 = s; k2 = k; }
+  }
+  float w1 = 0.5 + 0.5 * clamp((s1 - s2) / 0.15, 0.0, 1.0);
+  // The polygon: through the centre, facing the viewer, covering the box's outline (enlarged for a
+  // near perspective camera, whose outline of the box's front is wider than at its centre).
+  vec3 up = abs(w.y) > 0.99 ? vec3(0.0, 0.0, -1.0) : vec3(0.0, 1.0, 0.0);
+  vec3 r = normalize(impostorCross(up, w));
+  vec3 u = impostorCross(w, r);
+  float grow = 1.0;
+  if (f.eye.w > 0.0) {
+    float dist = length(f.eye.xyz - c), radius = length(h);
+    grow = dist / max(dist - radius, 0.5 * dist);
+  }
+  const vec2 corners[6] = vec2[6](vec2(-1, -1), vec2(1, -1), vec2(1, 1), vec2(-1, -1), vec2(1, 1), vec2(-1, 1));
+  vec2 q = corners[gl_VertexIndex % 6];
+  vWorld = c + grow * (r * support(h, r) * q.x + u * support(h, u) * q.y);
+  gl_Position = f.viewProj * vec4(vWorld, 1.0);
+  vBoxViews = uvec4(inst.box, k1, k2, inst.level);
+  vWeights = vec2(w1, inst.weight);
+  return layerOfDepth(f, dot(f.depthRow, vec4(b.root.xyz, 1.0)));
+}
+#endif

@@ -48,5 +48,10 @@ int runRebuildBench(Device& dev, const std::vector<uint64_t>& faceCounts, const 
 // and camera, per face count; `csvPath` (empty: none) for scripts/plot_bench.py --pervertex.
 int runPerVertexBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int frames,
                       uint32_t width, uint32_t height, uint64_t deviceMemoryBudget, const std::string& csvPath);
+// Impostors (issue 18): re-slice time with and without Lluch et al.'s impostors (off, far region,
+// by projected size, alternated) and the far layers' image difference, per face count; with
+// `imageDir` (empty: none) the far layers and the debug view as PNG.
+int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int rebuilds,
+                     uint32_t width, uint32_t height, const std::string& imageDir);
 }
 }  // namespace canopy

@@ -7,6 +7,7 @@
 //   canopy-bench rebuild [--faces 80000,10000000] [--scene shrub] [--budget MS] [--rebuilds N] [--size WxH]
 //                [--spread-max-faces N] [--device-budget MIB]
 //   canopy-bench pervertex [--faces 80000,1000000,10000000] [--scene shrub] [--frames N] [--size WxH] [--csv FILE]
+//   canopy-bench impostors [--faces 10000000] [--scene field] [--rebuilds N] [--size WxH] [--images DIR]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -34,6 +35,9 @@ static int usage(const char* why) {
                "                 spread only up to --spread-max-faces (default 10000000)\n"
                "  pervertex      the 2D method against the per-vertex wind baseline (Habel) on the same scene and\n"
                "                 camera, per face count (default 80000,1000000,10000000), as ratios; --csv FILE\n"
+               "  impostors      Lluch et al.'s impostors: re-slice time off / far region / by projected size and the\n"
+               "                 far layers' image difference, per face count (default 10000000, --scene field,\n"
+               "                 --rebuilds 5, --size 1024x768); --images DIR writes the far layers and the debug view\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -78,8 +82,8 @@ int main(int argc, char** argv) {
     return !out->empty();
   };
   uint32_t rebuildEvery = 100;
-  bool runRebuild = false, runPerVertex = false;
-  std::string csvPath;
+  bool runRebuild = false, runPerVertex = false, runImpostors = false;
+  std::string csvPath, imagesDir;
   float budgetMs = 4.0f;
   uint64_t spreadMaxFaces = 10000000;
   std::vector<uint64_t> faces = {80000, 10000000};
@@ -99,6 +103,12 @@ int main(int argc, char** argv) {
     else if (a == "table1") runTable1 = true;
     else if (a == "rebuild") runRebuild = true;
     else if (a == "pervertex") runPerVertex = true;
+    else if (a == "impostors") runImpostors = true;
+    else if (a == "--images") {
+      const char* v = next();
+      if (!v) return usage("--images needs a folder");
+      imagesDir = v;
+    }
     else if (a == "--csv") {
       const char* v = next();
       if (!v) return usage("--csv needs a file name");
@@ -207,7 +217,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors) runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
@@ -226,6 +236,9 @@ int main(int argc, char** argv) {
     rc = bench::runPerVertexBench(dev, facesGiven ? faces : std::vector<uint64_t>{80000, 1000000, 10000000},
                                   scene.empty() ? "shrub" : scene, frames ? frames : 24, t1.width, t1.height,
                                   t1.deviceMemoryBudget, csvPath);
+  if (rc == 0 && runImpostors)
+    rc = bench::runImpostorBench(dev, facesGiven ? faces : std::vector<uint64_t>{10000000}, scene, int(rebuilds),
+                                 t1.width, t1.height, imagesDir);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

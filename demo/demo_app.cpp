@@ -40,6 +40,11 @@ void printHelp() {
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
       "  --method M          2d (the paper's layers) or per-vertex (the 3D baseline: every vertex bent through\n"
       "                      its branch hierarchy each frame, Habel); the window switches with M (default 2d)\n"
+      "  --impostors MODE    off, far (boxes in the far region) or size (any box) drawn as Lluch et al.'s\n"
+      "                      impostors when their projected size is below --impostor-pixels; re-slices\n"
+      "                      are then at once (default off)\n"
+      "  --impostor-pixels P the switch size, pixels, [1, 4096] (default %g)\n"
+      "  --impostor-debug    colour leaves and impostors by their box's hierarchy level\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
       "Light and leaf shading (Habel: specular front, diffuse back, transmission on the unlit side):\n"
@@ -74,6 +79,7 @@ void printHelp() {
       "  --window            open a window: left drag orbits, wheel zooms, right drag pushes the foliage;\n"
       "                      keys: arrows wind direction/strength, F/G frequency, L layout, D delay mode,\n"
       "                      V debug view, M method (2D / per-vertex), J/K turn the light, T translucency,\n"
+      "                      I impostors (off / far / size), B impostor debug view (levels),\n"
       "                      space pause, O auto-orbit,\n"
       "                      P screenshot, Esc quit\n"
       "  --vsync on|off      present with vsync (default on)\n"
@@ -88,7 +94,7 @@ void printHelp() {
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
       (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust,
-      d.light.x, d.light.y, d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, d.ambient, d.leafIor, d.leafRoughness,
+      d.impostorPixels, d.light.x, d.light.y, d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, d.ambient, d.leafIor, d.leafRoughness,
       d.leafTransmission, d.width,
       d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.deviceBudgetMiB, d.ringMiB, d.outDir.c_str());
 }
@@ -185,6 +191,16 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (std::string(v) == "2d") o->method = AnimationMode::Layers2D;
       else if (std::string(v) == "per-vertex") o->method = AnimationMode::PerVertex;
       else return bad(quoted(v) + " is not 2d or per-vertex");
+    } else if (a == "--impostors") {
+      if (!takes()) return bad("needs off, far or size");
+      if (std::string(v) == "off") o->impostors = ImpostorMode::Off;
+      else if (std::string(v) == "far") o->impostors = ImpostorMode::FarRegion;
+      else if (std::string(v) == "size") o->impostors = ImpostorMode::ByProjectedSize;
+      else return bad(quoted(v) + " is not off, far or size");
+    } else if (a == "--impostor-pixels") {
+      if (const int rc = number(1, 4096, &o->impostorPixels)) return rc;
+    } else if (a == "--impostor-debug") {
+      o->impostorDebug = true;
     } else if (a == "--debug") {
       if (!takes()) return bad("needs none, layers, velocity or grid");
       const std::string d = v;
@@ -304,6 +320,7 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
   d.faces = o.faces;
   d.seed = o.seed;
   d.hierarchy = bothMethods(o);
+  d.boxes = withImpostors(o);
   SceneStats st;
   cli::ProgressLine progress(std::string("generating ") + sceneName(o.scene));
   CANOPY_TRY(generateScene(d, model, &st, o.faces >= 1'000'000 ? SceneProgress(std::ref(progress)) : SceneProgress()));
@@ -348,6 +365,11 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.leafRoughness = o.leafRoughness;
   p.layers.leafTransmission = o.leafTransmission;
   p.layers.translucency = o.translucency;
+  p.layers.impostors.mode = o.impostors;
+  p.layers.impostors.switchPixels = o.impostorPixels;
+  p.layers.impostors.debugView = o.impostorDebug;
+  // Impostors are drawn by re-slices at once (ImpostorSettings).
+  if (o.impostors != ImpostorMode::Off || o.impostorDebug) p.layers.rebuildBudgetMs = 0.0f;
   p.composite.debugView = o.debug;
   p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
   return p;
@@ -518,6 +540,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
   desc.allowPerVertex = bothMethods(o);
+  desc.impostors.enable = withImpostors(o);
   // The preparation's own peak above what is resident before it (the model): issue 16's
   // "bytes per face" of preparation, printed below.
   const uint64_t residentBefore = cli::residentBytes();

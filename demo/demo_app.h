@@ -41,6 +41,11 @@ struct Options {
   // The 2D method or the per-vertex baseline (Habel), on the same scene; the window can switch
   // (key M) when the context allows both, which it does in window mode and with per-vertex.
   AnimationMode method = AnimationMode::Layers2D;
+  // Lluch et al.'s impostors for the far boxes (LayerSettings.impostors; docs/design.md
+  // "Impostors"); the window cycles the mode (key I) and the debug view (key B).
+  ImpostorMode impostors = ImpostorMode::Off;
+  float impostorPixels = 64.0f;        // ImpostorSettings.switchPixels
+  bool impostorDebug = false;          // colour leaves and impostors by their box's level
   // Light and leaf shading (LayerSettings; docs/design.md "Layers: leaf shading")
   Float3 light = LayerSettings{}.lightDirection;     // towards the light, world space
   Float3 lightColor = LayerSettings{}.lightColor;
@@ -75,6 +80,8 @@ struct Options {
 // Whether the context is created with both methods (CanopyDesc.allowPerVertex; the scene then
 // carries its branch hierarchy).
 inline bool bothMethods(const Options& o) { return o.window || o.method == AnimationMode::PerVertex; }
+// Whether the context bakes impostors (CanopyDesc.impostors; the scene then carries its boxes).
+inline bool withImpostors(const Options& o) { return o.window || o.impostors != ImpostorMode::Off || o.impostorDebug; }
 
 // Parses the command line. Returns 0 to run, 1 when --help was printed, 2 on an error (the
 // one-line reason is in *error).

@@ -191,6 +191,18 @@ void onKey(GLFWwindow* win, int key, int, int action, int) {
       l.params.animation = l.params.animation == AnimationMode::Layers2D ? AnimationMode::PerVertex : AnimationMode::Layers2D;
       std::printf("%s\n", l.params.animation == AnimationMode::PerVertex ? "per-vertex baseline (Habel)" : "2D layers");
       break;
+    case GLFW_KEY_I: {  // impostors off -> far region -> by projected size (re-slices at once)
+      ImpostorSettings& im = l.params.layers.impostors;
+      im.mode = ImpostorMode((uint32_t(im.mode) + 1) % 3);
+      if (im.mode != ImpostorMode::Off) l.params.layers.rebuildBudgetMs = 0.0f;
+      const char* names[] = {"off", "far region", "by projected size"};
+      std::printf("impostors: %s (switch at %g px)\n", names[uint32_t(im.mode)], im.switchPixels);
+      break;
+    }
+    case GLFW_KEY_B:
+      l.params.layers.impostors.debugView = !l.params.layers.impostors.debugView;
+      std::printf("impostor debug view (colour by box level) %s\n", l.params.layers.impostors.debugView ? "on" : "off");
+      break;
     case GLFW_KEY_T:
       l.params.layers.translucency = !l.params.layers.translucency;
       std::printf("translucency %s\n", l.params.layers.translucency ? "on" : "off");

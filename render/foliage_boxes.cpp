@@ -130,4 +130,77 @@ Status boxesFromLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& 
   return finish(m, foliage, boxOf, out);
 }
 
+Status refineBoxes(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                   uint32_t maxOwnLeaves, uint32_t maxPieces, BoxHierarchy* h) {
+  CANOPY_TRY(checkMask(m, foliage));
+  if (maxOwnLeaves < 1 || maxPieces < 2)
+    return Status::error("foliage boxes: refinement needs maxOwnLeaves >= 1 and maxPieces >= 2");
+  if (roots.leafOfVertex.size() != m.positions.size())
+    return Status::error("foliage boxes: the leaf roots are not those of " + modelName(m));
+  const size_t nb = h->boxes.size();
+  std::vector<uint32_t> boxOf(m.triangleCount(), 0), boxOfLeaf(roots.leafCount(), kNoBox);
+  for (size_t b = 0; b < nb; ++b)
+    for (uint64_t j = h->boxes[b].firstTriangle; j < h->boxes[b].firstTriangle + h->boxes[b].triangleCount; ++j)
+      boxOf[h->triangles[j]] = uint32_t(b);
+  auto leafOf = [&](uint32_t t) { return roots.leafOfVertex[m.indices[3 * size_t(t)]]; };
+  auto rootOf = [&](uint32_t leaf) { return m.positions[roots.leafRoot[leaf]]; };
+  bool changed = false;
+  for (size_t b = 0; b < nb; ++b) {
+    const FoliageBox box = h->boxes[b];
+    std::vector<uint32_t> leaves;
+    for (uint64_t j = box.firstTriangle; j < box.firstTriangle + box.triangleCount; ++j) {
+      const uint32_t leaf = leafOf(h->triangles[j]);
+      if (leaf != kNoLeaf && leaf < boxOfLeaf.size() && boxOfLeaf[leaf] != uint32_t(b)) {
+        boxOfLeaf[leaf] = uint32_t(b);
+        leaves.push_back(leaf);
+      }
+    }
+    if (leaves.size() <= maxOwnLeaves) continue;
+    // Median splits along the longest axis of the pieces' roots, the largest piece first, until
+    // every piece is small enough or there are maxPieces of them; the pieces become children.
+    std::vector<std::pair<size_t, size_t>> pieces{{0, leaves.size()}};
+    while (pieces.size() < maxPieces) {
+      size_t largest = 0;
+      for (size_t i = 1; i < pieces.size(); ++i)
+        if (pieces[i].second - pieces[i].first > pieces[largest].second - pieces[largest].first) largest = i;
+      const auto [begin, end] = pieces[largest];
+      if (end - begin <= maxOwnLeaves) break;
+      glm::vec3 lo(INFINITY), hi(-INFINITY);
+      for (size_t i = begin; i < end; ++i) {
+        lo = glm::min(lo, rootOf(leaves[i]));
+        hi = glm::max(hi, rootOf(leaves[i]));
+      }
+      const glm::vec3 ext = hi - lo;
+      const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : ext.y >= ext.z ? 1 : 2;
+      const size_t mid = begin + (end - begin) / 2;
+      std::nth_element(leaves.begin() + long(begin), leaves.begin() + long(mid), leaves.begin() + long(end),
+                       [&](uint32_t a, uint32_t c) {
+                         return rootOf(a)[axis] < rootOf(c)[axis] || (rootOf(a)[axis] == rootOf(c)[axis] && a < c);
+                       });
+      pieces[largest] = {begin, mid};
+      pieces.push_back({mid, end});
+    }
+    for (const auto& [begin, end] : pieces) {
+      FoliageBox child;
+      child.parent = uint32_t(b);
+      child.level = box.level + 1;
+      h->boxes.push_back(child);
+      for (size_t i = begin; i < end; ++i) boxOfLeaf[leaves[i]] = uint32_t(h->boxes.size() - 1);
+    }
+    for (uint64_t j = box.firstTriangle; j < box.firstTriangle + box.triangleCount; ++j) {
+      const uint32_t t = h->triangles[j], leaf = leafOf(t);
+      if (leaf != kNoLeaf && leaf < boxOfLeaf.size()) boxOf[t] = boxOfLeaf[leaf];
+    }
+    changed = true;
+  }
+  if (!changed) return Status();
+  for (FoliageBox& b : h->boxes) {
+    b.boundsMin = glm::vec3(INFINITY);
+    b.boundsMax = glm::vec3(-INFINITY);
+    b.firstTriangle = b.triangleCount = 0;
+  }
+  h->triangles.clear();
+  return finish(m, foliage, boxOf, h);
+}
+
 }  // namespace canopy

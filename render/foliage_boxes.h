@@ -40,4 +40,11 @@ Status boxesFromModel(const VegetationModel& model, const std::vector<uint8_t>& 
 Status boxesFromLeafRoots(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
                           uint32_t maxLeavesPerBox, BoxHierarchy* out);
 
+// Splits the own leaves of every box holding more than `maxOwnLeaves` (a grass patch of thousands
+// of blades) into k-d pieces by their roots, the largest piece first, until each holds at most
+// maxOwnLeaves or there are `maxPieces`; the pieces become the box's children (one level down), so
+// the impostors can switch a large box region by region. Boxes stay parents first and nested.
+Status refineBoxes(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                   uint32_t maxOwnLeaves, uint32_t maxPieces, BoxHierarchy* hierarchy);
+
 }  // namespace canopy

@@ -9,6 +9,8 @@
 namespace canopy {
 namespace {
 
+constexpr uint32_t kRefinePieces = 64;  // children a refined box gets at most
+
 std::string modelName(const VegetationModel& m) { return m.path.empty() ? std::string("the model") : m.path; }
 
 std::string mib(uint64_t bytes) {
@@ -50,8 +52,13 @@ Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& 
   if (materialStart.size() < size_t(nm) + 1) return Status::error("impostors: material starts missing");
   // The hierarchy: the model's own (the generator's L-system boxes), else a k-d split (glTF).
   BoxHierarchy h;
-  if (!m.boxParent.empty()) CANOPY_TRY(boxesFromModel(m, foliage, &h));
-  else CANOPY_TRY(boxesFromLeafRoots(m, foliage, roots, desc.maxLeavesPerBox, &h));
+  if (!m.boxParent.empty()) {
+    CANOPY_TRY(boxesFromModel(m, foliage, &h));
+    // A box of many leaves of its own (a grass patch) gets regional children.
+    CANOPY_TRY(refineBoxes(m, foliage, roots, desc.maxLeavesPerBox, kRefinePieces, &h));
+  } else {
+    CANOPY_TRY(boxesFromLeafRoots(m, foliage, roots, desc.maxLeavesPerBox, &h));
+  }
   const size_t nb = h.boxes.size();
   // Depth-first preorder (children in index order), so a subtree is a contiguous node range and,
   // with each node's own leaves laid out before its children's, a contiguous triangle run.
@@ -243,7 +250,7 @@ void impostorCut(const Impostors& imp, const ImpostorCutInput& in, ImpostorCut* 
     const ImpostorNode& n = imp.nodes[i];
     const float left = n.parent == kNoTile ? 1.0f : carry[n.parent];
     float a = 0.0f;
-    if (n.firstTile != kNoTile) {
+    if (n.firstTile != kNoTile && s.mode != ImpostorMode::Off) {
       const float z = glm::dot(in.depthRow, glm::vec4(n.center, 1.0f));
       const float p = in.perspective ? (z > n.radius ? 2.0f * n.radius * in.pixelScale / z : INFINITY)
                                      : 2.0f * n.radius * in.pixelScale;

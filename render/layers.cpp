@@ -82,7 +82,7 @@ Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) 
 
 // What impostors on (LayerSettings.impostors.mode) need of the object and the other settings.
 Status checkImpostorSettings(const LayeredVegetation& lv, const LayerSettings& s) {
-  if (s.impostors.mode == ImpostorMode::Off) return Status();
+  if (s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) return Status();
   if (!lv.imp.enabled)
     return Status::error("LayerSettings.impostors.mode: impostors need CanopyDesc.impostors.enable at creation (the box "
                          "hierarchy and its baked views)");
@@ -619,7 +619,7 @@ void planImpostorCut(LayeredVegetation& lv, const LayerView& view) {
   lv.cutInstances.clear();
   lv.cutOpaque = 0;
   const LayerSettings& s = lv.settings;
-  if (s.impostors.mode == ImpostorMode::Off || !lv.imp.enabled) return;
+  if ((s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) || !lv.imp.enabled) return;
   ImpostorCutInput in;
   in.settings = s.impostors;
   in.depthRow = lv.frame.depthRow;

@@ -153,3 +153,45 @@ TEST(FoliageBoxes, InconsistentInputsAreRefused) {
   s = boxesFromLeafRoots(m, foliage, roots, 0, &h);
   EXPECT_NE(s.message().find("maxLeavesPerBox"), std::string::npos) << s.message();
 }
+
+TEST(FoliageBoxes, ABoxOfManyLeavesIsRefinedIntoRegionalChildren) {
+  // The field's grass is one patch box of thousands of blades: refined, it gets up to 16 children
+  // of at most 64 blades each (or as close as 16 pieces allow), and the hierarchy stays valid.
+  SceneDesc d;
+  d.kind = SceneKind::Field;
+  d.faces = 40000;
+  d.boxes = true;
+  VegetationModel m;
+  ASSERT_TRUE(generateScene(d, &m).ok());
+  const std::vector<uint8_t> foliage = foliageMask(m);
+  LeafRoots roots;
+  ASSERT_TRUE(computeLeafRoots(m, foliage, {}, &roots).ok());
+  BoxHierarchy h;
+  ASSERT_TRUE(boxesFromModel(m, foliage, &h).ok());
+  const size_t before = h.boxes.size();
+  auto ownLeaves = [&](const BoxHierarchy& x, uint32_t b) {
+    std::set<uint32_t> leaves;
+    for (uint64_t i = x.boxes[b].firstTriangle; i < x.boxes[b].firstTriangle + x.boxes[b].triangleCount; ++i)
+      leaves.insert(roots.leafOfVertex[m.indices[3 * size_t(x.triangles[i])]]);
+    return leaves.size();
+  };
+  size_t big = 0;
+  for (uint32_t b = 0; b < before; ++b) big += ownLeaves(h, b) > 64;
+  ASSERT_GT(big, 0u) << "the grass patch holds more than 64 blades";
+  Status s = refineBoxes(m, foliage, roots, 64, 16, &h);
+  ASSERT_TRUE(s.ok()) << s.message();
+  checkHierarchy(m, foliage, h, roots);
+  EXPECT_GT(h.boxes.size(), before);
+  EXPECT_LE(h.boxes.size(), before + 16 * big);
+  for (uint32_t b = 0; b < before; ++b) {
+    size_t children = 0;
+    for (uint32_t c = uint32_t(before); c < h.boxes.size(); ++c) children += h.boxes[c].parent == b;
+    if (children) EXPECT_EQ(ownLeaves(h, b), 0u) << "a refined box hands all its leaves to its pieces";
+  }
+  for (uint32_t c = uint32_t(before); c < h.boxes.size(); ++c) {
+    size_t siblings = 0;
+    for (uint32_t x = uint32_t(before); x < h.boxes.size(); ++x) siblings += h.boxes[x].parent == h.boxes[c].parent;
+    if (siblings < 16) EXPECT_LE(ownLeaves(h, c), 64u) << "piece " << c;
+  }
+  EXPECT_FALSE(refineBoxes(m, foliage, roots, 0, 16, &h).ok());
+}

@@ -360,8 +360,9 @@ struct ImpostorSettings {
   // from switchPixels x (1 + band) to switchPixels (a distance band: size ~ 1 / distance). At
   // switchPixels = CanopyDesc.impostors.tilePixels the views are shown 1:1 (Lluch et al. 4.1).
   float switchPixels = 64.0f;             // [1, 4096]
-  float band = 0.5f;                      // [0, 4]; 0: a hard switch
+  float band = 0.2f;                      // [0, 4]; 0: a hard switch
   bool debugView = false;                 // colour leaves and impostors by their box's hierarchy level
+                                          // (also with mode Off; needs what the modes need)
 };
 inline bool operator==(const ImpostorSettings& a, const ImpostorSettings& b) {
   return a.mode == b.mode && a.switchPixels == b.switchPixels && a.band == b.band && a.debugView == b.debugView;
@@ -373,8 +374,10 @@ struct ImpostorDesc {
   // Boxes of hierarchy levels 0..maxLevel get views (12 each: six faces, six diagonal planes), level
   // by level from the top while memoryBudget allows; a box over maxBoxTriangles (its subtree's
   // leaves) gets none (its children do). [0, 64]
-  uint32_t maxLevel = 3;
-  uint64_t maxBoxTriangles = 4'000'000;    // [1, 2^40]
+  uint32_t maxLevel = 2;
+  // Baking costs 12 draws of a box's leaves (the bake's time grows with levels x faces), and a box
+  // this large is rarely small on screen.
+  uint64_t maxBoxTriangles = 1'000'000;    // [1, 2^40]
   // The views' colour (RGBA8) and depth (32-bit) in bytes; when not even the top level fits, the
   // tiles are halved (down to 8 pixels) before the creation is refused. [1 MiB, 16 GiB]
   uint64_t memoryBudget = 256ull << 20;

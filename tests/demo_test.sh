@@ -60,6 +60,11 @@ awk -v w="$pv" -v c="$pvcalm" 'BEGIN { exit !(w >= 1.0 && c == 0) }' ||
   fail "per-vertex sway: wind $pv px (expected >= 1), no wind $pvcalm px (expected 0)"
 echo "per-vertex sway over 24 frames at 320x240: wind $pv px, no wind $pvcalm px"
 
+# Impostors (issue 18) on a field, every box with views an impostor, with the debug view (validation on).
+"$demo" --scene field --faces 60K --impostors size --impostor-pixels 4096 --impostor-debug --frames 2 --size 160x120 \
+  --warmup 0 --validate --no-mp4 --out "$out/imp" >/dev/null 2>"$out/stderr5" || fail "impostors: exit $? ($(tail -5 "$out/stderr5"))"
+[ -s "$out/imp/frame_0001.png" ] || fail "impostor frames missing"
+
 # No display: --window says so and renders headless.
 env -u DISPLAY -u WAYLAND_DISPLAY "$demo" --window --frames 2 --size 96x72 --no-mp4 --out "$out/fallback" \
   >/dev/null 2>"$out/stderr3" || fail "fallback: exit $?"
@@ -78,6 +83,7 @@ expect_refusal() {  # pattern args...
 expect_refusal "--frames" --frames 0
 expect_refusal "--layers" --layers "5(3-1)"
 expect_refusal "palm" --scene palm
+expect_refusal "--impostors" --impostors near
 expect_refusal "--size" --size 10x10
 expect_refusal "north" --wind north
 expect_refusal "--strength" --strength -1

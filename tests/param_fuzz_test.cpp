@@ -51,6 +51,9 @@ std::vector<Field> fields() {
       {"leafRefractiveIndex", [](CanopyParams& p, float f, uint32_t) { p.layers.leafRefractiveIndex = f; }},
       {"leafRoughness", [](CanopyParams& p, float f, uint32_t) { p.layers.leafRoughness = f; }},
       {"leafTransmission", [](CanopyParams& p, float f, uint32_t) { p.layers.leafTransmission = f; }},
+      {"impostors.mode", [](CanopyParams& p, float, uint32_t u) { p.layers.impostors.mode = ImpostorMode(u); }},
+      {"impostors.switchPixels", [](CanopyParams& p, float f, uint32_t) { p.layers.impostors.switchPixels = f; }},
+      {"impostors.band", [](CanopyParams& p, float f, uint32_t u) { p.layers.impostors.band = f, p.layers.impostors.debugView = u & 1; }},
       {"wind.sides", [](CanopyParams& p, float, uint32_t u) { p.simulation.wind.sides = u; }},
       {"wind.strength", [](CanopyParams& p, float f, uint32_t) { p.simulation.wind.strength = f; }},
       {"wind.frequency", [](CanopyParams& p, float f, uint32_t) { p.simulation.wind.frequency = f; }},
@@ -130,6 +133,7 @@ TEST_F(ParamFuzzTest, HostileValuesAreRefusedNamingTheFieldOrAppliedAndFramesSta
   desc.depthFormat = host.depthFormat;
   desc.maxLayers = 8;
   desc.allowPerVertex = true;  // the baseline's parameters and mode switches are fuzzed too
+  desc.impostors.enable = true;  // and the impostors' (a leaf cloud: k-d boxes)
   CanopyContext* ctx = nullptr;
   Status made = createCanopy(dev, model, desc, &ctx);
   ASSERT_TRUE(made.ok()) << made.message();

@@ -122,9 +122,10 @@ CANOPY_INLINE vec3 layerDecodeNormal(vec2 e) {
   return normalize(n);
 }
 
-// The debug view's colour of hierarchy level `level` (geometry and impostors alike).
+// The debug view's colour of hierarchy level `level` (geometry and impostors alike): red, yellow,
+// green, cyan, blue for levels 0..4, magenta for 5 and deeper.
 CANOPY_INLINE vec3 lodLevelColor(uint level) {
-  uint k = level % 6u;
+  uint k = min(level, 5u);
   if (k == 0u) return vec3(0.9f, 0.2f, 0.2f);
   if (k == 1u) return vec3(0.95f, 0.75f, 0.1f);
   if (k == 2u) return vec3(0.2f, 0.8f, 0.25f);

@@ -8,7 +8,7 @@
 //   - the image difference against the mode without impostors: the far region's layers flattened
 //     ("over", front to back), and all layers flattened: mean |RGBA difference| over covered
 //     pixels, coverage agreement (IoU of alpha > 0.5);
-//   - with --images DIR: the far layers of each mode, and the debug view (levels) as PNG.
+//   - with --images DIR: the far layers of each mode, and the debug view (levels; by projected size) as PNG.
 // Medians of --rebuilds re-slices per mode, after one untimed round.
 #include <algorithm>
 #include <chrono>
@@ -201,7 +201,7 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
     }
     if (s.ok() && !imageDir.empty()) {
       std::vector<glm::vec4> dbg;
-      s = reslice(1, false, true);
+      s = reslice(2, false, true);  // by projected size: the most impostors
       if (s.ok()) s = flatten(lv, 0, n, &dbg);
       if (s.ok())
         s = writeImage(imageDir + "/impostors_debug_" + camName + "_" + std::to_string(faces) + ".png", width, height, dbg);

@@ -50,7 +50,8 @@ bool shade() {
   if ((pc.shadingFlags & LAYER_SHADE_TINT_FROM_BASE) != 0u) tc *= leafTransmissionTint(base.rgb);
   vec3 lit = leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
                        f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
-  if (pc.lod.y > 0.0) lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.35 + 0.65 * max(dot(n, f.lightDirection.xyz), 0.0));
+  // The impostor debug view: leaves in their box level's colour, darker than impostors.
+  if (pc.lod.y > 0.0) lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.2 + 0.35 * max(dot(n, f.lightDirection.xyz), 0.0));
   // A box fading towards its impostor (issue 18): its leaves' share of the pixels, premultiplied.
   outColor = vec4(lit * alpha, alpha) * pc.lod.x;
   return true;

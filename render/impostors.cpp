@@ -153,15 +153,19 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
   std::vector<uint32_t> children(nb, 0);
   for (const ImpostorNode& n : imp->nodes)
     if (n.parent != kNoTile) children[n.parent]++;
-  std::vector<uint8_t> eligible(nb, 0);
+  // Levels are counted without twins: an L-system's bracketed axiom is a box with the same leaves
+  // as its plant, and its branches are the plant's first real level below.
+  std::vector<uint8_t> eligible(nb, 0), twin(nb, 0);
+  std::vector<uint32_t> level(nb, 0);
   std::vector<uint64_t> perLevel(size_t(desc.maxLevel) + 1, 0);
   for (uint32_t i = 0; i < nb; ++i) {
     const ImpostorNode& n = imp->nodes[i];
     const uint64_t tris = subtreeTriangles(*imp, i);
-    if (n.level > desc.maxLevel || tris == 0 || tris > desc.maxBoxTriangles) continue;
-    if (children[i] == 1 && i + 1 < nb && subtreeTriangles(*imp, i + 1) == tris) continue;
+    twin[i] = children[i] == 1 && i + 1 < nb && subtreeTriangles(*imp, i + 1) == tris;
+    level[i] = n.parent == kNoTile ? 0 : level[n.parent] + (twin[n.parent] ? 0 : 1);
+    if (level[i] > desc.maxLevel || tris == 0 || tris > desc.maxBoxTriangles || twin[i]) continue;
     eligible[i] = 1;
-    perLevel[n.level]++;
+    perLevel[level[i]]++;
   }
   // Levels from the top while the budget holds them at this tile size; the tiles halve (to 8) when
   // not even the first level with boxes fits.
@@ -204,7 +208,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
   for (uint32_t i = 0; i < nb; ++i) {
     ImpostorNode& n = imp->nodes[i];
     n.firstTile = n.gpuIndex = kNoTile;
-    if (!eligible[i] || n.level > lastLevel) continue;
+    if (!eligible[i] || level[i] > lastLevel) continue;
     n.firstTile = imp->tiles;
     n.gpuIndex = imp->baked++;
     imp->tiles += IMPOSTOR_VIEWS;

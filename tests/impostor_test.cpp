@@ -114,10 +114,11 @@ LayerView lookFrom(glm::vec3 eye, glm::vec3 target, uint32_t w, uint32_t h, floa
   return v;
 }
 
-const ImpostorNode* largestBaked(const LayeredVegetation& lv, uint32_t level) {
+// The largest box with views (the top one: maxLevel 0 bakes one box per plant).
+const ImpostorNode* largestBaked(const LayeredVegetation& lv) {
   const ImpostorNode* best = nullptr;
   for (const ImpostorNode& n : lv.imp.nodes)
-    if (n.firstTile != kNoTile && n.level == level && (!best || n.radius > best->radius)) best = &n;
+    if (n.firstTile != kNoTile && (!best || n.radius > best->radius)) best = &n;
   return best;
 }
 
@@ -148,8 +149,8 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
   ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
   ASSERT_GT(lv.imp.baked, 2u);
   EXPECT_EQ(lv.stats.impostorTilePixels, 64u);
-  // The box under test: the model's own box with the most leaves at level 2 (a first-order branch),
-  // its subtree's triangles collected from the model's hierarchy, not from the impostor code.
+  // The box under test: the model's own box with the most leaves at a level, its subtree's
+  // triangles collected from the model's hierarchy, not from the impostor code.
   std::vector<uint8_t> foliage(m.triangleCount());
   for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = lv.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
   BoxHierarchy h;
@@ -159,7 +160,9 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
       if (b == root) return true;
     return false;
   };
-  for (uint32_t level : {1u, 2u}) {
+  // Raw levels 2 and 3: the tree's bracketed axiom (the plant and scene boxes above it are its
+  // twins, with the same leaves, and get no views) and its first branches.
+  for (uint32_t level : {2u, 3u}) {
     uint32_t box = kNoBox;
     uint64_t most = 0;
     for (uint32_t b = 0; b < h.boxes.size(); ++b) {
@@ -252,7 +255,7 @@ TEST_F(ImpostorTest, WithImpostorsOffTheBoxOrderDrawsTheSameLayers) {
   destroyLayeredVegetation(boxed);
 }
 
-// One plant box (maxLevel 1) seen from where its projected size is P pixels.
+// One tree seen from where its top box's projected size is P pixels.
 struct SwitchScene {
   VegetationModel m;
   LayerView view;
@@ -279,12 +282,12 @@ TEST_F(ImpostorTest, AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves) {
   d.width = w;
   d.height = h;
   d.impostors.enable = true;
-  d.impostors.maxLevel = 1;
+  d.impostors.maxLevel = 0;  // the tree's top box only
   d.impostors.tilePixels = 128;
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, sc.m, d, &lv).ok());
-  ASSERT_NE(largestBaked(lv, 1), nullptr);
-  sc.projected = projectedSize(*largestBaked(lv, 1), sc.view, h);
+  ASSERT_NE(largestBaked(lv), nullptr);
+  sc.projected = projectedSize(*largestBaked(lv), sc.view, h);
   ASSERT_TRUE(renderOnce(dev, lv, sc.view).ok());
   const std::vector<glm::vec4> leaves = flatten(lv);
   EXPECT_EQ(lv.stats.lastImpostors, 0u);
@@ -298,7 +301,7 @@ TEST_F(ImpostorTest, AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves) {
   EXPECT_EQ(lv.stats.lastFadingBoxes, 0u);
   EXPECT_EQ(lv.stats.lastDrawnTriangles, 0u);  // every leaf is under the plant box
   // The impostor lands whole in the layer of its root.
-  const ImpostorNode* plant = largestBaked(lv, 1);
+  const ImpostorNode* plant = largestBaked(lv);
   ASSERT_NE(plant, nullptr);
   const uint32_t rootLayer = gpu::layerOfDepth(lv.frame, glm::dot(lv.frame.depthRow, glm::vec4(plant->root, 1.0f)));
   std::vector<glm::vec4> impostor;
@@ -343,12 +346,12 @@ TEST_F(ImpostorTest, TheTransitionIsContinuousAcrossTheBand) {
   d.width = w;
   d.height = h;
   d.impostors.enable = true;
-  d.impostors.maxLevel = 1;
+  d.impostors.maxLevel = 0;  // the tree's top box only
   d.impostors.tilePixels = 128;
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, sc.m, d, &lv).ok());
-  ASSERT_NE(largestBaked(lv, 1), nullptr);
-  sc.projected = projectedSize(*largestBaked(lv, 1), sc.view, h);
+  ASSERT_NE(largestBaked(lv), nullptr);
+  sc.projected = projectedSize(*largestBaked(lv), sc.view, h);
   const float band = 1.0f;
   std::vector<std::vector<glm::vec4>> images;
   const float shares[] = {0.0f, 0.2f, 0.4f, 0.6f, 0.8f, 1.0f};

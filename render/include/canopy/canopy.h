@@ -373,7 +373,8 @@ struct ImpostorDesc {
   uint32_t tilePixels = 64;   // side of each view's image, a power of two in [8, 512]
   // Boxes of hierarchy levels 0..maxLevel get views (12 each: six faces, six diagonal planes), level
   // by level from the top while memoryBudget allows; a box over maxBoxTriangles (its subtree's
-  // leaves) gets none (its children do). [0, 64]
+  // leaves) gets none (its children do). Levels count boxes with other leaves than their only
+  // child's (an L-system's bracketed axiom is not a level of its own). [0, 64]
   uint32_t maxLevel = 2;
   // Baking costs 12 draws of a box's leaves (the bake's time grows with levels x faces), and a box
   // this large is rarely small on screen.

@@ -46,18 +46,8 @@ Status createDrawPipelines(LayeredVegetation& lv) {
     }
   }
   // The bake: the background path of the layers (every triangle, no slicing), into the atlas formats.
-  GraphicsPipelineDesc b;
-  b.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
-  b.pushConstantSize = sizeof(gpu::LayerDrawPush);
-  b.vertexStride = sizeof(gpu::LayerVertex);
-  b.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0}, {1, VK_FORMAT_R16G16_SNORM, 8}, {2, VK_FORMAT_R16G16_SFLOAT, 12}};
-  b.colorFormats = {kAtlasColorFormat};
-  b.depthFormat = kAtlasDepthFormat;
-  b.blend = BlendMode::PremultipliedOver;
+  GraphicsPipelineDesc b = layerMeshPipelineDesc(kAtlasColorFormat, kAtlasDepthFormat);
   b.vertexShader = "layers_clip.vert";
-  b.fragmentShader = "layers.frag";
   return createGraphicsPipeline(d, b, &imp.bake);
 }
 

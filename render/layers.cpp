@@ -217,8 +217,9 @@ Status createTargets(LayeredVegetation& lv) {
   return s;
 }
 
-Status createPipelines(LayeredVegetation& lv) {
-  Device& d = *lv.device;
+}  // namespace
+
+GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthFormat) {
   GraphicsPipelineDesc p;
   // shaders/layers_common.glsl: frame block, chunk root table, base colour, normal map,
   // transmission factor and colour textures.
@@ -230,10 +231,18 @@ Status createPipelines(LayeredVegetation& lv) {
   p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0},  // quantised position, chunk-local leaf
                   {1, VK_FORMAT_R16G16_SNORM, 8},        // octahedral normal
                   {2, VK_FORMAT_R16G16_SFLOAT, 12}};     // texcoord 0
-  p.colorFormats = {lv.desc.colorFormat};
-  p.depthFormat = kDepthFormat;
+  p.colorFormats = {colorFormat};
+  p.depthFormat = depthFormat;
   p.blend = BlendMode::PremultipliedOver;
   p.fragmentShader = "layers.frag";
+  return p;
+}
+
+namespace {
+
+Status createPipelines(LayeredVegetation& lv) {
+  Device& d = *lv.device;
+  GraphicsPipelineDesc p = layerMeshPipelineDesc(lv.desc.colorFormat, kDepthFormat);
   if (d.shaderClipDistance) {
     p.vertexShader = "layers_clip.vert";
     CANOPY_TRY(createGraphicsPipeline(d, p, &lv.background));

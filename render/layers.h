@@ -268,6 +268,11 @@ struct PerVertexBindings {
 Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
                      const PerVertexBindings& bindings);
 
+// The pipeline description every draw of the compact mesh starts from (the layers, the background,
+// the impostor bake, the per-vertex baseline): shaders/layers_common.glsl's six bindings, the
+// LayerDrawPush constants, the LayerVertex attributes, premultiplied "over", layers.frag.
+GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthFormat);
+
 // For render/impostor_gpu.cpp: a 2D view of one layer of an array image; the mesh draw with chunk
 // parts (drawMaterials); a GPU-order foliage triangle run cut at chunk borders into parts.
 Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImageView* out);

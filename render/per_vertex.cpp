@@ -132,20 +132,10 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   pv.desc = desc;
   pv.hierarchy = lv.bendVertices.buffer != VK_NULL_HANDLE;
   const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
-  GraphicsPipelineDesc p;
   // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's four.
-  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,         VK_DESCRIPTOR_TYPE_STORAGE_BUFFER};
-  p.pushConstantSize = sizeof(gpu::LayerDrawPush);
-  p.vertexStride = sizeof(gpu::LayerVertex);
-  p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0}, {1, VK_FORMAT_R16G16_SNORM, 8}, {2, VK_FORMAT_R16G16_SFLOAT, 12}};
-  p.colorFormats = {desc.colorFormat};
+  GraphicsPipelineDesc p = layerMeshPipelineDesc(desc.colorFormat, desc.depthFormat);
+  for (int i = 0; i < 4; ++i) p.bindings.push_back(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
   if (motion) p.colorFormats.push_back(desc.motionFormat);
-  p.depthFormat = desc.depthFormat;
-  p.blend = BlendMode::PremultipliedOver;
   p.blendedAttachments = 1;
   p.depthCompare = desc.reverseZ ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
   p.vertexShader = motion ? "per_vertex_motion.vert" : "per_vertex.vert";

@@ -275,19 +275,26 @@ float projectedSize(const ImpostorNode& n, const LayerView& v, uint32_t h) {
   return 2.0f * n.radius * std::abs(v.proj[1][1]) * 0.5f * float(h) / z;
 }
 
-TEST_F(ImpostorTest, AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves) {
-  const uint32_t w = 256, h = 192;
-  SwitchScene sc = switchScene(w, h, 3.0f);
+// The scene's layers with views for the tree's top box only (128 px), its projected size measured.
+Status createSwitchLayers(Device& dev, SwitchScene& sc, uint32_t w, uint32_t h, LayeredVegetation* lv) {
   LayeredVegetationDesc d;
   d.width = w;
   d.height = h;
   d.impostors.enable = true;
-  d.impostors.maxLevel = 0;  // the tree's top box only
+  d.impostors.maxLevel = 0;
   d.impostors.tilePixels = 128;
+  CANOPY_TRY(createLayeredVegetation(dev, sc.m, d, lv));
+  const ImpostorNode* top = largestBaked(*lv);
+  if (!top) return Status::error("no box has views");
+  sc.projected = projectedSize(*top, sc.view, h);
+  return Status();
+}
+
+TEST_F(ImpostorTest, AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves) {
+  const uint32_t w = 256, h = 192;
+  SwitchScene sc = switchScene(w, h, 3.0f);
   LayeredVegetation lv;
-  ASSERT_TRUE(createLayeredVegetation(dev, sc.m, d, &lv).ok());
-  ASSERT_NE(largestBaked(lv), nullptr);
-  sc.projected = projectedSize(*largestBaked(lv), sc.view, h);
+  ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &lv).ok());
   ASSERT_TRUE(renderOnce(dev, lv, sc.view).ok());
   const std::vector<glm::vec4> leaves = flatten(lv);
   EXPECT_EQ(lv.stats.lastImpostors, 0u);
@@ -342,16 +349,8 @@ TEST_F(ImpostorTest, TheTransitionIsContinuousAcrossTheBand) {
   // The images: a fixed view, the switch swept so that the plant box's share goes 0 .. 1.
   const uint32_t w = 224, h = 168;
   SwitchScene sc = switchScene(w, h, 3.0f);
-  LayeredVegetationDesc d;
-  d.width = w;
-  d.height = h;
-  d.impostors.enable = true;
-  d.impostors.maxLevel = 0;  // the tree's top box only
-  d.impostors.tilePixels = 128;
   LayeredVegetation lv;
-  ASSERT_TRUE(createLayeredVegetation(dev, sc.m, d, &lv).ok());
-  ASSERT_NE(largestBaked(lv), nullptr);
-  sc.projected = projectedSize(*largestBaked(lv), sc.view, h);
+  ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &lv).ok());
   const float band = 1.0f;
   std::vector<std::vector<glm::vec4>> images;
   const float shares[] = {0.0f, 0.2f, 0.4f, 0.6f, 0.8f, 1.0f};

@@ -276,10 +276,12 @@ float projectedSize(const ImpostorNode& n, const LayerView& v, uint32_t h) {
 }
 
 // The scene's layers with views for the tree's top box only (128 px), its projected size measured.
-Status createSwitchLayers(Device& dev, SwitchScene& sc, uint32_t w, uint32_t h, LayeredVegetation* lv) {
+Status createSwitchLayers(Device& dev, SwitchScene& sc, uint32_t w, uint32_t h, LayeredVegetation* lv,
+                          LayerDrawMode draw = LayerDrawMode::Auto) {
   LayeredVegetationDesc d;
   d.width = w;
   d.height = h;
+  d.settings.draw = draw;
   d.impostors.enable = true;
   d.impostors.maxLevel = 0;
   d.impostors.tilePixels = 128;
@@ -384,6 +386,37 @@ TEST_F(ImpostorTest, TheTransitionIsContinuousAcrossTheBand) {
     EXPECT_LE(compareImages(images[i], images[i - 1]).meanAbs, 0.5 * fromLeaves.back()) << "step " << i;
   }
   destroyLayeredVegetation(lv);
+}
+
+TEST_F(ImpostorTest, OneDrawPerLayerGivesTheSingleDrawsImpostors) {
+  // Devices without shaderOutputLayer draw each layer on its own, the impostor clipped to its
+  // root's layer: the same layers as gl_Layer, fully switched and inside the band.
+  const uint32_t w = 192, h = 144;
+  SwitchScene sc = switchScene(w, h, 3.0f);
+  LayeredVegetation single, perLayer;
+  ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &single, LayerDrawMode::SinglePass).ok());
+  ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &perLayer, LayerDrawMode::PerLayer).ok());
+  for (float share : {1.0f, 0.5f}) {
+    for (LayeredVegetation* lv : {&single, &perLayer}) {
+      LayerSettings s = lv->settings;
+      s.impostors.mode = ImpostorMode::ByProjectedSize;
+      s.impostors.band = 0.5f;
+      s.impostors.switchPixels = sc.projected / (1.5f - share * 0.5f) * 1.001f;
+      ASSERT_TRUE(setLayerSettings(*lv, s).ok());
+      ASSERT_TRUE(renderOnce(dev, *lv, sc.view).ok());
+      EXPECT_EQ(lv->stats.lastFadingBoxes, share < 1.0f ? 1u : 0u);
+    }
+    for (uint32_t l = 0; l < single.settings.layout.count(); ++l) {
+      std::vector<glm::vec4> a, b;
+      ASSERT_TRUE(readLayerColor(single, l, &a).ok());
+      ASSERT_TRUE(readLayerColor(perLayer, l, &b).ok());
+      const ImageDiff diff = compareImages(a, b);
+      EXPECT_LE(diff.meanAbs, 1e-3) << "share " << share << " layer " << l;
+      EXPECT_GE(diff.coverageIoU, 0.999) << "share " << share << " layer " << l;
+    }
+  }
+  destroyLayeredVegetation(single);
+  destroyLayeredVegetation(perLayer);
 }
 
 TEST_F(ImpostorTest, FarBoxesBecomeImpostorsAndNearOnesKeepTheirLeaves) {

@@ -2,9 +2,12 @@
 // bake (each baked box's twelve views drawn with the layers' own pipeline and shading, orthographic,
 // into its tiles) and the draw of a cut's impostors into the layers.
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include "engine/device.h"
+#include "engine/hash.h"
 #include "engine/pipeline.h"
 #include "engine/transfer.h"
 #include "render/layers.h"
@@ -71,6 +74,80 @@ std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
   return bytes;
 }
 
+constexpr char kCacheMagic[8] = {'C', 'N', 'P', 'Y', 'I', 'M', 'P', '1'};
+
+uint64_t atlasBytes(const Impostors& imp) {
+  return uint64_t(imp.atlasLayers) * imp.tilesPerRow * imp.rowsPerLayer * imp.tileSize * imp.tileSize * 4;
+}
+
+// The cached views for `key`, uploaded into the atlas; false (with the reason) when there is none.
+bool readCache(Device& d, Impostors& imp, uint64_t key, std::string* why) {
+  std::ifstream f(imp.cachePath, std::ios::binary);
+  if (!f) {
+    *why = "no cache file";
+    return false;
+  }
+  char magic[8];
+  uint64_t fileKey = 0, bytes = 0;
+  f.read(magic, 8);
+  f.read(reinterpret_cast<char*>(&fileKey), 8);
+  f.read(reinterpret_cast<char*>(&bytes), 8);
+  if (!f || std::memcmp(magic, kCacheMagic, 8) != 0) {
+    *why = "not an impostor cache";
+    return false;
+  }
+  if (fileKey != key || bytes != atlasBytes(imp)) {
+    *why = "made for other data (model, options or lighting changed)";
+    return false;
+  }
+  std::vector<uint8_t> color(bytes), depth(bytes);
+  f.read(reinterpret_cast<char*>(color.data()), std::streamsize(bytes));
+  f.read(reinterpret_cast<char*>(depth.data()), std::streamsize(bytes));
+  if (!f) {
+    *why = "truncated";
+    return false;
+  }
+  const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+  Status s = uploadImage(d, imp.color, color.data(), bytes, sampled);
+  if (s.ok()) s = uploadImage(d, imp.depth, depth.data(), bytes, sampled);
+  if (!s.ok()) {
+    *why = s.message();
+    return false;
+  }
+  return true;
+}
+
+// The atlas read back (colour, then depth, layer after layer) into the cache file.
+Status writeCache(Device& d, const Impostors& imp, uint64_t key) {
+  const uint64_t bytes = atlasBytes(imp), perLayer = bytes / std::max<uint32_t>(imp.atlasLayers, 1);
+  std::vector<uint8_t> color(bytes), depth(bytes);
+  const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+  for (uint32_t l = 0; l < imp.atlasLayers; ++l) {
+    CANOPY_TRY(readbackImage(d, imp.color, l, 4, color.data() + l * perLayer, sampled));
+    CANOPY_TRY(readbackImage(d, imp.depth, l, 4, depth.data() + l * perLayer, sampled));
+  }
+  const std::string tmp = imp.cachePath + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    f.write(kCacheMagic, 8);
+    f.write(reinterpret_cast<const char*>(&key), 8);
+    f.write(reinterpret_cast<const char*>(&bytes), 8);
+    f.write(reinterpret_cast<const char*>(color.data()), std::streamsize(bytes));
+    f.write(reinterpret_cast<const char*>(depth.data()), std::streamsize(bytes));
+    if (!f) {
+      std::remove(tmp.c_str());
+      return Status::error("cannot write " + tmp);
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, imp.cachePath, ec);
+  if (ec) {
+    std::remove(tmp.c_str());
+    return Status::error("cannot write " + imp.cachePath + ": " + ec.message());
+  }
+  return Status();
+}
+
 Status bake(LayeredVegetation& lv) {
   Device& d = *lv.device;
   Impostors& imp = lv.imp;
@@ -78,6 +155,17 @@ Status bake(LayeredVegetation& lv) {
   const uint64_t align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 16);
   const uint64_t stride = roundUpTo(sizeof(gpu::LayerFrame), align);
   const std::vector<uint8_t> frames = bakeFrames(lv, stride);
+  // The file cache (like the leaf roots'): the key adds the bake's cameras and lighting.
+  const uint64_t key = hashBytes(imp.cacheKey, frames.data(), frames.size());
+  if (!imp.cachePath.empty()) {
+    std::string why;
+    imp.cacheHit = readCache(d, imp, key, &why);
+    imp.cacheNote = imp.cacheHit ? "read " + imp.cachePath : imp.cachePath + ": " + why;
+    if (imp.cacheHit) {
+      imp.bakeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+      return Status();
+    }
+  }
   PreparedWork work;
   Buffer frameBuf;
   CANOPY_TRY(createBuffer(d, std::max<uint64_t>(frames.size(), 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::Upload,
@@ -160,8 +248,17 @@ Status bake(LayeredVegetation& lv) {
   CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
   CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
   CANOPY_TRY(g.bindBuffer(roots, lv.leafRoots.buffer));
+  const bool deferred = d.deferUploads && d.deferTarget;
   CANOPY_TRY(submitOrDefer(d, std::move(work)));
   imp.bakeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  if (!imp.cachePath.empty()) {
+    if (deferred) {
+      imp.cacheNote += "; not written: the bake is recorded into the host's first frame";
+    } else {
+      const Status w = writeCache(d, imp, key);
+      imp.cacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
+    }
+  }
   return Status();
 }
 
@@ -178,11 +275,13 @@ Status createImpostors(LayeredVegetation& lv) {
   c.height = imp.rowsPerLayer * imp.tileSize;
   c.layers = imp.atlasLayers;
   c.arrayView = true;
-  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+            VK_IMAGE_USAGE_TRANSFER_DST_BIT;  // uploaded from the file cache, read back to write it
   CANOPY_TRY(createImage(d, c, &imp.color, "impostors: colour atlas"));
   ImageDesc z = c;
   z.format = kAtlasDepthFormat;
-  z.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  z.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+            VK_IMAGE_USAGE_TRANSFER_DST_BIT;
   CANOPY_TRY(createImage(d, z, &imp.depth, "impostors: depth atlas"));
   for (uint32_t l = 0; l < imp.atlasLayers; ++l) {
     VkImageView v;

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <string>
 
+#include "engine/hash.h"
 #include "render/foliage_boxes.h"
+
+#include <filesystem>
 
 namespace canopy {
 namespace {
@@ -223,6 +226,35 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
                          std::to_string(maxArrayLayers) + "; lower CanopyDesc.impostors.maxLevel or tilePixels");
   imp->bytes = shape.bytes;
   return Status();
+}
+
+std::string impostorCachePath(const std::string& modelPath, const std::string& cacheDir) {
+  if (cacheDir.empty()) return modelPath + ".impostors";
+  return (std::filesystem::path(cacheDir) / (std::filesystem::path(modelPath).filename().string() + ".impostors")).string();
+}
+
+uint64_t impostorModelKey(const Impostors& imp, const VegetationModel& m, const std::vector<uint64_t>& meshHashes) {
+  uint64_t h = 0x3c6ef372fe94f82bull;
+  h = hashBytes(h, meshHashes.data(), meshHashes.size() * 8);
+  for (const ModelMaterial& mm : m.materials) {
+    const float f[] = {mm.baseColorFactor.r, mm.baseColorFactor.g, mm.baseColorFactor.b, mm.baseColorFactor.a,
+                       mm.alphaCutoff, mm.transmissionFactor, mm.transmissionColor.r, mm.transmissionColor.g,
+                       mm.transmissionColor.b, mm.normalScale};
+    const int32_t i[] = {mm.baseColorImage, int32_t(mm.alphaMode), mm.transmissionImage, mm.transmissionColorImage,
+                         mm.normalImage};
+    h = hashBytes(hashBytes(h, f, sizeof f), i, sizeof i);
+  }
+  for (const ModelImage& im : m.images) {
+    const uint32_t dims[] = {im.width, im.height, im.linear ? 1u : 0u};
+    h = hashBytes(hashBytes(h, dims, sizeof dims), im.rgba.data(), im.rgba.size());
+  }
+  h = hashBytes(h, imp.runs.data(), imp.runs.size() * 8);
+  for (const ImpostorNode& n : imp.nodes) {
+    const float b[] = {n.center.x, n.center.y, n.center.z, n.half.x, n.half.y, n.half.z};
+    h = hashBytes(hashBytes(h, b, sizeof b), &n.firstTile, 4);
+  }
+  const uint32_t plan[] = {imp.tiles, imp.tileSize, imp.tilesPerRow, imp.rowsPerLayer, imp.atlasLayers};
+  return hashBytes(h, plan, sizeof plan);
 }
 
 glm::mat4 impostorViewProj(const ImpostorNode& box, uint32_t k) {

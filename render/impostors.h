@@ -11,6 +11,7 @@
 // At a re-slice (LayerSettings.impostors): the cut for the view (impostorCut), its impostors drawn
 // into the layers (each in the layer of its box's root depth), then the leaves of the boxes left.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -60,7 +61,19 @@ struct Impostors {
   VkSampler linearSampler = VK_NULL_HANDLE, nearestSampler = VK_NULL_HANDLE;
   double bakeMs = 0;
   uint64_t bytes = 0;
+  // The bake's file cache (beside the leaf-root cache; empty path: off): the key of everything the
+  // views are drawn from but the bake frames (added by the bake), and what became of it.
+  std::string cachePath;
+  uint64_t cacheKey = 0;
+  bool cacheHit = false;
+  std::string cacheNote = "cache off";
 };
+
+// Where a model's baked views are cached (the leaf-root cache's folder and naming, ".impostors").
+std::string impostorCachePath(const std::string& modelPath, const std::string& cacheDir);
+// The part of the cache key that comes from the model and the layout: mesh, materials, images,
+// hierarchy runs, node bounds and the atlas plan.
+uint64_t impostorModelKey(const Impostors& imp, const VegetationModel& model, const std::vector<uint64_t>& meshHashes);
 
 // What a re-slice draws with impostors on (computed by impostorCut with the placement).
 struct ImpostorCut {

@@ -1,5 +1,7 @@
 #include "render/layers.h"
 
+#include "engine/hash.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -1106,12 +1108,24 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
         return Status::error("impostors (CanopyDesc.impostors.enable) bake from the resident mesh and cut it into draw "
                              "ranges: the mesh (" + mib(lv.stats.meshBytes) + ") is streamed under deviceMemoryBudget " +
                              mib(desc.deviceMemoryBudget) + "; raise it (or 0: no limit)");
+      if (cacheOn) {
+        // The views' file cache sits beside the leaf roots' and is keyed by what they are drawn from.
+        const CompactMesh& hm = lv.hostMesh;
+        const std::vector<uint64_t> meshHashes = {
+            hashBytes(key, hm.vertices.data(), hm.vertices.size() * sizeof(gpu::LayerVertex)),
+            hashBytes(key, hm.indices.data(), hm.indices.size() * 2),
+            hashBytes(key, hm.roots.data(), hm.roots.size() * sizeof(gpu::LayerLeafRoot))};
+        lv.imp.cachePath = impostorCachePath(m.path, desc.rootCacheDir);
+        lv.imp.cacheKey = impostorModelKey(lv.imp, m, meshHashes);
+      }
       CANOPY_TRY(createImpostors(lv));
       lv.stats.impostorBoxes = uint32_t(lv.imp.nodes.size());
       lv.stats.impostorBakedBoxes = lv.imp.baked;
       lv.stats.impostorTilePixels = lv.imp.tileSize;
       lv.stats.impostorBytes = lv.imp.bytes;
       lv.stats.impostorBakeMs = lv.imp.bakeMs;
+      lv.stats.impostorCacheHit = lv.imp.cacheHit;
+      lv.stats.impostorCacheNote = lv.imp.cacheNote;
     }
     CANOPY_TRY(checkImpostorSettings(lv, lv.settings));
     lv.stats.singlePass = lv.singlePass;

@@ -464,6 +464,46 @@ TEST_F(ImpostorTest, FarBoxesBecomeImpostorsAndNearOnesKeepTheirLeaves) {
   destroyLayeredVegetation(lv);
 }
 
+TEST_F(ImpostorTest, TheBakedViewsAreCachedBesideTheLeafRoots) {
+  // A model with a path and a cache folder: the first creation bakes and writes the views, the
+  // second reads them (the same texels), another light bakes again.
+  VegetationModel m = treeWithBoxes();
+  const std::string dir = outputDir() + "/cache";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  m.path = dir + "/tree.glb";  // names the cache files only
+  LayeredVegetationDesc d;
+  d.width = d.height = 64;
+  d.rootCacheDir = dir;
+  d.impostors.enable = true;
+  std::vector<glm::vec4> first, second;
+  for (int run = 0; run < 3; ++run) {
+    SCOPED_TRACE(run);
+    if (run == 2) d.settings.lightDirection = Float3{-0.5f, 0.6f, -0.4f};
+    LayeredVegetation lv;
+    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+    EXPECT_EQ(lv.stats.impostorCacheHit, run == 1) << lv.stats.impostorCacheNote;
+    EXPECT_NE(lv.stats.impostorCacheNote.find(run == 1 ? "read " : "wrote it"), std::string::npos) << lv.stats.impostorCacheNote;
+    if (run == 2) EXPECT_NE(lv.stats.impostorCacheNote.find("other data"), std::string::npos) << lv.stats.impostorCacheNote;
+    const ImpostorNode* top = largestBaked(lv);
+    ASSERT_NE(top, nullptr);
+    std::vector<glm::vec4> tile;
+    for (uint32_t k = 0; k < IMPOSTOR_VIEWS; ++k) {
+      const std::vector<glm::vec4> t = readTile(dev, lv, *top, k);
+      tile.insert(tile.end(), t.begin(), t.end());
+    }
+    (run == 0 ? first : second) = tile;
+    if (run == 1) {
+      // A cache round trip is exact: every texel of the twelve views as baked.
+      const ImageDiff diff = compareImages(first, second);
+      EXPECT_EQ(diff.meanAbs, 0.0);
+      EXPECT_GT(diff.covered, 0u);
+    }
+    destroyLayeredVegetation(lv);
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir + "/tree.glb.impostors"));
+}
+
 TEST_F(ImpostorTest, WhatImpostorsNeedIsRefusedWithTheReason) {
   VegetationModel m = treeWithBoxes();
   LayeredVegetationDesc d;

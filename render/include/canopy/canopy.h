@@ -655,7 +655,11 @@ struct LayerStats {
   uint32_t impostorBakedBoxes = 0;   // of which have views
   uint32_t impostorTilePixels = 0;   // the views' side after the budget
   uint64_t impostorBytes = 0;        // the views' colour and depth
-  double impostorBakeMs = 0;         // wall clock of the bake (creation)
+  double impostorBakeMs = 0;         // wall clock of the bake (creation), or of reading its cache
+  // The views' file cache (CanopyDesc.rootCacheDir, beside the leaf roots', for a model with a
+  // path): whether it was read, else why not and whether it was written.
+  bool impostorCacheHit = false;
+  std::string impostorCacheNote;
   uint32_t lastImpostors = 0;        // boxes drawn as impostors by the last re-slice
   uint32_t lastFadingBoxes = 0;      // of which inside the transition band
   uint64_t lastDrawnTriangles = 0;   // foliage triangles the last re-slice drew

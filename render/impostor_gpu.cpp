@@ -180,14 +180,11 @@ Status bake(LayeredVegetation& lv) {
   const auto color = g.importImage("impostors: colour atlas", descOf(imp.color), {}, sampled);
   const auto depth = g.importImage("impostors: depth atlas", descOf(imp.depth), {}, sampled);
   const auto frameId = g.importBuffer("impostors: bake frames", frameBuf.size, kImpostorRead, kImpostorRead);
-  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
-                  rootState = rg::stateOf(rg::Use::VertexStorageRead);
-  const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
-  const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
-  const auto roots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, rootState, rootState);
+  MeshResources mesh;
+  CANOPY_TRY(importMesh(lv, g, &mesh));
   LayeredVegetation* p = &lv;
   const VkBuffer frameHandle = frameBuf.buffer;
-  g.addPass("impostors: bake", [p, frameHandle, stride](rg::PassContext& c) -> Status {
+  auto pass = g.addPass("impostors: bake", [p, frameHandle, stride](rg::PassContext& c) -> Status {
      Impostors& im = p->imp;
      const Device& dev = *c.device;
      const uint32_t T = im.tileSize, perLayer = im.tilesPerLayer();
@@ -238,16 +235,11 @@ Status bake(LayeredVegetation& lv) {
    })
       .write(color, rg::Use::ColorAttachmentWrite)
       .write(depth, rg::Use::DepthAttachmentWrite)
-      .access(frameId, kImpostorRead)
-      .read(vertices, rg::Use::VertexBuffer)
-      .read(indices, rg::Use::IndexBuffer)
-      .read(roots, rg::Use::VertexStorageRead);
+      .access(frameId, kImpostorRead);
+  readsMesh(pass, mesh);
   CANOPY_TRY(g.bindImage(color, imp.color));
   CANOPY_TRY(g.bindImage(depth, imp.depth));
   CANOPY_TRY(g.bindBuffer(frameId, frameBuf.buffer));
-  CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
-  CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
-  CANOPY_TRY(g.bindBuffer(roots, lv.leafRoots.buffer));
   const bool deferred = d.deferUploads && d.deferTarget;
   CANOPY_TRY(submitOrDefer(d, std::move(work)));
   imp.bakeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();

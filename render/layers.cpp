@@ -1477,6 +1477,23 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   return Status();
 }
 
+Status importMesh(const LayeredVegetation& lv, rg::RenderGraph& g, MeshResources* out) {
+  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
+                  roots = rg::stateOf(rg::Use::VertexStorageRead);
+  out->vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
+  out->indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
+  out->roots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, roots, roots);
+  CANOPY_TRY(g.bindBuffer(out->vertices, lv.vertices.buffer));
+  CANOPY_TRY(g.bindBuffer(out->indices, lv.indexBuffer.buffer));
+  return g.bindBuffer(out->roots, lv.leafRoots.buffer);
+}
+
+rg::RenderGraph::PassBuilder& readsMesh(rg::RenderGraph::PassBuilder& pass, const MeshResources& mesh) {
+  return pass.read(mesh.vertices, rg::Use::VertexBuffer)
+      .read(mesh.indices, rg::Use::IndexBuffer)
+      .read(mesh.roots, rg::Use::VertexStorageRead);
+}
+
 Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources* out) {
   if (!lv.device) return Status::error("addLayerPasses: the layered vegetation was not created");
   const rg::State rest = rg::stateOf(lv.desc.restUse);
@@ -1486,11 +1503,8 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   if (lv.desc.writeIds) r.ids = g.importImage("layers: ids", descOf(lv.ids), rest, rest);
   r.backgroundColor = g.importImage("background: colour", descOf(lv.backgroundColor), rest, rest);
   r.backgroundDepth = g.importImage("background: depth", descOf(lv.backgroundDepth), rest, rest);
-  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
-                  roots = rg::stateOf(rg::Use::VertexStorageRead);
-  const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
-  const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
-  const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, roots, roots);
+  MeshResources mesh;
+  CANOPY_TRY(importMesh(lv, g, &mesh));
   const auto frame = g.importBuffer("layers: frame", lv.frameBuffer.size, kFrameRead, kFrameRead);
   // Impostors (render/impostor_gpu.cpp): the re-slice's list, the box table and the baked atlas.
   rg::ResourceId impostorList = rg::kInvalidResource, impostorBoxes = rg::kInvalidResource,
@@ -1508,12 +1522,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   }
   LayeredVegetation* p = &lv;
   // What every mesh draw reads: the frame block and the chunked mesh.
-  auto drawsMesh = [&](rg::RenderGraph::PassBuilder b) {
-    return b.access(frame, kFrameRead)
-        .read(vertices, rg::Use::VertexBuffer)
-        .read(indices, rg::Use::IndexBuffer)
-        .read(leafRoots, rg::Use::VertexStorageRead);
-  };
+  auto drawsMesh = [&](rg::RenderGraph::PassBuilder b) { return readsMesh(b.access(frame, kFrameRead), mesh); };
   // The frame block holds the placement being drawn: the visible one for a re-slice at once, the
   // spread re-slice's from its first slice on.
   // Every layer pass runs only in the frames that have its work (rg `when`): a still frame records
@@ -1605,9 +1614,6 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   if (lv.desc.writeIds) CANOPY_TRY(g.bindImage(r.ids, lv.ids));
   CANOPY_TRY(g.bindImage(r.backgroundColor, lv.backgroundColor));
   CANOPY_TRY(g.bindImage(r.backgroundDepth, lv.backgroundDepth));
-  CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
-  CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
-  CANOPY_TRY(g.bindBuffer(leafRoots, lv.leafRoots.buffer));
   CANOPY_TRY(g.bindBuffer(frame, lv.frameBuffer.buffer));
   if (out) *out = r;
   return Status();

@@ -287,6 +287,15 @@ Status createImpostors(LayeredVegetation& lv);
 void destroyImpostors(LayeredVegetation& lv);
 Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer);
 
+// The compact mesh in a render graph (issue 16's buffers, read-only after their upload): imported in
+// its rest states and bound; readsMesh() declares a draw's reads. One place for the layer passes,
+// the per-vertex baseline and the impostor bake.
+struct MeshResources {
+  rg::ResourceId vertices = rg::kInvalidResource, indices = rg::kInvalidResource, roots = rg::kInvalidResource;
+};
+Status importMesh(const LayeredVegetation& lv, rg::RenderGraph& graph, MeshResources* out);
+rg::RenderGraph::PassBuilder& readsMesh(rg::RenderGraph::PassBuilder& pass, const MeshResources& mesh);
+
 struct LayerResources {
   rg::ResourceId color = rg::kInvalidResource, depth = rg::kInvalidResource, ids = rg::kInvalidResource;
   rg::ResourceId backgroundColor = rg::kInvalidResource, backgroundDepth = rg::kInvalidResource;

@@ -204,11 +204,8 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   const auto bendFrame = g.importBuffer("per-vertex: bend frame", pv.bendFrame.size, kFrameRead, kFrameRead);
   const rg::State tipRest = rg::stateOf(rg::Use::VertexStorageRead);
   const auto tips = g.importBuffer("per-vertex: motion table", pv.tips.size, tipRest, tipRest);
-  const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
-                  vs = rg::stateOf(rg::Use::VertexStorageRead);
-  const auto vertices = g.importBuffer("layers: vertices", lv.vertices.size, vb, vb);
-  const auto indices = g.importBuffer("layers: indices", lv.indexBuffer.size, ib, ib);
-  const auto leafRoots = g.importBuffer("layers: leaf roots", lv.leafRoots.size, vs, vs);
+  MeshResources mesh;
+  CANOPY_TRY(importMesh(lv, g, &mesh));
   PerVertexAnimation* p = &pv;
   g.addPass("per-vertex: constants", [p](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::LayerFrame), &p->layerFrame);
@@ -243,18 +240,13 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   draw.access(frame, kFrameRead)
       .read(bendFrame, rg::Use::VertexStorageRead)
       .read(tips, rg::Use::VertexStorageRead)
-      .read(vertices, rg::Use::VertexBuffer)
-      .read(indices, rg::Use::IndexBuffer)
-      .read(leafRoots, rg::Use::VertexStorageRead)
       .write(t.color, rg::Use::ColorAttachmentReadWrite)
       .write(t.depth, rg::Use::DepthAttachmentWrite);
+  readsMesh(draw, mesh);
   if (motion) draw.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   CANOPY_TRY(g.bindBuffer(frame, pv.frame.buffer));
   CANOPY_TRY(g.bindBuffer(bendFrame, pv.bendFrame.buffer));
   CANOPY_TRY(g.bindBuffer(tips, pv.tips.buffer));
-  CANOPY_TRY(g.bindBuffer(vertices, lv.vertices.buffer));
-  CANOPY_TRY(g.bindBuffer(indices, lv.indexBuffer.buffer));
-  CANOPY_TRY(g.bindBuffer(leafRoots, lv.leafRoots.buffer));
   return Status();
 }
 

@@ -5,6 +5,8 @@
 // without Canopy's features. Validation and synchronization validation are on (GpuTest).
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include <cmath>
 #include <cstring>
 
@@ -359,6 +361,41 @@ TEST_F(EmbeddingTest, ACameraCutReslicesAtOnceAndDropsMotionVectors) {
   host.destroy();
 }
 
+// Embeds `model` three ways — serial frames, three frames in flight, one pass of the host's graph
+// — on `target` with the description `configure` completes; `check` looks at each context after
+// its 12 frames; the three images must agree and cover the sky.
+void expectSameFramesThreeWays(Device& target, const VegetationModel& model, const LayerView& view, uint64_t& frameNumber,
+                               const std::function<void(CanopyDesc&)>& configure,
+                               const std::function<void(CanopyContext*)>& check) {
+  std::vector<glm::vec4> images[3];
+  std::vector<float> z;
+  for (int variant = 0; variant < 3; ++variant) {
+    SCOPED_TRACE(variant);
+    Host host;
+    host.passGroup = variant == 2;
+    ASSERT_TRUE(host.create(target, variant == 0 ? 1 : 3).ok());
+    CanopyDesc d;
+    d.width = host.w;
+    d.height = host.h;
+    d.colorFormat = host.colorFormat;
+    d.depthFormat = host.depthFormat;
+    d.params.simulation.wind.strength = 2.0f;
+    configure(d);
+    CanopyContext* ctx = nullptr;
+    Status s = createCanopy(target, model, d, &ctx);
+    ASSERT_TRUE(s.ok()) << s.message();
+    for (int i = 0; i < 12 && s.ok(); ++i) s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
+    if (s.ok()) s = host.read(&images[variant], &z);
+    EXPECT_TRUE(s.ok()) << s.message();
+    check(ctx);
+    destroyCanopy(ctx);
+    host.destroy();
+  }
+  EXPECT_LE(differing(images[0], images[1], 3.0f / 255.0f), 0.005);
+  EXPECT_LE(differing(images[0], images[2], 3.0f / 255.0f), 0.005);
+  EXPECT_GT(differing(images[0], std::vector<glm::vec4>(images[0].size(), kSky), 0.05f), 0.05) << "the tree is drawn";
+}
+
 }  // namespace
 
 // The per-vertex baseline embedded like the 2D method: on a device that records its uploads into
@@ -373,33 +410,13 @@ TEST_F(EmbeddingTest, ThePerVertexBaselineEmbedsLikeThe2DMethod) {
   sd.threads = 1;
   ASSERT_TRUE(generateScene(sd, &model).ok());
   view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 64.0f, 1.05f);
-  std::vector<glm::vec4> images[3];
-  std::vector<float> z;
-  for (int variant = 0; variant < 3; ++variant) {  // serial; three in flight; a pass of the host's graph
-    SCOPED_TRACE(variant);
-    Host host;
-    host.passGroup = variant == 2;
-    ASSERT_TRUE(host.create(*target, variant == 0 ? 1 : 3).ok());
-    CanopyDesc d;
-    d.width = host.w;
-    d.height = host.h;
-    d.colorFormat = host.colorFormat;
-    d.depthFormat = host.depthFormat;
-    d.allowPerVertex = true;
-    d.params.animation = AnimationMode::PerVertex;
-    d.params.simulation.wind.strength = 2.0f;
-    CanopyContext* ctx = nullptr;
-    Status s = createCanopy(*target, model, d, &ctx);
-    ASSERT_TRUE(s.ok()) << s.message();
-    for (int i = 0; i < 12 && s.ok(); ++i) s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
-    if (s.ok()) s = host.read(&images[variant], &z);
-    EXPECT_TRUE(s.ok()) << s.message();
-    destroyCanopy(ctx);
-    host.destroy();
-  }
-  EXPECT_LE(differing(images[0], images[1], 3.0f / 255.0f), 0.005);
-  EXPECT_LE(differing(images[0], images[2], 3.0f / 255.0f), 0.005);
-  EXPECT_GT(differing(images[0], std::vector<glm::vec4>(images[0].size(), kSky), 0.05f), 0.05) << "the tree is drawn";
+  expectSameFramesThreeWays(
+      *target, model, view, frameNumber,
+      [](CanopyDesc& d) {
+        d.allowPerVertex = true;
+        d.params.animation = AnimationMode::PerVertex;
+      },
+      [](CanopyContext*) {});
 }
 
 // Impostors (issue 18) on a host's device: the bake is prepared work like the uploads (recorded
@@ -413,35 +430,16 @@ TEST_F(EmbeddingTest, ImpostorsEmbedLikeTheLayers) {
   sd.threads = 1;
   ASSERT_TRUE(generateScene(sd, &model).ok());
   view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, 96.0f / 64.0f, 1.05f);
-  std::vector<glm::vec4> images[3];
-  std::vector<float> z;
-  for (int variant = 0; variant < 3; ++variant) {
-    SCOPED_TRACE(variant);
-    Host host;
-    host.passGroup = variant == 2;
-    ASSERT_TRUE(host.create(*target, variant == 0 ? 1 : 3).ok());
-    CanopyDesc d;
-    d.width = host.w;
-    d.height = host.h;
-    d.colorFormat = host.colorFormat;
-    d.depthFormat = host.depthFormat;
-    d.impostors.enable = true;
-    d.params.layers.impostors.mode = ImpostorMode::ByProjectedSize;
-    d.params.layers.impostors.switchPixels = 4096.0f;  // every box with views is an impostor
-    d.params.simulation.wind.strength = 2.0f;
-    CanopyContext* ctx = nullptr;
-    Status s = createCanopy(*target, model, d, &ctx);
-    ASSERT_TRUE(s.ok()) << s.message();
-    for (int i = 0; i < 12 && s.ok(); ++i) s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
-    if (s.ok()) s = host.read(&images[variant], &z);
-    EXPECT_TRUE(s.ok()) << s.message();
-    const CanopyStats st = canopyStats(ctx);
-    EXPECT_GT(st.layers.lastImpostors, 0u);
-    EXPECT_EQ(st.layers.lastDrawnTriangles, 0u) << "the tree is one impostor";
-    destroyCanopy(ctx);
-    host.destroy();
-  }
-  EXPECT_LE(differing(images[0], images[1], 3.0f / 255.0f), 0.005);
-  EXPECT_LE(differing(images[0], images[2], 3.0f / 255.0f), 0.005);
-  EXPECT_GT(differing(images[0], std::vector<glm::vec4>(images[0].size(), kSky), 0.05f), 0.05) << "the impostor is drawn";
+  expectSameFramesThreeWays(
+      *target, model, view, frameNumber,
+      [](CanopyDesc& d) {
+        d.impostors.enable = true;
+        d.params.layers.impostors.mode = ImpostorMode::ByProjectedSize;
+        d.params.layers.impostors.switchPixels = 4096.0f;  // every box with views is an impostor
+      },
+      [](CanopyContext* ctx) {
+        const CanopyStats st = canopyStats(ctx);
+        EXPECT_GT(st.layers.lastImpostors, 0u);
+        EXPECT_EQ(st.layers.lastDrawnTriangles, 0u) << "the tree is drawn as impostors only";
+      });
 }

@@ -14,6 +14,7 @@
 #include "render/foliage_boxes.h"
 #include "render/layers.h"
 #include "tests/gpu_test.h"
+#include "tests/layer_render.h"
 #include "tools/image_io.h"
 #include "tools/own_device.h"
 #include "tools/scene_generator.h"
@@ -37,15 +38,7 @@ VegetationModel treeWithBoxes(uint64_t faces = 12000, SceneKind kind = SceneKind
 }
 
 Status renderOnce(Device& dev, LayeredVegetation& lv, const LayerView& view) {
-  bool rebuild = false;
-  CANOPY_TRY(updateLayerView(lv, view, &rebuild));
-  rg::RenderGraph g;
-  CANOPY_TRY(addLayerPasses(lv, g, nullptr));
-  CANOPY_TRY(g.compile());
-  CANOPY_TRY(g.realize(dev));
-  Status s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-  g.release(dev);
-  return s;
+  return canopy::test::renderLayersOnce(dev, lv, view);
 }
 
 // All layers flattened front to back ("over", premultiplied): what the layers show together.

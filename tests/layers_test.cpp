@@ -15,6 +15,7 @@
 #include "tools/image_io.h"
 #include "render/layers.h"
 #include "tests/gpu_test.h"
+#include "tests/layer_render.h"
 #include "tools/own_device.h"
 #include "tools/scene_generator.h"
 
@@ -80,15 +81,7 @@ LayerView frontView() {
 }
 
 Status renderOnce(Device& dev, LayeredVegetation& lv, const LayerView& view) {
-  bool rebuild = false;
-  CANOPY_TRY(updateLayerView(lv, view, &rebuild));
-  rg::RenderGraph g;
-  CANOPY_TRY(addLayerPasses(lv, g, nullptr));
-  CANOPY_TRY(g.compile());
-  CANOPY_TRY(g.realize(dev));
-  Status s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-  g.release(dev);
-  return s;
+  return canopy::test::renderLayersOnce(dev, lv, view);
 }
 
 // The layer passes of one LayeredVegetation in a graph kept across frames (a spread or streamed

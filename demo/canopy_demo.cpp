@@ -415,6 +415,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "canopy-demo: %s\n", err.c_str());
     return 2;
   }
+  if (o.cache.clear) return cli::clearCacheCommand("canopy-demo", o.cache, o.gltf);
+  if (!o.gltf.empty()) {
+    const Status where = cli::resolveCacheFolder(o.cache, o.gltf, &o.cacheFolder);
+    if (!where.ok()) std::printf("cache: none: %s\n", where.message().c_str());
+  }
   VegetationModel model;
   std::string label;
   const Status s = loadScene(o, &model, &label);

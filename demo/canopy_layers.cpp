@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "demo/cache_cli.h"
 #include "demo/cli.h"
 #include "engine/device.h"
 #include "tools/own_device.h"
@@ -43,9 +44,8 @@ int usage(const std::string& why) {
       "  --slice roots|geometry leaf-root slicing (default) or the simple per-triangle segmentation\n"
       "  --per-layer            draw one pass per layer even when gl_Layer is available\n"
       "  --no-weld              leaves only through shared indices, not equal positions\n"
-      "  --no-cache             neither read nor write the leaf-root cache (MODEL.leafroots)\n"
-      "  --cache-dir DIR        keep the leaf-root cache in DIR instead of beside the model\n"
-      "  --device NAME          substring of the Vulkan device name\n");
+      "  --device NAME          substring of the Vulkan device name\n"
+      "Leaf-root cache:\n%s", cli::cacheHelp());
   return 0;
 }
 
@@ -79,7 +79,8 @@ int main(int argc, char** argv) {
   desc.settings.regions = RegionSplit{};
   float yaw = 0, pitch = 10, fov = 40, distance = 0.8f;
   DeviceDesc dd;
-  bool noCache = false;
+  cli::CacheOptions cache;
+  std::string why;
   dd.applicationName = "canopy-layers";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -127,11 +128,8 @@ int main(int argc, char** argv) {
       desc.settings.draw = LayerDrawMode::PerLayer;
     } else if (a == "--no-weld") {
       desc.roots.weldPositions = false;
-    } else if (a == "--no-cache") {
-      noCache = true;
-    } else if (a == "--cache-dir") {
-      if (!(v = next())) return usage("--cache-dir needs a folder");
-      desc.rootCacheDir = v;
+    } else if (const int c = cli::parseCacheOption(argc, argv, &i, &cache, &why)) {
+      if (c < 0) return usage(why);
     } else if (a == "--device") {
       if (!(v = next())) return usage("--device needs a name");
       dd.preferredDevice = v;
@@ -143,19 +141,17 @@ int main(int argc, char** argv) {
       return usage("more than one model given ('" + model + "' and '" + a + "')");
     }
   }
+  if (cache.clear) return cli::clearCacheCommand("canopy-layers", cache, model);
   if (model.empty()) return usage("no model given");
   auto fail = [](const Status& s) {
     std::fprintf(stderr, "canopy-layers: %s\n", s.message().c_str());
     return 1;
   };
-
-  // The tool's own default (the library writes nothing unless asked): the cache beside the model.
-  if (noCache) desc.rootCacheDir.clear();
-  else if (desc.rootCacheDir.empty()) desc.rootCacheDir = std::filesystem::path(model).parent_path().empty() ? std::string(".") : std::filesystem::path(model).parent_path().string();
-  if (!desc.rootCacheDir.empty()) {
-    std::error_code ec;
-    std::filesystem::create_directories(desc.rootCacheDir, ec);
-  }
+  // The caches go to the user's cache folder unless the options say otherwise (docs/design.md
+  // "Files"); a folder that cannot be used means no cache, said on one line.
+  const Status where = cli::resolveCacheFolder(cache, model, &desc.rootCacheDir);
+  if (!where.ok()) std::printf("No cache: %s\n", where.message().c_str());
+  desc.cacheMaxBytes = uint64_t(cache.maxMiB) << 20;
   VegetationModel m;
   const auto t0 = std::chrono::steady_clock::now();
   Status s = loadGltf(model, GltfLoadOptions{}, &m);

@@ -28,7 +28,6 @@ void printHelp() {
       "  --gltf FILE         load a .gltf/.glb instead of generating a scene\n"
       "  --rigid M1,M2       materials (names or #index) forced to be rigid background (trunk, branches)\n"
       "  --foliage M1,M2     materials forced to be foliage (default rule: render/material_split.h)\n"
-      "  --cache-dir DIR     leaf-root cache of a --gltf model (default: the output folder)\n"
       "Method:\n"
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
       "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
@@ -97,6 +96,7 @@ void printHelp() {
       d.impostorPixels, d.light.x, d.light.y, d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, d.ambient, d.leafIor, d.leafRoughness,
       d.leafTransmission, d.width,
       d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.deviceBudgetMiB, d.ringMiB, d.outDir.c_str());
+  std::printf("Caches of a --gltf model (leaf roots, impostor views; docs/design.md \"Files\"):\n%s", cli::cacheHelp());
 }
 
 namespace {
@@ -148,9 +148,11 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--rigid" || a == "--foliage") {
       if (!takes() || !*v) return bad("needs material names or #indices, comma-separated");
       (a == "--rigid" ? o->split.rigid : o->split.foliage) = cli::splitList(v);
-    } else if (a == "--cache-dir") {
-      if (!takes() || !*v) return bad("needs a folder");
-      o->cacheDir = v;
+    } else if (std::string why; const int c = cli::parseCacheOption(argc, argv, &i, &o->cache, &why)) {
+      if (c < 0) {
+        *err = why;
+        return 2;
+      }
     } else if (a == "--layers") {
       LayerLayout l;
       if (!takes()) return bad("needs a layout such as 5(3-1-1) or 3");
@@ -531,11 +533,12 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.width = w;
   desc.height = h;
   desc.colorFormat = VK_FORMAT_R8G8B8A8_SRGB;
-  // A generated scene has no file to key a cache by. A loaded model's cache goes to the output
-  // folder (or --cache-dir), not beside the model: the demo writes only where it was told to.
+  // A generated scene has no file to key a cache by. A loaded model's caches go to the folder
+  // main() resolved (the user's cache folder unless the options say otherwise).
   LayerLayout layout;
   if (parseLayerLayout(o.layout, &layout).ok()) desc.maxLayers = std::max(desc.maxLayers, layout.count());
-  desc.rootCacheDir = o.cacheDir.empty() ? o.outDir : o.cacheDir;
+  desc.rootCacheDir = o.cacheFolder;
+  desc.cacheMaxBytes = uint64_t(o.cache.maxMiB) << 20;
   desc.split = o.split;
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
@@ -574,6 +577,12 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
                  double(peak - std::min(peak, residentBefore)) / double(1ull << 30),
                  double(peak - std::min(peak, residentBefore)) / faces,
                  double(cli::residentBytes() - std::min(cli::residentBytes(), residentBefore)) / faces);
+  }
+  if (!desc.rootCacheDir.empty() && !model.path.empty()) {
+    // What became of the caches, why one was not used (a line each).
+    const CanopyStats st = canopyStats(host.canopy);
+    std::printf("cache: leaf roots: %s\n", st.layers.rootCacheNote.c_str());
+    if (desc.impostors.enable) std::printf("cache: impostor views: %s\n", st.layers.impostorCacheNote.c_str());
   }
   CANOPY_TRY(setCanopyParams(host.canopy, paramsFrom(o, canopyParams(host.canopy))));
   return Status();

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "demo/cache_cli.h"
 #include "engine/device.h"
 #include "tools/own_device.h"
 #include "engine/memory.h"
@@ -24,7 +25,8 @@ struct Options {
   // Scene
   std::string gltf;                    // a glTF/GLB file instead of a generated scene
   MaterialSplitOptions split;          // --rigid / --foliage overrides of the default material rule
-  std::string cacheDir;                // leaf-root cache folder; empty: the output folder
+  cli::CacheOptions cache;             // where the caches of a --gltf model go (demo/cache_cli.h)
+  std::string cacheFolder;             // resolved by main(); empty: no cache
   SceneKind scene = SceneKind::Shrub;
   uint64_t faces = 80000;
   uint32_t seed = 1;

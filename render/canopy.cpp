@@ -352,6 +352,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.split = desc.split;
     ld.roots = desc.roots;
     ld.rootCacheDir = desc.rootCacheDir;
+    ld.cacheMaxBytes = desc.cacheMaxBytes;
     ld.progress = desc.progress;
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;

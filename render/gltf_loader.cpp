@@ -19,6 +19,8 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "engine/files.h"
+
 // Our own decoder, private to this file (the tinygltf library carries its own copy).
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
@@ -28,34 +30,14 @@
 namespace canopy {
 namespace {
 
-// ---- files ---------------------------------------------------------------------------------------
-// Opened non-blocking so that a FIFO or a device (also behind a symbolic link) is refused by the
-// regular-file check instead of blocking open() or read(); regular files ignore O_NONBLOCK.
+// ---- files ----------------------------------------------------------------------------------------
+// engine/files.h: opened non-blocking, so that a FIFO or a device (also behind a symbolic link)
+// is refused by the regular-file check instead of blocking open() or read(); sized before reading.
+// The model and its files may be links (checkPath keeps them inside the model's folder).
 Status readFile(const std::string& path, uint64_t maxBytes, std::vector<unsigned char>* out) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
-  if (fd < 0) return Status::error(Result::FileError, "cannot open: " + std::string(std::strerror(errno)));
-  struct stat st;
-  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    return Status::error(Result::FileError, "not a regular file");
-  }
-  if (uint64_t(st.st_size) > maxBytes) {
-    ::close(fd);
-    return Status::error("file of " + std::to_string(st.st_size) + " bytes exceeds the limit of " + std::to_string(maxBytes));
-  }
-  out->resize(size_t(st.st_size));
-  size_t got = 0;
-  while (got < out->size()) {
-    ssize_t r = ::read(fd, out->data() + got, out->size() - got);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) {
-      ::close(fd);
-      return Status::error(Result::FileError, r == 0 ? "the file shrank while being read" : "read error: " + std::string(std::strerror(errno)));
-    }
-    got += size_t(r);
-  }
-  ::close(fd);
-  return Status();
+  FileReadOptions o;
+  o.maxBytes = maxBytes;
+  return readWholeFile(path, o, out);
 }
 
 // External URIs resolve only to regular files inside the model's folder: no absolute paths, no

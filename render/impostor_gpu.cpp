@@ -2,14 +2,14 @@
 // bake (each baked box's twelve views drawn with the layers' own pipeline and shading, orthographic,
 // into its tiles) and the draw of a cut's impostors into the layers.
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include "engine/device.h"
 #include "engine/hash.h"
 #include "engine/pipeline.h"
+#include "engine/shader_registry.h"
 #include "engine/transfer.h"
+#include "render/cache_file.h"
 #include "render/layers.h"
 
 namespace canopy {
@@ -20,6 +20,10 @@ constexpr VkFormat kAtlasDepthFormat = VK_FORMAT_D32_SFLOAT;
 // The box table and the instance list are read by both stages (the fragment stage reads the box).
 const rg::State kImpostorRead{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                               VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+
+// The bake's shaders are part of the cache key: a shading change must not serve stale views.
+constexpr const char* kBakeVertexShader = "layers_clip.vert";
+constexpr const char* kBakeFragmentShader = "layers.frag";
 
 uint64_t roundUpTo(uint64_t x, uint64_t a) { return (x + a - 1) / a * a; }
 
@@ -50,7 +54,8 @@ Status createDrawPipelines(LayeredVegetation& lv) {
   }
   // The bake: the background path of the layers (every triangle, no slicing), into the atlas formats.
   GraphicsPipelineDesc b = layerMeshPipelineDesc(kAtlasColorFormat, kAtlasDepthFormat);
-  b.vertexShader = "layers_clip.vert";
+  b.vertexShader = kBakeVertexShader;
+  b.fragmentShader = kBakeFragmentShader;
   return createGraphicsPipeline(d, b, &imp.bake);
 }
 
@@ -74,42 +79,26 @@ std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
   return bytes;
 }
 
-constexpr char kCacheMagic[8] = {'C', 'N', 'P', 'Y', 'I', 'M', 'P', '1'};
-
 uint64_t atlasBytes(const Impostors& imp) {
   return uint64_t(imp.atlasLayers) * imp.tilesPerRow * imp.rowsPerLayer * imp.tileSize * imp.tileSize * 4;
 }
 
-// The cached views for `key`, uploaded into the atlas; false (with the reason) when there is none.
+uint64_t bakeShaderKey() {
+  uint64_t h = 0xa4093822299f31d0ull;
+  for (const char* name : {kBakeVertexShader, kBakeFragmentShader})
+    if (const EmbeddedShader* sh = findEmbeddedShader(name)) h = hashBytes(h, sh->code, sh->sizeBytes);
+  return h;
+}
+
+// The cached views for `key` (colour, then depth, layer after layer; render/cache_file.h checks
+// the header, size and checksum), uploaded into the atlas; false (with the reason) when there are none.
 bool readCache(Device& d, Impostors& imp, uint64_t key, std::string* why) {
-  std::ifstream f(imp.cachePath, std::ios::binary);
-  if (!f) {
-    *why = "no cache file";
-    return false;
-  }
-  char magic[8];
-  uint64_t fileKey = 0, bytes = 0;
-  f.read(magic, 8);
-  f.read(reinterpret_cast<char*>(&fileKey), 8);
-  f.read(reinterpret_cast<char*>(&bytes), 8);
-  if (!f || std::memcmp(magic, kCacheMagic, 8) != 0) {
-    *why = "not an impostor cache";
-    return false;
-  }
-  if (fileKey != key || bytes != atlasBytes(imp)) {
-    *why = "made for other data (model, options or lighting changed)";
-    return false;
-  }
-  std::vector<uint8_t> color(bytes), depth(bytes);
-  f.read(reinterpret_cast<char*>(color.data()), std::streamsize(bytes));
-  f.read(reinterpret_cast<char*>(depth.data()), std::streamsize(bytes));
-  if (!f) {
-    *why = "truncated";
-    return false;
-  }
+  const uint64_t bytes = atlasBytes(imp);
+  std::vector<uint8_t> payload;
+  if (!readCacheFile(imp.cachePath, CacheKind::ImpostorViews, key, 2 * bytes, &payload, why)) return false;
   const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
-  Status s = uploadImage(d, imp.color, color.data(), bytes, sampled);
-  if (s.ok()) s = uploadImage(d, imp.depth, depth.data(), bytes, sampled);
+  Status s = uploadImage(d, imp.color, payload.data(), bytes, sampled);
+  if (s.ok()) s = uploadImage(d, imp.depth, payload.data() + bytes, bytes, sampled);
   if (!s.ok()) {
     *why = s.message();
     return false;
@@ -117,35 +106,16 @@ bool readCache(Device& d, Impostors& imp, uint64_t key, std::string* why) {
   return true;
 }
 
-// The atlas read back (colour, then depth, layer after layer) into the cache file.
-Status writeCache(Device& d, const Impostors& imp, uint64_t key) {
+// The atlas read back into the cache file; `note` gets what the folder's cap evicted.
+Status writeCache(Device& d, const Impostors& imp, uint64_t key, std::string* note) {
   const uint64_t bytes = atlasBytes(imp), perLayer = bytes / std::max<uint32_t>(imp.atlasLayers, 1);
-  std::vector<uint8_t> color(bytes), depth(bytes);
+  std::vector<uint8_t> payload(2 * bytes);
   const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
   for (uint32_t l = 0; l < imp.atlasLayers; ++l) {
-    CANOPY_TRY(readbackImage(d, imp.color, l, 4, color.data() + l * perLayer, sampled));
-    CANOPY_TRY(readbackImage(d, imp.depth, l, 4, depth.data() + l * perLayer, sampled));
+    CANOPY_TRY(readbackImage(d, imp.color, l, 4, payload.data() + l * perLayer, sampled));
+    CANOPY_TRY(readbackImage(d, imp.depth, l, 4, payload.data() + bytes + l * perLayer, sampled));
   }
-  const std::string tmp = imp.cachePath + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    f.write(kCacheMagic, 8);
-    f.write(reinterpret_cast<const char*>(&key), 8);
-    f.write(reinterpret_cast<const char*>(&bytes), 8);
-    f.write(reinterpret_cast<const char*>(color.data()), std::streamsize(bytes));
-    f.write(reinterpret_cast<const char*>(depth.data()), std::streamsize(bytes));
-    if (!f) {
-      std::remove(tmp.c_str());
-      return Status::error("cannot write " + tmp);
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, imp.cachePath, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    return Status::error("cannot write " + imp.cachePath + ": " + ec.message());
-  }
-  return Status();
+  return writeCacheFile(imp.cachePath, CacheKind::ImpostorViews, key, payload.data(), payload.size(), imp.cacheMaxBytes, note);
 }
 
 Status bake(LayeredVegetation& lv) {
@@ -156,7 +126,7 @@ Status bake(LayeredVegetation& lv) {
   const uint64_t stride = roundUpTo(sizeof(gpu::LayerFrame), align);
   const std::vector<uint8_t> frames = bakeFrames(lv, stride);
   // The file cache (like the leaf roots'): the key adds the bake's cameras and lighting.
-  const uint64_t key = hashBytes(imp.cacheKey, frames.data(), frames.size());
+  const uint64_t key = hashBytes(imp.cacheKey ^ bakeShaderKey(), frames.data(), frames.size());
   if (!imp.cachePath.empty()) {
     std::string why;
     imp.cacheHit = readCache(d, imp, key, &why);
@@ -247,8 +217,10 @@ Status bake(LayeredVegetation& lv) {
     if (deferred) {
       imp.cacheNote += "; not written: the bake is recorded into the host's first frame";
     } else {
-      const Status w = writeCache(d, imp, key);
+      std::string evicted;
+      const Status w = writeCache(d, imp, key, &evicted);
       imp.cacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
+      if (!evicted.empty()) imp.cacheNote += "; " + evicted;
     }
   }
   return Status();

@@ -4,10 +4,11 @@
 #include <cmath>
 #include <string>
 
+#include "engine/files.h"
 #include "engine/hash.h"
+#include "render/cache_file.h"
 #include "render/foliage_boxes.h"
 
-#include <filesystem>
 
 namespace canopy {
 namespace {
@@ -229,8 +230,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
 }
 
 std::string impostorCachePath(const std::string& modelPath, const std::string& cacheDir) {
-  if (cacheDir.empty()) return modelPath + ".impostors";
-  return (std::filesystem::path(cacheDir) / (std::filesystem::path(modelPath).filename().string() + ".impostors")).string();
+  return cacheFilePath(modelPath, cacheDir.empty() ? parentFolder(modelPath) : cacheDir, CacheKind::ImpostorViews);
 }
 
 uint64_t impostorModelKey(const Impostors& imp, const VegetationModel& m, const std::vector<uint64_t>& meshHashes) {

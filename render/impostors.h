@@ -65,6 +65,7 @@ struct Impostors {
   // views are drawn from but the bake frames (added by the bake), and what became of it.
   std::string cachePath;
   uint64_t cacheKey = 0;
+  uint64_t cacheMaxBytes = 0;  // the folder's cap (CanopyDesc.cacheMaxBytes; 0: none)
   bool cacheHit = false;
   std::string cacheNote = "cache off";
 };

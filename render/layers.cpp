@@ -1080,8 +1080,10 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     if (!cached) {
       CANOPY_TRY(computeLeafRoots(m, foliage, desc.roots, &roots, desc.progress));
       if (cacheOn) {
-        Status w = writeLeafRootCache(cachePath, key, roots);
+        std::string evicted;
+        Status w = writeLeafRootCache(cachePath, key, roots, desc.cacheMaxBytes, &evicted);
         lv.stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
+        if (!evicted.empty()) lv.stats.rootCacheNote += "; " + evicted;
       }
     }
     // Only the per-vertex leaf and the per-leaf root are used from here on, by the compaction; the
@@ -1117,6 +1119,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
             hashBytes(key, hm.roots.data(), hm.roots.size() * sizeof(gpu::LayerLeafRoot))};
         lv.imp.cachePath = impostorCachePath(m.path, desc.rootCacheDir);
         lv.imp.cacheKey = impostorModelKey(lv.imp, m, meshHashes);
+        lv.imp.cacheMaxBytes = desc.cacheMaxBytes;
       }
       CANOPY_TRY(createImpostors(lv));
       lv.stats.impostorBoxes = uint32_t(lv.imp.nodes.size());

@@ -43,6 +43,7 @@ struct LayeredVegetationDesc {
   // The leaf-root cache folder: leafRootCachePath(model.path, rootCacheDir) is read and written
   // there. Empty (the default), or a model without a path: no file is touched.
   std::string rootCacheDir;
+  uint64_t cacheMaxBytes = 0;  // CanopyDesc.cacheMaxBytes (0: no cap)
   bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
   uint32_t maxChunkVertices = kMaxChunkVertices;  // distinct vertices per mesh chunk, 3..65535 (tests cut small chunks)
   // Spread re-slicing: every drawing frame draws this many triangles instead of what the budget and

@@ -1,11 +1,10 @@
 #include "render/leaf_roots.h"
 
+#include "engine/files.h"
 #include "engine/hash.h"
+#include "render/cache_file.h"
 
-#include <cstdio>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 
 namespace canopy {
 namespace {
@@ -38,8 +37,6 @@ uint32_t floatKey(float f) {
 uint64_t hashPosition(const glm::vec3& p) {
   return mix64((uint64_t(floatKey(p.x)) << 32 | floatKey(p.y)) ^ mix64(floatKey(p.z) + 0x9e3779b97f4a7c15ull));
 }
-
-constexpr char kMagic[8] = {'C', 'N', 'P', 'Y', 'L', 'R', 'T', '1'};
 
 }  // namespace
 
@@ -158,38 +155,17 @@ uint64_t leafRootKey(const VegetationModel& m, const std::vector<uint8_t>& folia
 }
 
 std::string leafRootCachePath(const std::string& modelPath, const std::string& cacheDir) {
-  if (cacheDir.empty()) return modelPath + ".leafroots";
-  return (std::filesystem::path(cacheDir) / (std::filesystem::path(modelPath).filename().string() + ".leafroots")).string();
+  return cacheFilePath(modelPath, cacheDir.empty() ? parentFolder(modelPath) : cacheDir, CacheKind::LeafRoots);
 }
 
 bool readLeafRootCache(const std::string& path, uint64_t key, size_t nv, LeafRoots* out, std::string* why) {
   *out = LeafRoots{};
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    *why = "no cache file";
-    return false;
-  }
-  char magic[8];
-  uint64_t fileKey = 0, count = 0;
-  f.read(magic, 8);
-  f.read(reinterpret_cast<char*>(&fileKey), 8);
-  f.read(reinterpret_cast<char*>(&count), 8);
-  if (!f || std::memcmp(magic, kMagic, 8) != 0) {
-    *why = "not a leaf-root cache";
-    return false;
-  }
-  if (fileKey != key || count != nv) {
-    *why = "made for other data (model or options changed)";
-    return false;
-  }
+  std::vector<uint8_t> payload;
+  if (!readCacheFile(path, CacheKind::LeafRoots, key, uint64_t(nv) * 4, &payload, why)) return false;
   out->rootOfVertex.resize(nv);
-  f.read(reinterpret_cast<char*>(out->rootOfVertex.data()), std::streamsize(nv * 4));
-  if (!f || f.peek() != std::char_traits<char>::eof()) {
-    *why = "truncated or oversized";
-    out->rootOfVertex.clear();
-    return false;
-  }
-  // A root must be in range and be its own root; anything else is a damaged file.
+  std::memcpy(out->rootOfVertex.data(), payload.data(), nv * 4);
+  // A root must be in range and be its own root: a file that passed the checksum but was made
+  // with other rules (or by hand) must not index out of range later.
   for (size_t v = 0; v < nv; ++v) {
     const uint32_t r = out->rootOfVertex[v];
     if (r != kNoLeaf && (r >= nv || out->rootOfVertex[r] != r)) {
@@ -202,28 +178,8 @@ bool readLeafRootCache(const std::string& path, uint64_t key, size_t nv, LeafRoo
   return true;
 }
 
-Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& r) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) return Status::error("cannot write leaf-root cache " + tmp);
-    const uint64_t count = r.rootOfVertex.size();
-    f.write(kMagic, 8);
-    f.write(reinterpret_cast<const char*>(&key), 8);
-    f.write(reinterpret_cast<const char*>(&count), 8);
-    f.write(reinterpret_cast<const char*>(r.rootOfVertex.data()), std::streamsize(count * 4));
-    if (!f) {
-      std::remove(tmp.c_str());
-      return Status::error("cannot write leaf-root cache " + tmp);
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    return Status::error("cannot write leaf-root cache " + path + ": " + ec.message());
-  }
-  return Status();
+Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& r, uint64_t capBytes, std::string* note) {
+  return writeCacheFile(path, CacheKind::LeafRoots, key, r.rootOfVertex.data(), uint64_t(r.rootOfVertex.size()) * 4, capBytes, note);
 }
 
 }  // namespace canopy

@@ -10,7 +10,7 @@
 // output (union-find with path halving and union by rank over the index buffer, its parent array
 // becoming rootOfVertex; welding through an open-addressing hash of positions). A leaf's triangles
 // may lie anywhere in a glTF index buffer, so the components need the whole mesh at once. The result can be cached in a
-// file next to the model, keyed by a hash of everything it depends on.
+// file (render/cache_file.h), keyed by a hash of everything it depends on.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -42,12 +42,16 @@ void indexLeaves(LeafRoots* roots);
 uint64_t leafRootKey(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,
                      const LeafRootOptions& options);
 
-// The cache file of a model: "<model path>.leafroots" beside it, or "<dir>/<model file name>.leafroots"
-// when a cache directory is given (e.g. when the model's folder is shared or read-only).
+// The cache file of a model in `cacheDir` (render/cache_file.h cacheFilePath; empty: the model's
+// own folder, "<model file name>.leafroots").
 std::string leafRootCachePath(const std::string& modelPath, const std::string& cacheDir = "");
-// Reads a cache; false (with `why`) when it is absent, truncated, for another key, or inconsistent.
+// Reads a cache (render/cache_file.h: header, key, size and checksum checked, no link followed);
+// false (with `why`) when it is absent, damaged, truncated, oversized, for another key or version,
+// or its roots are inconsistent.
 bool readLeafRootCache(const std::string& path, uint64_t key, size_t vertexCount, LeafRoots* out, std::string* why);
-// Writes atomically (temporary file + rename).
-Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& roots);
+// Writes atomically (a new temporary file renamed into place), then keeps the folder under
+// capBytes (0: no cap); `note` gets what was evicted.
+Status writeLeafRootCache(const std::string& path, uint64_t key, const LeafRoots& roots, uint64_t capBytes = 0,
+                          std::string* note = nullptr);
 
 }  // namespace canopy

@@ -5,9 +5,13 @@
 // and the refusals.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -495,6 +499,64 @@ TEST_F(ImpostorTest, TheBakedViewsAreCachedBesideTheLeafRoots) {
     destroyLayeredVegetation(lv);
   }
   EXPECT_TRUE(std::filesystem::exists(dir + "/tree.glb.impostors"));
+}
+
+TEST_F(ImpostorTest, AHostileCacheFolderNeitherRedirectsTheWriteNorStopsTheBake) {
+  // Links at the views' (and leaf roots') final and temporary names, then a damaged, a FIFO and a
+  // folder at the name (docs/design.md "Files"): each creation bakes, says why the file was not
+  // used, and either writes a whole new cache or says why it could not; the linked file is
+  // never written. tests/cache_files_test.cpp covers the format, cache_files_cli_test.sh the programs.
+  VegetationModel m = treeWithBoxes();
+  const std::string dir = outputDir() + "/hostile_cache";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string victim = outputDir() + "/hostile_cache_victim.txt";
+  { std::ofstream(victim, std::ios::trunc) << "the user's own file"; }
+  m.path = dir + "/tree.glb";  // names the cache files only
+  const std::string views = dir + "/tree.glb.impostors";
+  for (const std::string& name : {views, views + ".tmp", dir + "/tree.glb.leafroots", dir + "/tree.glb.leafroots.tmp"})
+    std::filesystem::create_symlink(victim, name);
+  LayeredVegetationDesc d;
+  d.width = d.height = 64;
+  d.rootCacheDir = dir;
+  d.impostors.enable = true;
+  auto create = [&](const std::string& expected) {
+    LayeredVegetation lv;
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    EXPECT_FALSE(lv.stats.impostorCacheHit);
+    EXPECT_NE(lv.stats.impostorCacheNote.find(expected), std::string::npos) << lv.stats.impostorCacheNote;
+    EXPECT_GT(lv.stats.impostorBakedBoxes, 0u);
+    std::printf("[  NOTE    ] %.2f s: %s\n", s, lv.stats.impostorCacheNote.c_str());
+    destroyLayeredVegetation(lv);
+  };
+  auto slurp = [](const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+  };
+  create("a symbolic link (not followed");
+  EXPECT_EQ(slurp(victim), "the user's own file");
+  EXPECT_FALSE(std::filesystem::is_symlink(views));
+  EXPECT_TRUE(std::filesystem::is_symlink(views + ".tmp"));
+  const std::string whole = slurp(views);
+  ASSERT_GT(whole.size(), 64u);
+  auto plant = [&](const std::string& bytes) { std::ofstream(views, std::ios::binary | std::ios::trunc) << bytes; };
+  plant(whole.substr(0, whole.size() - 5));
+  create("truncated");
+  std::string flipped = whole;
+  flipped[whole.size() / 2] = char(flipped[whole.size() / 2] ^ 0x20);
+  plant(flipped);
+  create("damaged: the contents' checksum does not match; wrote it");
+  plant(whole + "x");
+  create("oversized");
+  std::filesystem::remove(views);
+  ASSERT_EQ(::mkfifo(views.c_str(), 0600), 0);
+  create("not a regular file (a FIFO); wrote it");
+  std::filesystem::remove(views);
+  std::filesystem::create_directory(views);
+  create("not a regular file (a directory); not written: cannot write '" + std::string(views) + "': Is a directory");
+  EXPECT_EQ(slurp(victim), "the user's own file");
 }
 
 TEST_F(ImpostorTest, WhatImpostorsNeedIsRefusedWithTheReason) {

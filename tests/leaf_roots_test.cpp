@@ -232,16 +232,26 @@ TEST(LeafRoots, CacheRoundTripAndRejection) {
   EXPECT_NE(leafRootKey(moved, mask, {}), key);
   EXPECT_FALSE(readLeafRootCache(path, key + 1, m.positions.size(), &back, &why));
   EXPECT_NE(why.find("other data"), std::string::npos);
-  // Truncated and corrupted files are rejected, never trusted.
+  // Truncated and corrupted files are rejected, never trusted (tests/cache_files_test.cpp tries
+  // every truncation and bit flip of the format).
   std::filesystem::resize_file(path, std::filesystem::file_size(path) - 3);
   EXPECT_FALSE(readLeafRootCache(path, key, m.positions.size(), &back, &why));
+  EXPECT_NE(why.find("truncated"), std::string::npos) << why;
   ASSERT_TRUE(writeLeafRootCache(path, key, r).ok());
   {
     std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
-    f.seekp(24 + 4 * 5);
-    const uint32_t bad = 7;  // vertex 5's root becomes 7, which is not a root
+    f.seekp(64 + 4 * 5);
+    const uint32_t bad = 7;
     f.write(reinterpret_cast<const char*>(&bad), 4);
   }
+  EXPECT_FALSE(readLeafRootCache(path, key, m.positions.size(), &back, &why));
+  EXPECT_EQ(why, "damaged: the contents' checksum does not match");
+  // A well-formed file whose roots are inconsistent (vertex 5's root becomes 7, which is not a
+  // root): rejected too, before anything indexes with it.
+  LeafRoots broken = r;
+  broken.rootOfVertex[5] = 7;
+  ASSERT_NE(r.rootOfVertex[7], 7u);
+  ASSERT_TRUE(writeLeafRootCache(path, key, broken).ok());
   EXPECT_FALSE(readLeafRootCache(path, key, m.positions.size(), &back, &why));
   EXPECT_EQ(why, "inconsistent contents");
   EXPECT_FALSE(readLeafRootCache(path + ".absent", key, m.positions.size(), &back, &why));

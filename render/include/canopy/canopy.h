@@ -21,7 +21,7 @@
 // The version this header declares. createCanopy() refuses a library of another major version, or
 // an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
 #define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 5
+#define CANOPY_VERSION_MINOR 6
 #define CANOPY_VERSION_PATCH 0
 #define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
 #define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)
@@ -540,9 +540,15 @@ struct CanopyDesc {
   CanopyContext* shareSimulationWith = nullptr;
   MaterialSplitOptions split;
   LeafRootOptions roots;
-  // The leaf-root cache (seconds saved on big models) is read and written only in this folder;
-  // empty: no file is read or written.
+  // Canopy's cache files (the leaf roots, seconds saved on big models, and the impostor views)
+  // are read and written only in this folder (userCacheFolder() gives the user's); empty: no file
+  // is read or written. A cache is checked before use (version, key, size, checksum) and rebuilt
+  // when it does not match; a link, FIFO or folder at a cache's name is never followed or waited
+  // on (docs/design.md "Files"). Every write is a new file renamed into place.
   std::string rootCacheDir;
+  // The most bytes Canopy's cache files may take in rootCacheDir: after a write the least recently
+  // used ones beyond it are removed (a single cache over it is not written). 0: no cap.
+  uint64_t cacheMaxBytes = 2048ull << 20;
   Progress progress;          // optional: called during createCanopy ("leaf roots", "vertices")
   CanopyParams params;        // the initial parameters
   // Device memory this context may allocate, bytes (buffers and images; Canopy's own allocator
@@ -561,6 +567,15 @@ struct CanopyDesc {
   // The foliage's box hierarchy and its baked views, for LayerSettings.impostors (issue 18).
   ImpostorDesc impostors;
 };
+
+// The user's cache folder for Canopy: $XDG_CACHE_HOME/canopy (when that is an absolute path),
+// else $HOME/.cache/canopy, created with mode 0700 when missing. An error when neither variable
+// is an absolute path, or the folder is a link or another user's.
+Status userCacheFolder(std::string* folder);
+// Removes Canopy's cache files from `folder` (leaf roots, impostor views, temporaries of
+// interrupted writes; a link or FIFO planted at such a name, never what a link points to). Other
+// files stay. The counts are optional.
+Status clearCacheFolder(const std::string& folder, uint64_t* removedFiles, uint64_t* removedBytes);
 
 // Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh
 // and textures. Submits nothing: the uploads are recorded at the start of the context's first

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <canopy/canopy.h>
+
 #include "engine/memory.h"
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include <canopy/canopy.h>
+
 #include "engine/memory.h"
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"

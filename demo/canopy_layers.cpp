@@ -231,7 +231,7 @@ int main(int argc, char** argv) {
     std::vector<uint8_t> bytes(px * 4), falseColour(px * 4), composite(px * 4);
     for (size_t i = 0; i < px; ++i) {
       toBytes(bg[i], &bytes[i * 4]);
-      // Far to near, the background inserted by its depth (docs/design.md, Compositing).
+      // Far to near, the background inserted by its depth (docs/design.md "Conventions where the paper is silent", compositing).
       glm::vec4 acc(0.0f);
       bool bgDone = false;
       int front = -1;

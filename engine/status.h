@@ -9,8 +9,9 @@
 #include <utility>
 #include <vulkan/vulkan.h>
 
-// Status, Result and Progress are the public API's (one definition for the library and hosts).
-#include <canopy/canopy.h>
+// Status, Result and Progress are the public API's (one definition for the library and hosts),
+// from the core header the public one includes.
+#include <canopy/canopy_core.h>
 
 namespace canopy {
 
@@ -20,7 +21,7 @@ const char* vkResultName(VkResult r);
 Result resultOf(VkResult r);
 Status vkError(const char* call, VkResult r);
 
-// The public API's boundary (docs/design.md, "Errors"): whatever the standard library,
+// The public API's boundary (docs/design.md "Errors and hostile input"): whatever the standard library,
 // nlohmann-json or tinygltf throws below a public function comes back as a Status naming the
 // function, never as an exception in the host.
 template <class F>

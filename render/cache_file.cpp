@@ -14,6 +14,8 @@
 #include <cstring>
 #include <ctime>
 
+#include <canopy/canopy.h>
+
 #include "engine/files.h"
 #include "engine/hash.h"
 

@@ -1,5 +1,5 @@
 #pragma once
-// Inverse warp + compositing into the host's targets (paper 3.2, 3.6; docs/design.md "Compositing"):
+// Inverse warp + compositing into the host's targets (paper 3.2, 3.6; docs/design.md "Conventions where the paper is silent", compositing):
 // one fused full-screen pass samples every layer at p - d_i(p), composites the layers front to
 // back with the rigid background and the host's scene inserted by depth, blends the premultiplied
 // result over the host's colour, writes the depth of the nearest layer where its alpha >= 0.5 (else

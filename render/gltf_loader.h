@@ -15,6 +15,8 @@
 
 #include <glm/glm.hpp>
 
+#include <canopy/canopy.h>
+
 #include "shared/bend.h"
 
 #include "engine/status.h"

@@ -1,6 +1,8 @@
 // The GPU side of the impostors (render/impostors.h; docs/design.md "Impostors"): the atlas, the
 // bake (each baked box's twelve views drawn with the layers' own pipeline and shading, orthographic,
 // into its tiles) and the draw of a cut's impostors into the layers.
+#include "render/impostor_gpu.h"
+
 #include <cstring>
 #include <memory>
 

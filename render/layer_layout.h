@@ -1,11 +1,13 @@
 #pragma once
-// Layer placement (paper 3.2, docs/design.md "Layers"): the foliage's view-space depth range is split
+// Layer placement (paper 3.2, docs/design.md "Conventions where the paper is silent", layers): the foliage's view-space depth range is split
 // into near, mid and far regions at user-given distances, each with its own layer count (written
 // like the paper: "5(3-1-1)"); inside a region the layers are equally spaced.
 #include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include <canopy/canopy.h>
 
 #include "engine/status.h"
 #include "shared/layers.h"

@@ -1,5 +1,7 @@
 #include "render/layers.h"
 
+#include "render/impostor_gpu.h"
+
 #include "engine/hash.h"
 
 #include <algorithm>

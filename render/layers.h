@@ -281,12 +281,6 @@ Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                      uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options);
 void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
                     std::vector<ChunkPart>* out);
-// render/impostor_gpu.cpp: the atlas, its pipelines and the bake (lv.imp planned); the draw of the
-// cut's opaque or fading impostors inside the caller's rendering of the layers (`layer`: the
-// per-layer path's layer, ignored by the single pass).
-Status createImpostors(LayeredVegetation& lv);
-void destroyImpostors(LayeredVegetation& lv);
-Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer);
 
 // The compact mesh in a render graph (issue 16's buffers, read-only after their upload): imported in
 // its rest states and bound; readsMesh() declares a draw's reads. One place for the layer passes,

@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Fused inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing"). For every layer, the
+// Fused inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Conventions where the paper is silent", compositing). For every layer, the
 // displacement d_i(p) is bilinear between the warp-grid corners; the layer's colour, alpha and
 // depth are all read at p - d_i(p) (one warp for all three, so the alpha never sways apart from
 // the leaves). Layers are composited in layer order with the rigid background and the host's scene

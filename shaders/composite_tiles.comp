@@ -1,6 +1,6 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Compute path of the inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Compositing",
+// Compute path of the inverse warp + compositing (paper 3.2, 3.6; docs/design.md "Conventions where the paper is silent", compositing,
 // docs/performance.md): a workgroup per tilesPerGroup listed screen tiles (composite_classify.comp),
 // one pixel of each per invocation. Only the tile's layers are visited, so the skip decision is the workgroup's, not each
 // lane's; front to back, a pixel stops once opaque. The displacement (current and previous) comes

@@ -1,7 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// MAC projection (docs/design.md, "Stable fluids"): A p = -h^2 (div u - q) on the cell-centred grid
-// (q: the motors' mass sources, shared/sim.h), solved
+// MAC projection (docs/design.md, "Conventions where the paper is silent", projection):
+// A p = -h^2 (div u - q) on the cell-centred grid (q: the motors' mass sources, shared/sim.h), solved
 // by f.mgCycles multigrid V-cycles (red-black Gauss-Seidel smoothing, sum restriction, bilinear
 // prolongation), warm-started from the previous pressure; then u -= grad p. Because the MAC
 // divergence of the MAC gradient is exactly the 5-point Laplacian being solved, the result is

@@ -1,6 +1,6 @@
-// Multigrid helpers of the MAC projection (docs/design.md, "Stable fluids"), shared by the
-// workgroup-wide kernel (sim_fluid_project.comp) and the lane-blocked one for CPU devices
-// (sim_fluid_project_lanes.comp): the same cell operations in the same order, so both match the CPU
+// Multigrid helpers of the MAC projection (docs/design.md "Conventions where the paper is silent",
+// projection), shared by the workgroup-wide kernel (sim_fluid_project.comp) and the lane-blocked
+// one for CPU devices (sim_fluid_project_lanes.comp): the same cell operations in the same order, so both match the CPU
 // reference (compute/sim_reference.cpp) to float rounding.
 #include "sim_common.glsl"
 

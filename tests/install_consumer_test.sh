@@ -13,6 +13,7 @@ cmake --install "$build" --prefix "$work/prefix" >/dev/null
 inc="$work/prefix/include"
 test -f "$inc/canopy/canopy.h"
 test -f "$inc/canopy/canopy_graph.h"
+test -f "$inc/canopy/canopy_core.h"
 test -f "$work/prefix/lib/cmake/Canopy/CanopyConfig.cmake"
 extra=$(cd "$inc" && find . -type f ! -path './canopy/*' | head -5)
 if [ -n "$extra" ] || [ -d "$inc/canopy/engine" ] || [ -d "$inc/canopy/render" ] || [ -d "$inc/canopy/compute" ]; then
@@ -29,6 +30,9 @@ c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/alone.cpp"
 echo '#include <canopy/canopy_graph.h>
 int main() { std::vector<canopy::CanopyTargetUse> u; return canopy::canopyPassGroupUses(nullptr, &u).ok() ? 1 : 0; }' > "$work/graph_alone.cpp"
 c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/graph_alone.cpp"
+echo '#include <canopy/canopy_core.h>
+int main() { canopy::Status s; canopy::ResourceState r; (void)r; return s.ok() ? 0 : 1; }' > "$work/core_alone.cpp"
+c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/core_alone.cpp"
 echo "the public headers compile alone (C++17, -I$inc only)"
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" -DCANOPY_SOURCE_DIR="$src" >/dev/null

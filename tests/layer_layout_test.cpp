@@ -1,4 +1,4 @@
-// Layer layout parsing and placement arithmetic (paper 3.2, docs/design.md "Layers").
+// Layer layout parsing and placement arithmetic (paper 3.2, docs/design.md "Conventions where the paper is silent", layers).
 #include <gtest/gtest.h>
 
 #include "render/layer_layout.h"

@@ -1,4 +1,4 @@
-// Inverse warp + alpha compositing (paper 3.2 and 3.6, docs/design.md "Compositing"): every output
+// Inverse warp + alpha compositing (paper 3.2 and 3.6, docs/design.md "Conventions where the paper is silent", compositing): every output
 // pixel p samples layer i at p - d_i(p), d_i bilinear between the warp-grid corners written by the
 // dynamics pass, and composites the layers with the rigid background and the host's scene by
 // depth. The grid lookup and the "over" step are shared inline functions, compiled into the

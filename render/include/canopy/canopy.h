@@ -18,147 +18,10 @@
 #include <vector>
 #include <vulkan/vulkan.h>
 
-// The version this header declares. createCanopy() refuses a library of another major version, or
-// an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
-#define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 6
-#define CANOPY_VERSION_PATCH 0
-#define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
-#define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)
+// The version, Result and Status, Float3 / Float4x4 / CanopyCamera, and the host's device.
+#include <canopy/canopy_core.h>
 
 namespace canopy {
-
-// ---------------------------------------------------------------------------------------------
-// Results
-
-enum class Result : uint32_t {
-  Success = 0,
-  InvalidArgument,    // a parameter out of range or inconsistent (the message names it and the range)
-  InvalidModel,       // the model file or data is malformed (the message names file and element)
-  FileError,          // a file could not be read or written
-  UnsupportedDevice,  // the device lacks a required version, extension, feature or format
-  OutOfHostMemory,
-  OutOfDeviceMemory,
-  DeviceLost,
-  VersionMismatch,    // header and library versions differ
-  VulkanError,        // any other failing Vulkan call (named in the message)
-};
-// The code's name ("UnsupportedDevice"), for logs.
-const char* toString(Result result);
-
-// Empty on success; else a Result and a message ("CanopyDesc.width = 0 is outside [1, 16384]").
-class [[nodiscard]] Status {
- public:
-  Status() = default;
-  static Status error(std::string message) { return error(Result::InvalidArgument, std::move(message)); }
-  static Status error(Result code, std::string message) {
-    Status s;
-    s.code_ = code == Result::Success ? Result::InvalidArgument : code;
-    s.message_ = std::move(message);
-    return s;
-  }
-  bool ok() const { return code_ == Result::Success; }
-  explicit operator bool() const { return ok(); }
-  Result code() const { return code_; }
-  const std::string& message() const { return message_; }
-  // Prefixes context ("while creating X: ") so the message reads outermost first; keeps the code.
-  Status context(const std::string& what) const { return ok() ? *this : error(code_, what + ": " + message_); }
-
- private:
-  Result code_ = Result::Success;
-  std::string message_;
-};
-
-// Progress of long work (leaf roots, mesh upload): (stage, done, total), called on the calling
-// thread now and then, last with done == total.
-using Progress = std::function<void(const char* stage, uint64_t done, uint64_t total)>;
-
-// The library's version (CANOPY_MAKE_VERSION form), to compare with CANOPY_HEADER_VERSION.
-uint32_t libraryVersion();
-
-// ---------------------------------------------------------------------------------------------
-// Small math types (column-major, like GLSL and glm: m[column * 4 + row]).
-
-struct Float3 {
-  float x = 0, y = 0, z = 0;
-};
-inline bool operator==(const Float3& a, const Float3& b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
-struct Float4x4 {
-  float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
-};
-
-// ---------------------------------------------------------------------------------------------
-// The host's device
-
-struct Device;  // Canopy's view of one host VkDevice (opaque)
-
-// What Canopy needs of a device, and what it uses when present.
-struct DeviceRequirements {
-  uint32_t minApiVersion = VK_API_VERSION_1_2;
-  std::vector<std::string> extensions;          // required (on 1.2 also synchronization2, dynamic rendering)
-  std::vector<std::string> optionalExtensions;  // used when enabled
-  std::vector<std::string> features;            // required, as "VkPhysicalDeviceVulkan12Features.scalarBlockLayout"
-  std::vector<std::string> optionalFeatures;    // used when enabled (single-pass layers, clip-distance fallback)
-  std::string unsupported;  // why this physical device cannot run Canopy; empty when it can
-};
-// Reads the physical device through the host's loader. Works before any VkDevice exists.
-// `instanceApiVersion` is VkApplicationInfo.apiVersion of the host's instance: on 1.3 (instance and
-// device) synchronization2 and dynamic rendering are core, below it they are extensions.
-Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
-                               uint32_t instanceApiVersion, VkPhysicalDevice physicalDevice, DeviceRequirements* out);
-// Sets Canopy's required features, and the optional ones the device supports, in the host's
-// feature chain (head VkPhysicalDeviceFeatures2 with VkPhysicalDeviceVulkan11Features,
-// VkPhysicalDeviceVulkan12Features and either VkPhysicalDeviceVulkan13Features or
-// VkPhysicalDeviceSynchronization2Features + VkPhysicalDeviceDynamicRenderingFeatures in pNext).
-// A struct missing from the chain is an error naming it; nothing is allocated.
-Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
-                            VkPhysicalDevice physicalDevice, VkPhysicalDeviceFeatures2* chain);
-
-// A range of device memory handed out by a host allocator (e.g. VMA's vmaAllocateMemory).
-struct DeviceMemoryRange {
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-  VkDeviceSize offset = 0;
-  VkDeviceSize size = 0;
-  void* mapped = nullptr;       // host pointer at `offset` when host-visible and mapped, else null
-  uint32_t memoryTypeIndex = 0;
-  uint64_t hostHandle = 0;      // the host's own handle, given back to free()
-};
-// Optional: all of Canopy's device memory through the host's allocator. Without it Canopy
-// sub-allocates from its own 64 MiB blocks. Called only from Canopy calls on this device.
-struct DeviceMemoryAllocator {
-  void* user = nullptr;
-  // `required` property flags must hold; `preferred` are wished for (DEVICE_LOCAL, or
-  // HOST_VISIBLE | HOST_COHERENT for uploads and readbacks, which must come back mapped).
-  VkResult (*allocate)(void* user, const VkMemoryRequirements& requirements, VkMemoryPropertyFlags required,
-                       VkMemoryPropertyFlags preferred, DeviceMemoryRange* out) = nullptr;
-  void (*free)(void* user, const DeviceMemoryRange& range) = nullptr;
-};
-
-struct AdoptDeviceDesc {
-  PFN_vkGetInstanceProcAddr getInstanceProcAddr = nullptr;  // every entry point is loaded through it
-  VkInstance instance = VK_NULL_HANDLE;
-  uint32_t instanceApiVersion = VK_API_VERSION_1_2;  // VkApplicationInfo.apiVersion of the instance
-  VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
-  VkDevice device = VK_NULL_HANDLE;
-  // What the device was created with (extensions and the pNext feature chain or pEnabledFeatures);
-  // read during adoptDevice() only. Adoption is refused, naming what is missing, when a required
-  // extension or feature is not enabled.
-  const VkDeviceCreateInfo* deviceCreateInfo = nullptr;
-  VkQueue queue = VK_NULL_HANDLE;  // graphics + compute, the queue the host submits Canopy's work to
-  uint32_t queueFamily = 0;
-  const VkAllocationCallbacks* allocationCallbacks = nullptr;  // optional, for every Vulkan object
-  VkPipelineCache pipelineCache = VK_NULL_HANDLE;              // optional
-  const DeviceMemoryAllocator* memoryAllocator = nullptr;      // optional (copied)
-  // Frames the host records ahead of the GPU, 1..3: resources Canopy replaces (a new layer count,
-  // a resize, a destroyed context) are released this many frames after their last use.
-  uint32_t framesInFlight = 2;
-  const char* debugName = "canopy";
-};
-// Wraps the host's device. The VkDevice, instance and queue stay the host's; releaseDevice()
-// destroys only what Canopy created (after every context on it was destroyed).
-Status adoptDevice(const AdoptDeviceDesc& desc, Device** out);
-// Waits for no device: the host calls it once its GPU work using Canopy has completed.
-void releaseDevice(Device* device);
 
 // ---------------------------------------------------------------------------------------------
 // Vegetation input
@@ -342,7 +205,7 @@ enum class SliceMode {
 enum class LayerDrawMode { Auto, SinglePass, PerLayer };  // Auto: single pass when the device can
 enum class ReslicePolicy { OnViewChange, EveryFrame };
 
-// Image-based levels of detail for the foliage (seed 002, Lluch et al.; docs/design.md
+// Image-based levels of detail for the foliage (Lluch et al.'s image-based multiresolution foliage; docs/design.md
 // "Impostors"): at a re-slice, boxes of the foliage's box hierarchy are drawn as textured polygons
 // (their baked views, CanopyDesc.impostors) instead of their leaves.
 enum class ImpostorMode {
@@ -398,7 +261,7 @@ struct LayerSettings {
   Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space, finite (normalised; zero: straight up)
   Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each in [0, 1000]
   float ambient = 0.35f;                 // [0, 1]
-  // Leaf shading (seed 004, Habel section III; docs/design.md "Layers: leaf shading"): on the side
+  // Leaf shading (Habel et al.'s leaf model, section III; docs/design.md "Layers: leaf shading"): on the side
   // the light falls on, Lambert plus a Cook-Torrance lobe on the leaf's front; on the unlit side,
   // diffuse transmission. Rigid parts are Lambert only. A change re-slices, like a light change.
   float leafRefractiveIndex = 1.45f;     // effective refractive index n of the lobe, [1.2, 1.7] (Bousquet et al.)
@@ -472,7 +335,7 @@ struct SimulationPlane {
 // between the two on the same context and scene (CanopyDesc.allowPerVertex) to compare them.
 enum class AnimationMode : uint32_t {
   Layers2D = 0,   // the paper's method: depth layers, 2D wind simulation, inverse warp, composite (default)
-  PerVertex = 1,  // the "3D" baseline (seed 004, Habel IV-VI): the whole mesh drawn every frame into
+  PerVertex = 1,  // the "3D" baseline (Habel et al.'s hierarchical bending, IV-VI): the whole mesh drawn every frame into
                   // the host's targets, every vertex bent through its branch hierarchy in the vertex
                   // shader; no simulation, layers or composite run
 };
@@ -564,7 +427,7 @@ struct CanopyDesc {
   // (8 bytes a vertex, host and device) and the per-vertex pipeline; the mesh must then be
   // resident (createCanopy refuses a model whose mesh would be streamed, naming the budget).
   bool allowPerVertex = false;
-  // The foliage's box hierarchy and its baked views, for LayerSettings.impostors (issue 18).
+  // The foliage's box hierarchy and its baked views, for LayerSettings.impostors.
   ImpostorDesc impostors;
 };
 
@@ -597,10 +460,6 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
 
 // What changes every frame.
-struct CanopyCamera {
-  Float4x4 view;  // world -> view (right-handed, looking down -Z)
-  Float4x4 proj;  // view -> Vulkan clip space (y down), following CanopyDesc.depthConvention
-};
 struct CanopyFrame {
   CanopyCamera camera;
   float dt = 1.0f / 30.0f;  // simulation step, s, [0, 10]; 0 holds the simulation (pause)
@@ -611,12 +470,7 @@ struct CanopyFrame {
   bool cameraCut = false;
 };
 
-// One of the host's images, how it arrives and how to leave it.
-struct ResourceState {
-  VkPipelineStageFlags2 stage = VK_PIPELINE_STAGE_2_NONE;
-  VkAccessFlags2 access = VK_ACCESS_2_NONE;
-  VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
-};
+// One of the host's images, how it arrives and how to leave it (ResourceState: canopy_core.h).
 struct CanopyImage {
   VkImage image = VK_NULL_HANDLE;
   VkImageView view = VK_NULL_HANDLE;  // 2D view; for depth, the depth aspect only

@@ -9,7 +9,6 @@
 #include "render/cache_file.h"
 #include "render/foliage_boxes.h"
 
-
 namespace canopy {
 namespace {
 

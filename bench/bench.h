@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "render/canopy.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 
 namespace canopy {
 struct Device;

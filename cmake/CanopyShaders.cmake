@@ -48,6 +48,10 @@ const EmbeddedShader* findEmbeddedShader(const char* name) {
     if (std::strcmp(s.name, name) == 0) return &s;
   return nullptr;
 }
+const EmbeddedShader* embeddedShaderAt(size_t index);
+const EmbeddedShader* embeddedShaderAt(size_t index) {
+  return index < sizeof(kShaders) / sizeof(kShaders[0]) ? &kShaders[index] : nullptr;
+}
 }  // namespace @ns@
 " @ONLY)
   add_library(${target} OBJECT ${registry} ${headers})

@@ -119,7 +119,6 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
   Status s = [&]() -> Status {
     ComputePipelineDesc pd;
     pd.shader = "anim_displace.comp";
-    pd.bindings.assign(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
     CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));

@@ -307,10 +307,8 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
   CANOPY_TRY(createBuffer(d, uint64_t(s.ringSize) * 2 * n * n * F, use, MemoryUsage::DeviceLocal, &s.ring, "sim history ring"));
   CANOPY_TRY(createBuffer(d, s.ringSize * F, use, MemoryUsage::DeviceLocal, &s.ringTimes, "sim ring times"));
 
-  const VkDescriptorType SB = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  const std::vector<VkDescriptorType> b(7, SB);
   const uint32_t push = sizeof(gpu::SimPush);
-  const ComputePipelineDesc one{nullptr, b, push, {s.groupSize}, true}, grid{nullptr, b, push};
+  const ComputePipelineDesc one{nullptr, push, {s.groupSize}, true}, grid{nullptr, push};
   auto make = [&](const char* shader, const ComputePipelineDesc& base, ComputePipeline* p) {
     ComputePipelineDesc pd = base;
     pd.shader = shader;
@@ -334,16 +332,16 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
     const uint32_t laneVelocityFloats = (n / W) * n + (n / W) * (n + 1) + n;  // u, v, u column n (one field)
     const uint32_t diffuseFloats = 2 * (n / W) * n + 2 * (n / W) * (n + 1) + n;
     s.laneWidth = W;
-    CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, floats, laneVelocityFloats}, true},
+    CANOPY_TRY(make("sim_fluid_project_lanes.comp", ComputePipelineDesc{nullptr, push, {W, floats, laneVelocityFloats}, true},
                     &s.laneProject));
-    CANOPY_TRY(make("sim_fluid_diffuse_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, diffuseFloats}, true}, &s.laneDiffuse));
-    CANOPY_TRY(make("sim_wave_lanes.comp", ComputePipelineDesc{nullptr, b, push, {W, 3 * (n / W) * n}, true}, &s.laneOscillator));
+    CANOPY_TRY(make("sim_fluid_diffuse_lanes.comp", ComputePipelineDesc{nullptr, push, {W, diffuseFloats}, true}, &s.laneDiffuse));
+    CANOPY_TRY(make("sim_wave_lanes.comp", ComputePipelineDesc{nullptr, push, {W, 3 * (n / W) * n}, true}, &s.laneOscillator));
   }
   const uint32_t widest = std::min<uint32_t>({SIM_MAX_GROUP_SIZE, d.properties.limits.maxComputeWorkGroupInvocations,
                                               d.properties.limits.maxComputeWorkGroupSize[0]});
   if (s.groupSize < widest) {
     s.wideGroupSize = uint32_t(1) << (31 - __builtin_clz(widest));  // a power of two for the reductions
-    const ComputePipelineDesc wide{nullptr, b, push, {s.wideGroupSize}, true};
+    const ComputePipelineDesc wide{nullptr, push, {s.wideGroupSize}, true};
     CANOPY_TRY(make("sim_fluid_diffuse.comp", wide, &s.wideDiffuse));
     CANOPY_TRY(make("sim_fluid_project.comp", wide, &s.wideProject));
     CANOPY_TRY(make("sim_stam_step.comp", wide, &s.wideStam));
@@ -404,10 +402,15 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   CANOPY_TRY(g.bindBuffer(r.ring, s.ring.buffer));
   CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
   Simulation* sp = &s;
-  auto run = [sp, hold](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
-    return *hold ? Status() : simDispatch(*sp, cmd, p, tx, ty, phase);
+  auto run = [sp](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
+    return simDispatch(*sp, cmd, p, tx, ty, phase);
   };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
+  // Which passes run this frame is the graph's to know (when): none while held, the MAC passes or
+  // Stam's step by the scheme of this step; a pass left out records neither work nor barriers.
+  auto stepping = [hold] { return !*hold; };
+  auto stepMac = [hold, mac] { return !*hold && mac(); };
+  auto stepStam = [hold, mac] { return !*hold && !mac(); };
   // Single-workgroup kernels: the width prepareSimulationStep chose for this step.
   auto wide = [sp] { return sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize; };
   auto one = [sp] { return sp->next.groupSize; };
@@ -416,46 +419,52 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
     const ComputePipeline& kernel = projectionKernel(*sp, sp->next, &threads);
     return run(cmd, kernel, threads, 1, phase);
   };
-  g.addPass("sim: upload step parameters", [sp, hold](rg::PassContext& c) {
-     if (!*hold) c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
+  g.addPass("sim: upload step parameters", [sp](rg::PassContext& c) {
+     c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
-   }).write(r.frame, rg::Use::TransferDst);
+   })
+      .write(r.frame, rg::Use::TransferDst)
+      .when(stepping);
   g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) {
-     if (!mac()) return Status();
      if (sp->laneDiffuseNext) return run(c.cmd, sp->laneDiffuse, sp->laneWidth, 1, 0);
      return run(c.cmd, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0);
    })
       .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project", [=](rg::PassContext& c) { return mac() ? project(c.cmd, 0) : Status(); })
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
+      .when(stepMac);
+  g.addPass("sim: project", [=](rg::PassContext& c) { return project(c.cmd, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: advect", [=](rg::PassContext& c) {
-     return mac() ? run(c.cmd, sp->advect, sp->n + 1, sp->n + 1, 0) : Status();
-   })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: project again", [=](rg::PassContext& c) { return mac() ? project(c.cmd, 1) : Status(); })
+      .write(r.multigrid, rg::Use::ComputeStorageReadWrite)
+      .when(stepMac);
+  g.addPass("sim: advect", [=](rg::PassContext& c) { return run(c.cmd, sp->advect, sp->n + 1, sp->n + 1, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .write(r.multigrid, rg::Use::ComputeStorageReadWrite);
-  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return mac() ? Status() : run(c.cmd, wide() ? sp->wideStam : sp->stam, one(), 1, 0); })
+      .when(stepMac);
+  g.addPass("sim: project again", [=](rg::PassContext& c) { return project(c.cmd, 1); })
       .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite);
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
+      .write(r.multigrid, rg::Use::ComputeStorageReadWrite)
+      .when(stepMac);
+  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return run(c.cmd, wide() ? sp->wideStam : sp->stam, one(), 1, 0); })
+      .read(r.frame, rg::Use::ComputeStorageRead)
+      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
+      .when(stepStam);
   g.addPass("sim: wave oscillator", [=](rg::PassContext& c) {
      if (sp->laneOscillatorNext) return run(c.cmd, sp->laneOscillator, sp->laneWidth, 1, 0);
      return run(c.cmd, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0);
    })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .read(r.velocity, rg::Use::ComputeStorageRead)
-      .write(r.wave, rg::Use::ComputeStorageReadWrite);
+      .write(r.wave, rg::Use::ComputeStorageReadWrite)
+      .when(stepping);
   g.addPass("sim: tile + history", [=](rg::PassContext& c) { return run(c.cmd, sp->tile, sp->n, sp->n, 0); })
       .read(r.frame, rg::Use::ComputeStorageRead)
       .read(r.wave, rg::Use::ComputeStorageRead)
       .write(r.tiled, rg::Use::ComputeStorageWrite)
       .write(r.ring, rg::Use::ComputeStorageWrite)
-      .write(r.ringTimes, rg::Use::ComputeStorageWrite);
+      .write(r.ringTimes, rg::Use::ComputeStorageWrite)
+      .when(stepping);
   *out = r;
   return Status();
 }

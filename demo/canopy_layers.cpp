@@ -16,6 +16,7 @@
 #include "engine/device.h"
 #include "tools/own_device.h"
 #include "tools/image_io.h"
+#include "render/gltf_loader.h"
 #include "render/layers.h"
 
 using namespace canopy;
@@ -171,12 +172,12 @@ int main(int argc, char** argv) {
     return fail(s);
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  std::vector<uint64_t> used(lv.materials.size(), 0);
+  std::vector<uint64_t> used(lv.mesh.materials.size(), 0);
   for (uint32_t mat : m.triangleMaterial) used[mat]++;
-  for (size_t i = 0; i < lv.materials.size(); ++i) {
+  for (size_t i = 0; i < lv.mesh.materials.size(); ++i) {
     if (!used[i]) continue;
-    std::printf("  material #%zu '%s': %s (%s), %llu triangles\n", i, lv.materials[i].name.c_str(),
-                lv.split.role[i] == MaterialRole::Rigid ? "rigid" : "foliage", lv.split.reason[i].c_str(),
+    std::printf("  material #%zu '%s': %s (%s), %llu triangles\n", i, lv.mesh.materials[i].name.c_str(),
+                lv.mesh.split.role[i] == MaterialRole::Rigid ? "rigid" : "foliage", lv.mesh.split.reason[i].c_str(),
                 (unsigned long long)used[i]);
   }
   std::printf("Split: %llu foliage triangles, %llu rigid triangles\n", (unsigned long long)lv.stats.foliageTriangles,
@@ -196,7 +197,7 @@ int main(int argc, char** argv) {
   if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
   const double rasterMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
   std::printf("Layers: %s, %s, %s slicing, drawn in %.1f ms (wall, incl. submit)\n", toString(lv.settings.layout).c_str(),
-              lv.singlePass ? "single pass (gl_Layer)" : "one draw per layer",
+              lv.pipelines.singlePass ? "single pass (gl_Layer)" : "one draw per layer",
               lv.settings.slice == SliceMode::LeafRoots ? "leaf-root" : "geometric", rasterMs);
 
   std::error_code ec;
@@ -219,7 +220,7 @@ int main(int argc, char** argv) {
     if (s.ok()) {
       size_t covered = 0;
       for (const glm::vec4& c : colors[l]) covered += c.a > 0;
-      const LayerInfo& li = lv.layers[l];
+      const LayerInfo& li = lv.visible.layers[l];
       std::printf("  layer %u: depth %.3f..%.3f (L = %.3f), %u leaves, %llu triangles, %.1f%% of pixels, "
                   "root line y=%.0f, height %.0f px\n",
                   l, li.slab.zNear, li.slab.zFar, li.slab.distance, li.leaves, (unsigned long long)li.triangles,

@@ -10,6 +10,7 @@
 
 #include "demo/cli.h"
 #include "demo/progress.h"
+#include "render/gltf_loader.h"
 
 namespace canopy::demo {
 

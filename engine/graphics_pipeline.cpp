@@ -2,14 +2,16 @@
 
 #include "engine/device.h"
 #include "engine/shader_registry.h"
+#include "engine/spirv_reflect.h"
 
 namespace canopy {
 namespace {
 constexpr VkShaderStageFlags kStages = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
 
-Status makeModule(Device& d, ShaderLookup lookup, const char* name, VkShaderModule* out) {
+Status makeModule(Device& d, ShaderLookup lookup, const char* name, VkShaderModule* out, DescriptorTypes* bindings) {
   const EmbeddedShader* sh = name ? (lookup ? lookup : &findEmbeddedShader)(name) : nullptr;
   if (!sh) return Status::error(std::string("no embedded shader named '") + (name ? name : "") + "'");
+  CANOPY_TRY(reflectDescriptors(sh->code, sh->sizeBytes / 4, bindings).context(name));
   VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
   mi.codeSize = sh->sizeBytes;
   mi.pCode = sh->code;
@@ -27,13 +29,15 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
     return Status::error(what + ": push constants of " + std::to_string(desc.pushConstantSize) +
                          " bytes exceed the device limit " + std::to_string(d.properties.limits.maxPushConstantsSize));
   out->name = what;
-  out->bindings = desc.bindings;
   out->pushConstantSize = desc.pushConstantSize;
   VkShaderModule vs = VK_NULL_HANDLE, fs = VK_NULL_HANDLE;
   Status s = [&]() -> Status {
-    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.vertexShader, &vs));
-    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.fragmentShader, &fs));
-    CANOPY_TRY(createPushDescriptorLayouts(d, desc.bindings, kStages, desc.pushConstantSize, &out->setLayout,
+    DescriptorTypes vsBindings, fsBindings;
+    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.vertexShader, &vs, &vsBindings));
+    CANOPY_TRY(makeModule(d, desc.shaderLookup, desc.fragmentShader, &fs, &fsBindings));
+    CANOPY_TRY(mergeDescriptors(vsBindings, fsBindings, what, &out->bindings));
+    CANOPY_TRY(requireContiguous(out->bindings, what));
+    CANOPY_TRY(createPushDescriptorLayouts(d, out->bindings, kStages, desc.pushConstantSize, &out->setLayout,
                                            &out->layout));
 
     VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},

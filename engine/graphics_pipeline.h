@@ -1,6 +1,6 @@
 #pragma once
 // Graphics pipelines for dynamic rendering (no render-pass objects): vertex + fragment shader from
-// the embedded SPIR-V, push descriptors (one set) and push constants visible to both stages,
+// the embedded SPIR-V, push descriptors (one set, read from the SPIR-V) and push constants visible to both stages,
 // dynamic viewport and scissor.
 #include <initializer_list>
 #include <string>
@@ -31,7 +31,6 @@ struct GraphicsPipelineDesc {
   const char* vertexShader = nullptr;    // embedded shader names, e.g. "layers.vert"
   const char* fragmentShader = nullptr;
   ShaderLookup shaderLookup = nullptr;   // where the names are looked up; null: Canopy's shaders
-  std::vector<VkDescriptorType> bindings;  // binding i of set 0, visible to both stages
   uint32_t pushConstantSize = 0;
   uint32_t vertexStride = 0;
   std::vector<VertexAttribute> attributes;
@@ -49,11 +48,13 @@ struct GraphicsPipeline {
   VkPipeline pipeline = VK_NULL_HANDLE;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
-  std::vector<VkDescriptorType> bindings;
+  std::vector<VkDescriptorType> bindings;  // binding i of set 0: the two stages' SPIR-V merged
   uint32_t pushConstantSize = 0;
   std::string name;
 };
 
+// The set layout is the union of the two shaders' declared bindings (engine/spirv_reflect.h),
+// visible to both stages; a binding typed differently in the two, or a gap, is refused.
 Status createGraphicsPipeline(Device& device, const GraphicsPipelineDesc& desc, GraphicsPipeline* out);
 void destroyGraphicsPipeline(Device& device, GraphicsPipeline& pipeline);
 

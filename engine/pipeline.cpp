@@ -2,6 +2,7 @@
 
 #include "engine/device.h"
 #include "engine/shader_registry.h"
+#include "engine/spirv_reflect.h"
 
 namespace canopy {
 
@@ -61,11 +62,12 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
     out->localSize[0] = desc.specialization[0];
   }
   out->name = desc.shader;
-  out->bindings = desc.bindings;
+  CANOPY_TRY(reflectDescriptors(sh->code, sh->sizeBytes / 4, &out->bindings).context(what));
+  CANOPY_TRY(requireContiguous(out->bindings, what));
   out->pushConstantSize = desc.pushConstantSize;
 
   Status s = [&]() -> Status {
-    CANOPY_TRY(createPushDescriptorLayouts(d, desc.bindings, VK_SHADER_STAGE_COMPUTE_BIT, desc.pushConstantSize,
+    CANOPY_TRY(createPushDescriptorLayouts(d, out->bindings, VK_SHADER_STAGE_COMPUTE_BIT, desc.pushConstantSize,
                                            &out->setLayout, &out->layout));
     VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     mi.codeSize = sh->sizeBytes;

@@ -1,7 +1,7 @@
 #pragma once
 // Compute pipelines from the embedded SPIR-V (graphics pipelines: engine/graphics_pipeline.h).
-// Descriptors are push descriptors (VK_KHR_push_descriptor): one set, bindings declared per
-// pipeline, no pools to manage.
+// Descriptors are push descriptors (VK_KHR_push_descriptor): one set, no pools to manage. The set
+// layout is read from the shader's SPIR-V (engine/spirv_reflect.h), never typed in C++.
 #include <cstring>
 #include <initializer_list>
 #include <string>
@@ -17,7 +17,7 @@ struct ComputePipeline {
   VkPipeline pipeline = VK_NULL_HANDLE;
   VkPipelineLayout layout = VK_NULL_HANDLE;
   VkDescriptorSetLayout setLayout = VK_NULL_HANDLE;
-  std::vector<VkDescriptorType> bindings;
+  std::vector<VkDescriptorType> bindings;  // binding i of set 0, as the SPIR-V declares it
   uint32_t pushConstantSize = 0;
   uint32_t localSize[3] = {1, 1, 1};  // read from the SPIR-V
   std::string name;
@@ -25,7 +25,6 @@ struct ComputePipeline {
 
 struct ComputePipelineDesc {
   const char* shader = nullptr;               // embedded shader name, e.g. "example_write.comp"
-  std::vector<VkDescriptorType> bindings;     // binding i of set 0
   uint32_t pushConstantSize = 0;              // sizeof the shared push-constant struct
   // Specialization constants: value i for constant_id i (32-bit). A shader declaring
   // local_size_x_id = 0 takes its workgroup width from specialization[0]: set workgroupXFromSpec.

@@ -13,5 +13,7 @@ struct EmbeddedShader {
 
 // Returns the embedded shader compiled from shaders/<name>, or nullptr when no such shader exists.
 const EmbeddedShader* findEmbeddedShader(const char* name);
+// The index-th embedded shader, nullptr past the last (tests walk every shader).
+const EmbeddedShader* embeddedShaderAt(size_t index);
 
 }  // namespace canopy

@@ -1,5 +1,7 @@
 #include "render/canopy.h"
 
+#include "render/gltf_loader.h"
+
 #include <canopy/canopy_graph.h>
 
 #include <algorithm>
@@ -454,8 +456,7 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
       if (p.animation == AnimationMode::Layers2D) {
         // Back to the layers: they are as old as the last 2D frame; re-slice at once, and no
         // motion vectors against a displacement from before the switch.
-        c->layers.forcedReason = "animation mode";
-        c->layers.forceImmediate = true;
+        requestReslice(c->layers, "animation mode", true);
         c->last = gpu::AnimFrame{};
       }
     }
@@ -505,7 +506,7 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
 // visible at the vegetation's centre depth.
 static void fixPlane(CanopyContext& c, const LayerView& view) {
   if (c.planeFixed) return;
-  const LayeredVegetation& lv = c.layers;
+  const LayerMesh& lv = c.layers.mesh;
   const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
   const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
   const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
@@ -553,17 +554,14 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   }
   const LayerView view = standardView(*c, f.camera);
   c->cut = f.cameraCut;
-  if (f.cameraCut) {
-    c->layers.forcedReason = "camera cut";
-    c->layers.forceImmediate = true;
-  }
+  if (f.cameraCut) requestReslice(c->layers, "camera cut", true);
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   fixPlane(*c, view);
   DynamicsFrameDesc fd;
   fd.view = view;
   fd.plane = c->plane;
-  for (const LayerInfo& l : c->layers.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
+  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
   fd.width = c->desc.width;
   fd.height = c->desc.height;
   fd.simSize = sim.n;
@@ -577,8 +575,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
                            a.layerCount == c->last.layerCount;
   const VkRect2D footprint = layerFootprint(c->layers);
-  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.hasRigid, c->layers.occupancyDirty,
-                              motionValid, &footprint, c->layers.occupancyUniteNext));
+  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.mesh.hasRigid, c->layers.reslice.occupancyDirty,
+                              motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
   c->last = a;
   c->layersRebuilt = rebuild;
   c->frames++;
@@ -587,7 +585,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
-  if (!c->pending.empty() || !c->shared->pending.empty() || !c->layers.pendingClear.empty())
+  if (!c->pending.empty() || !c->shared->pending.empty() || layerClearsPending(c->layers))
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
   return declarePasses(*c, g, targets);
@@ -596,8 +594,7 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
 Status requestCanopyRebuild(CanopyContext* c, bool immediate) {
   return guardApi("requestCanopyRebuild", [&]() -> Status {
     if (!c) return Status::error("requestCanopyRebuild: null context");
-    c->layers.forcedReason = immediate ? "requested at once" : "requested";
-    c->layers.forceImmediate = c->layers.forceImmediate || immediate;
+    requestReslice(c->layers, immediate ? "requested at once" : "requested", immediate);
     return Status();
   });
 }
@@ -612,7 +609,7 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
     // Uploads and clears prepared since the last frame, before anything reads them.
     CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
     CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
-    CANOPY_TRY(flushPreparedWork(*c->device, c->layers.pendingClear, cmd));
+    CANOPY_TRY(flushLayerClears(c->layers, cmd));
     RecordGraph* graph = nullptr;
     for (RecordGraph& g : c->graphs)
       if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&

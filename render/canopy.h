@@ -11,7 +11,7 @@
 #include "engine/render_graph.h"
 #include "engine/status.h"
 #include "render/composite.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 #include "render/layers.h"
 
 namespace canopy {

@@ -41,9 +41,11 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
   CANOPY_TRY(g.bindImage(composed, c.composed));
   CANOPY_TRY(g.bindBuffer(tileList, c.tileList.buffer));
   Compositor* cp = &c;
+  // The compute path's passes run in the frames prepareComposite chose it (the graph leaves them
+  // and their barriers out in the others; the fragment path's passes are their complement).
+  auto computePath = [cp] { return cp->computeThisFrame; };
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, gen = VK_IMAGE_LAYOUT_GENERAL;
   g.addPass("composite: displacement image", [cp, displacement, previous](rg::PassContext& x) {
-     if (!cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;
      return dispatch(*x.device, x.cmd, cp->displacementPipeline, p.gridX * p.gridY, p.layerCount, 1,
                      {bindBuffer(x.buffer(displacement)), bindBuffer(x.buffer(previous)),
@@ -52,15 +54,16 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
    })
       .read(displacement, rg::Use::ComputeStorageRead)
       .read(previous, rg::Use::ComputeStorageRead)
-      .write(dispImage, rg::Use::ComputeStorageWrite);
+      .write(dispImage, rg::Use::ComputeStorageWrite)
+      .when(computePath);
   g.addPass("composite: tile list reset", [cp](rg::PassContext& x) {
-     if (!cp->computeThisFrame) return Status();
      const gpu::CompositeTileHeader empty{0, 1, 1, 0, 6, 0, 0, 0};
      x.device->vk.CmdUpdateBuffer(x.cmd, cp->tileList.buffer, 0, sizeof empty, &empty);
      return Status();
-   }).write(tileList, rg::Use::TransferDst);
+   })
+      .write(tileList, rg::Use::TransferDst)
+      .when(computePath);
   g.addPass("composite: classify", [cp, displacement](rg::PassContext& x) {
-     if (!cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;
      return dispatch(*x.device, x.cmd, cp->classifyPipeline, p.tilesX * p.tilesY, 1, 1,
                      {bindBuffer(x.buffer(displacement)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->tileList.buffer)},
@@ -68,9 +71,9 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
    })
       .read(displacement, rg::Use::ComputeStorageRead)
       .read(occupancy, rg::Use::ComputeStorageRead)
-      .write(tileList, rg::Use::ComputeStorageReadWrite);
+      .write(tileList, rg::Use::ComputeStorageReadWrite)
+      .when(computePath);
   g.addPass("composite: warp + composite (tiles)", [cp, l, t, ro, gen](rg::PassContext& x) {
-     if (!cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;
      return dispatchIndirect(*x.device, x.cmd, cp->tilesPipeline, cp->tileList.buffer, 0,
                              {bindImage(x.image(l.color).view, ro, cp->params.bilinear ? cp->linear : cp->nearest),
@@ -90,10 +93,10 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .read(dispImage, rg::Use::ComputeSampled)
       .read(tileList, rg::Use::IndirectBuffer)
       .read(tileList, rg::Use::ComputeStorageRead)
-      .write(composed, rg::Use::ComputeStorageWrite);
+      .write(composed, rg::Use::ComputeStorageWrite)
+      .when(computePath);
   const bool hasMotion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   auto resolve = g.addPass("composite: resolve", [cp, t, hasMotion, ro](rg::PassContext& x) {
-    if (!cp->computeThisFrame) return Status();
     beginHostRendering(x, t, cp->desc.width, cp->desc.height, hasMotion);
     Status s = bindGraphics(*x.device, x.cmd, cp->resolve,
                             {bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, ro, cp->nearest)},
@@ -108,6 +111,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .write(t.color, rg::Use::ColorAttachmentReadWrite)
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (hasMotion) resolve.write(t.motion, rg::Use::ColorAttachmentReadWrite);
+  resolve.when(computePath);
   return Status();
 }
 
@@ -199,8 +203,6 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     GraphicsPipelineDesc gp;
     gp.vertexShader = "composite.vert";
     gp.fragmentShader = "composite.frag";
-    const VkDescriptorType sampled = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, storage = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    gp.bindings = {sampled, sampled, sampled, sampled, storage, storage, storage, storage, storage, storage};
     gp.pushConstantSize = sizeof(gpu::CompositePush);
     gp.colorFormats = {desc.colorFormat};
     if (desc.motionFormat != VK_FORMAT_UNDEFINED) gp.colorFormats.push_back(desc.motionFormat);
@@ -214,12 +216,10 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     gp.depthWrite = true;
     CANOPY_TRY(createGraphicsPipeline(d, gp, &out->composite));
     ComputePipelineDesc cp;
-    cp.bindings = {sampled, storage};
     cp.pushConstantSize = sizeof(gpu::CompositePush);
     cp.shader = "composite_scene_depth.comp";
     CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
     cp.shader = "composite_occupancy.comp";
-    cp.bindings = {sampled, storage, sampled, sampled, sampled};
     CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
     const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
     CANOPY_TRY(createBuffer(d, tiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
@@ -231,20 +231,15 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
                                            VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
     out->computeAvailable = (df.optimalTilingFeatures & dispNeeds) == dispNeeds;
     if (out->computeAvailable) {
-      const VkDescriptorType storageImage = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
       cp.shader = "composite_displacement.comp";
-      cp.bindings = {storage, storage, storageImage};
       CANOPY_TRY(createComputePipeline(d, cp, &out->displacementPipeline));
       cp.shader = "composite_classify.comp";
-      cp.bindings = {storage, storage, storage};
       CANOPY_TRY(createComputePipeline(d, cp, &out->classifyPipeline));
       cp.shader = "composite_tiles.comp";
-      cp.bindings = {sampled, sampled, sampled, sampled, sampled, sampled, storage, storageImage};
       CANOPY_TRY(createComputePipeline(d, cp, &out->tilesPipeline));
       GraphicsPipelineDesc rp = gp;
       rp.vertexShader = "composite_resolve.vert";
       rp.fragmentShader = "composite_resolve.frag";
-      rp.bindings = {storage, sampled};
       CANOPY_TRY(createGraphicsPipeline(d, rp, &out->resolve));
       ImageDesc id;
       id.format = VK_FORMAT_R32G32B32A32_SFLOAT;
@@ -385,7 +380,6 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   // set (spread re-slicing) in the frame after if both are pending.
   auto occupancyPass = g.addPass("composite: occupancy", [cp, l](rg::PassContext& x) {
     const bool unite = !cp->occupancyPending && cp->occupancyUnitePending && l.nextColor != rg::kInvalidResource;
-    if (!cp->occupancyPending && !unite) return Status();
     if (unite) cp->occupancyUnitePending = false;
     cp->occupancyPending = false;
     gpu::CompositePush p = cp->push;
@@ -402,11 +396,13 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   });
   occupancyPass.read(l.color, rg::Use::ComputeSampled)
       .read(l.backgroundColor, rg::Use::ComputeSampled)
-      .write(occupancy, rg::Use::ComputeStorageReadWrite);
+      .write(occupancy, rg::Use::ComputeStorageReadWrite)
+      .when([cp, l] {
+        return cp->occupancyPending || (cp->occupancyUnitePending && l.nextColor != rg::kInvalidResource);
+      });
   if (l.nextColor != rg::kInvalidResource)
     occupancyPass.read(l.nextColor, rg::Use::ComputeSampled).read(l.nextBackgroundColor, rg::Use::ComputeSampled);
   g.addPass("composite: scene depth", [cp, t](rg::PassContext& x) {
-     if (cp->computeThisFrame) return Status();
      const gpu::CompositePush& p = cp->push;
      return dispatch(*x.device, x.cmd, cp->sceneDepthPipeline, cp->desc.width * cp->desc.height, 1, 1,
                      {bindImage(x.image(t.depth).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->depthSampler),
@@ -414,13 +410,13 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
                      p);
    })
       .read(t.depth, rg::Use::ComputeSampled)
-      .write(scene, rg::Use::ComputeStorageWrite);
+      .write(scene, rg::Use::ComputeStorageWrite)
+      .when([cp] { return !cp->computeThisFrame; });
   const bool debugSources = debug.animFrame != rg::kInvalidResource && debug.tiled != rg::kInvalidResource;
   c.hasDebugSources = debugSources;
   auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion, debug,
                                                         debugSources](rg::PassContext& x) {
     const gpu::CompositePush& p = cp->push;
-    if (cp->computeThisFrame) return Status();
     if (p.debugView == COMPOSITE_DEBUG_VELOCITY && !debugSources)
       return Status::error("composite: the velocity debug view needs the simulation's field (CompositeDebugSources)");
     const Image& color = x.graph->image(t.color);
@@ -457,6 +453,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   if (debugSources) pass.read(debug.animFrame, rg::Use::FragmentStorageRead).read(debug.tiled, rg::Use::FragmentStorageRead);
+  pass.when([cp] { return !cp->computeThisFrame; });
   if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy));
   return Status();
 }

@@ -11,7 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/status.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 #include "render/leaf_roots.h"
 
 namespace canopy {

@@ -13,67 +13,14 @@
 #include <string>
 #include <vector>
 
-#include <glm/glm.hpp>
-
 #include <canopy/canopy.h>
 
-#include "shared/bend.h"
-
 #include "engine/status.h"
+#include "render/model.h"
 
 namespace canopy {
 
-// AlphaMode and GltfLoadOptions: <canopy/canopy.h>.
-struct ModelMaterial {
-  std::string name;
-  glm::vec4 baseColorFactor{1.0f};
-  int32_t baseColorImage = -1;  // index into VegetationModel::images, -1: none
-  AlphaMode alphaMode = AlphaMode::Opaque;
-  float alphaCutoff = 0.5f;
-  bool doubleSided = false;
-  // Diffuse transmission of a leaf (docs/design.md "Layers: leaf shading"), from
-  // KHR_materials_diffuse_transmission (its factor and colour factor) or, where only that is
-  // present, KHR_materials_transmission's factor; -1 when the file has neither: a foliage material
-  // then takes LayerSettings.leafTransmission and glows in its own base colour.
-  float transmissionFactor = -1.0f;
-  glm::vec3 transmissionColor{1.0f};
-  int32_t transmissionImage = -1;       // its factor texture (alpha channel), -1: none
-  int32_t transmissionColorImage = -1;  // its colour texture (RGB), -1: none
-  int32_t normalImage = -1;             // tangent-space normal map (glTF normalTexture), -1: none
-  float normalScale = 1.0f;             // glTF normalTexture.scale
-};
-
-struct ModelImage {
-  std::string name;
-  uint32_t width = 0, height = 0;
-  std::vector<uint8_t> rgba;  // 8-bit RGBA, rows top to bottom
-  bool linear = false;        // data, not colour (normal maps): uploaded UNORM, not sRGB
-};
-
-struct VegetationModel {
-  std::string path;
-  std::vector<glm::vec3> positions;  // world space (node transforms applied)
-  std::vector<glm::vec3> normals;    // world space, unit length (computed when the file has none)
-  std::vector<glm::vec2> uvs;        // texcoord 0 ((0,0) when absent)
-  std::vector<uint32_t> indices;     // triangle list
-  std::vector<uint32_t> triangleMaterial;  // per triangle: index into materials
-  std::vector<ModelMaterial> materials;    // the file's materials, then one default material last
-  std::vector<ModelImage> images;          // decoded base-colour images (only those used)
-  glm::vec3 boundsMin{0.0f}, boundsMax{0.0f};
-  // Optional branch hierarchy for the per-vertex wind baseline (shared/bend.h): per vertex its
-  // innermost branch and Habel's w, and the branch table (parents before children). Empty: none
-  // (glTF files; the baseline then derives a trunk and radial branches from the positions).
-  std::vector<gpu::BendVertex> bend;
-  std::vector<gpu::BendBranch> branches;
-  // Optional bounding-box hierarchy of the foliage (Lluch et al.; render/foliage_boxes.h): each
-  // box's parent (an earlier box, or 0xffffffff), and per triangle the box that owns it (foliage
-  // triangles; others 0xffffffff). Empty: none (a k-d split of the leaf roots stands in).
-  std::vector<uint32_t> boxParent;
-  std::vector<uint32_t> triangleBox;
-  std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
-  size_t triangleCount() const { return indices.size() / 3; }
-};
-
+// GltfLoadOptions: <canopy/canopy.h>; the model type: render/model.h.
 // Loads `path` (.gltf or .glb, decided by the file's first bytes). On failure `out` is empty and
 // the Status names the file and the element ("meshes[2].primitives[0]: accessor 7 ...").
 // Never throws; a file that is not a regular file (FIFO, device, folder) is refused without

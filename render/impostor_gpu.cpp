@@ -31,11 +31,8 @@ uint64_t roundUpTo(uint64_t x, uint64_t a) { return (x + a - 1) / a * a; }
 
 Status createDrawPipelines(LayeredVegetation& lv) {
   Device& d = *lv.device;
-  Impostors& imp = lv.imp;
+  Impostors& imp = lv.impostors;
   GraphicsPipelineDesc p;
-  // shaders/layers_impostor_common.glsl: frame block, box table, instance list, colour and depth atlas.
-  p.bindings = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER};
   p.pushConstantSize = sizeof(gpu::ImpostorPush);
   p.colorFormats = {lv.desc.colorFormat};
   p.depthFormat = VK_FORMAT_D32_SFLOAT;
@@ -63,7 +60,7 @@ Status createDrawPipelines(LayeredVegetation& lv) {
 
 // The bake's frame block of each tile: the layers' lighting, the view's orthographic camera.
 std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
-  const Impostors& imp = lv.imp;
+  const Impostors& imp = lv.impostors;
   std::vector<uint8_t> bytes(size_t(imp.tiles) * stride, 0);
   const gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
   for (const ImpostorNode& n : imp.nodes) {
@@ -122,7 +119,7 @@ Status writeCache(Device& d, const Impostors& imp, uint64_t key, std::string* no
 
 Status bake(LayeredVegetation& lv) {
   Device& d = *lv.device;
-  Impostors& imp = lv.imp;
+  Impostors& imp = lv.impostors;
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 16);
   const uint64_t stride = roundUpTo(sizeof(gpu::LayerFrame), align);
@@ -157,7 +154,7 @@ Status bake(LayeredVegetation& lv) {
   LayeredVegetation* p = &lv;
   const VkBuffer frameHandle = frameBuf.buffer;
   auto pass = g.addPass("impostors: bake", [p, frameHandle, stride](rg::PassContext& c) -> Status {
-     Impostors& im = p->imp;
+     Impostors& im = p->impostors;
      const Device& dev = *c.device;
      const uint32_t T = im.tileSize, perLayer = im.tilesPerLayer();
      std::vector<std::vector<ChunkPart>> parts(im.nodes.size());
@@ -232,7 +229,7 @@ Status bake(LayeredVegetation& lv) {
 
 Status createImpostors(LayeredVegetation& lv) {
   Device& d = *lv.device;
-  Impostors& imp = lv.imp;
+  Impostors& imp = lv.impostors;
   if (!d.shaderClipDistance)
     return Status::error("impostors: the bake needs shaderClipDistance (the layers' background path)");
   ImageDesc c;
@@ -288,7 +285,7 @@ Status createImpostors(LayeredVegetation& lv) {
 void destroyImpostors(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
-  Impostors& imp = lv.imp;
+  Impostors& imp = lv.impostors;
   for (VkImageView v : imp.colorLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
   for (VkImageView v : imp.depthLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
   imp.colorLayerViews.clear();
@@ -305,16 +302,16 @@ void destroyImpostors(LayeredVegetation& lv) {
 }
 
 Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer) {
-  const Impostors& imp = lv.imp;
-  const uint32_t total = uint32_t(lv.cutInstances.size());
-  const uint32_t first = fading ? lv.cutOpaque : 0, count = fading ? total - lv.cutOpaque : lv.cutOpaque;
+  const Impostors& imp = lv.impostors;
+  const uint32_t total = uint32_t(lv.visible.cutInstances.size());
+  const uint32_t first = fading ? lv.visible.cutOpaque : 0, count = fading ? total - lv.visible.cutOpaque : lv.visible.cutOpaque;
   if (!count) return Status();
   const GraphicsPipeline& pipe =
-      lv.singlePass ? (fading ? imp.layeredFade : imp.layered) : (fading ? imp.perLayerFade : imp.perLayer);
+      lv.pipelines.singlePass ? (fading ? imp.layeredFade : imp.layered) : (fading ? imp.perLayerFade : imp.perLayer);
   const Device& d = *lv.device;
   setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   gpu::ImpostorPush push{};
-  push.passKind = lv.singlePass ? LAYER_PASS_LAYERED : LAYER_PASS_ONE_LAYER;
+  push.passKind = lv.pipelines.singlePass ? LAYER_PASS_LAYERED : LAYER_PASS_ONE_LAYER;
   push.targetLayer = layer;
   push.tileSize = imp.tileSize;
   push.tilesPerRow = imp.tilesPerRow;
@@ -323,7 +320,7 @@ Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, 
   push.debugLevels = lv.settings.impostors.debugView ? 1u : 0u;
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
   CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                          {bindBuffer(lv.frameBuffer.buffer), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
+                          {bindBuffer(lv.visible.frameBuffer.buffer), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
                            bindImage(imp.color.view, ro, imp.linearSampler), bindImage(imp.depth.view, ro, imp.nearestSampler)},
                           push));
   d.vk.CmdDraw(cmd, 6, count, 0, first);

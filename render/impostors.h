@@ -22,7 +22,7 @@
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
 #include "engine/status.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 #include "render/leaf_roots.h"
 #include "shared/impostor.h"
 

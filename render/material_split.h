@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "engine/status.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 
 namespace canopy {
 

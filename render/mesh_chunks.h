@@ -17,7 +17,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/status.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 #include "render/leaf_roots.h"
 #include "shared/layers.h"
 

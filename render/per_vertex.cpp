@@ -130,11 +130,10 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   PerVertexAnimation& pv = *out;
   pv.device = &d;
   pv.desc = desc;
-  pv.hierarchy = lv.bendVertices.buffer != VK_NULL_HANDLE;
+  pv.hierarchy = lv.mesh.bendVertices.buffer != VK_NULL_HANDLE;
   const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
   // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's four.
   GraphicsPipelineDesc p = layerMeshPipelineDesc(desc.colorFormat, desc.depthFormat);
-  for (int i = 0; i < 4; ++i) p.bindings.push_back(VK_DESCRIPTOR_TYPE_STORAGE_BUFFER);
   if (motion) p.colorFormats.push_back(desc.motionFormat);
   p.blendedAttachments = 1;
   p.depthCompare = desc.reverseZ ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
@@ -145,9 +144,8 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), usage, MemoryUsage::DeviceLocal, &pv.frame, "per-vertex: frame"));
   CANOPY_TRY(createBuffer(d, sizeof(gpu::BendFrame), usage, MemoryUsage::DeviceLocal, &pv.bendFrame, "per-vertex: bend frame"));
   pv.branchCount = uint32_t(branches.size());
-  pv.leafCount = lv.leafCount;
-  const VkDescriptorType sb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  CANOPY_TRY(createComputePipeline(d, {"per_vertex_tips.comp", {sb, sb, sb}, 0}, &pv.tipsPipeline));
+  pv.leafCount = lv.mesh.leafCount;
+  CANOPY_TRY(createComputePipeline(d, {"per_vertex_tips.comp", 0}, &pv.tipsPipeline));
   const VkDeviceSize tipBytes = (uint64_t(pv.branchCount) + pv.leafCount) * sizeof(glm::vec3) * (motion ? 2 : 1);
   CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(tipBytes, 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
                           MemoryUsage::DeviceLocal, &pv.tips, "per-vertex: motion table"));
@@ -187,7 +185,7 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   const float e = params.composite.exposure;
   pv.layerFrame.lightColor *= glm::vec4(e, e, e, 1.0f);
   pv.layerFrame.lightDirection.w *= e;
-  pv.current = makeBendFrame(params.perVertex, params.simulation.wind, plane, lv.boundsMin, lv.boundsMax, float(pv.time),
+  pv.current = makeBendFrame(params.perVertex, params.simulation.wind, plane, lv.mesh.boundsMin, lv.mesh.boundsMax, float(pv.time),
                              float(pv.frames > 0 ? before : pv.time));
   pv.current.targetSize = glm::vec2(float(pv.desc.width), float(pv.desc.height));
   pv.current.flags = (pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u) |
@@ -231,7 +229,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
     b.frame = p->frame.buffer;
     b.bendFrame = p->bendFrame.buffer;
     b.branches = p->branches.buffer;
-    b.bendVertices = p->hierarchy ? l->bendVertices.buffer : p->dummy.buffer;
+    b.bendVertices = p->hierarchy ? l->mesh.bendVertices.buffer : p->dummy.buffer;
     b.tips = p->tips.buffer;
     Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b);
     x.device->cmdEndRendering(x.cmd);

@@ -25,7 +25,7 @@ struct PerVertexAnimation {
   PerVertexDesc desc;
   GraphicsPipeline pipeline;
   ComputePipeline tipsPipeline;              // shaders/per_vertex_tips.comp: the motion table
-  Buffer frame, bendFrame, branches, dummy;  // dummy: binding 8 when the model has no hierarchy
+  Buffer frame, bendFrame, branches, dummy;  // dummy: BendVertexBuf when the model has no hierarchy
   Buffer tips;                               // the motion table: a vec3 per branch and leaf (twice with motion)
   uint32_t branchCount = 0, leafCount = 0;
   bool hierarchy = false;

@@ -619,7 +619,7 @@ TEST_F(CanopyTest, StreamedMeshWithinTheDeviceBudget) {
   const LayeredVegetation& rl = canopyLayers(resident);
   const uint64_t mesh = rs.layers.meshBytes;
   const uint64_t other =
-      residentBytes - (rl.vertices.allocation.size + rl.indexBuffer.allocation.size + rl.leafRoots.allocation.size);
+      residentBytes - (rl.mesh.vertices.allocation.size + rl.mesh.indexBuffer.allocation.size + rl.mesh.leafRoots.allocation.size);
   CanopyDesc sdsc = rd;
   sdsc.params.layers.rebuildBudgetMs = 0.0f;
   sdsc.deviceMemoryBudget = other + mesh / 2;

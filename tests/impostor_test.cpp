@@ -114,14 +114,14 @@ LayerView lookFrom(glm::vec3 eye, glm::vec3 target, uint32_t w, uint32_t h, floa
 // The largest box with views (the top one: maxLevel 0 bakes one box per plant).
 const ImpostorNode* largestBaked(const LayeredVegetation& lv) {
   const ImpostorNode* best = nullptr;
-  for (const ImpostorNode& n : lv.imp.nodes)
+  for (const ImpostorNode& n : lv.impostors.nodes)
     if (n.firstTile != kNoTile && (!best || n.radius > best->radius)) best = &n;
   return best;
 }
 
 // The node's view k as RGBA float (premultiplied), read from its atlas tile.
 std::vector<glm::vec4> readTile(Device& dev, LayeredVegetation& lv, const ImpostorNode& n, uint32_t k) {
-  const Impostors& imp = lv.imp;
+  const Impostors& imp = lv.impostors;
   const uint32_t tile = n.firstTile + k, perLayer = imp.tilesPerLayer(), side = imp.tilesPerRow * imp.tileSize;
   std::vector<uint8_t> texels(size_t(side) * imp.rowsPerLayer * imp.tileSize * 4);
   EXPECT_TRUE(readbackImage(dev, imp.color, tile / perLayer, 4, texels.data(), rg::stateOf(rg::Use::FragmentSampled)).ok());
@@ -144,12 +144,12 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
   d.impostors.maxLevel = 2;
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
-  ASSERT_GT(lv.imp.baked, 2u);
+  ASSERT_GT(lv.impostors.baked, 2u);
   EXPECT_EQ(lv.stats.impostorTilePixels, 64u);
   // The box under test: the model's own box with the most leaves at a level, its subtree's
   // triangles collected from the model's hierarchy, not from the impostor code.
   std::vector<uint8_t> foliage(m.triangleCount());
-  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = lv.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
+  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = lv.mesh.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
   BoxHierarchy h;
   ASSERT_TRUE(boxesFromModel(m, foliage, &h).ok());
   auto inSubtree = [&](uint32_t b, uint32_t root) {
@@ -171,7 +171,7 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
     ASSERT_NE(box, kNoBox);
     const glm::vec3 c = 0.5f * (h.boxes[box].boundsMin + h.boxes[box].boundsMax);
     const ImpostorNode* node = nullptr;
-    for (const ImpostorNode& n : lv.imp.nodes)
+    for (const ImpostorNode& n : lv.impostors.nodes)
       if (n.firstTile != kNoTile && glm::length(n.center - c) < 1e-5f && n.level == level) node = &n;
     ASSERT_NE(node, nullptr) << "level " << level << " box " << box << " was not baked";
     // The sub-model: that subtree's foliage only.
@@ -203,7 +203,7 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
       }
       v.proj = impostorViewProj(*node, k) * glm::inverse(v.view);
       LayeredVegetationDesc sd;
-      sd.width = sd.height = lv.imp.tileSize;
+      sd.width = sd.height = lv.impostors.tileSize;
       sd.settings.layout = LayerLayout{{1, 0, 0}};
       LayeredVegetation direct;
       ASSERT_TRUE(createLayeredVegetation(dev, sub, sd, &direct).ok());
@@ -215,11 +215,11 @@ TEST_F(ImpostorTest, AViewMatchesADirectOrthographicRenderOfItsLeaves) {
       const ImageDiff diff = compareImages(got, want);
       // Stated metric: mean |RGBA difference| over covered pixels <= 0.02 (the atlas is 8-bit, the
       // layers half floats), coverage IoU >= 0.97, and the box covers a real part of its image.
-      EXPECT_GT(diff.covered, uint64_t(lv.imp.tileSize) * lv.imp.tileSize / 20) << "view " << k;
+      EXPECT_GT(diff.covered, uint64_t(lv.impostors.tileSize) * lv.impostors.tileSize / 20) << "view " << k;
       EXPECT_LE(diff.meanAbs, 0.02) << "level " << level << " view " << k;
       EXPECT_GE(diff.coverageIoU, 0.97) << "level " << level << " view " << k;
       if (diff.meanAbs > 0.02 || diff.coverageIoU < 0.97)
-        writeDiff("view_level" + std::to_string(level) + "_k" + std::to_string(k), lv.imp.tileSize, lv.imp.tileSize, got, want);
+        writeDiff("view_level" + std::to_string(level) + "_k" + std::to_string(k), lv.impostors.tileSize, lv.impostors.tileSize, got, want);
     }
   }
   destroyLayeredVegetation(lv);
@@ -309,7 +309,7 @@ TEST_F(ImpostorTest, AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves) {
   // The impostor lands whole in the layer of its root.
   const ImpostorNode* plant = largestBaked(lv);
   ASSERT_NE(plant, nullptr);
-  const uint32_t rootLayer = gpu::layerOfDepth(lv.frame, glm::dot(lv.frame.depthRow, glm::vec4(plant->root, 1.0f)));
+  const uint32_t rootLayer = gpu::layerOfDepth(lv.visible.frame, glm::dot(lv.visible.frame.depthRow, glm::vec4(plant->root, 1.0f)));
   std::vector<glm::vec4> impostor;
   for (uint32_t l = 0; l < lv.settings.layout.count(); ++l) {
     std::vector<glm::vec4> px;
@@ -441,13 +441,13 @@ TEST_F(ImpostorTest, FarBoxesBecomeImpostorsAndNearOnesKeepTheirLeaves) {
   EXPECT_LT(lv.stats.lastDrawnTriangles, all);
   // Every impostor's root is in the far region's layers or the band before it.
   const uint32_t far = lv.settings.layout.region[0] + lv.settings.layout.region[1];
-  for (const gpu::ImpostorInstance& inst : lv.cutInstances) {
+  for (const gpu::ImpostorInstance& inst : lv.visible.cutInstances) {
     const ImpostorNode* n = nullptr;
-    for (const ImpostorNode& x : lv.imp.nodes)
+    for (const ImpostorNode& x : lv.impostors.nodes)
       if (x.gpuIndex == inst.box) n = &x;
     ASSERT_NE(n, nullptr);
-    const float z = glm::dot(lv.frame.depthRow, glm::vec4(n->root, 1.0f));
-    EXPECT_GE(z, lv.frame.boundaries[far] - s.impostors.band * (lv.frame.boundaries[5] - lv.frame.boundaries[0]) / 5.0f - 1e-3f);
+    const float z = glm::dot(lv.visible.frame.depthRow, glm::vec4(n->root, 1.0f));
+    EXPECT_GE(z, lv.visible.frame.boundaries[far] - s.impostors.band * (lv.visible.frame.boundaries[5] - lv.visible.frame.boundaries[0]) / 5.0f - 1e-3f);
   }
   // The debug view colours by level (a different image, the same coverage).
   std::vector<glm::vec4> normal = flatten(lv), debug;

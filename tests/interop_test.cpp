@@ -28,7 +28,7 @@ TEST_F(Interop, PushConstantLayoutMatchesCpp) {
   for (int i = 0; i < 16; ++i) expected.push_back(float(100 + i));
 
   ComputePipeline pipe;
-  Status s = createComputePipeline(dev, {"interop_probe.comp", {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER}, sizeof probe}, &pipe);
+  Status s = createComputePipeline(dev, {"interop_probe.comp", sizeof probe}, &pipe);
   ASSERT_TRUE(s.ok()) << s.message();
   Buffer out;
   ASSERT_TRUE(createBuffer(dev, expected.size() * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
@@ -54,7 +54,7 @@ TEST_F(Interop, PushConstantLayoutMatchesCpp) {
 // dispatch() checks the push-constant size against the pipeline and records nothing on mismatch.
 TEST_F(Interop, DispatchRefusesWrongPushSize) {
   ComputePipeline pipe;
-  ASSERT_TRUE(createComputePipeline(dev, {"interop_probe.comp", {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER},
+  ASSERT_TRUE(createComputePipeline(dev, {"interop_probe.comp",
                                           sizeof(gpu::InteropProbe)}, &pipe).ok());
   struct Wrong { float x[3]; } wrong{};
   Status s = submitAndWait(dev, [&](VkCommandBuffer cmd) {
@@ -67,7 +67,7 @@ TEST_F(Interop, DispatchRefusesWrongPushSize) {
 
 TEST_F(Interop, UnknownShaderIsAnError) {
   ComputePipeline pipe;
-  Status s = createComputePipeline(dev, {"no_such.comp", {}, 0}, &pipe);
+  Status s = createComputePipeline(dev, {"no_such.comp", 0}, &pipe);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("no_such.comp"), std::string::npos);
 }

@@ -13,6 +13,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "tools/image_io.h"
+#include "render/gltf_loader.h"
 #include "render/layers.h"
 #include "tests/gpu_test.h"
 #include "tests/layer_render.h"
@@ -127,7 +128,7 @@ Coverage readCoverage(LayeredVegetation& lv) {
       if (id.y == 0) continue;
       EXPECT_NE(id.x, 0u) << "a rigid triangle was drawn into layer " << l;
       c.layersOfLeaf[id.x - 1].insert(l);
-      c.layersOfTriangle[lv.gpuToModelTriangle[id.y - 1]].insert(l);
+      c.layersOfTriangle[lv.mesh.gpuToModelTriangle[id.y - 1]].insert(l);
     }
   }
   return c;
@@ -136,20 +137,20 @@ Coverage readCoverage(LayeredVegetation& lv) {
 // Each leaf's root position, from the chunks' root tables.
 std::map<uint32_t, glm::vec3> rootPositions(const LayeredVegetation& lv) {
   std::map<uint32_t, glm::vec3> r;
-  for (const MeshChunk& c : lv.chunks)
-    for (uint32_t i = 0; i < c.rootCount; ++i) r[lv.hostMesh.roots[c.firstRoot + i].leaf] = lv.hostMesh.roots[c.firstRoot + i].position;
+  for (const MeshChunk& c : lv.mesh.chunks)
+    for (uint32_t i = 0; i < c.rootCount; ++i) r[lv.mesh.hostMesh.roots[c.firstRoot + i].leaf] = lv.mesh.hostMesh.roots[c.firstRoot + i].position;
   return r;
 }
 
 // Leaves whose own vertices lie on both sides of a layer boundary.
 uint32_t countStraddlers(const LayeredVegetation& lv) {
   std::map<uint32_t, std::set<uint32_t>> layers;
-  for (const MeshChunk& c : lv.chunks)
+  for (const MeshChunk& c : lv.mesh.chunks)
     for (uint32_t i = 0; i < c.vertexCount; ++i) {
-      const gpu::LayerVertex& v = lv.hostMesh.vertices[c.firstVertex + i];
+      const gpu::LayerVertex& v = lv.mesh.hostMesh.vertices[c.firstVertex + i];
       if (chunkLeaf(v) == LAYER_CHUNK_NO_LEAF) continue;
-      const float z = glm::dot(lv.frame.depthRow, glm::vec4(decodePosition(c, v), 1.0f));
-      layers[lv.hostMesh.roots[c.firstRoot + chunkLeaf(v)].leaf].insert(gpu::layerOfDepth(lv.frame, z));
+      const float z = glm::dot(lv.visible.frame.depthRow, glm::vec4(decodePosition(c, v), 1.0f));
+      layers[lv.mesh.hostMesh.roots[c.firstRoot + chunkLeaf(v)].leaf].insert(gpu::layerOfDepth(lv.visible.frame, z));
     }
   uint32_t n = 0;
   for (auto& [leaf, set] : layers) n += set.size() > 1;
@@ -247,7 +248,7 @@ TEST_F(LayersTest, EveryLeafLandsWholeInTheLayerOfItsRoot) {
   LayeredVegetation lv;
   Status s = createLayeredVegetation(dev, m, smallDesc(), &lv);
   ASSERT_TRUE(s.ok()) << s.message();
-  EXPECT_TRUE(lv.singlePass) << "lavapipe has shaderOutputLayer: the single pass is expected";
+  EXPECT_TRUE(lv.pipelines.singlePass) << "lavapipe has shaderOutputLayer: the single pass is expected";
   ASSERT_TRUE(renderOnce(dev, lv, frontView()).ok());
   const uint32_t leaves = 12 * 8;
   EXPECT_EQ(lv.stats.leafCount, leaves);
@@ -260,14 +261,14 @@ TEST_F(LayersTest, EveryLeafLandsWholeInTheLayerOfItsRoot) {
   const std::map<uint32_t, glm::vec3> rootOf = rootPositions(lv);
   for (auto& [leaf, layers] : c.layersOfLeaf) {
     ASSERT_EQ(layers.size(), 1u) << "leaf " << leaf << " is cut across " << layers.size() << " layers";
-    const float rootDepth = glm::dot(lv.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
-    EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(lv.frame, rootDepth)) << "leaf " << leaf;
+    const float rootDepth = glm::dot(lv.visible.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
+    EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(lv.visible.frame, rootDepth)) << "leaf " << leaf;
     perLayer[*layers.begin()]++;
   }
   for (auto& [tri, layers] : c.layersOfTriangle) EXPECT_EQ(layers.size(), 1u) << "triangle " << tri;
   for (uint32_t l = 0; l < perLayer.size(); ++l) {
     EXPECT_GT(perLayer[l], 0u) << "layer " << l << " is empty";
-    EXPECT_EQ(perLayer[l], lv.layers[l].leaves) << "the CPU placement statistics disagree in layer " << l;
+    EXPECT_EQ(perLayer[l], lv.visible.layers[l].leaves) << "the CPU placement statistics disagree in layer " << l;
   }
   destroyLayeredVegetation(lv);
 }
@@ -278,7 +279,7 @@ TEST_F(LayersTest, PerTriangleSlicingCutsTheSameLeaves) {
   d.settings.slice = SliceMode::Geometry;
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
-  EXPECT_FALSE(lv.singlePass);
+  EXPECT_FALSE(lv.pipelines.singlePass);
   ASSERT_TRUE(renderOnce(dev, lv, frontView()).ok());
   Coverage c = readCoverage(lv);
   uint32_t cut = 0, cutTriangles = 0;
@@ -309,8 +310,8 @@ TEST_F(LayersTest, SinglePassEqualsPerLayerDrawsPixelForPixel) {
     LayeredVegetation x, y;
     ASSERT_TRUE(createLayeredVegetation(dev, m, a, &x).ok());
     ASSERT_TRUE(createLayeredVegetation(dev, m, b, &y).ok());
-    ASSERT_TRUE(x.singlePass);
-    ASSERT_FALSE(y.singlePass);
+    ASSERT_TRUE(x.pipelines.singlePass);
+    ASSERT_FALSE(y.pipelines.singlePass);
     const LayerView view = name == "leaves" ? frontView() : orbitView(m.boundsMin, m.boundsMax, 30, 15, 40, float(kW) / kH, 0.8f);
     ASSERT_TRUE(renderOnce(dev, x, view).ok());
     ASSERT_TRUE(renderOnce(dev, y, view).ok());
@@ -332,8 +333,8 @@ TEST_F(LayersWithoutGlLayerTest, FallbackIsChosenAutomaticallyAndKeepsLeavesWhol
   const VegetationModel m = straddlingLeaves(8, 6, false);
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, m, smallDesc("3(1-1-1)"), &lv).ok());
-  EXPECT_FALSE(lv.singlePass) << "Auto must pick one draw per layer without shaderOutputLayer";
-  EXPECT_FALSE(lv.layered.pipeline) << "no gl_Layer pipeline may be created on such a device";
+  EXPECT_FALSE(lv.pipelines.singlePass) << "Auto must pick one draw per layer without shaderOutputLayer";
+  EXPECT_FALSE(lv.pipelines.layered.pipeline) << "no gl_Layer pipeline may be created on such a device";
   ASSERT_TRUE(renderOnce(dev, lv, frontView()).ok());
   Coverage c = readCoverage(lv);
   EXPECT_EQ(c.layersOfLeaf.size(), 48u);
@@ -370,7 +371,7 @@ TEST_F(LayersTest, AlphaCutoffAndRigidBackground) {
   ASSERT_TRUE(readLayerColor(lv, 0, &c).ok());
   // Linear filtering between the texel centres (u = 0.25 and 0.75) crosses the cutoff at
   // u = 0.25 + 0.5 (0.5 - a) / (1 - a) with a = 77/255: everything left of it must be cut away.
-  const glm::mat4 vp = lv.frame.viewProj;
+  const glm::mat4 vp = lv.visible.frame.viewProj;
   auto screenX = [&](glm::vec3 p) {
     glm::vec4 q = vp * glm::vec4(p, 1.0f);
     return (q.x / q.w * 0.5f + 0.5f) * float(kW);
@@ -419,9 +420,9 @@ TEST_F(LayersTest, ChunkBordersInsideLeavesCutNoLeaf) {
     ASSERT_TRUE(createLayeredVegetation(dev, m, a, &x).ok());
     Status s = createLayeredVegetation(dev, m, b, &y);
     ASSERT_TRUE(s.ok()) << s.message();
-    EXPECT_LE(x.chunks.size(), 2u) << "default chunking: one foliage and one rigid chunk";
-    EXPECT_EQ(y.chunks.size(), size_t(2 * 12 * 8 + 2)) << "one triangle per chunk";
-    EXPECT_EQ(y.stats.meshChunks, y.chunks.size());
+    EXPECT_LE(x.mesh.chunks.size(), 2u) << "default chunking: one foliage and one rigid chunk";
+    EXPECT_EQ(y.mesh.chunks.size(), size_t(2 * 12 * 8 + 2)) << "one triangle per chunk";
+    EXPECT_EQ(y.stats.meshChunks, y.mesh.chunks.size());
     ASSERT_TRUE(renderOnce(dev, x, frontView()).ok());
     ASSERT_TRUE(renderOnce(dev, y, frontView()).ok());
     Coverage c = readCoverage(y);
@@ -429,8 +430,8 @@ TEST_F(LayersTest, ChunkBordersInsideLeavesCutNoLeaf) {
     const std::map<uint32_t, glm::vec3> rootOf = rootPositions(y);
     for (auto& [leaf, layers] : c.layersOfLeaf) {
       ASSERT_EQ(layers.size(), 1u) << what << ": leaf " << leaf << " is cut across " << layers.size() << " layers";
-      const float rootDepth = glm::dot(y.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
-      EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(y.frame, rootDepth)) << what << ": leaf " << leaf;
+      const float rootDepth = glm::dot(y.visible.frame.depthRow, glm::vec4(rootOf.at(leaf), 1.0f));
+      EXPECT_EQ(*layers.begin(), gpu::layerOfDepth(y.visible.frame, rootDepth)) << what << ": leaf " << leaf;
     }
     Coverage cx = readCoverage(x);
     EXPECT_EQ(c.layersOfLeaf, cx.layersOfLeaf) << what << ": leaves land in other layers than with one chunk";
@@ -492,7 +493,7 @@ TEST_F(LayersTest, ReslicingFollowsThePolicy) {
   ASSERT_TRUE(parseLayerLayout("5(3-1-1)", &five.layout).ok());
   five.policy = ReslicePolicy::OnViewChange;
   ASSERT_TRUE(setLayerSettings(lv, five).ok());
-  EXPECT_EQ(lv.color.layers, 5u);
+  EXPECT_EQ(lv.targets.color.layers, 5u);
   ASSERT_TRUE(renderOnce(dev, lv, zoomed).ok());
   EXPECT_EQ(lv.stats.lastRebuildReason, "settings changed");
   LayerSettings bad = five;
@@ -525,8 +526,8 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     LayeredVegetation x, y;
     ASSERT_TRUE(createLayeredVegetation(dev, m, d, &x).ok());
     ASSERT_TRUE(createLayeredVegetation(dev, m, once, &y).ok());
-    ASSERT_NE(x.next.color.image, VkImage(VK_NULL_HANDLE)) << "spread re-slicing draws into a second layer set";
-    EXPECT_EQ(y.next.color.image, VkImage(VK_NULL_HANDLE));
+    ASSERT_NE(x.targets.next.color.image, VkImage(VK_NULL_HANDLE)) << "spread re-slicing draws into a second layer set";
+    EXPECT_EQ(y.targets.next.color.image, VkImage(VK_NULL_HANDLE));
     auto run = std::make_unique<LayerFrames>(dev, x);
     ASSERT_TRUE(run->init().ok());
     const bool& changed = run->changed;
@@ -543,14 +544,14 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     EXPECT_EQ(x.stats.spreadPhase, 0u);
     std::vector<std::vector<glm::vec4>> oldColor, newColor, mid;
     readAll(x, &oldColor);
-    const std::vector<LayerInfo> oldLayers = x.layers;
+    const std::vector<LayerInfo> oldLayers = x.visible.layers;
     // A 3-degree turn: placement, slices, the occupancy frame, the fade.
     LayerView b = a;
     b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
     ASSERT_TRUE(renderOnce(dev, y, b).ok());
     readAll(y, &newColor);
     uint64_t triangles = 0;
-    for (const MeshChunk& c : x.chunks) triangles += c.triangleCount;
+    for (const MeshChunk& c : x.mesh.chunks) triangles += c.triangleCount;
     const uint32_t slices = uint32_t((triangles + kSlice - 1) / kSlice);
     ASSERT_GT(slices, 20u);
     ASSERT_TRUE(frame(b).ok());  // placement (the mesh is small: done in this frame)
@@ -559,19 +560,19 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     for (uint32_t i = 0; i < slices; ++i) {
       ASSERT_TRUE(frame(b).ok());
       EXPECT_FALSE(changed) << what << ": slice " << i << " changed the visible layers";
-      EXPECT_TRUE(x.slicePending);
+      EXPECT_TRUE(x.reslice.slicePending);
       EXPECT_LE(x.stats.lastSliceTriangles, kSlice);
       if (i == slices / 2) {
         // Halfway: the visible layers and their placement are the old ones.
         readAll(x, &mid);
         for (uint32_t l = 0; l < n; ++l) expectClose(mid[l], oldColor[l], 0.0f, 0.0, what + "_halfway_layer" + std::to_string(l));
-        for (uint32_t l = 0; l < n; ++l) EXPECT_EQ(x.layers[l].slab.depth, oldLayers[l].slab.depth);
+        for (uint32_t l = 0; l < n; ++l) EXPECT_EQ(x.visible.layers[l].slab.depth, oldLayers[l].slab.depth);
       }
     }
     EXPECT_EQ(x.stats.spreadPhase, uint32_t(SpreadPhase::CrossFading)) << what << ": the last slice was drawn";
     ASSERT_TRUE(frame(b).ok());  // unites the occupancy, no fade yet
     EXPECT_FALSE(changed);
-    EXPECT_TRUE(x.occupancyUniteNext);
+    EXPECT_TRUE(x.reslice.occupancyUniteNext);
     EXPECT_EQ(x.stats.crossFade, 0.0f);
     for (uint32_t k = 1; k <= kFade; ++k) {
       ASSERT_TRUE(frame(b).ok());
@@ -581,7 +582,7 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
         EXPECT_EQ(x.stats.spreadPhase, uint32_t(SpreadPhase::CrossFading));
         // Layer info moves linearly with the share.
         const float t = float(k) / float(kFade);
-        EXPECT_NEAR(x.layers[0].slab.depth, glm::mix(oldLayers[0].slab.depth, y.layers[0].slab.depth, t), 1e-4f);
+        EXPECT_NEAR(x.visible.layers[0].slab.depth, glm::mix(oldLayers[0].slab.depth, y.visible.layers[0].slab.depth, t), 1e-4f);
       }
       if (k == 2) {
         // Image i has had floor((k + (i odd)) / 2) of its H + 1 steps (H = blends of its parity):
@@ -601,7 +602,7 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     EXPECT_EQ(x.stats.lastSpreadFrames, 1 + slices + 1 + kFade);
     ASSERT_TRUE(frame(b).ok());
     EXPECT_FALSE(changed);
-    EXPECT_TRUE(x.occupancyDirty) << "the frame after the fade recomputes the occupancy";
+    EXPECT_TRUE(x.reslice.occupancyDirty) << "the frame after the fade recomputes the occupancy";
     // Exactly the layers drawn at once: colour and depth of every layer, and the background.
     expectSameLayers(x, y, what);
     std::vector<glm::vec4> bx, by;
@@ -611,9 +612,9 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     expectClose(bx, by, 0.0f, 0.0, what + "_background");
     expectIdentical(zx, zy, 1, what + "_background_depth");
     for (uint32_t l = 0; l < n; ++l) {
-      EXPECT_EQ(x.layers[l].slab.depth, y.layers[l].slab.depth);
-      EXPECT_EQ(x.layers[l].leaves, y.layers[l].leaves);
-      EXPECT_EQ(x.layers[l].triangles, y.layers[l].triangles);
+      EXPECT_EQ(x.visible.layers[l].slab.depth, y.visible.layers[l].slab.depth);
+      EXPECT_EQ(x.visible.layers[l].leaves, y.visible.layers[l].leaves);
+      EXPECT_EQ(x.visible.layers[l].triangles, y.visible.layers[l].triangles);
     }
     run.reset();
     destroyLayeredVegetation(x);
@@ -645,11 +646,11 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   c.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * b.view;
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
   EXPECT_EQ(lv.stats.rebuilds, 2u) << "a turn during a spread re-slice waits for it";
-  lv.forcedReason = "camera cut";
-  lv.forceImmediate = true;
+  lv.reslice.forcedReason = "camera cut";
+  lv.reslice.forceImmediate = true;
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
   EXPECT_TRUE(changed);
-  EXPECT_TRUE(lv.rebuildPending);
+  EXPECT_TRUE(lv.reslice.rebuildPending);
   EXPECT_EQ(lv.stats.spreadPhase, 0u) << "a camera cut re-slices at once and ends the spread one";
   EXPECT_EQ(lv.stats.lastRebuildReason, "camera cut");
   LayerSettings slower = lv.settings;
@@ -665,7 +666,7 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   ASSERT_TRUE(setLayerSettings(lv, every).ok());
   for (int i = 0; i < 2; ++i) {
     ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
-    EXPECT_TRUE(changed && lv.rebuildPending) << "EveryFrame re-slices at once";
+    EXPECT_TRUE(changed && lv.reslice.rebuildPending) << "EveryFrame re-slices at once";
   }
   LayerSettings three = lv.settings;
   three.policy = ReslicePolicy::OnViewChange;
@@ -673,14 +674,14 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   bool recreated = false;
   ASSERT_TRUE(setLayerSettings(lv, three, &recreated).ok());
   EXPECT_TRUE(recreated);
-  EXPECT_EQ(lv.next.color.layers, 3u);
+  EXPECT_EQ(lv.targets.next.color.layers, 3u);
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
-  EXPECT_TRUE(changed && lv.rebuildPending) << "new layer images: nothing to fade from";
+  EXPECT_TRUE(changed && lv.reslice.rebuildPending) << "new layer images: nothing to fade from";
   LayerSettings off = three;
   off.rebuildBudgetMs = 0.0f;
   ASSERT_TRUE(setLayerSettings(lv, off, &recreated).ok());
   EXPECT_TRUE(recreated);
-  EXPECT_EQ(lv.next.color.image, VkImage(VK_NULL_HANDLE)) << "no second set without spreading";
+  EXPECT_EQ(lv.targets.next.color.image, VkImage(VK_NULL_HANDLE)) << "no second set without spreading";
   LayerSettings bad = three;
   bad.rebuildBudgetMs = -1.0f;
   Status s = setLayerSettings(lv, bad);
@@ -707,7 +708,7 @@ LayerView viewOfModel(const VegetationModel& m, uint32_t w, uint32_t h) {
 
 // Bytes of the three mesh buffers (resident: the mesh; streamed: the rings).
 uint64_t meshBufferBytes(const LayeredVegetation& lv) {
-  return lv.vertices.allocation.size + lv.indexBuffer.allocation.size + lv.leafRoots.allocation.size;
+  return lv.mesh.vertices.allocation.size + lv.mesh.indexBuffer.allocation.size + lv.mesh.leafRoots.allocation.size;
 }
 
 }  // namespace
@@ -771,7 +772,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       Status made = createLayeredVegetation(dev, k.model, d, &x);
       ASSERT_TRUE(made.ok()) << made.message();
       EXPECT_FALSE(x.stats.meshResident);
-      EXPECT_TRUE(x.streamed);
+      EXPECT_TRUE(x.mesh.streamed);
       EXPECT_GT(x.stats.meshRingBytes, 0u);
       EXPECT_LT(x.stats.meshRingBytes, mesh) << "the ring is smaller than the mesh";
       EXPECT_EQ(x.stats.meshBytes, mesh);
@@ -791,7 +792,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
         ASSERT_LT(frames, 100000u);
       } while (x.stats.spreadRebuilds == 0);
       EXPECT_TRUE(changed) << "the last slice's frame copies the new layers in";
-      EXPECT_TRUE(x.occupancyDirty) << "and recomputes the occupancy in that frame";
+      EXPECT_TRUE(x.reslice.occupancyDirty) << "and recomputes the occupancy in that frame";
       EXPECT_GT(frames, 2u) << "the ring holds less than the mesh: several slices";
       EXPECT_EQ(drawn, y.stats.foliageTriangles + y.stats.rigidTriangles);
       EXPECT_EQ(x.stats.lastSpreadFrames, frames);
@@ -806,7 +807,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       ASSERT_TRUE(readBackground(y, &by, &zy).ok());
       expectClose(bx, by, 0.0f, 0.0, what + "_background", k.width);
       expectIdentical(zx, zy, 1, what + "_background_depth", k.width);
-      for (uint32_t l = 0; l < x.settings.layout.count(); ++l) EXPECT_EQ(x.layers[l].slab.depth, y.layers[l].slab.depth);
+      for (uint32_t l = 0; l < x.settings.layout.count(); ++l) EXPECT_EQ(x.visible.layers[l].slab.depth, y.visible.layers[l].slab.depth);
       // A spread re-slice (a 3-degree turn with a budget): the same layers once its fade is done.
       LayerSettings s = x.settings;
       s.rebuildBudgetMs = 2.0f;
@@ -825,7 +826,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       } while (x.stats.spreadRebuilds == 1);
       EXPECT_GT(x.stats.lastSpreadFrames, 3u);
       EXPECT_LE(dev.allocator->peakLiveBytes - start, d.deviceMemoryBudget);
-      y.forceImmediate = true;  // the reference at once (it has spreading on for its second set)
+      y.reslice.forceImmediate = true;  // the reference at once (it has spreading on for its second set)
       ASSERT_TRUE(renderOnce(dev, y, b).ok());
       expectSameLayers(x, y, what + "_spread");
       run.reset();
@@ -894,7 +895,7 @@ Status shadeCentre(Device& dev, const VegetationModel& m, const LayeredVegetatio
   if (s.ok()) s = renderOnce(dev, lv, orthoFront());
   if (s.ok()) s = readLayerColor(lv, 0, &c);
   if (s.ok()) *pixel = c[(kH / 2) * kW + kW / 2];
-  if (s.ok() && normal) *normal = decodeNormal(lv.hostMesh.vertices[0]);
+  if (s.ok() && normal) *normal = decodeNormal(lv.mesh.hostMesh.vertices[0]);
   destroyLayeredVegetation(lv);
   return s;
 }

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <set>
 
+#include "render/gltf_loader.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
 

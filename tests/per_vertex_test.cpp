@@ -95,9 +95,8 @@ class PerVertexTest : public GpuTest {
     f.branchCount = uint32_t(m.branches.size());
     f.tipCount = f.branchCount + leaves;
     ComputePipeline pipe, tipsPipe;
-    const VkDescriptorType sb = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", {sb, sb, sb, sb, sb, sb}, sizeof(uint32_t)}, &pipe);
-    if (s.ok()) s = createComputePipeline(dev, {"per_vertex_tips.comp", {sb, sb, sb}, 0}, &tipsPipe);
+    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", sizeof(uint32_t)}, &pipe);
+    if (s.ok()) s = createComputePipeline(dev, {"per_vertex_tips.comp", 0}, &tipsPipe);
     EXPECT_TRUE(s.ok()) << s.message();
     const VkBufferUsageFlags usage =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;

@@ -581,3 +581,52 @@ TEST_F(Sim, BadParametersAreRefusedBeforeRecording) {
     std::printf("  refused: %s\n", st.message().c_str());
   }
 }
+
+// One way to skip a pass: the graph's condition (when), asked at record. A held step leaves every
+// simulation pass and its barriers out of the plan recorded (and sync validation sees a clean
+// frame); the scheme picks the MAC passes or Stam's step the same way, and the field is unchanged
+// by a held frame.
+TEST_F(Sim, HeldOrOtherSchemePassesRecordNoBarrier) {
+  create(32);
+  SimulationParams p;
+  ASSERT_TRUE(runSimulationSteps(sim, p, 1.0f / 30.0f, 3).ok());
+  const SimulationFields before = fields();
+  rg::RenderGraph g;
+  SimulationResources r;
+  bool hold = true;
+  ASSERT_TRUE(addSimulationPasses(sim, g, &r, &hold).ok());
+  ASSERT_TRUE(g.compile().ok());
+  ASSERT_TRUE(g.realize(dev).ok());
+  auto plan = [&](std::vector<std::string>* ran, size_t* barriers) {
+    const rg::RenderGraph::Plan& pl = g.currentPlan();
+    ran->clear();
+    *barriers = pl.final.size();
+    for (const rg::Step& st : pl.steps) {
+      *barriers += st.barriers.size();
+      for (uint32_t pass : st.passes)
+        if (!pl.skipped[pass]) ran->push_back(g.passName(pass));
+    }
+  };
+  std::vector<std::string> ran;
+  size_t barriers = 0;
+  plan(&ran, &barriers);
+  EXPECT_TRUE(ran.empty()) << ran.size() << " passes run while held, first: " << (ran.empty() ? "" : ran[0]);
+  EXPECT_EQ(barriers, 0u) << "a held step records barriers";
+  Status s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+  ASSERT_TRUE(s.ok()) << s.message();
+  const SimulationFields held = fields();
+  EXPECT_EQ(held.velocity, before.velocity);
+  EXPECT_EQ(held.vs, before.vs);
+
+  hold = false;
+  ASSERT_TRUE(prepareSimulationStep(sim, p, 1.0f / 30.0f).ok());
+  plan(&ran, &barriers);
+  EXPECT_GT(barriers, 0u);
+  const bool mac = std::find(ran.begin(), ran.end(), "sim: project") != ran.end();
+  const bool stam = std::find(ran.begin(), ran.end(), "sim: stam velocity step") != ran.end();
+  EXPECT_NE(mac, stam) << "exactly one velocity scheme runs";
+  EXPECT_NE(std::find(ran.begin(), ran.end(), "sim: tile + history"), ran.end());
+  s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_NE(fields().vs, before.vs) << "a step that runs changes the field";
+}

@@ -8,11 +8,10 @@ namespace canopy {
 
 Status createExamplePipelines(Device& d, ExamplePipelines* out) {
   *out = ExamplePipelines{};
-  const VkDescriptorType SB = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, SI = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE;
-  CANOPY_TRY(createComputePipeline(d, {"example_write.comp", {SB}, sizeof(gpu::ExampleWriteParams)}, &out->write));
-  CANOPY_TRY(createComputePipeline(d, {"example_transform.comp", {SB, SI}, sizeof(gpu::ExampleTransformParams)},
+  CANOPY_TRY(createComputePipeline(d, {"example_write.comp", sizeof(gpu::ExampleWriteParams)}, &out->write));
+  CANOPY_TRY(createComputePipeline(d, {"example_transform.comp", sizeof(gpu::ExampleTransformParams)},
                                    &out->transform));
-  CANOPY_TRY(createComputePipeline(d, {"example_reduce.comp", {SI, SB}, sizeof(gpu::ExampleReduceParams)}, &out->reduce));
+  CANOPY_TRY(createComputePipeline(d, {"example_reduce.comp", sizeof(gpu::ExampleReduceParams)}, &out->reduce));
   return Status();
 }
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "engine/status.h"
-#include "render/gltf_loader.h"
+#include "render/model.h"
 
 namespace canopy {
 

@@ -7,7 +7,7 @@
 // Deterministic for a seed.
 #include <cstdint>
 
-#include "render/gltf_loader.h"
+#include "render/model.h"
 
 namespace canopy {
 

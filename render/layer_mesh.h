@@ -1,0 +1,126 @@
+#pragma once
+// The compact mesh of the layered vegetation (docs/design.md "Layers: mesh budget and staging
+// ring"): its chunks in host memory (the placement reads them), on the device or streamed through a
+// staging ring, the materials' textures, and every draw of it (the layers, the background, the
+// impostor bake, the per-vertex baseline).
+#include <cstdint>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+#include "engine/graphics_pipeline.h"
+#include "engine/memory.h"
+#include "engine/render_graph.h"
+#include "engine/status.h"
+#include "render/material_split.h"
+#include "render/mesh_chunks.h"
+#include "render/model.h"
+
+namespace canopy {
+struct Device;
+struct LayeredVegetation;
+
+// The staging ring of a streamed mesh (docs/design.md "Layers: mesh budget and staging ring"):
+// lv.vertices, lv.indexBuffer and lv.leafRoots are host-visible rings of `segments` segments of
+// these capacities (elements); frame F writes segment F mod segments, which the embedding contract
+// (frames <= F - framesInFlight completed) leaves free.
+struct MeshRing {
+  uint32_t segments = 0;
+  uint64_t vertexCapacity = 0, indexCapacity = 0, rootCapacity = 0;  // per segment
+  uint32_t rootAlignment = 1;            // root blocks start at multiples of this many entries
+  uint64_t counter = 0;                  // segment choice when no host frame numbers are seen (tools)
+  uint64_t bytes = 0;                    // the three rings together
+};
+
+struct LayerMesh {
+  MaterialSplit split;
+  std::vector<ModelMaterial> materials;
+  glm::vec3 boundsMin{0}, boundsMax{0};
+  // The compact mesh in host memory (its chunks: `chunks`): the placement reads its decoded
+  // positions and leaves (so the CPU places what the GPU draws, and no per-vertex copy of the
+  // model is kept), and a streamed mesh's re-slices copy from it into the ring.
+  CompactMesh hostMesh;
+  uint32_t leafCount = 0;                 // model leaves (LayerLeafRoot.leaf < leafCount)
+  std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
+  bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
+  std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
+  Buffer vertices, indexBuffer, leafRoots;
+  Buffer bendVertices;                    // hostMesh.bend on the device (desc.keepBend and a hierarchy)
+  std::vector<Image> textures;            // per model image (sRGB), plus a white one last
+  VkSampler sampler = VK_NULL_HANDLE;
+  bool streamed = false;                  // not resident: re-slices stream it through `ring`
+  MeshRing ring;
+};
+
+// A part of a mesh chunk drawn by one spread slice; a streamed mesh has the chunk's vertices,
+// the part's indices and the chunk's roots copied into this frame's ring segment at these element
+// offsets (vertexOffset, firstIndex, root-table binding).
+struct ChunkPart {
+  uint32_t chunk = 0, firstTriangle = 0, triangleCount = 0;
+  uint64_t ringVertex = 0, ringIndex = 0, ringRoot = 0;
+  float weight = 1.0f;  // LayerDrawPush.lod.x: below 1 for a box fading towards its impostor
+  uint32_t level = 0;   // the part's foliage box level (the debug view)
+};
+
+// How drawMaterials differs from a layer draw (the impostor bake, the debug view).
+struct MeshDrawOptions {
+  VkBuffer frame = VK_NULL_HANDLE;  // another frame block (layers_common.glsl FrameBuf) at frameOffset; null: the layers'
+  VkDeviceSize frameOffset = 0;
+  bool keepViewport = false;        // the caller has set viewport and scissor
+  bool debugLevels = false;         // colour each part by its level (LayerDrawPush.lod.y)
+};
+
+// Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh
+// into *out and uploads the textures; *rootKey: the leaf roots' cache key (0: no cache).
+Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& model, CompactMesh* out, uint64_t* rootKey);
+// After the layer images exist: sets lv.mesh.streamed when the compact mesh (`meshBytes`) does not
+// fit the memory budget beside them and the second layer set (`liveAtStart`: the allocator's bytes
+// before this object), refusing what needs it resident; a streamed mesh then needs the second set
+// before placeLayerMesh. placeLayerMesh creates and fills the resident buffers, or the staging ring
+// (the mesh stays in host memory).
+Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes);
+Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart);
+void destroyLayerMesh(LayeredVegetation& lv);
+
+// The pipeline description every draw of the compact mesh starts from (the layers, the background,
+// the impostor bake, the per-vertex baseline): shaders/layers_common.glsl's six bindings, the
+// LayerDrawPush constants, the LayerVertex attributes, premultiplied "over", layers.frag.
+GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthFormat);
+
+// What the per-vertex baseline binds besides the layers' mesh and textures (render/per_vertex.cpp).
+struct PerVertexBindings {
+// Bound in the order shaders/per_vertex_common.glsl declares them, after layers_common.glsl's.
+  VkBuffer frame = VK_NULL_HANDLE;         // its gpu::LayerFrame (FrameBuf, in place of the layers')
+  VkBuffer bendFrame = VK_NULL_HANDLE;     // gpu::BendFrame (BendFrameBuf)
+  VkBuffer branches = VK_NULL_HANDLE;      // gpu::BendBranch table (BranchBuf)
+  VkBuffer bendVertices = VK_NULL_HANDLE;  // gpu::BendVertex per compact-mesh vertex (BendVertexBuf)
+  VkBuffer tips = VK_NULL_HANDLE;          // the motion table (TipBuf)
+};
+// Draws every chunk of the (resident) mesh, foliage then rigid, with `pipe` inside the caller's
+// rendering: the per-vertex baseline's frame.
+Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+                     const PerVertexBindings& bindings);
+
+// The mesh draw with chunk parts (the layer passes' slices and cut, the impostor bake); a
+// GPU-order foliage triangle run cut at chunk borders into parts.
+Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
+                     uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options);
+void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
+                    std::vector<ChunkPart>* out);
+
+// Draws one material group of the chunk parts (`foliage`: the foliage's parts, else the rigid
+// chunks) with `pipe` inside the caller's rendering; `perVertex`/`options` as drawWholeMesh and
+// drawMeshParts.
+Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
+                     uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
+                     const PerVertexBindings* perVertex = nullptr, const MeshDrawOptions* options = nullptr);
+
+// The compact mesh in a render graph (issue 16's buffers, read-only after their upload): imported in
+// its rest states and bound; readsMesh() declares a draw's reads. One place for the layer passes,
+// the per-vertex baseline and the impostor bake.
+struct MeshResources {
+  rg::ResourceId vertices = rg::kInvalidResource, indices = rg::kInvalidResource, roots = rg::kInvalidResource;
+};
+Status importMesh(const LayeredVegetation& lv, rg::RenderGraph& graph, MeshResources* out);
+rg::RenderGraph::PassBuilder& readsMesh(rg::RenderGraph::PassBuilder& pass, const MeshResources& mesh);
+
+}  // namespace canopy

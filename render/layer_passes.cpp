@@ -1,0 +1,287 @@
+#include "render/layer_passes.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "engine/device.h"
+#include "engine/transfer.h"
+#include "render/layer_common.h"
+#include "render/layers.h"
+#include "render/impostor_gpu.h"
+
+namespace canopy {
+
+namespace {
+VkRenderingAttachmentInfo attachment(VkImageView view, bool depth, bool clear) {
+  VkRenderingAttachmentInfo a{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  a.imageView = view;
+  a.imageLayout = depth ? VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL : VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  a.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+  a.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  if (depth) a.clearValue.depthStencil = {1.0f, 0};
+  return a;
+}
+
+// Begins dynamic rendering into the attachments, records `draw`, ends rendering.
+Status renderInto(Device& d, VkCommandBuffer cmd, const LayeredVegetation& lv, uint32_t layerCount,
+                  const VkRenderingAttachmentInfo* colors, uint32_t colorCount, const VkRenderingAttachmentInfo& depth,
+                  const std::function<Status()>& draw) {
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {lv.desc.width, lv.desc.height}};
+  ri.layerCount = layerCount;
+  ri.colorAttachmentCount = colorCount;
+  ri.pColorAttachments = colors;
+  ri.pDepthAttachment = &depth;
+  d.cmdBeginRendering(cmd, &ri);
+  Status s = draw();
+  d.cmdEndRendering(cmd);
+  return s;
+}
+
+// Where foliage and rigid parts are drawn: the visible set (a re-slice at once) or the next set (a
+// spread slice).
+struct DrawTargets {
+  VkImageView color, depth, ids;  // array views
+  const std::vector<VkImageView>*colorLayers, *depthLayers, *idsLayers;
+  VkImageView backgroundColor, backgroundDepth;
+};
+DrawTargets visibleTargets(const LayeredVegetation& lv) {
+  return {lv.targets.color.view, lv.targets.depth.view, lv.targets.ids.view, &lv.targets.colorLayerViews, &lv.targets.depthLayerViews, &lv.targets.idsLayerViews,
+          lv.targets.backgroundColor.view, lv.targets.backgroundDepth.view};
+}
+DrawTargets nextTargets(const LayeredVegetation& lv) {
+  return {lv.targets.next.color.view, lv.targets.next.depth.view, VK_NULL_HANDLE, &lv.targets.next.colorLayerViews, &lv.targets.next.depthLayerViews,
+          nullptr, lv.targets.next.backgroundColor.view, lv.targets.next.backgroundDepth.view};
+}
+
+Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
+                     const std::vector<ChunkPart>* parts) {
+  const uint32_t n = lv.settings.layout.count();
+  const uint32_t passes = lv.pipelines.singlePass ? 1 : n;
+  const bool ids = t.ids != VK_NULL_HANDLE;
+  for (uint32_t i = 0; i < passes; ++i) {
+    const VkRenderingAttachmentInfo colors[2] = {
+        attachment(lv.pipelines.singlePass ? t.color : (*t.colorLayers)[i], false, clear),
+        attachment(ids ? (lv.pipelines.singlePass ? t.ids : (*t.idsLayers)[i]) : VK_NULL_HANDLE, false, clear)};
+    const VkRenderingAttachmentInfo depth = attachment(lv.pipelines.singlePass ? t.depth : (*t.depthLayers)[i], true, clear);
+    // With an impostor cut (a re-slice at once): the opaque impostors, the foliage left, then the
+    // impostors fading in over their fading leaves (docs/design.md "Impostors").
+    const bool cut = lv.visible.cut.active && !parts;
+    MeshDrawOptions o;
+    o.debugLevels = cut && lv.settings.impostors.debugView;
+    CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
+      if (cut) CANOPY_TRY(recordImpostors(lv, cmd, false, i));
+      const std::vector<ChunkPart>* drawn = cut ? &lv.visible.cutParts : parts;
+      if (!cut || !lv.visible.cutParts.empty())
+        CANOPY_TRY(lv.pipelines.singlePass ? drawMaterials(lv, cmd, lv.pipelines.layered, true, LAYER_PASS_LAYERED, 0, drawn, nullptr, &o)
+                                 : drawMaterials(lv, cmd, lv.pipelines.perLayer, true, LAYER_PASS_ONE_LAYER, i, drawn, nullptr, &o));
+      return cut ? recordImpostors(lv, cmd, true, i) : Status();
+    }));
+  }
+  return Status();
+}
+
+Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
+                        const std::vector<ChunkPart>* parts) {
+  const VkRenderingAttachmentInfo color = attachment(t.backgroundColor, false, clear);
+  const VkRenderingAttachmentInfo depth = attachment(t.backgroundDepth, true, clear);
+  return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
+    return drawMaterials(lv, cmd, lv.pipelines.background, false, LAYER_PASS_BACKGROUND, 0, parts);
+  });
+}
+
+// Whether a spread slice holds parts of foliage (rigid) chunks.
+bool sliceHas(const LayeredVegetation& lv, bool foliage) {
+  for (const ChunkPart& p : lv.reslice.spread.slice)
+    if (lv.mesh.chunks[p.chunk].foliage == foliage) return true;
+  return false;
+}
+
+
+// A cross-fade step before the last (shared/layers.h LayerFadePush): the visible layers' colours
+// (and the background's) with a weight this frame blended towards the next set inside
+// layerFootprint. Only colour: the composite reads depth where a layer is opaque enough, and the
+// old depth for a few frames is cheaper than a depth pass per layer (with gl_FragDepth, ~15 ms a
+// layer at 1024x768 on lavapipe).
+Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  Device& d = *lv.device;
+  const VkRect2D rect = layerFootprint(lv);
+  if (rect.extent.width == 0 || rect.extent.height == 0) return Status();
+  auto step = [&](const GraphicsPipeline& pipe, VkImageView color, const Image& newColor, uint32_t layer, float w) -> Status {
+    if (w <= 0.0f) return Status();
+    const float constants[4] = {0.0f, 0.0f, 0.0f, w};
+    VkRenderingAttachmentInfo c = attachment(color, false, false);
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = rect;
+    ri.layerCount = 1;
+    ri.colorAttachmentCount = 1;
+    ri.pColorAttachments = &c;
+    d.cmdBeginRendering(cmd, &ri);
+    gpu::LayerFadePush push{};
+    push.layer = layer;
+    push.weight = w;
+    Status s = bindGraphics(d, cmd, pipe, {bindImage(newColor.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.pipelines.nearestSampler)},
+                            push);
+    if (s.ok()) {
+      setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+      d.vk.CmdSetScissor(cmd, 0, 1, &rect);
+      d.vk.CmdSetBlendConstants(cmd, constants);
+      d.vk.CmdDraw(cmd, 3, 1, 0, 0);
+    }
+    d.cmdEndRendering(cmd);
+    return s;
+  };
+  const std::vector<float>& w = lv.reslice.spread.fadeWeights;
+  const uint32_t n = lv.settings.layout.count();
+  for (uint32_t i = 0; i < n; ++i) CANOPY_TRY(step(lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
+  if (!lv.mesh.hasRigid) return Status();  // both backgrounds stay cleared
+  return step(lv.pipelines.fadeBackground, lv.targets.backgroundColor.view, lv.targets.next.backgroundColor, 0, w[n]);
+}
+
+// The last cross-fade step: the next set copied whole into the visible one, colour and depth.
+Status recordFadeCopy(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  Device& d = *lv.device;
+  auto copy = [&](const Image& from, const Image& to) {
+    VkImageCopy r{};
+    r.srcSubresource = {from.aspect, 0, 0, from.layers};
+    r.dstSubresource = {to.aspect, 0, 0, to.layers};
+    r.extent = {lv.desc.width, lv.desc.height, 1};
+    d.vk.CmdCopyImage(cmd, from.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, to.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &r);
+  };
+  copy(lv.targets.next.color, lv.targets.color);
+  copy(lv.targets.next.depth, lv.targets.depth);
+  copy(lv.targets.next.backgroundColor, lv.targets.backgroundColor);
+  copy(lv.targets.next.backgroundDepth, lv.targets.backgroundDepth);
+  return Status();
+}
+
+}  // namespace
+
+Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources* out) {
+  if (!lv.device) return Status::error("addLayerPasses: the layered vegetation was not created");
+  const rg::State rest = rg::stateOf(lv.desc.restUse);
+  LayerResources r;
+  r.color = g.importImage("layers: colour", descOf(lv.targets.color), rest, rest);
+  r.depth = g.importImage("layers: depth", descOf(lv.targets.depth), rest, rest);
+  if (lv.desc.writeIds) r.ids = g.importImage("layers: ids", descOf(lv.targets.ids), rest, rest);
+  r.backgroundColor = g.importImage("background: colour", descOf(lv.targets.backgroundColor), rest, rest);
+  r.backgroundDepth = g.importImage("background: depth", descOf(lv.targets.backgroundDepth), rest, rest);
+  MeshResources mesh;
+  CANOPY_TRY(importMesh(lv, g, &mesh));
+  const auto frame = g.importBuffer("layers: frame", lv.visible.frameBuffer.size, kFrameRead, kFrameRead);
+  // Impostors (render/impostor_gpu.cpp): the re-slice's list, the box table and the baked atlas.
+  rg::ResourceId impostorList = rg::kInvalidResource, impostorBoxes = rg::kInvalidResource,
+                 atlasColor = rg::kInvalidResource, atlasDepth = rg::kInvalidResource;
+  if (lv.impostors.enabled) {
+    const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+    impostorList = g.importBuffer("impostors: instances", lv.impostors.instances.size, kFrameRead, kFrameRead);
+    impostorBoxes = g.importBuffer("impostors: boxes", lv.impostors.boxTable.size, kFrameRead, kFrameRead);
+    atlasColor = g.importImage("impostors: colour atlas", descOf(lv.impostors.color), sampled, sampled);
+    atlasDepth = g.importImage("impostors: depth atlas", descOf(lv.impostors.depth), sampled, sampled);
+    CANOPY_TRY(g.bindBuffer(impostorList, lv.impostors.instances.buffer));
+    CANOPY_TRY(g.bindBuffer(impostorBoxes, lv.impostors.boxTable.buffer));
+    CANOPY_TRY(g.bindImage(atlasColor, lv.impostors.color));
+    CANOPY_TRY(g.bindImage(atlasDepth, lv.impostors.depth));
+  }
+  LayeredVegetation* p = &lv;
+  // What every mesh draw reads: the frame block and the chunked mesh.
+  auto drawsMesh = [&](rg::RenderGraph::PassBuilder b) { return readsMesh(b.access(frame, kFrameRead), mesh); };
+  // The frame block holds the placement being drawn: the visible one for a re-slice at once, the
+  // spread re-slice's from its first slice on.
+  // Every layer pass runs only in the frames that have its work (rg `when`): a still frame records
+  // neither the passes nor their barriers (the layer images stay in their rest state).
+  auto constants = g.addPass("layers: frame constants", [p](rg::PassContext& c) {
+     if (p->reslice.rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->visible.frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->visible.frame);
+     // The cut's impostor list, in vkCmdUpdateBuffer's 64 KiB pieces.
+     if (p->reslice.rebuildPending && !p->visible.cutInstances.empty()) {
+       const size_t bytes = p->visible.cutInstances.size() * sizeof(gpu::ImpostorInstance);
+       for (size_t at = 0; at < bytes; at += 65536)
+         c.device->vk.CmdUpdateBuffer(c.cmd, p->impostors.instances.buffer, at, std::min<size_t>(65536, bytes - at),
+                                      reinterpret_cast<const uint8_t*>(p->visible.cutInstances.data()) + at);
+     }
+     else if (p->reslice.slicePending && p->reslice.spread.sliceClears)
+       c.device->vk.CmdUpdateBuffer(c.cmd, p->visible.frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->reslice.spread.job.frame);
+     return Status();
+   })
+      .write(frame, rg::Use::TransferDst)
+      .when([p] { return p->reslice.rebuildPending || (p->reslice.slicePending && p->reslice.spread.sliceClears); });
+  if (impostorList != rg::kInvalidResource) constants.write(impostorList, rg::Use::TransferDst);
+  auto foliage = g.addPass("layers: foliage", [p](rg::PassContext& c) {
+                    return p->reslice.rebuildPending ? recordFoliage(*p, c.cmd, visibleTargets(*p), true, nullptr) : Status();
+                  });
+  drawsMesh(foliage)
+      .write(r.color, rg::Use::ColorAttachmentWrite)
+      .write(r.depth, rg::Use::DepthAttachmentWrite)
+      .when([p] { return p->reslice.rebuildPending; });
+  if (lv.desc.writeIds) foliage.write(r.ids, rg::Use::ColorAttachmentWrite);
+  if (lv.impostors.enabled)
+    foliage.access(impostorList, kFrameRead)
+        .access(impostorBoxes, kFrameRead)
+        .read(atlasColor, rg::Use::FragmentSampled)
+        .read(atlasDepth, rg::Use::FragmentSampled);
+  drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
+     return p->reslice.rebuildPending && p->mesh.hasRigid ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
+                                                        : Status();
+   }))
+      .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
+      .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite)
+      .when([p] { return p->reslice.rebuildPending && p->mesh.hasRigid; });
+  if (lv.targets.next.color.image) {
+    // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): this frame's slice into the
+    // next set (loaded: earlier slices are kept), then a cross-fade step into the visible set.
+    const auto nextColor = g.importImage("layers (next set): colour", descOf(lv.targets.next.color), kNextRest, kNextRest);
+    const auto nextDepth = g.importImage("layers (next set): depth", descOf(lv.targets.next.depth), kNextRest, kNextRest);
+    const auto nextBgColor = g.importImage("background (next set): colour", descOf(lv.targets.next.backgroundColor), kNextRest, kNextRest);
+    const auto nextBgDepth = g.importImage("background (next set): depth", descOf(lv.targets.next.backgroundDepth), kNextRest, kNextRest);
+    drawsMesh(g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
+       if (!p->reslice.slicePending) return Status();
+       const bool clear = p->reslice.spread.sliceClears;
+       if (clear || sliceHas(*p, true)) CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
+       if (p->mesh.hasRigid && (clear || sliceHas(*p, false)))
+         CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
+       return Status();
+     }))
+        .write(nextColor, rg::Use::ColorAttachmentReadWrite)
+        .write(nextDepth, rg::Use::DepthAttachmentWrite)
+        .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)
+        .write(nextBgDepth, rg::Use::DepthAttachmentWrite)
+        .when([p] { return p->reslice.slicePending; });
+    const bool rigid = lv.mesh.hasRigid;
+    auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
+      return p->reslice.fadePending && !p->reslice.spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();
+    });
+    blend.read(nextColor, rg::Use::FragmentSampled).write(r.color, rg::Use::ColorAttachmentReadWrite);
+    blend.when([p] { return p->reslice.fadePending && !p->reslice.spread.fadeCopy; });
+    if (rigid) blend.read(nextBgColor, rg::Use::FragmentSampled).write(r.backgroundColor, rg::Use::ColorAttachmentReadWrite);
+    g.addPass("layers: cross-fade (last step)", [p](rg::PassContext& c) {
+       return p->reslice.fadePending && p->reslice.spread.fadeCopy ? recordFadeCopy(*p, c.cmd) : Status();
+     })
+        .read(nextColor, rg::Use::TransferSrc)
+        .read(nextDepth, rg::Use::TransferSrc)
+        .read(nextBgColor, rg::Use::TransferSrc)
+        .read(nextBgDepth, rg::Use::TransferSrc)
+        .write(r.color, rg::Use::TransferDst)
+        .write(r.depth, rg::Use::TransferDst)
+        .write(r.backgroundColor, rg::Use::TransferDst)
+        .write(r.backgroundDepth, rg::Use::TransferDst)
+        .when([p] { return p->reslice.fadePending && p->reslice.spread.fadeCopy; });
+    r.nextColor = nextColor;
+    r.nextBackgroundColor = nextBgColor;
+    CANOPY_TRY(g.bindImage(nextColor, lv.targets.next.color));
+    CANOPY_TRY(g.bindImage(nextDepth, lv.targets.next.depth));
+    CANOPY_TRY(g.bindImage(nextBgColor, lv.targets.next.backgroundColor));
+    CANOPY_TRY(g.bindImage(nextBgDepth, lv.targets.next.backgroundDepth));
+  }
+  CANOPY_TRY(g.bindImage(r.color, lv.targets.color));
+  CANOPY_TRY(g.bindImage(r.depth, lv.targets.depth));
+  if (lv.desc.writeIds) CANOPY_TRY(g.bindImage(r.ids, lv.targets.ids));
+  CANOPY_TRY(g.bindImage(r.backgroundColor, lv.targets.backgroundColor));
+  CANOPY_TRY(g.bindImage(r.backgroundDepth, lv.targets.backgroundDepth));
+  CANOPY_TRY(g.bindBuffer(frame, lv.visible.frameBuffer.buffer));
+  if (out) *out = r;
+  return Status();
+}
+
+}  // namespace canopy

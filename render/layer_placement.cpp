@@ -1,0 +1,250 @@
+#include "render/layer_placement.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "engine/device.h"
+#include "engine/transfer.h"
+#include "render/layer_common.h"
+#include "render/layers.h"
+
+namespace canopy {
+
+// Starts the placement for `view`: the frame constants the layer draws read.
+void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job) {
+  job = PlacementJob{};
+  const LayerSettings& s = lv.settings;
+  gpu::LayerFrame& f = job.frame;
+  f = cameraFrame(s, view);
+  f.layerCount = s.layout.count();
+  f.sliceMode = s.slice == SliceMode::Geometry ? LAYER_SLICE_GEOMETRY : LAYER_SLICE_LEAF_ROOT;
+  job.zMin = INFINITY;
+  job.zMax = -INFINITY;
+  job.bottom = -INFINITY;
+  job.leafDepth.resize(lv.mesh.leafCount);
+}
+
+// Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
+// layer, per-layer top and the root line over the vertices, triangles per layer) until it is done
+// or `deadline` (null: none) has passed; the clock is read every kBatch items.
+Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
+  constexpr size_t kBatch = 1 << 14;
+  const auto t0 = PlacementClock::now();
+  const LayerSettings& s = lv.settings;
+  gpu::LayerFrame& f = job.frame;
+  const bool geometric = s.slice == SliceMode::Geometry;
+  auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
+  // Per vertex the placement reads the compact host mesh (decoded as the vertex shader decodes it),
+  // chunk by chunk: foliage chunks come first, each chunk's vertices and indices contiguous.
+  const CompactMesh& hm = lv.mesh.hostMesh;
+  const size_t nLeaves = lv.mesh.leafCount, nVertices = hm.vertices.size(), nChunks = lv.mesh.chunks.size();
+  size_t foliageIndices = 0;
+  for (const MeshChunk& c : lv.mesh.chunks)
+    if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
+  auto chunkOf = [&](size_t item, bool index) -> const MeshChunk& {
+    for (;; ++job.chunk) {
+      const MeshChunk& c = lv.mesh.chunks[job.chunk];
+      if (job.chunk + 1 == lv.mesh.chunks.size() || item < (index ? c.firstIndex + 3ull * c.triangleCount : c.firstVertex + c.vertexCount))
+        return c;
+    }
+  };
+  auto leafOf = [&](const MeshChunk& c, const gpu::LayerVertex& v) {
+    const uint32_t l = chunkLeaf(v);
+    return l == LAYER_CHUNK_NO_LEAF ? kNoLeaf : hm.roots[c.firstRoot + l].leaf;
+  };
+  const glm::vec4 rowY(f.viewProj[0][1], f.viewProj[1][1], f.viewProj[2][1], f.viewProj[3][1]);
+  const glm::vec4 rowW(f.viewProj[0][3], f.viewProj[1][3], f.viewProj[2][3], f.viewProj[3][3]);
+  const float h = float(lv.desc.height);
+  *done = false;
+  while (!*done) {
+    size_t end = 0;
+    switch (job.stage) {
+      case 0: {  // the keys the layers are assigned by: leaf roots (or, below, every foliage vertex),
+                 // read from the chunks' root tables (a leaf in two chunks is written twice, alike)
+        size_t roots = 0;
+        for (end = job.next; end < nChunks && roots < kBatch; ++end) {
+          const MeshChunk& c = lv.mesh.chunks[end];
+          for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i) {
+            const float z = depthOf(hm.roots[i].position);
+            job.leafDepth[hm.roots[i].leaf] = z;
+            if (!geometric) {
+              job.zMin = std::min(job.zMin, z);
+              job.zMax = std::max(job.zMax, z);
+            }
+          }
+          roots += c.rootCount + 1;
+        }
+        if (end == nChunks) job.stage = geometric ? 1 : 2, end = 0;
+        break;
+      }
+      case 1:
+        end = std::min(job.next + kBatch, nVertices);
+        for (size_t v = job.next; v < end; ++v)
+          if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
+            const float z = depthOf(decodePosition(chunkOf(v, false), hm.vertices[v]));
+            job.zMin = std::min(job.zMin, z);
+            job.zMax = std::max(job.zMax, z);
+          }
+        if (end == nVertices) job.stage = 2, end = 0;
+        break;
+      case 2: {
+        if (!(job.zMin <= job.zMax)) job.zMin = job.zMax = 0.0f;  // no foliage: empty layers
+        std::vector<LayerSlab> slabs;
+        std::vector<float> bounds;
+        CANOPY_TRY(placeLayers(s.layout, s.regions, job.zMin, job.zMax, &slabs, &bounds));
+        for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) f.boundaries[i] = bounds[std::min<size_t>(i, bounds.size() - 1)];
+        job.layers.assign(f.layerCount, LayerInfo{});
+        for (uint32_t i = 0; i < f.layerCount; ++i) {
+          job.layers[i].slab = slabs[i];
+          job.layers[i].top = INFINITY;
+        }
+        job.leafLayer.resize(nLeaves);
+        job.stage = 3;
+        break;
+      }
+      case 3:
+        end = std::min(job.next + kBatch, nLeaves);
+        for (size_t i = job.next; i < end; ++i) {
+          job.leafLayer[i] = uint8_t(gpu::layerOfDepth(f, job.leafDepth[i]));
+          job.layers[job.leafLayer[i]].leaves++;
+        }
+        if (end == nLeaves) job.stage = 4, end = 0;
+        break;
+      case 4:  // the screen-space root line and per-layer tops (eq. 7)
+        end = std::min(job.next + kBatch, nVertices);
+        for (size_t v = job.next; v < end; ++v) {
+          const MeshChunk& c = chunkOf(v, false);
+          const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
+          const float w = glm::dot(rowW, p);
+          if (w <= 1e-6f) continue;
+          const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
+          job.bottom = std::max(job.bottom, y);
+          const uint32_t leaf = leafOf(c, hm.vertices[v]);
+          if (leaf == kNoLeaf) continue;
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(f.depthRow, p)) : job.leafLayer[leaf];
+          job.layers[layer].top = std::min(job.layers[layer].top, y);
+        }
+        if (end == nVertices) job.stage = 5, end = 0;
+        break;
+      case 5:  // foliage triangles come first in GPU order: indices [0, foliageIndices)
+        end = std::min(job.next + 3 * kBatch, foliageIndices);
+        for (size_t k = job.next; k < end; k += 3) {
+          const MeshChunk& c = chunkOf(k, true);
+          const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
+          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(decodePosition(c, v))) : job.leafLayer[leafOf(c, v)];
+          job.layers[layer].triangles++;
+        }
+        if (end == foliageIndices) job.stage = 6, end = 0;
+        break;
+      default: {
+        float bottom = job.bottom;
+        if (!std::isfinite(bottom)) bottom = h;
+        for (LayerInfo& li : job.layers) {
+          li.rootLineY = bottom;
+          if (!std::isfinite(li.top)) li.top = bottom;
+          li.height = std::max(bottom - li.top, 1.0f);
+        }
+        job.leafDepth = {};
+        job.leafLayer = {};
+        *done = true;
+        break;
+      }
+    }
+    job.next = end;
+    if (end == 0) job.chunk = 0;  // a new stage starts at the first chunk
+    if (!*done && deadline && PlacementClock::now() >= *deadline) break;
+  }
+  job.ms += msSince(t0);
+  return Status();
+}
+
+// The impostor cut of the visible placement (LayerSettings.impostors; render/impostors.h): which
+// boxes are drawn as impostors, with which weight, and the remaining foliage as chunk parts.
+void planImpostorCut(LayeredVegetation& lv, const LayerView& view) {
+  const auto t0 = PlacementClock::now();
+  lv.visible.cut = ImpostorCut{};
+  lv.visible.cutParts.clear();
+  lv.visible.cutInstances.clear();
+  lv.visible.cutOpaque = 0;
+  const LayerSettings& s = lv.settings;
+  if ((s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) || !lv.impostors.enabled) return;
+  ImpostorCutInput in;
+  in.settings = s.impostors;
+  in.depthRow = lv.visible.frame.depthRow;
+  in.perspective = view.proj[2][3] != 0.0f;
+  in.pixelScale = std::abs(view.proj[1][1]) * 0.5f * float(lv.desc.height);
+  // The far region begins at the first far layer's near boundary (none: no far region); boxes ramp
+  // in over band x the mean layer thickness before it.
+  const LayerLayout& l = s.layout;
+  const uint32_t n = l.count();
+  in.farStart = l.region[2] ? lv.visible.frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
+  in.farBand = s.impostors.band * (lv.visible.frame.boundaries[n] - lv.visible.frame.boundaries[0]) / float(n);
+  impostorCut(lv.impostors, in, &lv.visible.cut);
+  for (const ImpostorCut::Run& r : lv.visible.cut.geometry) appendRunParts(lv, r.first, r.count, r.weight, r.level, &lv.visible.cutParts);
+  lv.visible.cutInstances = lv.visible.cut.opaque;
+  lv.visible.cutOpaque = uint32_t(lv.visible.cut.opaque.size());
+  lv.visible.cutInstances.insert(lv.visible.cutInstances.end(), lv.visible.cut.fading.begin(), lv.visible.cut.fading.end());
+  lv.stats.lastImpostors = uint32_t(lv.visible.cutInstances.size());
+  lv.stats.lastFadingBoxes = uint32_t(lv.visible.cut.fading.size());
+  lv.stats.lastDrawnTriangles = lv.visible.cut.triangles;
+  lv.stats.lastPlacementMs += msSince(t0);
+}
+
+// The whole placement for `view` at once, made the visible one.
+Status placeForView(LayeredVegetation& lv, const LayerView& view) {
+  PlacementJob job;
+  beginPlacement(lv, view, job);
+  bool done = false;
+  CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
+  lv.visible.frame = job.frame;
+  lv.visible.layers = std::move(job.layers);
+  lv.stats.lastPlacementMs = job.ms;
+  planImpostorCut(lv, view);
+  return Status();
+}
+
+
+gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
+  gpu::LayerFrame f{};
+  f.viewProj = view.proj * view.view;
+  f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
+  const glm::vec3 dir = toGlm(s.lightDirection);
+  const glm::vec3 l = glm::length(dir) > 0 ? glm::normalize(dir) : glm::vec3(0, 1, 0);
+  f.lightDirection = glm::vec4(l, s.ambient);
+  f.lightColor = glm::vec4(toGlm(s.lightColor), 1.0f);
+  // The viewer for the shading's view vector: the camera position, or for an orthographic
+  // projection (no perspective row) the direction towards the viewer.
+  const glm::mat4 cameraToWorld = glm::inverse(view.view);
+  const bool orthographic = view.proj[0][3] == 0.0f && view.proj[1][3] == 0.0f && view.proj[2][3] == 0.0f;
+  f.eye = orthographic ? glm::vec4(glm::normalize(glm::vec3(cameraToWorld[2])), 0.0f) : glm::vec4(glm::vec3(cameraToWorld[3]), 1.0f);
+  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f, 0.0f);
+  return f;
+}
+
+
+VkRect2D layerFootprint(const LayeredVegetation& lv) {
+  const float w = float(lv.desc.width), h = float(lv.desc.height);
+  const VkRect2D all{{0, 0}, {lv.desc.width, lv.desc.height}};
+  glm::vec2 lo(INFINITY), hi(-INFINITY);
+  std::vector<const glm::mat4*> views{&lv.visible.frame.viewProj};
+  if (lv.reslice.spread.phase == SpreadPhase::Drawing || lv.reslice.spread.phase == SpreadPhase::CrossFading)
+    views.push_back(&lv.reslice.spread.job.frame.viewProj);
+  for (const glm::mat4* vp : views)
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 p((c & 1) ? lv.mesh.boundsMax.x : lv.mesh.boundsMin.x, (c & 2) ? lv.mesh.boundsMax.y : lv.mesh.boundsMin.y,
+                        (c & 4) ? lv.mesh.boundsMax.z : lv.mesh.boundsMin.z);
+      const glm::vec4 q = *vp * glm::vec4(p, 1.0f);
+      if (!(q.w > 1e-6f)) return all;  // a corner behind the camera (or no view yet)
+      const glm::vec2 px((q.x / q.w * 0.5f + 0.5f) * w, (q.y / q.w * 0.5f + 0.5f) * h);
+      lo = glm::min(lo, px);
+      hi = glm::max(hi, px);
+    }
+  if (!std::isfinite(lo.x) || !std::isfinite(lo.y) || !std::isfinite(hi.x) || !std::isfinite(hi.y)) return all;
+  const int x0 = int(std::clamp(std::floor(lo.x) - 2.0f, 0.0f, w)), y0 = int(std::clamp(std::floor(lo.y) - 2.0f, 0.0f, h));
+  const int x1 = int(std::clamp(std::ceil(hi.x) + 2.0f, 0.0f, w)), y1 = int(std::clamp(std::ceil(hi.y) + 2.0f, 0.0f, h));
+  return {{x0, y0}, {uint32_t(std::max(x1 - x0, 0)), uint32_t(std::max(y1 - y0, 0))}};
+}
+
+}  // namespace canopy

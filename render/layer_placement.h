@@ -1,0 +1,79 @@
+#pragma once
+// The leaf-to-layer placement for a view (paper 3.2; docs/design.md "Per-frame data flow"): the leaf roots'
+// depth range, the layer boundaries, per-layer bounds and the eq. 7 root line, resumable so a
+// spread re-slice runs it a few ms a frame; the placement the visible layers show, with the
+// impostor cut it draws; the frame block's camera; the layers' screen footprint.
+#include <chrono>
+#include <cstdint>
+#include <vector>
+#include <vulkan/vulkan.h>
+
+#include "engine/camera.h"
+#include "engine/memory.h"
+#include "engine/status.h"
+#include "render/impostors.h"
+#include "render/layer_layout.h"
+#include "render/layer_mesh.h"
+#include "shared/layers.h"
+
+namespace canopy {
+struct Device;
+struct LayeredVegetation;
+
+struct LayerInfo {
+  LayerSlab slab;             // view-depth range, representative depth, L_i
+  float top = 0;              // highest pixel row (y down) of the layer's foliage
+  float rootLineY = 0;        // pixel row of the vegetation's root line (bottom of its projected
+                              // bounding box; the same for every layer: paper eq. 7)
+  float height = 1;           // rootLineY - top, at least 1 pixel (h of eq. 7)
+  uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
+  uint64_t triangles = 0;
+};
+
+// The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
+// bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
+struct PlacementJob {
+  gpu::LayerFrame frame{};
+  std::vector<LayerInfo> layers;
+  std::vector<float> leafDepth;
+  std::vector<uint8_t> leafLayer;
+  float zMin = 0, zMax = 0, bottom = 0;
+  uint32_t stage = 0;
+  size_t next = 0;       // the stage's next item (chunk, leaf, or vertex / index of the host mesh)
+  uint32_t chunk = 0;    // the chunk holding item `next` (vertex and index stages)
+  double ms = 0;  // CPU time spent so far
+};
+
+// What the visible layers show: the placement's frame block (uploaded to frameBuffer) and layers,
+// and the impostor cut it draws (CanopyDesc.impostors): the cut, its foliage as chunk parts, its
+// impostor list (the opaque ones first, uploaded with the frame block).
+struct VisibleLayers {
+  gpu::LayerFrame frame{};
+  std::vector<LayerInfo> layers;
+  Buffer frameBuffer;
+  ImpostorCut cut;
+  std::vector<ChunkPart> cutParts;
+  std::vector<gpu::ImpostorInstance> cutInstances;
+  uint32_t cutOpaque = 0;
+};
+
+using PlacementClock = std::chrono::steady_clock;
+// Starts a placement for `view`; advancePlacement runs it until done or past `deadline` (null: to
+// the end); placeForView runs one to the end into lv.visible.
+void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job);
+Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline,
+                        bool* done);
+Status placeForView(LayeredVegetation& lv, const LayerView& view);
+// The impostor cut for `view` into lv.visible (nothing when impostors are off).
+void planImpostorCut(LayeredVegetation& lv, const LayerView& view);
+
+// The pixels the visible layers (and, during a spread re-slice, the next set) can cover: the
+// model's bounding box projected by the placements' views, 2 pixels of margin; the whole target
+// when a corner is behind a camera.
+VkRect2D layerFootprint(const LayeredVegetation& lv);
+
+// The frame block's camera and lighting for `view` (no placement): the layers' start and the
+// per-vertex baseline's every frame.
+gpu::LayerFrame cameraFrame(const LayerSettings& settings, const LayerView& view);
+
+}  // namespace canopy

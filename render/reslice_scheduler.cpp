@@ -1,0 +1,329 @@
+#include "render/reslice_scheduler.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "engine/device.h"
+#include "engine/timing.h"
+#include "engine/transfer.h"
+#include "render/layer_common.h"
+#include "render/layers.h"
+
+namespace canopy {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+bool matricesDiffer(const glm::mat4& a, const glm::mat4& b) {
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r)
+      if (std::abs(a[c][r] - b[c][r]) > 1e-5f * std::max(1.0f, std::abs(b[c][r]))) return true;
+  return false;
+}
+
+float angleDegrees(const glm::vec3& a, const glm::vec3& b) {
+  return glm::degrees(std::acos(std::clamp(glm::dot(a, b), -1.0f, 1.0f)));
+}
+
+using Clock = std::chrono::steady_clock;
+
+
+// The interval since the last view update tells what the last frame's layer work cost
+// (SliceRateControl); a drawing frame's triangles over its cost above the still baseline update
+// the rate (frame times are noisy: see below).
+void updateSliceRate(LayeredVegetation& lv) {
+  SliceRateControl& r = lv.reslice.rate;
+  const auto now = Clock::now();
+  if (r.haveLast) {
+    const double ms = std::chrono::duration<double, std::milli>(now - r.lastUpdate).count();
+    constexpr size_t kStill = 15;
+    // A placement frame is a still frame plus its (timed) CPU placement: a baseline sample too, so
+    // an orbiting camera that never stands still still has one.
+    if (r.lastWork == SliceRateControl::Work::None || r.lastWork == SliceRateControl::Work::Placement) {
+      const double still = r.lastWork == SliceRateControl::Work::None ? ms : std::max(ms - r.lastPlacementMs, 0.0);
+      if (r.stillMs.size() < kStill) r.stillMs.push_back(still);
+      else r.stillMs[r.stillNext++ % kStill] = still;
+    } else if (r.lastWork == SliceRateControl::Work::Slice && r.stillMs.size() >= 3 && r.lastTriangles > 0) {
+      // Cautious up, quick down: a slice is never believed to cost under a quarter of the budget
+      // (a lucky fast frame would otherwise ask for a huge next slice), the estimate follows the
+      // median of the last five slices by at most x1.2 up / x0.5 down a frame, and a slice that
+      // cost over twice the budget halves it at once.
+      const double budget = std::max<double>(lv.settings.rebuildBudgetMs, 1e-3);
+      const double raw = ms - median(r.stillMs);
+      const double measured = double(r.lastTriangles) / std::max(raw, 0.25 * budget);
+      constexpr size_t kSamples = 5;
+      if (r.rateSamples.size() < kSamples) r.rateSamples.push_back(measured);
+      else r.rateSamples[r.rateNext++ % kSamples] = measured;
+      r.trianglesPerMs *= std::clamp(median(r.rateSamples) / r.trianglesPerMs, 0.5, 1.2);
+      if (raw > 2.0 * budget) r.trianglesPerMs = std::min(r.trianglesPerMs, 0.5 * double(r.lastTriangles) / budget);
+    }
+  }
+  r.haveLast = true;
+  r.lastUpdate = now;
+  r.lastWork = SliceRateControl::Work::None;
+  r.lastTriangles = 0;
+}
+
+// The next frame's draws of a spread re-slice: triangles from the cursor, as many as the budget
+// and the measured rate allow (at least 1024, so it always ends); a streamed mesh also stops at
+// what this frame's ring segment holds, and its parts are copied there now (the frame that reads
+// them is the one being recorded: docs/design.md "Layers: mesh budget and staging ring").
+void planSlice(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.reslice.spread;
+  const uint64_t want = sp.immediate ? UINT64_MAX
+                        : lv.desc.fixedSliceTriangles
+                            ? lv.desc.fixedSliceTriangles
+                            : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.reslice.rate.trianglesPerMs));
+  sp.slice.clear();
+  sp.sliceClears = sp.cursorChunk == 0 && sp.cursorTriangle == 0;
+  MeshRing& r = lv.mesh.ring;
+  uint64_t segment = 0, usedV = 0, usedI = 0, usedR = 0;
+  if (lv.mesh.streamed) {
+    const Device& d = *lv.device;
+    segment = (d.anyFrame ? d.frameNumber : r.counter++) % r.segments;
+  }
+  uint64_t drawn = 0;
+  while (sp.cursorChunk < lv.mesh.chunks.size() && drawn < want) {
+    const MeshChunk& c = lv.mesh.chunks[sp.cursorChunk];
+    uint32_t count = uint32_t(std::min<uint64_t>(c.triangleCount - sp.cursorTriangle, want - drawn));
+    ChunkPart part{sp.cursorChunk, sp.cursorTriangle, count};
+    if (lv.mesh.streamed && count) {
+      const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment);
+      if (usedV + c.vertexCount > r.vertexCapacity || usedR + roots > r.rootCapacity || usedI + 3 > r.indexCapacity) break;
+      part.triangleCount = count = uint32_t(std::min<uint64_t>(count, (r.indexCapacity - usedI) / 3));
+      part.ringVertex = segment * r.vertexCapacity + usedV;
+      part.ringIndex = segment * roundUp(r.indexCapacity * 2, 4) / 2 + usedI;
+      part.ringRoot = segment * r.rootCapacity + usedR;
+      auto* v = static_cast<gpu::LayerVertex*>(lv.mesh.vertices.allocation.mapped);
+      auto* ix = static_cast<uint16_t*>(lv.mesh.indexBuffer.allocation.mapped);
+      auto* rt = static_cast<gpu::LayerLeafRoot*>(lv.mesh.leafRoots.allocation.mapped);
+      std::memcpy(v + part.ringVertex, lv.mesh.hostMesh.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
+      std::memcpy(ix + part.ringIndex, lv.mesh.hostMesh.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
+      std::memcpy(rt + part.ringRoot, lv.mesh.hostMesh.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
+      usedV += c.vertexCount;
+      usedI += 3ull * count;
+      usedR += roots;
+    }
+    if (count) sp.slice.push_back(part);
+    drawn += count;
+    sp.cursorTriangle += count;
+    if (sp.cursorTriangle >= c.triangleCount) {
+      sp.cursorChunk++;
+      sp.cursorTriangle = 0;
+    }
+  }
+  lv.reslice.slicePending = true;
+  // A slice sized by the ring alone says nothing about the drawing rate the budget sizes.
+  lv.reslice.rate.lastWork = sp.immediate ? SliceRateControl::Work::Other : SliceRateControl::Work::Slice;
+  lv.reslice.rate.lastTriangles = drawn;
+  lv.stats.lastSliceTriangles = drawn;
+  lv.stats.maxSliceTriangles = std::max(lv.stats.maxSliceTriangles, drawn);
+}
+
+LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
+  LayerInfo m = b;
+  m.slab.depth = glm::mix(a.slab.depth, b.slab.depth, t);
+  m.slab.distance = glm::mix(a.slab.distance, b.slab.distance, t);
+  m.top = glm::mix(a.top, b.top, t);
+  m.rootLineY = glm::mix(a.rootLineY, b.rootLineY, t);
+  m.height = glm::mix(a.height, b.height, t);
+  return m;
+}
+
+// The frame of the last step (the copy of the next set): its placement becomes the visible one.
+void finishSpread(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.reslice.spread;
+  lv.visible.frame = sp.job.frame;
+  lv.visible.layers = std::move(sp.job.layers);
+  lv.stats.spreadRebuilds++;
+  lv.stats.lastSpreadFrames = sp.frames;
+  lv.stats.crossFade = 1.0f;
+  sp.phase = SpreadPhase::Idle;
+  sp.job = PlacementJob{};
+  sp.fadeFrom.clear();
+}
+
+// One frame of a spread re-slice: placement for up to the budget, then slices, then the fade.
+Status advanceSpread(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.reslice.spread;
+  sp.frames++;
+  switch (sp.phase) {
+    case SpreadPhase::Placing: {
+      const auto deadline = Clock::now() + std::chrono::duration<double, std::milli>(lv.settings.rebuildBudgetMs);
+      const auto deadlineTp = std::chrono::time_point_cast<Clock::duration>(deadline);
+      bool done = false;
+      const double before = sp.job.ms;
+      CANOPY_TRY(advancePlacement(lv, sp.job, sp.immediate ? nullptr : &deadlineTp, &done));
+      lv.reslice.rate.lastWork = SliceRateControl::Work::Placement;
+      lv.reslice.rate.lastPlacementMs = sp.job.ms - before;
+      if (done) {
+        lv.stats.lastPlacementMs = sp.job.ms;
+        sp.phase = SpreadPhase::Drawing;
+        // No visible placement of this layer count yet (the first view, or new layer images, of a
+        // streamed mesh): the new one describes the visible images, still empty, until the copy.
+        if (lv.visible.layers.size() != sp.job.layers.size()) {
+          lv.visible.layers = sp.job.layers;
+          lv.visible.frame = sp.job.frame;
+        }
+      }
+      if (!done || !sp.immediate) break;
+      [[fallthrough]];  // asked at once: the first slice in the placement's frame
+    }
+    case SpreadPhase::Drawing:
+      planSlice(lv);
+      if (sp.cursorChunk < lv.mesh.chunks.size()) break;
+      if (!sp.immediate) {
+        sp.phase = SpreadPhase::CrossFading;  // from the next frame
+        break;
+      }
+      // Asked at once: the next set is copied in behind the last slice (the copy pass follows the
+      // slice pass), without a fade, and the occupancy recomputed in this frame.
+      sp.fadeCopy = true;
+      lv.reslice.fadePending = true;
+      lv.reslice.occupancyRecomputeNow = true;
+      finishSpread(lv);
+      break;
+    case SpreadPhase::CrossFading: {
+      lv.reslice.rate.lastWork = SliceRateControl::Work::Other;
+      if (!sp.united) {  // the composite unites the next set's occupancy in; no blend this frame
+        sp.united = true;
+        lv.reslice.occupancyUniteNext = true;
+        break;
+      }
+      // F frames: F - 1 blend frames, then a copy of the next set (depth included). Each frame blends
+      // every other image (layers and background alternate), which halves a blend frame's cost; an
+      // image blended H times before the copy takes weight 1 / (H + 2 - j) at its j-th blend, so its
+      // new share is j / (H + 1) and the copy ends it at 1.
+      const uint32_t f = lv.settings.crossFadeFrames, n = lv.settings.layout.count(), blends = f - 1;
+      if (sp.fadeStep == 0) sp.fadeFrom = lv.visible.layers;
+      sp.fadeStep++;
+      sp.fadeCopy = sp.fadeStep >= f;
+      sp.fadeWeights.assign(n + 1, 0.0f);
+      if (!sp.fadeCopy) {
+        for (uint32_t i = 0; i <= n; ++i) {
+          const bool alternate = blends >= 2;
+          if (alternate && (sp.fadeStep + i) % 2 != 0) continue;
+          const uint32_t h = !alternate ? blends : (i % 2 == 0 ? blends / 2 : (blends + 1) / 2);
+          // Image i blends at frames k with k + i even: its j-th blend is at k = 2j - (i odd).
+          const uint32_t j = !alternate ? sp.fadeStep : (sp.fadeStep + i % 2) / 2;
+          sp.fadeWeights[i] = 1.0f / float(h + 2 - std::min(j, h));
+        }
+      }
+      const float share = float(sp.fadeStep) / float(f);
+      lv.reslice.fadePending = true;
+      lv.stats.crossFade = share;
+      if (sp.fadeCopy) {
+        lv.reslice.occupancyRecomputeNext = true;
+        finishSpread(lv);
+      } else {
+        for (size_t i = 0; i < lv.visible.layers.size(); ++i) lv.visible.layers[i] = mixLayerInfo(sp.fadeFrom[i], sp.job.layers[i], share);
+      }
+      break;
+    }
+    case SpreadPhase::Idle: break;
+  }
+  return Status();
+}
+
+}  // namespace
+
+void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targetsRecreated, bool budgetChanged) {
+  ResliceScheduler& r = lv.reslice;
+  if (budgetChanged) {
+    r.rate.trianglesPerMs = SliceRateControl{}.trianglesPerMs;
+    r.rate.rateSamples.clear();
+  }
+  r.settingsChanged = r.settingsChanged || contentChanged || targetsRecreated;
+  if (targetsRecreated) {
+    r.forceImmediate = true;
+    r.spread = SpreadRebuild{};
+  } else if (contentChanged && r.spread.phase != SpreadPhase::Idle) {
+    r.spread = SpreadRebuild{};
+  }
+}
+
+void abandonSpreadRebuild(LayeredVegetation& lv) { lv.reslice.spread = SpreadRebuild{}; }
+
+void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immediate) {
+  lv.reslice.forcedReason = reason;
+  lv.reslice.forceImmediate = lv.reslice.forceImmediate || immediate;
+}
+
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
+  lv.stats.viewUpdates++;
+  updateSliceRate(lv);
+  lv.reslice.rebuildPending = lv.reslice.slicePending = lv.reslice.fadePending = lv.reslice.occupancyUniteNext = lv.reslice.occupancyRecomputeNow = false;
+  const bool recomputeOccupancy = lv.reslice.occupancyRecomputeNext;
+  lv.reslice.occupancyRecomputeNext = false;
+  std::string reason;
+  const LayerSettings& s = lv.settings;
+  bool forced = false;
+  if (!lv.reslice.haveView) {
+    reason = "first view";
+  } else if (!lv.reslice.forcedReason.empty()) {
+    reason = lv.reslice.forcedReason;
+    forced = true;
+  } else if (lv.reslice.settingsChanged) {
+    reason = "settings changed";
+    forced = true;
+  } else if (s.policy == ReslicePolicy::EveryFrame) {
+    reason = "every frame";
+  } else {
+    const float radius = std::max(0.5f * glm::length(lv.mesh.boundsMax - lv.mesh.boundsMin), 1e-6f);
+    const float moved = glm::length(viewPosition(view.view) - viewPosition(lv.reslice.lastRebuildView.view)) / radius;
+    const float turned = std::max(angleDegrees(viewForward(view.view), viewForward(lv.reslice.lastRebuildView.view)),
+                                  angleDegrees(viewUp(view.view), viewUp(lv.reslice.lastRebuildView.view)));
+    if (moved > s.moveThreshold) {
+      reason = "camera moved " + std::to_string(moved) + " radii (threshold " + std::to_string(s.moveThreshold) + ")";
+    } else if (turned > s.turnThresholdDegrees) {
+      reason = "camera turned " + std::to_string(turned) + " degrees (threshold " + std::to_string(s.turnThresholdDegrees) + ")";
+    } else if (matricesDiffer(view.proj, lv.reslice.lastRebuildView.proj)) {
+      reason = "projection changed";
+    }
+  }
+  const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
+  // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
+  // allows, copied in without a fade (SpreadRebuild.immediate).
+  const bool atOnce = wantAtOnce && !lv.mesh.streamed;
+  const bool spreading = lv.reslice.spread.phase != SpreadPhase::Idle;
+  // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
+  // re-slice or new settings restart it).
+  if (!reason.empty() && (atOnce || !spreading || forced)) {
+    lv.reslice.haveView = true;
+    lv.reslice.settingsChanged = false;
+    lv.reslice.forcedReason.clear();
+    lv.reslice.forceImmediate = false;
+    lv.reslice.lastRebuildView = view;
+    lv.stats.rebuilds++;
+    lv.stats.lastRebuildReason = reason;
+    if (atOnce) {
+      lv.reslice.spread = SpreadRebuild{};
+      CANOPY_TRY(placeForView(lv, view));
+      lv.reslice.rebuildPending = true;
+      lv.reslice.rate.lastWork = SliceRateControl::Work::Other;
+      lv.stats.crossFade = 1.0f;
+    } else {
+      lv.reslice.spread = SpreadRebuild{};
+      lv.reslice.spread.phase = SpreadPhase::Placing;
+      lv.reslice.spread.immediate = wantAtOnce;
+      lv.stats.maxSliceTriangles = 0;
+      beginPlacement(lv, view, lv.reslice.spread.job);
+      lv.stats.crossFade = 0.0f;
+    }
+  }
+  if (lv.reslice.spread.phase != SpreadPhase::Idle) CANOPY_TRY(advanceSpread(lv));
+  lv.stats.spreadPhase = uint32_t(lv.reslice.spread.phase);
+  lv.stats.trianglesPerMs = lv.reslice.rate.trianglesPerMs;
+  *changed = lv.reslice.rebuildPending || lv.reslice.fadePending;
+  // The composite's occupancy: recomputed after a re-slice at once and in the frame after a
+  // cross-fade's copy; the frame after the last slice unites the next set's tiles in
+  // (occupancyUniteNext), which covers every fade step (old and new both partly visible) without
+  // a recompute in a fade frame. (Marking the views' whole footprint occupied instead was tried:
+  // the composite then works through every footprint tile of every layer, 60-70 ms a fade frame
+  // more at 80K faces on lavapipe.)
+  lv.reslice.occupancyDirty = lv.reslice.rebuildPending || recomputeOccupancy || lv.reslice.occupancyRecomputeNow;
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,96 @@
+#pragma once
+// When the layers are re-sliced and how (docs/design.md "Layers: spread re-slicing"): the policy
+// applied to each new view, a spread re-slice's phases (placing, drawing slices into the next set,
+// the cross-fade), the slice sizing from measured frame times, and what the composite must
+// recompute because of it.
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/camera.h"
+#include "engine/status.h"
+#include "render/layer_mesh.h"
+#include "render/layer_placement.h"
+
+namespace canopy {
+struct Device;
+struct LayeredVegetation;
+
+enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFading = 3 };  // = LayerStats.spreadPhase
+
+// docs/design.md "Layers: spread re-slicing".
+struct SpreadRebuild {
+  SpreadPhase phase = SpreadPhase::Idle;
+  PlacementJob job;
+  uint32_t frames = 0;                 // frames since it started
+  uint32_t cursorChunk = 0, cursorTriangle = 0;  // the next triangle to draw
+  std::vector<ChunkPart> slice;        // this frame's draws into the next set
+  bool sliceClears = false;            // this frame's slice is the first: clear the next set
+  bool united = false;                 // the frame after the last slice unites the occupancy (no fade)
+  uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade (the last copies)
+  bool fadeCopy = false;               // this frame's step is the last: copy the next set
+  // Asked at once but the mesh is streamed: placement in one frame, slices as large as the ring
+  // segment allows, and the copy without a fade in the frame of the last slice.
+  bool immediate = false;
+  std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
+                                       // background; 0: not blended this frame
+  std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
+};
+
+// Sizes the spread slices: frame intervals (between updateLayerView calls) of frames without layer
+// work give the still baseline; a drawing frame's interval above it is what its triangles cost.
+struct SliceRateControl {
+  std::chrono::steady_clock::time_point lastUpdate{};
+  bool haveLast = false;
+  enum class Work { None, Placement, Slice, Other } lastWork = Work::Other;
+  uint64_t lastTriangles = 0;
+  double lastPlacementMs = 0;          // CPU placement time of a Placement frame (taken off its interval)
+  std::vector<double> stillMs;         // the last few still intervals (ring)
+  uint32_t stillNext = 0;
+  std::vector<double> rateSamples;     // the last few slices' triangles / cost (ring)
+  uint32_t rateNext = 0;
+  double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~2000-4000/ms)
+};
+
+struct ResliceScheduler {
+  bool rebuildPending = false;
+  bool haveView = false;
+  bool settingsChanged = false;
+  std::string forcedReason;     // re-slice at the next view update for this reason (requestReslice)
+  bool forceImmediate = false;  // ... and at once
+  bool slicePending = false;    // this frame draws spread.slice into the next set
+  bool fadePending = false;     // this frame runs a cross-fade step
+  // Which tiles hold foliage may have changed this frame (the composite's occupancy): a re-slice at
+  // once and the frame after a cross-fade recompute it; the frame after a spread re-slice's last
+  // slice has the next set's tiles united in (occupancyUniteNext), which covers the cross-fade.
+  bool occupancyDirty = false;
+  bool occupancyUniteNext = false;
+  bool occupancyRecomputeNext = false;  // the last fade step asks the frame after it
+  bool occupancyRecomputeNow = false;   // a streamed re-slice asked at once copied its set in this frame
+  SpreadRebuild spread;
+  SliceRateControl rate;
+  LayerView lastRebuildView;
+};
+
+// Asks for a re-slice at the next updateLayerView, for `reason` (LayerStats.lastRebuildReason);
+// `immediate`: at once rather than spread (an earlier request at once stays at once).
+void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immediate);
+
+// The settings or the target size changed: `contentChanged`, what the layers hold differs (re-slice;
+// a spread re-slice drawn with the old settings starts again); `targetsRecreated`, the images are
+// new and empty (re-slice at once: nothing to fade from); `budgetChanged`, the slice rate measured
+// for other slice sizes is dropped (a slice's cost is not linear in its triangles; the still
+// baseline carries over).
+void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targetsRecreated, bool budgetChanged);
+
+// Drops a spread re-slice in progress (its next set or placement is about to go).
+void abandonSpreadRebuild(LayeredVegetation& lv);
+
+// Applies the re-slicing policy for the new view and advances a spread re-slice: *changed tells
+// whether the next recorded layer passes change the visible layers (a re-slice at once, whose
+// placement has been recomputed for `view`, or a cross-fade step); lv.layers is then the placement
+// they show.
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed);
+
+}  // namespace canopy

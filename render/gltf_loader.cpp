@@ -320,49 +320,50 @@ glm::mat4 nodeMatrix(const tinygltf::Node& n) {
   return t * r * s;
 }
 
-}  // namespace
+// What the steps of loadBytes share: the parsed document, the options, the model being filled.
+struct Load {
+  const tinygltf::Model& m;
+  const GltfLoadOptions& opt;
+  const FsContext& fs;
+  const ImageContext& images;
+  VegetationModel* out;
+  Reader reader;
+};
 
-// The loader behind loadGltf and loadGltfFromMemory: `bytes` is the model file, `fs` resolves
-// its external files.
-static Status loadBytes(const std::string& path, const std::vector<unsigned char>& bytes, FsContext& fs,
-                 const GltfLoadOptions& opt, VegetationModel* out) {
-  const std::string file = "'" + path + "'";
-  auto fail = [&](const std::string& what) {
-    *out = VegetationModel{};
-    return Status::error(file + ": " + what);
-  };
+// The file through Canopy's checks of its framing and JSON, then tinygltf (external files through
+// `fs`, images kept encoded in `images`). A parse warning goes to `warnings`.
+Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const GltfLoadOptions& opt,
+                 tinygltf::Model* m, ImageContext* images, std::vector<std::string>* warnings) {
   Status s;
   if (bytes.size() > std::numeric_limits<uint32_t>::max())
-    return fail(std::to_string(bytes.size()) + " bytes: glTF files are limited to 4 GiB");
+    return Status::error(std::to_string(bytes.size()) + " bytes: glTF files are limited to 4 GiB");
   const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
-  if (glb && !(s = checkGlb(bytes)).ok()) return fail(s.message());
+  if (glb && !(s = checkGlb(bytes)).ok()) return s;
   {
     // glTF JSON is UTF-8 without a byte-order mark (tinygltf would accept one).
     const size_t json = glb ? 20 : 0;
     if (bytes.size() >= json + 3 && bytes[json] == 0xEF && bytes[json + 1] == 0xBB && bytes[json + 2] == 0xBF)
-      return fail("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
+      return Status::error("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
     uint32_t jsonLength = uint32_t(bytes.size());
     if (glb) std::memcpy(&jsonLength, bytes.data() + 12, 4);  // checkGlb: inside the file
-    if (!(s = checkJsonDepth(bytes.data() + json, jsonLength, opt.maxJsonDepth)).ok()) return fail(s.message());
+    if (!(s = checkJsonDepth(bytes.data() + json, jsonLength, opt.maxJsonDepth)).ok()) return s;
     const nlohmann::json doc = nlohmann::json::parse(bytes.data() + json, bytes.data() + json + jsonLength, nullptr, false);
-    if (!doc.is_discarded() && !(s = checkGltfJsonFields(doc)).ok()) return fail(s.message());
+    if (!doc.is_discarded() && !(s = checkGltfJsonFields(doc)).ok()) return s;
   }
 
-  ImageContext images;
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks({&fsFileExists, &fsExpand, &fsRead, &fsWrite, &fs});
-  loader.SetImageLoader(&imageCallback, &images);
-  tinygltf::Model m;
+  loader.SetImageLoader(&imageCallback, images);
   std::string err, warn;
   bool parsed = false;
   try {
-    parsed = glb ? loader.LoadBinaryFromMemory(&m, &err, &warn, bytes.data(), unsigned(bytes.size()), fs.baseDir)
-                 : loader.LoadASCIIFromString(&m, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+    parsed = glb ? loader.LoadBinaryFromMemory(m, &err, &warn, bytes.data(), unsigned(bytes.size()), fs.baseDir)
+                 : loader.LoadASCIIFromString(m, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
                                               unsigned(bytes.size()), fs.baseDir);
   } catch (const std::bad_alloc&) {
-    return Status::error(Result::OutOfHostMemory, file + ": out of host memory while parsing the JSON");
+    return Status::error(Result::OutOfHostMemory, "out of host memory while parsing the JSON");
   } catch (const std::exception& e) {
-    return fail(std::string("the glTF parser failed: ") + e.what());
+    return Status::error(std::string("the glTF parser failed: ") + e.what());
   }
   auto trim = [](std::string t) {
     while (!t.empty() && (t.back() == '\n' || t.back() == ' ')) t.pop_back();
@@ -370,9 +371,14 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     return t;
   };
   if (!parsed)
-    return fail(trim(err.empty() ? "not valid glTF" : err) + (fs.lastError.empty() ? "" : " (" + fs.lastError + ")"));
-  if (!warn.empty()) out->warnings.push_back(trim(warn));
+    return Status::error(trim(err.empty() ? "not valid glTF" : err) + (fs.lastError.empty() ? "" : " (" + fs.lastError + ")"));
+  if (!warn.empty()) warnings->push_back(trim(warn));
 
+  return Status();
+}
+
+// The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded.
+Status checkDocument(const tinygltf::Model& m, const FsContext& fs) {
   // asset.version (and minVersion) must be 2.x.
   {
     auto major = [](const std::string& v, int* mj, int* mn) {
@@ -380,11 +386,11 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
              std::count(v.begin(), v.end(), '.') == 1;
     };
     int mj = 0, mn = 0, mmj = 0, mmn = 0;
-    if (!major(m.asset.version, &mj, &mn)) return fail("asset.version '" + m.asset.version + "' is not MAJOR.MINOR");
-    if (mj != 2) return fail("asset.version " + m.asset.version + ": only glTF 2.x is supported");
+    if (!major(m.asset.version, &mj, &mn)) return Status::error("asset.version '" + m.asset.version + "' is not MAJOR.MINOR");
+    if (mj != 2) return Status::error("asset.version " + m.asset.version + ": only glTF 2.x is supported");
     if (!m.asset.minVersion.empty()) {
-      if (!major(m.asset.minVersion, &mmj, &mmn)) return fail("asset.minVersion '" + m.asset.minVersion + "' is not MAJOR.MINOR");
-      if (mmj != 2 || mmn > mn) return fail("asset.minVersion " + m.asset.minVersion + " is not satisfiable by version " + m.asset.version);
+      if (!major(m.asset.minVersion, &mmj, &mmn)) return Status::error("asset.minVersion '" + m.asset.minVersion + "' is not MAJOR.MINOR");
+      if (mmj != 2 || mmn > mn) return Status::error("asset.minVersion " + m.asset.minVersion + " is not satisfiable by version " + m.asset.version);
     }
   }
   // The node graph must be a forest (no loops, no node with two parents), scene or not.
@@ -393,9 +399,9 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
     for (size_t i = 0; i < m.nodes.size(); ++i)
       for (int c : m.nodes[i].children) {
         if (c < 0 || size_t(c) >= m.nodes.size())
-          return fail("nodes[" + std::to_string(i) + "]: child " + std::to_string(c) + " does not exist");
+          return Status::error("nodes[" + std::to_string(i) + "]: child " + std::to_string(c) + " does not exist");
         if (parent[size_t(c)] >= 0 || size_t(c) == i)
-          return fail("nodes[" + std::to_string(c) + "] has two parents or is its own child (node hierarchy is not a tree)");
+          return Status::error("nodes[" + std::to_string(c) + "] has two parents or is its own child (node hierarchy is not a tree)");
         parent[size_t(c)] = int(i);
       }
     // Every node has at most one parent, so a loop is a parent chain that comes back to itself:
@@ -410,42 +416,158 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
         walk.push_back(size_t(p));
         p = parent[size_t(p)];
       }
-      if (p >= 0 && state[size_t(p)] == 1) return fail("nodes[" + std::to_string(p) + "] is part of a loop in the node hierarchy");
+      if (p >= 0 && state[size_t(p)] == 1) return Status::error("nodes[" + std::to_string(p) + "] is part of a loop in the node hierarchy");
       for (size_t w : walk) state[w] = 2;
     }
   }
   if (m.defaultScene >= 0 && size_t(m.defaultScene) >= m.scenes.size())
-    return fail("scene " + std::to_string(m.defaultScene) + " (the default scene) does not exist");
+    return Status::error("scene " + std::to_string(m.defaultScene) + " (the default scene) does not exist");
 
   // Buffers must hold what they declare (external files may be short).
   for (size_t i = 0; i < m.buffers.size(); ++i)
     if (m.buffers[i].data.empty() && !m.buffers[i].uri.empty())
-      return fail("buffers[" + std::to_string(i) + "] ('" + m.buffers[i].uri + "') could not be loaded" +
+      return Status::error("buffers[" + std::to_string(i) + "] ('" + m.buffers[i].uri + "') could not be loaded" +
                   (fs.lastError.empty() ? "" : ": " + fs.lastError));
 
-  // Scene traversal: the default scene (or scene 0, or every root node when there is none). Meshes
-  // no node instantiates are not displayed (glTF), so they are not loaded and not checked.
-  std::vector<int> roots;
+  return Status();
+}
+
+// The nodes the scene traversal starts from: the default scene (or scene 0, or every root node
+// when there is none). Meshes no node instantiates are not displayed (glTF), so they are not loaded
+// and not checked.
+Status sceneRoots(const tinygltf::Model& m, VegetationModel* out, std::vector<int>* roots) {
   if (m.nodes.empty() && !m.meshes.empty())
     out->warnings.push_back("no nodes: the file's " + std::to_string(m.meshes.size()) + " mesh(es) are not part of any scene");
   if (!m.scenes.empty()) {
     const int sc = m.defaultScene >= 0 ? m.defaultScene : 0;
-    if (size_t(sc) >= m.scenes.size()) return fail("scene " + std::to_string(sc) + " does not exist");
-    roots = m.scenes[size_t(sc)].nodes;
+    if (size_t(sc) >= m.scenes.size()) return Status::error("scene " + std::to_string(sc) + " does not exist");
+    *roots = m.scenes[size_t(sc)].nodes;
   } else {
     std::vector<bool> isChild(m.nodes.size(), false);
     for (const auto& n : m.nodes)
       for (int c : n.children)
         if (c >= 0 && size_t(c) < m.nodes.size()) isChild[size_t(c)] = true;
     for (size_t i = 0; i < m.nodes.size(); ++i)
-      if (!isChild[i]) roots.push_back(int(i));
+      if (!isChild[i]) roots->push_back(int(i));
   }
 
-  Reader reader(m);
+  return Status();
+}
+
+// One primitive of mesh `meshIndex` under the node transform `world`: its attributes and indices
+// read within the budgets left, strips and fans as lists, appended to the model in world space.
+Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world, const glm::mat3& normalMatrix) {
+  const tinygltf::Model& m = L.m;
+  const GltfLoadOptions& opt = L.opt;
+  VegetationModel* out = L.out;
+  Reader& reader = L.reader;
   const uint32_t defaultMaterial = uint32_t(m.materials.size());
+  const tinygltf::Mesh& mesh = m.meshes[size_t(meshIndex)];
+  const tinygltf::Primitive& pr = mesh.primitives[pi];
+  const std::string pw = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(pi) + "]";
+  if (pr.mode != TINYGLTF_MODE_TRIANGLES && pr.mode != TINYGLTF_MODE_TRIANGLE_STRIP && pr.mode != TINYGLTF_MODE_TRIANGLE_FAN && pr.mode != -1)
+    return Status::error(pw + ": mode " + std::to_string(pr.mode) + " is not a triangle primitive");
+  auto pos = pr.attributes.find("POSITION");
+  if (pos == pr.attributes.end()) {
+    out->warnings.push_back(pw + ": no POSITION attribute, nothing to draw (skipped)");
+    return Status();
+  }
+  std::vector<double> P, N, T, I;
+  uint32_t nc;
+  uint64_t vcount, count;
+  // Budgets left for this primitive (instancing a mesh by many nodes counts every instance).
+  const uint64_t vertexBudget = opt.maxVertices > out->positions.size() ? opt.maxVertices - out->positions.size() : 0;
+  const uint64_t triangleBudget = opt.maxTriangles > out->triangleCount() ? opt.maxTriangles - out->triangleCount() : 0;
+  const uint64_t indexBudget = triangleBudget > (UINT64_MAX - 2) / 3 ? UINT64_MAX : triangleBudget * 3 + 2;
+  CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &P, &nc, &vcount).context(pw + ".POSITION"));
+  if (auto it = pr.attributes.find("NORMAL"); it != pr.attributes.end()) {
+    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &N, &nc, &count).context(pw + ".NORMAL"));
+    if (count != vcount) return Status::error(pw + ".NORMAL: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
+  }
+  if (auto it = pr.attributes.find("TEXCOORD_0"); it != pr.attributes.end()) {
+    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2},
+                           {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
+                           vertexBudget, &T, &nc, &count).context(pw + ".TEXCOORD_0"));
+    if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
+  }
+  std::vector<uint32_t> idx;
+  if (pr.indices >= 0) {
+    CANOPY_TRY(reader.read(pr.indices, {TINYGLTF_TYPE_SCALAR},
+                           {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
+                           indexBudget, &I, &nc, &count).context(pw + ".indices"));
+    idx.resize(I.size());
+    for (size_t k = 0; k < I.size(); ++k) {
+      if (I[k] >= double(vcount))
+        return Status::error(pw + ".indices[" + std::to_string(k) + "] = " + std::to_string(uint64_t(I[k])) +
+                             " is past the vertex count " + std::to_string(vcount));
+      idx[k] = uint32_t(I[k]);
+    }
+  } else {
+    idx.resize(size_t(vcount));
+    for (uint32_t k = 0; k < vcount; ++k) idx[k] = k;
+  }
+  // Strips and fans become lists; a trailing partial triangle is dropped.
+  std::vector<uint32_t> tri;
+  if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+    for (size_t k = 2; k < idx.size(); ++k)
+      if (k % 2 == 0) tri.insert(tri.end(), {idx[k - 2], idx[k - 1], idx[k]});
+      else tri.insert(tri.end(), {idx[k - 1], idx[k - 2], idx[k]});
+  } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+    for (size_t k = 2; k < idx.size(); ++k) tri.insert(tri.end(), {idx[0], idx[k - 1], idx[k]});
+  } else {
+    if (idx.size() % 3 != 0) out->warnings.push_back(pw + ": " + std::to_string(idx.size() % 3) + " trailing indices ignored");
+    tri.assign(idx.begin(), idx.end() - long(idx.size() % 3));
+  }
+  uint32_t mat = defaultMaterial;
+  if (pr.material >= 0) {
+    if (size_t(pr.material) >= m.materials.size()) return Status::error(pw + ": material " + std::to_string(pr.material) + " does not exist");
+    mat = uint32_t(pr.material);
+  }
+  if (vcount > vertexBudget)
+    return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxVertices) + " vertices (GltfLoadOptions.maxVertices)");
+  if (out->positions.size() + vcount > std::numeric_limits<uint32_t>::max())
+    return Status::error(pw + ": the model exceeds 2^32 vertices");
+  if (out->triangleCount() + tri.size() / 3 > opt.maxTriangles)
+    return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxTriangles) + " triangles (GltfLoadOptions.maxTriangles)");
+  const uint32_t base = uint32_t(out->positions.size());
+  for (uint64_t v = 0; v < vcount; ++v) {
+    glm::vec4 p = world * glm::vec4(float(P[v * 3]), float(P[v * 3 + 1]), float(P[v * 3 + 2]), 1.0f);
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+      return Status::error(pw + ".POSITION[" + std::to_string(v) + "] is not finite after the node transforms");
+    out->positions.push_back(glm::vec3(p));
+    glm::vec3 nrm(0.0f);
+    if (!N.empty()) {
+      nrm = normalMatrix * glm::vec3(float(N[v * 3]), float(N[v * 3 + 1]), float(N[v * 3 + 2]));
+      const float len = glm::length(nrm);
+      nrm = len > 0 ? nrm / len : glm::vec3(0.0f);
+    }
+    out->normals.push_back(nrm);
+    out->uvs.push_back(T.empty() ? glm::vec2(0.0f) : glm::vec2(float(T[v * 2]), float(T[v * 2 + 1])));
+  }
+  const bool computeNormals = N.empty();
+  for (size_t k = 0; k < tri.size(); k += 3) {
+    out->indices.insert(out->indices.end(), {base + tri[k], base + tri[k + 1], base + tri[k + 2]});
+    out->triangleMaterial.push_back(mat);
+    if (computeNormals) {
+      const glm::vec3 &a = out->positions[base + tri[k]], &b = out->positions[base + tri[k + 1]], &c = out->positions[base + tri[k + 2]];
+      const glm::vec3 fn = glm::cross(b - a, c - a);
+      for (int q = 0; q < 3; ++q) out->normals[base + tri[k + size_t(q)]] += fn;
+    }
+  }
+  if (computeNormals)
+    for (uint64_t v = 0; v < vcount; ++v) {
+      glm::vec3& n2 = out->normals[base + v];
+      const float len = glm::length(n2);
+      n2 = len > 0 ? n2 / len : glm::vec3(0.0f, 1.0f, 0.0f);
+    }
+  return Status();
+}
+
+// The scene's hierarchy from `roots`, each node's meshes appended. Walked with an explicit stack:
+// a chain of a million nodes is a valid tree and must not exhaust the call stack.
+Status walkNodes(Load& L, const std::vector<int>& roots) {
+  const tinygltf::Model& m = L.m;
   std::vector<uint8_t> visiting(m.nodes.size(), 0);
-  // The hierarchy is walked with an explicit stack: a chain of a million nodes is a valid tree
-  // and must not exhaust the call stack.
   std::vector<std::pair<int, glm::mat4>> pending;
   auto visit = [&](int ni, const glm::mat4& parent) -> Status {
     const std::string what = "nodes[" + std::to_string(ni) + "]";
@@ -459,107 +581,9 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
       if (!std::isfinite(glm::value_ptr(world)[k])) return Status::error(what + ": transform is not finite");
     if (node.mesh >= 0) {
       if (size_t(node.mesh) >= m.meshes.size()) return Status::error(what + ": mesh " + std::to_string(node.mesh) + " does not exist");
-      const tinygltf::Mesh& mesh = m.meshes[size_t(node.mesh)];
       const glm::mat3 normalMatrix = glm::inverseTranspose(glm::mat3(world));
-      for (size_t pi = 0; pi < mesh.primitives.size(); ++pi) {
-        const tinygltf::Primitive& pr = mesh.primitives[pi];
-        const std::string pw = "meshes[" + std::to_string(node.mesh) + "].primitives[" + std::to_string(pi) + "]";
-        if (pr.mode != TINYGLTF_MODE_TRIANGLES && pr.mode != TINYGLTF_MODE_TRIANGLE_STRIP && pr.mode != TINYGLTF_MODE_TRIANGLE_FAN && pr.mode != -1)
-          return Status::error(pw + ": mode " + std::to_string(pr.mode) + " is not a triangle primitive");
-        auto pos = pr.attributes.find("POSITION");
-        if (pos == pr.attributes.end()) {
-          out->warnings.push_back(pw + ": no POSITION attribute, nothing to draw (skipped)");
-          continue;
-        }
-        std::vector<double> P, N, T, I;
-        uint32_t nc;
-        uint64_t vcount, count;
-        // Budgets left for this primitive (instancing a mesh by many nodes counts every instance).
-        const uint64_t vertexBudget = opt.maxVertices > out->positions.size() ? opt.maxVertices - out->positions.size() : 0;
-        const uint64_t triangleBudget = opt.maxTriangles > out->triangleCount() ? opt.maxTriangles - out->triangleCount() : 0;
-        const uint64_t indexBudget = triangleBudget > (UINT64_MAX - 2) / 3 ? UINT64_MAX : triangleBudget * 3 + 2;
-        CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &P, &nc, &vcount).context(pw + ".POSITION"));
-        if (auto it = pr.attributes.find("NORMAL"); it != pr.attributes.end()) {
-          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &N, &nc, &count).context(pw + ".NORMAL"));
-          if (count != vcount) return Status::error(pw + ".NORMAL: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
-        }
-        if (auto it = pr.attributes.find("TEXCOORD_0"); it != pr.attributes.end()) {
-          CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2},
-                                 {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-                                 vertexBudget, &T, &nc, &count).context(pw + ".TEXCOORD_0"));
-          if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
-        }
-        std::vector<uint32_t> idx;
-        if (pr.indices >= 0) {
-          CANOPY_TRY(reader.read(pr.indices, {TINYGLTF_TYPE_SCALAR},
-                                 {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
-                                 indexBudget, &I, &nc, &count).context(pw + ".indices"));
-          idx.resize(I.size());
-          for (size_t k = 0; k < I.size(); ++k) {
-            if (I[k] >= double(vcount))
-              return Status::error(pw + ".indices[" + std::to_string(k) + "] = " + std::to_string(uint64_t(I[k])) +
-                                   " is past the vertex count " + std::to_string(vcount));
-            idx[k] = uint32_t(I[k]);
-          }
-        } else {
-          idx.resize(size_t(vcount));
-          for (uint32_t k = 0; k < vcount; ++k) idx[k] = k;
-        }
-        // Strips and fans become lists; a trailing partial triangle is dropped.
-        std::vector<uint32_t> tri;
-        if (pr.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-          for (size_t k = 2; k < idx.size(); ++k)
-            if (k % 2 == 0) tri.insert(tri.end(), {idx[k - 2], idx[k - 1], idx[k]});
-            else tri.insert(tri.end(), {idx[k - 1], idx[k - 2], idx[k]});
-        } else if (pr.mode == TINYGLTF_MODE_TRIANGLE_FAN) {
-          for (size_t k = 2; k < idx.size(); ++k) tri.insert(tri.end(), {idx[0], idx[k - 1], idx[k]});
-        } else {
-          if (idx.size() % 3 != 0) out->warnings.push_back(pw + ": " + std::to_string(idx.size() % 3) + " trailing indices ignored");
-          tri.assign(idx.begin(), idx.end() - long(idx.size() % 3));
-        }
-        uint32_t mat = defaultMaterial;
-        if (pr.material >= 0) {
-          if (size_t(pr.material) >= m.materials.size()) return Status::error(pw + ": material " + std::to_string(pr.material) + " does not exist");
-          mat = uint32_t(pr.material);
-        }
-        if (vcount > vertexBudget)
-          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxVertices) + " vertices (GltfLoadOptions.maxVertices)");
-        if (out->positions.size() + vcount > std::numeric_limits<uint32_t>::max())
-          return Status::error(pw + ": the model exceeds 2^32 vertices");
-        if (out->triangleCount() + tri.size() / 3 > opt.maxTriangles)
-          return Status::error(pw + ": the model exceeds " + std::to_string(opt.maxTriangles) + " triangles (GltfLoadOptions.maxTriangles)");
-        const uint32_t base = uint32_t(out->positions.size());
-        for (uint64_t v = 0; v < vcount; ++v) {
-          glm::vec4 p = world * glm::vec4(float(P[v * 3]), float(P[v * 3 + 1]), float(P[v * 3 + 2]), 1.0f);
-          if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            return Status::error(pw + ".POSITION[" + std::to_string(v) + "] is not finite after the node transforms");
-          out->positions.push_back(glm::vec3(p));
-          glm::vec3 nrm(0.0f);
-          if (!N.empty()) {
-            nrm = normalMatrix * glm::vec3(float(N[v * 3]), float(N[v * 3 + 1]), float(N[v * 3 + 2]));
-            const float len = glm::length(nrm);
-            nrm = len > 0 ? nrm / len : glm::vec3(0.0f);
-          }
-          out->normals.push_back(nrm);
-          out->uvs.push_back(T.empty() ? glm::vec2(0.0f) : glm::vec2(float(T[v * 2]), float(T[v * 2 + 1])));
-        }
-        const bool computeNormals = N.empty();
-        for (size_t k = 0; k < tri.size(); k += 3) {
-          out->indices.insert(out->indices.end(), {base + tri[k], base + tri[k + 1], base + tri[k + 2]});
-          out->triangleMaterial.push_back(mat);
-          if (computeNormals) {
-            const glm::vec3 &a = out->positions[base + tri[k]], &b = out->positions[base + tri[k + 1]], &c = out->positions[base + tri[k + 2]];
-            const glm::vec3 fn = glm::cross(b - a, c - a);
-            for (int q = 0; q < 3; ++q) out->normals[base + tri[k + size_t(q)]] += fn;
-          }
-        }
-        if (computeNormals)
-          for (uint64_t v = 0; v < vcount; ++v) {
-            glm::vec3& n2 = out->normals[base + v];
-            const float len = glm::length(n2);
-            n2 = len > 0 ? n2 / len : glm::vec3(0.0f, 1.0f, 0.0f);
-          }
-      }
+      for (size_t pi = 0; pi < m.meshes[size_t(node.mesh)].primitives.size(); ++pi)
+        CANOPY_TRY(appendPrimitive(L, node.mesh, pi, world, normalMatrix));
     }
     for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) pending.push_back({*c, world});
     return Status();
@@ -568,144 +592,201 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
   while (!pending.empty()) {
     const auto [ni, parentWorld] = pending.back();
     pending.pop_back();
-    s = visit(ni, parentWorld);
-    if (!s.ok()) return fail(s.message());
+    CANOPY_TRY(visit(ni, parentWorld));
   }
+  return Status();
+}
 
-  // Materials (all of them keep their index; a default one is appended) and the images they use.
-  std::vector<int32_t> imageSlot(m.images.size(), -1), linearImageSlot(m.images.size(), -1);
+// The images decoded so far for each colour space (slot in out->images per glTF image, -1: not
+// yet) and the pixel budget left.
+struct ImageSlots {
+  std::vector<int32_t> srgb, linear;
+  uint64_t pixelsLeft = 0;
+};
+
+// A texture of material `what` (texture index `tex`, coordinate set `texCoord`) as a slot of
+// out->images, decoded once per image and colour space (`linear`: normal maps; else sRGB).
+Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, int texCoord, const char* role,
+                     bool linear, int32_t* slot) {
+  const tinygltf::Model& m = L.m;
+  const GltfLoadOptions& opt = L.opt;
+  VegetationModel* out = L.out;
+  if (tex < 0) return Status();
+  if (size_t(tex) >= m.textures.size()) return Status::error(what + ": " + role + " texture " + std::to_string(tex) + " does not exist");
+  const int img = m.textures[size_t(tex)].source;
+  if (img < 0 || size_t(img) >= m.images.size())
+    return Status::error(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
+  if (texCoord != 0)
+    out->warnings.push_back(what + ": " + role + " uses TEXCOORD_" + std::to_string(texCoord) + "; TEXCOORD_0 is used");
+  if (!opt.decodeImages) return Status();
+  std::vector<int32_t>& slots = linear ? S.linear : S.srgb;
+  if (slots[size_t(img)] < 0) {
+    const std::string iw = "images[" + std::to_string(img) + "]";
+    const tinygltf::Image& im = m.images[size_t(img)];
+    const unsigned char* data = nullptr;
+    uint64_t size = 0;
+    if (im.bufferView >= 0) {
+      uint32_t stride;
+      const Status s = L.reader.view(im.bufferView, &data, &size, &stride);
+      if (!s.ok()) return Status::error(iw + ": " + s.message());
+    } else if (size_t(img) < L.images.encoded.size() && !L.images.encoded[size_t(img)].empty()) {
+      data = L.images.encoded[size_t(img)].data();
+      size = L.images.encoded[size_t(img)].size();
+    } else {
+      return Status::error(iw + " ('" + im.uri + "') could not be loaded" + (L.fs.lastError.empty() ? "" : ": " + L.fs.lastError));
+    }
+    int w = 0, h = 0, comp = 0;
+    if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
+      return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+    if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
+      return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
+    const uint64_t pixels = uint64_t(w) * uint64_t(h);
+    if (pixels > S.pixelsLeft)
+      return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
+                  std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
+    S.pixelsLeft -= pixels;
+    unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
+    if (!px) return Status::error(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+    ModelImage mi;
+    mi.name = im.name.empty() ? im.uri : im.name;
+    mi.width = uint32_t(w);
+    mi.height = uint32_t(h);
+    mi.rgba.assign(px, px + size_t(w) * h * 4);
+    stbi_image_free(px);
+    mi.linear = linear;
+    slots[size_t(img)] = int32_t(out->images.size());
+    out->images.push_back(std::move(mi));
+  }
+  *slot = slots[size_t(img)];
+  return Status();
+}
+
+// Leaf transmission's factors: KHR_materials_diffuse_transmission (its textures in
+// *diffuseTransmission for loadMaterial), else KHR_materials_transmission's factor.
+Status transmissionFactors(const tinygltf::Material& src, const std::string& what, ModelMaterial* mm,
+                           const tinygltf::Value** diffuseTransmission) {
+  // A glTF factor: a number in [0, 1].
+  auto factor = [&](const tinygltf::Value& ext, const char* extName, const char* key, float* out) -> Status {
+    if (!ext.Has(key)) return Status();
+    const tinygltf::Value& v = ext.Get(key);
+    const double x = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
+    if (!(x >= 0.0 && x <= 1.0)) return Status::error(what + ": " + extName + "." + key + " must be a number in [0, 1]");
+    *out = float(x);
+    return Status();
+  };
+  *diffuseTransmission = nullptr;
+  auto extension = src.extensions.find("KHR_materials_diffuse_transmission");
+  if (extension != src.extensions.end() && extension->second.IsObject()) {
+    const tinygltf::Value& ext = extension->second;
+    *diffuseTransmission = &ext;
+    mm->transmissionFactor = 0.0f;  // the extension's default
+    Status s = factor(ext, "KHR_materials_diffuse_transmission", "diffuseTransmissionFactor", &mm->transmissionFactor);
+    if (!s.ok()) return s;
+    if (ext.Has("diffuseTransmissionColorFactor")) {
+      const tinygltf::Value& c = ext.Get("diffuseTransmissionColorFactor");
+      bool good = c.IsArray() && c.ArrayLen() == 3;
+      for (int k = 0; good && k < 3; ++k) {
+        const double x = c.Get(k).IsNumber() ? c.Get(k).GetNumberAsDouble() : NAN;
+        good = x >= 0.0 && x <= 1.0;
+        if (good) mm->transmissionColor[k] = float(x);
+      }
+      if (!good)
+        return Status::error(what + ": KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor must be 3 numbers in [0, 1]");
+    }
+  } else if ((extension = src.extensions.find("KHR_materials_transmission")) != src.extensions.end() &&
+             extension->second.IsObject()) {
+    mm->transmissionFactor = 0.0f;
+    const Status s = factor(extension->second, "KHR_materials_transmission", "transmissionFactor", &mm->transmissionFactor);
+    if (!s.ok()) return s;
+  }
+  return Status();
+}
+
+// Material i: factors, alpha, transmission, and (when a triangle uses it) its textures decoded.
+Status loadMaterial(Load& L, ImageSlots& S, size_t i, bool used, ModelMaterial* mm) {
+  const tinygltf::Material& src = L.m.materials[i];
+  const std::string what = "materials[" + std::to_string(i) + "]";
+  mm->name = src.name;
+  const auto& f = src.pbrMetallicRoughness.baseColorFactor;
+  if (f.size() == 4) mm->baseColorFactor = glm::vec4(float(f[0]), float(f[1]), float(f[2]), float(f[3]));
+  mm->alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
+  mm->alphaCutoff = float(src.alphaCutoff);
+  mm->doubleSided = src.doubleSided;
+  const tinygltf::Value* diffuseTransmission = nullptr;
+  CANOPY_TRY(transmissionFactors(src, what, mm, &diffuseTransmission));
+  Status s;
+  auto texture = [&](int tex, int texCoord, const char* role, bool linear, int32_t* slot) {
+    return used ? decodeTexture(L, S, what, tex, texCoord, role, linear, slot) : Status();
+  };
+  const auto& pbr = src.pbrMetallicRoughness;
+  if (!(s = texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, "base colour", false, &mm->baseColorImage)).ok() ||
+      !(s = texture(src.normalTexture.index, src.normalTexture.texCoord, "normal map", true, &mm->normalImage)).ok())
+    return Status::error(s.message());
+  if (mm->normalImage >= 0) {
+    mm->normalScale = float(src.normalTexture.scale);
+    if (!(std::abs(mm->normalScale) <= 100.0f))
+      return Status::error(what + ": normalTexture.scale must be a finite number in [-100, 100]");
+  }
+  // KHR_materials_diffuse_transmission's textures: the factor in the alpha channel, the colour in RGB.
+  if (diffuseTransmission) {
+    for (const char* key : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"}) {
+      if (!diffuseTransmission->Has(key)) continue;
+      const tinygltf::Value& info = diffuseTransmission->Get(key);
+      const bool colour = std::string(key) == "diffuseTransmissionColorTexture";
+      if (!info.IsObject() || !info.Has("index") || !info.Get("index").IsInt() || info.Get("index").GetNumberAsInt() < 0)
+        return Status::error(what + ": KHR_materials_diffuse_transmission." + key + ".index must be a texture index");
+      const int texCoord = info.Has("texCoord") && info.Get("texCoord").IsInt() ? info.Get("texCoord").GetNumberAsInt() : 0;
+      if (!(s = texture(info.Get("index").GetNumberAsInt(), texCoord, key, false,
+                        colour ? &mm->transmissionColorImage : &mm->transmissionImage)).ok())
+        return Status::error(s.message());
+    }
+  }
+  return Status();
+}
+
+// Materials (all of them keep their index; a default one is appended) and the images they use.
+Status loadMaterials(Load& L) {
+  const tinygltf::Model& m = L.m;
+  ImageSlots S;
+  S.srgb.assign(m.images.size(), -1);
+  S.linear.assign(m.images.size(), -1);
+  S.pixelsLeft = L.opt.maxImagePixels;
   std::vector<bool> materialUsedByTriangle(m.materials.size() + 1, false);
-  for (uint32_t t : out->triangleMaterial) materialUsedByTriangle[t] = true;
-  uint64_t pixelsLeft = opt.maxImagePixels;
-  for (size_t i = 0; i <= m.materials.size(); ++i) {
+  for (uint32_t t : L.out->triangleMaterial) materialUsedByTriangle[t] = true;
+  for (size_t i = 0; i < m.materials.size(); ++i) {
     ModelMaterial mm;
-    if (i == m.materials.size()) {
-      mm.name = "(default)";
-      out->materials.push_back(mm);
-      break;
-    }
-    const tinygltf::Material& src = m.materials[i];
-    const std::string what = "materials[" + std::to_string(i) + "]";
-    mm.name = src.name;
-    const auto& f = src.pbrMetallicRoughness.baseColorFactor;
-    if (f.size() == 4) mm.baseColorFactor = glm::vec4(float(f[0]), float(f[1]), float(f[2]), float(f[3]));
-    mm.alphaMode = src.alphaMode == "MASK" ? AlphaMode::Mask : src.alphaMode == "BLEND" ? AlphaMode::Blend : AlphaMode::Opaque;
-    mm.alphaCutoff = float(src.alphaCutoff);
-    mm.doubleSided = src.doubleSided;
-    // Leaf transmission: the factors here, the textures with the others below.
-    // A glTF factor: a number in [0, 1].
-    auto factor = [&](const tinygltf::Value& ext, const char* extName, const char* key, float* out) -> Status {
-      if (!ext.Has(key)) return Status();
-      const tinygltf::Value& v = ext.Get(key);
-      const double x = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
-      if (!(x >= 0.0 && x <= 1.0)) return Status::error(what + ": " + extName + "." + key + " must be a number in [0, 1]");
-      *out = float(x);
-      return Status();
-    };
-    const tinygltf::Value* diffuseTransmission = nullptr;  // KHR_materials_diffuse_transmission, if present
-    auto extension = src.extensions.find("KHR_materials_diffuse_transmission");
-    if (extension != src.extensions.end() && extension->second.IsObject()) {
-      const tinygltf::Value& ext = extension->second;
-      diffuseTransmission = &ext;
-      mm.transmissionFactor = 0.0f;  // the extension's default
-      s = factor(ext, "KHR_materials_diffuse_transmission", "diffuseTransmissionFactor", &mm.transmissionFactor);
-      if (!s.ok()) return fail(s.message());
-      if (ext.Has("diffuseTransmissionColorFactor")) {
-        const tinygltf::Value& c = ext.Get("diffuseTransmissionColorFactor");
-        bool good = c.IsArray() && c.ArrayLen() == 3;
-        for (int k = 0; good && k < 3; ++k) {
-          const double x = c.Get(k).IsNumber() ? c.Get(k).GetNumberAsDouble() : NAN;
-          good = x >= 0.0 && x <= 1.0;
-          if (good) mm.transmissionColor[k] = float(x);
-        }
-        if (!good)
-          return fail(what + ": KHR_materials_diffuse_transmission.diffuseTransmissionColorFactor must be 3 numbers in [0, 1]");
-      }
-    } else if ((extension = src.extensions.find("KHR_materials_transmission")) != src.extensions.end() &&
-               extension->second.IsObject()) {
-      mm.transmissionFactor = 0.0f;
-      s = factor(extension->second, "KHR_materials_transmission", "transmissionFactor", &mm.transmissionFactor);
-      if (!s.ok()) return fail(s.message());
-    }
-    const bool used = materialUsedByTriangle[i];
-    // A texture of this material (texture index `tex`, coordinate set `texCoord`) as a slot of
-    // out->images, decoded once per image and colour space (`linear`: normal maps; else sRGB).
-    auto texture = [&](int tex, int texCoord, const char* role, bool linear, int32_t* slot) -> Status {
-      if (tex < 0 || !used) return Status();
-      if (size_t(tex) >= m.textures.size()) return Status::error(what + ": " + role + " texture " + std::to_string(tex) + " does not exist");
-      const int img = m.textures[size_t(tex)].source;
-      if (img < 0 || size_t(img) >= m.images.size())
-        return Status::error(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
-      if (texCoord != 0)
-        out->warnings.push_back(what + ": " + role + " uses TEXCOORD_" + std::to_string(texCoord) + "; TEXCOORD_0 is used");
-      if (!opt.decodeImages) return Status();
-      std::vector<int32_t>& slots = linear ? linearImageSlot : imageSlot;
-      if (slots[size_t(img)] < 0) {
-        const std::string iw = "images[" + std::to_string(img) + "]";
-        const tinygltf::Image& im = m.images[size_t(img)];
-        const unsigned char* data = nullptr;
-        uint64_t size = 0;
-        if (im.bufferView >= 0) {
-          uint32_t stride;
-          s = reader.view(im.bufferView, &data, &size, &stride);
-          if (!s.ok()) return Status::error(iw + ": " + s.message());
-        } else if (size_t(img) < images.encoded.size() && !images.encoded[size_t(img)].empty()) {
-          data = images.encoded[size_t(img)].data();
-          size = images.encoded[size_t(img)].size();
-        } else {
-          return Status::error(iw + " ('" + im.uri + "') could not be loaded" + (fs.lastError.empty() ? "" : ": " + fs.lastError));
-        }
-        int w = 0, h = 0, comp = 0;
-        if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
-          return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
-        if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
-          return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
-        const uint64_t pixels = uint64_t(w) * uint64_t(h);
-        if (pixels > pixelsLeft)
-          return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
-                      std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
-        pixelsLeft -= pixels;
-        unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
-        if (!px) return Status::error(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
-        ModelImage mi;
-        mi.name = im.name.empty() ? im.uri : im.name;
-        mi.width = uint32_t(w);
-        mi.height = uint32_t(h);
-        mi.rgba.assign(px, px + size_t(w) * h * 4);
-        stbi_image_free(px);
-        mi.linear = linear;
-        slots[size_t(img)] = int32_t(out->images.size());
-        out->images.push_back(std::move(mi));
-      }
-      *slot = slots[size_t(img)];
-      return Status();
-    };
-    const auto& pbr = src.pbrMetallicRoughness;
-    if (!(s = texture(pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord, "base colour", false, &mm.baseColorImage)).ok() ||
-        !(s = texture(src.normalTexture.index, src.normalTexture.texCoord, "normal map", true, &mm.normalImage)).ok())
-      return fail(s.message());
-    if (mm.normalImage >= 0) {
-      mm.normalScale = float(src.normalTexture.scale);
-      if (!(std::abs(mm.normalScale) <= 100.0f))
-        return fail(what + ": normalTexture.scale must be a finite number in [-100, 100]");
-    }
-    // KHR_materials_diffuse_transmission's textures: the factor in the alpha channel, the colour in RGB.
-    if (diffuseTransmission) {
-      for (const char* key : {"diffuseTransmissionTexture", "diffuseTransmissionColorTexture"}) {
-        if (!diffuseTransmission->Has(key)) continue;
-        const tinygltf::Value& info = diffuseTransmission->Get(key);
-        const bool colour = std::string(key) == "diffuseTransmissionColorTexture";
-        if (!info.IsObject() || !info.Has("index") || !info.Get("index").IsInt() || info.Get("index").GetNumberAsInt() < 0)
-          return fail(what + ": KHR_materials_diffuse_transmission." + key + ".index must be a texture index");
-        const int texCoord = info.Has("texCoord") && info.Get("texCoord").IsInt() ? info.Get("texCoord").GetNumberAsInt() : 0;
-        if (!(s = texture(info.Get("index").GetNumberAsInt(), texCoord, key, false,
-                          colour ? &mm.transmissionColorImage : &mm.transmissionImage)).ok())
-          return fail(s.message());
-      }
-    }
-    out->materials.push_back(mm);
+    CANOPY_TRY(loadMaterial(L, S, i, materialUsedByTriangle[i], &mm));
+    L.out->materials.push_back(mm);
   }
+  ModelMaterial fallback;
+  fallback.name = "(default)";
+  L.out->materials.push_back(fallback);
+  return Status();
+}
 
+}  // namespace
+
+// The loader behind loadGltf and loadGltfFromMemory: `bytes` is the model file, `fs` resolves
+// its external files. Every refusal names the file.
+static Status loadBytes(const std::string& path, const std::vector<unsigned char>& bytes, FsContext& fs,
+                        const GltfLoadOptions& opt, VegetationModel* out) {
+  const std::string file = "'" + path + "'";
+  auto fail = [&](const Status& s) {
+    *out = VegetationModel{};
+    // Out of host memory keeps its code; every other refusal is the file's (InvalidArgument).
+    return s.code() == Result::OutOfHostMemory ? Status::error(Result::OutOfHostMemory, file + ": " + s.message())
+                                                : Status::error(file + ": " + s.message());
+  };
+  ImageContext images;
+  tinygltf::Model m;
+  Status s = parseFile(bytes, fs, opt, &m, &images, &out->warnings);
+  if (s.ok()) s = checkDocument(m, fs);
+  std::vector<int> roots;
+  if (s.ok()) s = sceneRoots(m, out, &roots);
+  Load L{m, opt, fs, images, out, Reader(m)};
+  if (s.ok()) s = walkNodes(L, roots);
+  if (s.ok()) s = loadMaterials(L);
+  if (!s.ok()) return fail(s);
   if (!out->positions.empty()) {
     out->boundsMin = out->boundsMax = out->positions[0];
     for (const glm::vec3& p : out->positions) {

@@ -152,15 +152,16 @@ int runProgram(const std::vector<std::string>& args) {
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : 1;
 }
 
-int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
+// The device for a headless run: validation (each message counted in *messages and printed) and
+// the fault-injecting loader as the options ask.
+Status createDemoDevice(const Options& o, int* messages, Device* dev) {
   DeviceDesc dd;
   dd.applicationName = "canopy-demo";
   dd.preferredDevice = o.device;
-  int messages = 0;
   if (o.validate) {
     dd.enableValidation = dd.requireValidation = true;
-    dd.validationSink = [&](VkDebugUtilsMessageSeverityFlagBitsEXT, const char* id, const char* text) {
-      ++messages;
+    dd.validationSink = [messages](VkDebugUtilsMessageSeverityFlagBitsEXT, const char* id, const char* text) {
+      ++*messages;
       std::fprintf(stderr, "validation: %s: %s\n", id ? id : "", text);
     };
   }
@@ -171,8 +172,131 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     fault::arm(mode, n);
     dd.getInstanceProcAddr = fault::loader(vkGetInstanceProcAddr);
   }
+  return createDevice(dd, dev);
+}
+
+// timing.txt: the run's settings and re-slices, the first and the steady frames' timings, the sway
+// (still camera), memory.
+std::string timingReport(const Options& o, const std::string& label, const Device& dev, const CanopyStats& st,
+                         uint32_t warmup, const TimingLog& first, const TimingLog& steady, const SwayMeter* sway) {
+  char head[2048];
+  std::snprintf(head, sizeof head,
+                "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
+                "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices (%u spread over frames "
+                "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles)\n"
+                "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
+                "(docs/design.md): the wall-clock line is the figure to trust there.\n",
+                label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
+                o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
+                dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
+                st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles);
+  std::string text = head;
+  text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
+  if (!steady.wallMs.empty())
+    text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
+                           (o.camera == CameraPath::Orbit ? std::string(o.rebuildBudgetMs > 0 ? ", re-slices spread over frames" : ", every frame re-slices") : std::string()) + "):");
+  if (sway) text += "\n" + sway->summary();
+  char ringNote[128];
+  std::snprintf(ringNote, sizeof ringNote, st.layers.meshResident ? "resident" : "streamed through a %.1f MiB ring",
+                double(st.layers.meshRingBytes) / double(1 << 20));
+  char mem[640];
+  std::snprintf(mem, sizeof mem,
+                "\nMemory: peak host %.2f GiB (VmHWM; on a CPU driver it includes device memory), device %.1f MiB live / "
+                "%.1f MiB peak (Canopy's buffers and images), mesh %.1f MiB in %u chunks (%.1f bytes per face), %s\n",
+                double(cli::peakResidentBytes()) / double(1ull << 30), double(st.deviceBytes) / double(1 << 20),
+                double(st.peakDeviceBytes) / double(1 << 20), double(st.layers.meshBytes) / double(1 << 20),
+                st.layers.meshChunks,
+                double(st.layers.meshBytes) / double(std::max<uint64_t>(st.layers.foliageTriangles + st.layers.rigidTriangles, 1)),
+                ringNote);
+  text += mem;
+  return text;
+}
+
+// demo.mp4 from the written frames. ffmpeg gets its arguments directly (no shell), so an output
+// folder with quotes or spaces cannot break or inject into the command.
+void writeMp4(const Options& o) {
+  const std::string fps = std::to_string(std::max(1l, std::lround(o.fps)));
+  const int rc = runProgram({"ffmpeg", "-y", "-loglevel", "error", "-framerate", fps, "-i", o.outDir + "/frame_%04d.png",
+                             "-frames:v", std::to_string(o.frames),
+                             "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-pix_fmt", "yuv420p", o.outDir + "/demo.mp4"});
+  if (rc == 0) std::printf("wrote %s/demo.mp4\n", o.outDir.c_str());
+  else if (rc == kNotInstalled) std::printf("(no demo.mp4: ffmpeg is not installed)\n");
+  else std::fprintf(stderr, "canopy-demo: ffmpeg failed (exit %d); the PNG frames are complete\n", rc);
+}
+
+// The output folder, created; frames beyond this run's count left by a longer earlier run in the
+// same folder would read as part of this sequence (and of the MP4): they go.
+Status prepareOutputFolder(const Options& o) {
+  std::error_code ec;
+  std::filesystem::create_directories(o.outDir, ec);
+  if (ec) return Status::error("cannot create the output folder '" + o.outDir + "': " + ec.message());
+  for (uint32_t i = o.frames;; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof name, "/frame_%04u.png", i);
+    if (!std::filesystem::remove(o.outDir + name, ec)) break;
+  }
+  return Status();
+}
+
+void printWrittenFiles(const Options& o, const std::vector<size_t>& picked, const glm::uvec4& crop) {
+  std::printf("wrote %u frames (%s/frame_0000.png ...), %s/contact_sheet.png (frames", o.frames, o.outDir.c_str(),
+              o.outDir.c_str());
+  for (size_t k : picked) std::printf(" %zu", k);
+  std::printf(", cropped to x %u..%u, y %u..%u), %s/timing.txt\n", crop.x, crop.z - 1, crop.y, crop.w - 1, o.outDir.c_str());
+}
+
+using SubmitFrame = std::function<Status(CanopyFrame, bool, int64_t)>;
+using WrittenFrame = std::function<Status(uint32_t, const std::vector<uint8_t>&)>;
+
+// A mesh over the device-memory budget is streamed: its first re-slice takes a slice a frame
+// (CanopyDesc.deviceMemoryBudget). More unwritten frames of `frame` until the layers are complete,
+// so the first written frame shows the whole plant.
+Status completeStreamedReslice(Host& host, uint32_t warmup, const CanopyFrame& frame, const SubmitFrame& submit,
+                               const std::function<Status()>& drain) {
+  if (warmup == 0) CANOPY_TRY(submit(frame, false, -1));
+  while (canopyStats(host.canopy).layers.spreadRebuilds == 0) CANOPY_TRY(submit(frame, false, -1));
+  CANOPY_TRY(drain());
+  const CanopyStats ms = canopyStats(host.canopy);
+  std::fprintf(stderr, "streamed mesh (%.1f MiB through a %.1f MiB ring): the first re-slice took %u frames (not written)\n",
+               double(ms.layers.meshBytes) / double(1 << 20), double(ms.layers.meshRingBytes) / double(1 << 20),
+               ms.layers.lastSpreadFrames);
+  return Status();
+}
+
+// Leaf shading (the light sheet): the plant lit from the front (--light), from behind (that
+// light turned 180 degrees about the vertical) and from behind without translucency; three more
+// frames at the last frame's camera, each light change re-sliced at once. `written` is redirected
+// to collect them.
+Status writeLightSheet(const Options& o, Host& host, const uint8_t clear[3],
+                       const std::function<CanopyFrame(uint32_t)>& frameAt, const SubmitFrame& submit,
+                       const std::function<Status()>& drain, WrittenFrame& written) {
+  std::vector<std::vector<uint8_t>> lit;
+  written = [&](uint32_t, const std::vector<uint8_t>& pixels) -> Status {
+    lit.push_back(pixels);
+    return Status();
+  };
+  const Float3 behind{-o.light.x, o.light.y, -o.light.z};
+  const struct { Float3 light; bool translucency; } variants[] = {{o.light, true}, {behind, true}, {behind, false}};
+  for (const auto& v : variants) {
+    CanopyParams p = canopyParams(host.canopy);
+    p.layers.lightDirection = v.light;
+    p.layers.translucency = v.translucency;
+    p.layers.rebuildBudgetMs = 0.0f;
+    CANOPY_TRY(setCanopyParams(host.canopy, p));
+    CANOPY_TRY(submit(frameAt(o.frames - 1), false, 0));
+    CANOPY_TRY(drain());
+  }
+  glm::uvec4 litCrop;
+  CANOPY_TRY(writeContactSheet(o.outDir + "/light_sheet.png", lit, o.width, o.height, clear, &litCrop));
+  std::fprintf(stderr, "wrote %s/light_sheet.png: light towards (%g, %g, %g), then (%g, %g, %g) with and without translucency\n",
+               o.outDir.c_str(), o.light.x, o.light.y, o.light.z, behind.x, behind.y, behind.z);
+  return Status();
+}
+
+int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
+  int messages = 0;
   Device dev;
-  Status s = createDevice(dd, &dev);
+  Status s = createDemoDevice(o, &messages, &dev);
   if (!s.ok()) {
     std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
     destroyDevice(dev);
@@ -181,16 +305,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
   Host host;
   FrameRing ring;
   s = [&]() -> Status {
-    std::error_code ec;
-    std::filesystem::create_directories(o.outDir, ec);
-    if (ec) return Status::error("cannot create the output folder '" + o.outDir + "': " + ec.message());
-    // Frames beyond this run's count left by a longer earlier run in the same folder would read as
-    // part of this sequence (and of the MP4): they go.
-    for (uint32_t i = o.frames;; ++i) {
-      char name[64];
-      std::snprintf(name, sizeof name, "/frame_%04u.png", i);
-      if (!std::filesystem::remove(o.outDir + name, ec)) break;
-    }
+    CANOPY_TRY(prepareOutputFolder(o));
     CANOPY_TRY(createHost(dev, model, o, o.width, o.height, true, VK_FORMAT_UNDEFINED, &host));
     const CameraRig rig0 = defaultRig(o);
     TimingLog first, steady;
@@ -280,18 +395,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       std::fprintf(stderr, "warm-up: %u frames (%.2f s of simulation) in %.1f s\n", warmup, double(warmup) / o.fps,
                    (nowMs() - w0) / 1000.0);
     }
-    // A mesh over the device-memory budget is streamed: its first re-slice takes a slice a frame
-    // (CanopyDesc.deviceMemoryBudget). More unwritten frames until the layers are complete, so the
-    // first written frame shows the whole plant.
-    if (!canopyStats(host.canopy).layers.meshResident) {
-      if (warmup == 0) CANOPY_TRY(submit(frameAt(0), false, -1));
-      while (canopyStats(host.canopy).layers.spreadRebuilds == 0) CANOPY_TRY(submit(frameAt(0), false, -1));
-      CANOPY_TRY(drain());
-      const CanopyStats ms = canopyStats(host.canopy);
-      std::fprintf(stderr, "streamed mesh (%.1f MiB through a %.1f MiB ring): the first re-slice took %u frames (not written)\n",
-                   double(ms.layers.meshBytes) / double(1 << 20), double(ms.layers.meshRingBytes) / double(1 << 20),
-                   ms.layers.lastSpreadFrames);
-    }
+    if (!canopyStats(host.canopy).layers.meshResident) CANOPY_TRY(completeStreamedReslice(host, warmup, frameAt(0), submit, drain));
     const double t0 = nowMs();
     double lastProgress = t0;
     written = [&](uint32_t i, const std::vector<uint8_t>& pixels) -> Status {
@@ -315,81 +419,15 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
     const CanopyStats st = canopyStats(host.canopy);  // the sequence's, before the light sheet's re-slices
-    if (o.lightSheet) {
-      // Leaf shading (issue 17): the plant lit from the front (--light), from behind (that light
-      // turned 180 degrees about the vertical) and from behind without translucency; three more
-      // frames at the last frame's camera, each light change re-sliced at once.
-      std::vector<std::vector<uint8_t>> lit;
-      written = [&](uint32_t, const std::vector<uint8_t>& pixels) -> Status {
-        lit.push_back(pixels);
-        return Status();
-      };
-      const Float3 behind{-o.light.x, o.light.y, -o.light.z};
-      const struct { Float3 light; bool translucency; } variants[] = {{o.light, true}, {behind, true}, {behind, false}};
-      for (const auto& v : variants) {
-        CanopyParams p = canopyParams(host.canopy);
-        p.layers.lightDirection = v.light;
-        p.layers.translucency = v.translucency;
-        p.layers.rebuildBudgetMs = 0.0f;
-        CANOPY_TRY(setCanopyParams(host.canopy, p));
-        CANOPY_TRY(submit(frameAt(o.frames - 1), false, 0));
-        CANOPY_TRY(drain());
-      }
-      glm::uvec4 litCrop;
-      CANOPY_TRY(writeContactSheet(o.outDir + "/light_sheet.png", lit, o.width, o.height, sway.clear, &litCrop));
-      std::fprintf(stderr, "wrote %s/light_sheet.png: light towards (%g, %g, %g), then (%g, %g, %g) with and without translucency\n",
-                   o.outDir.c_str(), o.light.x, o.light.y, o.light.z, behind.x, behind.y, behind.z);
-    }
-    char head[2048];
-    std::snprintf(head, sizeof head,
-                  "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
-                  "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices (%u spread over frames "
-                  "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles)\n"
-                  "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
-                  "(docs/design.md): the wall-clock line is the figure to trust there.\n",
-                  label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
-                  o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
-                  dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
-                  st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles);
-    std::string text = head;
-    text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
-    if (!steady.wallMs.empty())
-      text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
-                             (o.camera == CameraPath::Orbit ? std::string(o.rebuildBudgetMs > 0 ? ", re-slices spread over frames" : ", every frame re-slices") : std::string()) + "):");
-    if (measureSway) text += "\n" + sway.summary();
-    char ringNote[128];
-    std::snprintf(ringNote, sizeof ringNote, st.layers.meshResident ? "resident" : "streamed through a %.1f MiB ring",
-                  double(st.layers.meshRingBytes) / double(1 << 20));
-    char mem[640];
-    std::snprintf(mem, sizeof mem,
-                  "\nMemory: peak host %.2f GiB (VmHWM; on a CPU driver it includes device memory), device %.1f MiB live / "
-                  "%.1f MiB peak (Canopy's buffers and images), mesh %.1f MiB in %u chunks (%.1f bytes per face), %s\n",
-                  double(cli::peakResidentBytes()) / double(1ull << 30), double(st.deviceBytes) / double(1 << 20),
-                  double(st.peakDeviceBytes) / double(1 << 20), double(st.layers.meshBytes) / double(1 << 20),
-                  st.layers.meshChunks,
-                  double(st.layers.meshBytes) / double(std::max<uint64_t>(st.layers.foliageTriangles + st.layers.rigidTriangles, 1)),
-                  ringNote);
-    text += mem;
+    if (o.lightSheet) CANOPY_TRY(writeLightSheet(o, host, sway.clear, frameAt, submit, drain, written));
+    const std::string text = timingReport(o, label, dev, st, warmup, first, steady, measureSway ? &sway : nullptr);
     if (FILE* f = std::fopen((o.outDir + "/timing.txt").c_str(), "w")) {
       std::fputs(text.c_str(), f);
       std::fclose(f);
     }
     std::printf("%s\n", text.c_str());
-    std::printf("wrote %u frames (%s/frame_0000.png ...), %s/contact_sheet.png (frames", o.frames, o.outDir.c_str(),
-                o.outDir.c_str());
-    for (size_t k : picked) std::printf(" %zu", k);
-    std::printf(", cropped to x %u..%u, y %u..%u), %s/timing.txt\n", crop.x, crop.z - 1, crop.y, crop.w - 1, o.outDir.c_str());
-    if (o.mp4) {
-      // ffmpeg gets its arguments directly (no shell), so an output folder with quotes or spaces
-      // cannot break or inject into the command.
-      const std::string fps = std::to_string(std::max(1l, std::lround(o.fps)));
-      const int rc = runProgram({"ffmpeg", "-y", "-loglevel", "error", "-framerate", fps, "-i", o.outDir + "/frame_%04d.png",
-                                 "-frames:v", std::to_string(o.frames),
-                                 "-vf", "scale=trunc(iw/2)*2:trunc(ih/2)*2", "-pix_fmt", "yuv420p", o.outDir + "/demo.mp4"});
-      if (rc == 0) std::printf("wrote %s/demo.mp4\n", o.outDir.c_str());
-      else if (rc == kNotInstalled) std::printf("(no demo.mp4: ffmpeg is not installed)\n");
-      else std::fprintf(stderr, "canopy-demo: ffmpeg failed (exit %d); the PNG frames are complete\n", rc);
-    }
+    printWrittenFiles(o, picked, crop);
+    if (o.mp4) writeMp4(o);
     return Status();
   }();
   if (!s.ok()) std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());

@@ -72,15 +72,24 @@ void toBytes(const glm::vec4& c, uint8_t* out) {
 const glm::vec3 kPalette[] = {{0.95f, 0.25f, 0.2f}, {0.2f, 0.75f, 0.25f}, {0.2f, 0.45f, 0.95f}, {0.95f, 0.8f, 0.15f},
                               {0.75f, 0.3f, 0.85f}, {0.15f, 0.85f, 0.85f}, {0.95f, 0.55f, 0.15f}, {0.6f, 0.6f, 0.6f}};
 
-}  // namespace
-
-int main(int argc, char** argv) {
+// canopy-layers' command line.
+struct LayersOptions {
   std::string model, out = "layers_out";
   LayeredVegetationDesc desc;
-  desc.settings.regions = RegionSplit{};
   float yaw = 0, pitch = 10, fov = 40, distance = 0.8f;
-  DeviceDesc dd;
+  DeviceDesc device;
   cli::CacheOptions cache;
+};
+
+// Reads the options into *o: -1 to go on, else the exit code (usage printed).
+int parseArgs(int argc, char** argv, LayersOptions* o) {
+  std::string& model = o->model;
+  std::string& out = o->out;
+  LayeredVegetationDesc& desc = o->desc;
+  desc.settings.regions = RegionSplit{};
+  float &yaw = o->yaw, &pitch = o->pitch, &fov = o->fov, &distance = o->distance;
+  DeviceDesc& dd = o->device;
+  cli::CacheOptions& cache = o->cache;
   std::string why;
   dd.applicationName = "canopy-layers";
   for (int i = 1; i < argc; ++i) {
@@ -142,35 +151,11 @@ int main(int argc, char** argv) {
       return usage("more than one model given ('" + model + "' and '" + a + "')");
     }
   }
-  if (cache.clear) return cli::clearCacheCommand("canopy-layers", cache, model);
-  if (model.empty()) return usage("no model given");
-  auto fail = [](const Status& s) {
-    std::fprintf(stderr, "canopy-layers: %s\n", s.message().c_str());
-    return 1;
-  };
-  // The caches go to the user's cache folder unless the options say otherwise (docs/design.md
-  // "Files"); a folder that cannot be used means no cache, said on one line.
-  const Status where = cli::resolveCacheFolder(cache, model, &desc.rootCacheDir);
-  if (!where.ok()) std::printf("No cache: %s\n", where.message().c_str());
-  desc.cacheMaxBytes = uint64_t(cache.maxMiB) << 20;
-  VegetationModel m;
-  const auto t0 = std::chrono::steady_clock::now();
-  Status s = loadGltf(model, GltfLoadOptions{}, &m);
-  if (!s.ok()) return fail(s);
-  const double loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("Model: %s: %zu triangles, %zu vertices, %zu materials, loaded in %.1f ms\n", model.c_str(),
-              m.triangleCount(), m.positions.size(), m.materials.size() - 1, loadMs);
-  for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
+  return -1;
+}
 
-  Device dev;
-  s = createDevice(dd, &dev);
-  if (!s.ok()) return fail(s);
-  LayeredVegetation lv;
-  s = createLayeredVegetation(dev, m, desc, &lv);
-  if (!s.ok()) {
-    destroyDevice(dev);
-    return fail(s);
-  }
+// What the split and the leaf roots made of the model.
+void printSplit(const Device& dev, const VegetationModel& m, const LayeredVegetation& lv, const LayeredVegetationDesc& desc) {
   std::printf("Device: %s\n", dev.properties.deviceName);
   std::vector<uint64_t> used(lv.mesh.materials.size(), 0);
   for (uint32_t mat : m.triangleMaterial) used[mat]++;
@@ -185,41 +170,27 @@ int main(int argc, char** argv) {
   std::printf("Leaves: %u (%s), preprocessing %.1f ms (%s)\n", lv.stats.leafCount,
               desc.roots.weldPositions ? "welded by position" : "shared indices only", lv.stats.preprocessMs,
               lv.stats.rootCacheNote.c_str());
+}
 
-  const LayerView view = orbitView(m.boundsMin, m.boundsMax, yaw, pitch, fov, float(desc.width) / float(desc.height), distance);
-  bool rebuild = false;
-  rg::RenderGraph g;
-  s = updateLayerView(lv, view, &rebuild);
-  if (s.ok()) s = addLayerPasses(lv, g, nullptr);
-  if (s.ok()) s = g.compile();
-  if (s.ok()) s = g.realize(dev);
-  const auto t1 = std::chrono::steady_clock::now();
-  if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
-  const double rasterMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
-  std::printf("Layers: %s, %s, %s slicing, drawn in %.1f ms (wall, incl. submit)\n", toString(lv.settings.layout).c_str(),
-              lv.pipelines.singlePass ? "single pass (gl_Layer)" : "one draw per layer",
-              lv.settings.slice == SliceMode::LeafRoots ? "leaf-root" : "geometric", rasterMs);
-
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec) s = Status::error("cannot create " + out + ": " + ec.message());
-  const uint32_t w = desc.width, h = desc.height, n = lv.settings.layout.count();
+// Each layer read back and written as layer_NN.png (straight-alpha sRGB), with its placement.
+Status writeLayers(LayeredVegetation& lv, const std::string& out, std::vector<std::vector<glm::vec4>>* colors,
+                   std::vector<std::vector<float>>* depths) {
+  Status s;
+  const uint32_t w = lv.desc.width, h = lv.desc.height, n = lv.settings.layout.count();
   const size_t px = size_t(w) * h;
-  std::vector<std::vector<glm::vec4>> colors(n);
-  std::vector<std::vector<float>> depths(n);
-  std::vector<glm::vec4> bg;
-  std::vector<float> bgDepth;
+  colors->assign(n, {});
+  depths->assign(n, {});
   for (uint32_t l = 0; l < n && s.ok(); ++l) {
-    s = readLayerColor(lv, l, &colors[l]);
-    if (s.ok()) s = readLayerDepth(lv, l, &depths[l]);
+    s = readLayerColor(lv, l, &(*colors)[l]);
+    if (s.ok()) s = readLayerDepth(lv, l, &(*depths)[l]);
     std::vector<uint8_t> bytes(px * 4);
-    for (size_t i = 0; i < px && s.ok(); ++i) toBytes(colors[l][i], &bytes[i * 4]);
+    for (size_t i = 0; i < px && s.ok(); ++i) toBytes((*colors)[l][i], &bytes[i * 4]);
     char name[64];
     std::snprintf(name, sizeof name, "/layer_%02u.png", l);
     if (s.ok()) s = writePng(out + name, w, h, bytes);
     if (s.ok()) {
       size_t covered = 0;
-      for (const glm::vec4& c : colors[l]) covered += c.a > 0;
+      for (const glm::vec4& c : (*colors)[l]) covered += c.a > 0;
       const LayerInfo& li = lv.visible.layers[l];
       std::printf("  layer %u: depth %.3f..%.3f (L = %.3f), %u leaves, %llu triangles, %.1f%% of pixels, "
                   "root line y=%.0f, height %.0f px\n",
@@ -227,7 +198,18 @@ int main(int argc, char** argv) {
                   100.0 * double(covered) / double(px), li.rootLineY, li.height);
     }
   }
-  if (s.ok()) s = readBackground(lv, &bg, &bgDepth);
+  return s;
+}
+
+// The background, the layers in false colour by the frontmost layer, and the static composite
+// (far to near, the background inserted by its depth) over a sky colour.
+Status writeComposites(LayeredVegetation& lv, const std::string& out, const std::vector<std::vector<glm::vec4>>& colors,
+                       const std::vector<std::vector<float>>& depths) {
+  const uint32_t w = lv.desc.width, h = lv.desc.height, n = lv.settings.layout.count();
+  const size_t px = size_t(w) * h;
+  std::vector<glm::vec4> bg;
+  std::vector<float> bgDepth;
+  Status s = readBackground(lv, &bg, &bgDepth);
   if (s.ok()) {
     std::vector<uint8_t> bytes(px * 4), falseColour(px * 4), composite(px * 4);
     for (size_t i = 0; i < px; ++i) {
@@ -265,7 +247,71 @@ int main(int argc, char** argv) {
     if (s.ok()) s = writePng(out + "/layers_false_colour.png", w, h, falseColour);
     if (s.ok()) s = writePng(out + "/composite.png", w, h, composite);
   }
-  if (s.ok()) std::printf("Wrote %u layer PNGs, background.png, layers_false_colour.png, composite.png to %s\n", n, out.c_str());
+  return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  LayersOptions opt;
+  if (const int code = parseArgs(argc, argv, &opt); code >= 0) return code;
+  const std::string& model = opt.model;
+  const std::string& out = opt.out;
+  LayeredVegetationDesc& desc = opt.desc;
+  cli::CacheOptions& cache = opt.cache;
+  if (cache.clear) return cli::clearCacheCommand("canopy-layers", cache, model);
+  if (model.empty()) return usage("no model given");
+  auto fail = [](const Status& s) {
+    std::fprintf(stderr, "canopy-layers: %s\n", s.message().c_str());
+    return 1;
+  };
+  // The caches go to the user's cache folder unless the options say otherwise (docs/design.md
+  // "Files"); a folder that cannot be used means no cache, said on one line.
+  const Status where = cli::resolveCacheFolder(cache, model, &desc.rootCacheDir);
+  if (!where.ok()) std::printf("No cache: %s\n", where.message().c_str());
+  desc.cacheMaxBytes = uint64_t(cache.maxMiB) << 20;
+  VegetationModel m;
+  const auto t0 = std::chrono::steady_clock::now();
+  Status s = loadGltf(model, GltfLoadOptions{}, &m);
+  if (!s.ok()) return fail(s);
+  const double loadMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("Model: %s: %zu triangles, %zu vertices, %zu materials, loaded in %.1f ms\n", model.c_str(),
+              m.triangleCount(), m.positions.size(), m.materials.size() - 1, loadMs);
+  for (const std::string& w : m.warnings) std::printf("  warning: %s\n", w.c_str());
+
+  Device dev;
+  s = createDevice(opt.device, &dev);
+  if (!s.ok()) return fail(s);
+  LayeredVegetation lv;
+  s = createLayeredVegetation(dev, m, desc, &lv);
+  if (!s.ok()) {
+    destroyDevice(dev);
+    return fail(s);
+  }
+  printSplit(dev, m, lv, desc);
+
+  const LayerView view = orbitView(m.boundsMin, m.boundsMax, opt.yaw, opt.pitch, opt.fov, float(desc.width) / float(desc.height), opt.distance);
+  bool rebuild = false;
+  rg::RenderGraph g;
+  s = updateLayerView(lv, view, &rebuild);
+  if (s.ok()) s = addLayerPasses(lv, g, nullptr);
+  if (s.ok()) s = g.compile();
+  if (s.ok()) s = g.realize(dev);
+  const auto t1 = std::chrono::steady_clock::now();
+  if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) { return g.record(cmd); });
+  const double rasterMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t1).count();
+  std::printf("Layers: %s, %s, %s slicing, drawn in %.1f ms (wall, incl. submit)\n", toString(lv.settings.layout).c_str(),
+              lv.pipelines.singlePass ? "single pass (gl_Layer)" : "one draw per layer",
+              lv.settings.slice == SliceMode::LeafRoots ? "leaf-root" : "geometric", rasterMs);
+
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) s = Status::error("cannot create " + out + ": " + ec.message());
+  std::vector<std::vector<glm::vec4>> colors;
+  std::vector<std::vector<float>> depths;
+  if (s.ok()) s = writeLayers(lv, out, &colors, &depths);
+  if (s.ok()) s = writeComposites(lv, out, colors, depths);
+  if (s.ok()) std::printf("Wrote %u layer PNGs, background.png, layers_false_colour.png, composite.png to %s\n", lv.settings.layout.count(), out.c_str());
   g.release(dev);
   destroyLayeredVegetation(lv);
   destroyDevice(dev);

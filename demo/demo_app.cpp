@@ -110,6 +110,43 @@ std::string quoted(const std::string& text) {
 }
 }  // namespace
 
+// The options that set one number in a range, and the switches: one line each (parseOptions).
+struct NumberOption {
+  const char* name;
+  float lo, hi;
+  float Options::*field;
+  const char* what;
+};
+const NumberOption kNumberOptions[] = {
+    {"--strength", 0, 1000, &Options::windStrength, "a number"},
+    {"--frequency", 0, 1000, &Options::windFrequency, "a number"},
+    {"--modulation", 0, 10, &Options::windModulation, "a number"},
+    {"--gust", 0, 1, &Options::windGust, "a number"},
+    {"--warmup", 0, 60, &Options::warmupSeconds, "seconds"},
+    {"--impostor-pixels", 1, 4096, &Options::impostorPixels, "a number"},
+    {"--ambient", 0, 1, &Options::ambient, "a number"},
+    {"--leaf-ior", 1.2f, 1.7f, &Options::leafIor, "a number"},
+    {"--leaf-roughness", 0.078f, 0.5f, &Options::leafRoughness, "a number"},
+    {"--leaf-transmission", 0, 1, &Options::leafTransmission, "a number"},
+    {"--fps", 1, 1000, &Options::fps, "a number"},
+    {"--orbit-degrees", -3600, 3600, &Options::orbitDegrees, "a number"},
+    {"--rebuild-budget", 0, 1000, &Options::rebuildBudgetMs, "a number"},
+    {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
+    {"--ring", 1, 4096, &Options::ringMiB, "a number"},
+};
+struct SwitchOption {
+  const char* name;
+  bool Options::*field;
+  bool value;
+};
+const SwitchOption kSwitchOptions[] = {
+    {"--impostor-debug", &Options::impostorDebug, true},
+    {"--no-translucency", &Options::translucency, false},
+    {"--light-sheet", &Options::lightSheet, true},
+    {"--window", &Options::window, true},
+    {"--validate", &Options::validate, true},
+};
+
 int parseOptions(int argc, char** argv, Options* o, std::string* err) {
   bool framesGiven = false;
   for (int i = 1; i < argc; ++i) {
@@ -131,7 +168,17 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       *dst = f;
       return 0;
     };
-    if (a == "--help" || a == "-h") {
+    const NumberOption* num = nullptr;
+    for (const NumberOption& n : kNumberOptions)
+      if (a == n.name) num = &n;
+    const SwitchOption* sw = nullptr;
+    for (const SwitchOption& n : kSwitchOptions)
+      if (a == n.name) sw = &n;
+    if (num) {
+      if (const int rc = number(num->lo, num->hi, &(o->*(num->field)), num->what)) return rc;
+    } else if (sw) {
+      o->*(sw->field) = sw->value;
+    } else if (a == "--help" || a == "-h") {
       printHelp();
       return 1;
     } else if (a == "--scene") {
@@ -174,16 +221,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
           else return bad("side '" + side + "' is not left, right, top or bottom");
         }
       o->windSides = sides;
-    } else if (a == "--strength") {
-      if (const int rc = number(0, 1000, &o->windStrength)) return rc;
-    } else if (a == "--frequency") {
-      if (const int rc = number(0, 1000, &o->windFrequency)) return rc;
-    } else if (a == "--modulation") {
-      if (const int rc = number(0, 10, &o->windModulation)) return rc;
-    } else if (a == "--gust") {
-      if (const int rc = number(0, 1, &o->windGust)) return rc;
-    } else if (a == "--warmup") {
-      if (const int rc = number(0, 60, &o->warmupSeconds, "seconds")) return rc;
     } else if (a == "--delay") {
       if (!takes()) return bad("needs exact or approx");
       if (std::string(v) == "exact") o->delay = DelayMode::Exact;
@@ -200,10 +237,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       else if (std::string(v) == "far") o->impostors = ImpostorMode::FarRegion;
       else if (std::string(v) == "size") o->impostors = ImpostorMode::ByProjectedSize;
       else return bad(quoted(v) + " is not off, far or size");
-    } else if (a == "--impostor-pixels") {
-      if (const int rc = number(1, 4096, &o->impostorPixels)) return rc;
-    } else if (a == "--impostor-debug") {
-      o->impostorDebug = true;
     } else if (a == "--debug") {
       if (!takes()) return bad("needs none, layers, velocity or grid");
       const std::string d = v;
@@ -221,18 +254,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
         good = cli::parseFloat(parts[k].c_str(), &x[k]) && (colour ? x[k] >= 0 && x[k] <= 1000 : std::abs(x[k]) <= 1e6f);
       if (!good) return bad(colour ? "needs R,G,B, each in [0, 1000]" : "needs X,Y,Z, three finite numbers");
       (colour ? o->lightColor : o->light) = Float3{x[0], x[1], x[2]};
-    } else if (a == "--ambient") {
-      if (const int rc = number(0, 1, &o->ambient)) return rc;
-    } else if (a == "--leaf-ior") {
-      if (const int rc = number(1.2f, 1.7f, &o->leafIor)) return rc;
-    } else if (a == "--leaf-roughness") {
-      if (const int rc = number(0.078f, 0.5f, &o->leafRoughness)) return rc;
-    } else if (a == "--leaf-transmission") {
-      if (const int rc = number(0, 1, &o->leafTransmission)) return rc;
-    } else if (a == "--no-translucency") {
-      o->translucency = false;
-    } else if (a == "--light-sheet") {
-      o->lightSheet = true;
     } else if (a == "--size") {
       unsigned w = 0, h = 0;
       char tail = 0;
@@ -243,28 +264,16 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--frames") {
       if (!takes() || !cli::parseUint(v, 1, 100000, &o->frames)) return bad("needs an integer in [1, 100000]");
       framesGiven = true;
-    } else if (a == "--fps") {
-      if (const int rc = number(1, 1000, &o->fps)) return rc;
     } else if (a == "--camera") {
       if (!takes()) return bad("needs still or orbit");
       if (std::string(v) == "still") o->camera = CameraPath::Still;
       else if (std::string(v) == "orbit") o->camera = CameraPath::Orbit;
       else return bad(quoted(v) + " is not still or orbit");
-    } else if (a == "--orbit-degrees") {
-      if (const int rc = number(-3600, 3600, &o->orbitDegrees)) return rc;
-    } else if (a == "--rebuild-budget") {
-      if (const int rc = number(0, 1000, &o->rebuildBudgetMs)) return rc;
-    } else if (a == "--device-budget") {
-      if (const int rc = number(0, 1048576, &o->deviceBudgetMiB)) return rc;
-    } else if (a == "--ring") {
-      if (const int rc = number(1, 4096, &o->ringMiB)) return rc;
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
     } else if (a == "--no-mp4") {
       o->mp4 = false;
-    } else if (a == "--window") {
-      o->window = true;
     } else if (a == "--vsync") {
       if (!takes() || (std::string(v) != "on" && std::string(v) != "off")) return bad("needs on or off");
       o->vsync = std::string(v) == "on";
@@ -273,8 +282,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       o->screenshot = v;
     } else if (a == "--resize-at") {
       if (!takes() || !cli::parseUint(v, 0, 100000, &o->resizeAt)) return bad("needs an integer in [0, 100000]");
-    } else if (a == "--validate") {
-      o->validate = true;
     } else if (a == "--device") {
       if (!takes()) return bad("needs a device name");
       o->device = v;

@@ -263,29 +263,121 @@ std::string titleOf(const std::string& label, double fps, const std::vector<Pass
 
 }  // namespace
 
-int runWindow(const Options& o, const VegetationModel& model, const std::string& label) {
+// The window, or nullptr (with the reason printed) when there is no display, no Vulkan loader for
+// windows or no window: the demo then runs headless.
+GLFWwindow* openWindow(const Options& o) {
   if (!std::getenv("DISPLAY") && !std::getenv("WAYLAND_DISPLAY")) {
     std::fprintf(stderr, "canopy-demo: no display (DISPLAY and WAYLAND_DISPLAY are unset): running headless instead\n");
-    return -1;
+    return nullptr;
   }
   glfwSetErrorCallback([](int, const char* text) { g_glfwError = text ? text : "?"; });
   if (!glfwInit()) {
     std::fprintf(stderr, "canopy-demo: cannot open the display (%s): running headless instead\n", g_glfwError.c_str());
-    return -1;
+    return nullptr;
   }
   if (!glfwVulkanSupported()) {
     std::fprintf(stderr, "canopy-demo: GLFW finds no Vulkan loader for windows (%s): running headless instead\n",
                  g_glfwError.c_str());
     glfwTerminate();
-    return -1;
+    return nullptr;
   }
   glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
   GLFWwindow* win = glfwCreateWindow(int(o.width), int(o.height), "Canopy", nullptr, nullptr);
   if (!win) {
     std::fprintf(stderr, "canopy-demo: cannot create a window (%s): running headless instead\n", g_glfwError.c_str());
     glfwTerminate();
-    return -1;
+    return nullptr;
   }
+  return win;
+}
+
+// Input: orbit with the left button (and the auto-orbit over `elapsed` seconds), a motor under the
+// cursor with the right one; changed parameters applied.
+void applyInput(GLFWwindow* win, Live& live, Host& host, VkExtent2D extent, double elapsed) {
+  double cx = 0, cy = 0;
+  glfwGetCursorPos(win, &cx, &cy);
+  int ww = 1, wh = 1;
+  glfwGetWindowSize(win, &ww, &wh);
+  const double sx = double(extent.width) / std::max(ww, 1), sy = double(extent.height) / std::max(wh, 1);
+  if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
+    live.rig.yaw -= float(cx - live.lastX) * 0.3f;
+    live.rig.pitch = std::clamp(live.rig.pitch + float(cy - live.lastY) * 0.3f, -80.0f, 85.0f);
+  }
+  if (live.autoOrbit) live.rig.yaw += float(elapsed) * 10.0f;
+  live.lastX = cx;
+  live.lastY = cy;
+  std::vector<Motor> motors;
+  float mx = 0, my = 0;
+  if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS &&
+      cursorOnPlane(canopyDynamics(host.canopy).current, cx * sx, cy * sy, &mx, &my))
+    motors.push_back({mx, my, 0.08f, 3.0f * std::max(0.3f, live.params.simulation.wind.strength)});
+  if (motors.size() != live.params.simulation.motors.size() ||
+      (!motors.empty() && (motors[0].x != live.params.simulation.motors[0].x || motors[0].y != live.params.simulation.motors[0].y))) {
+    live.params.simulation.motors = motors;
+    live.paramsChanged = true;
+  }
+  if (live.paramsChanged) {
+    const Status ps = setCanopyParams(host.canopy, live.params);
+    if (!ps.ok()) std::fprintf(stderr, "canopy-demo: %s\n", ps.message().c_str());
+    live.params = canopyParams(host.canopy);
+    live.paramsChanged = false;
+  }
+}
+
+// Submits the slot's command buffer (waiting for the image's acquire, signalling its render) and
+// presents swapchain image `index`; *recreate when the swapchain is out of date or suboptimal.
+Status submitAndPresent(Device& dev, FrameRing& ring, Swapchain& sc, uint32_t slot, uint32_t index, bool* recreate) {
+  VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO}, signal{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
+  wait.semaphore = ring.acquired[slot];
+  wait.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+  signal.semaphore = sc.rendered[index];
+  signal.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+  VkCommandBufferSubmitInfo cbi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
+  cbi.commandBuffer = ring.cmds[slot];
+  VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
+  submit.waitSemaphoreInfoCount = 1;
+  submit.pWaitSemaphoreInfos = &wait;
+  submit.commandBufferInfoCount = 1;
+  submit.pCommandBufferInfos = &cbi;
+  submit.signalSemaphoreInfoCount = 1;
+  submit.pSignalSemaphoreInfos = &signal;
+  auto queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2"));
+  if (!queueSubmit2) queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2KHR"));
+  if (!queueSubmit2 || queueSubmit2(dev.queue, 1, &submit, ring.fences[slot]) != VK_SUCCESS) return Status::error("vkQueueSubmit2 failed");
+  VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+  pi.waitSemaphoreCount = 1;
+  pi.pWaitSemaphores = &sc.rendered[index];
+  pi.swapchainCount = 1;
+  pi.pSwapchains = &sc.swapchain;
+  pi.pImageIndices = &index;
+  const VkResult r = vkQueuePresentKHR(dev.queue, &pi);
+  if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) *recreate = true;
+  else if (r != VK_SUCCESS) return Status::error("vkQueuePresentKHR failed (" + std::to_string(int(r)) + ")");
+  return Status();
+}
+
+// The slot's presented frame (already finished) read back and written as PNG: at --screenshot's path
+// for the last frame, else outDir/screenshot_N.png; a blank one is an error.
+Status saveScreenshot(const Options& o, Host& host, uint32_t slot, Live& live, uint32_t* screenshots) {
+  std::vector<uint8_t> rgba;
+  readPixels(host, slot, &rgba);
+  std::string path = o.screenshot;
+  if (live.screenshotRequested || path.empty()) {
+    std::filesystem::create_directories(o.outDir);
+    path = o.outDir + "/screenshot_" + std::to_string((*screenshots)++) + ".png";
+  }
+  live.screenshotRequested = false;
+  std::error_code ec;
+  if (std::filesystem::path(path).has_parent_path()) std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  CANOPY_TRY(writePng(path, host.width, host.height, rgba));
+  std::printf("screenshot %s: %ux%u read back from the swapchain image\n", path.c_str(), host.width, host.height);
+  if (!notBlank(rgba)) return Status::error("the screenshot " + path + " is blank (one colour)");
+  return Status();
+}
+
+// The device for the window: GLFW's instance extensions, the swapchain, validation (each message
+// counted in *messages and printed) as the options ask.
+DeviceDesc windowDeviceDesc(const Options& o, int* messages) {
   uint32_t extCount = 0;
   const char** exts = glfwGetRequiredInstanceExtensions(&extCount);
   DeviceDesc dd;
@@ -293,14 +385,21 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
   dd.preferredDevice = o.device;
   dd.instanceExtensions.assign(exts, exts + extCount);
   dd.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
-  int messages = 0;
   if (o.validate) {
     dd.enableValidation = dd.requireValidation = true;
-    dd.validationSink = [&](VkDebugUtilsMessageSeverityFlagBitsEXT, const char* id, const char* text) {
-      ++messages;
+    dd.validationSink = [messages](VkDebugUtilsMessageSeverityFlagBitsEXT, const char* id, const char* text) {
+      ++*messages;
       std::fprintf(stderr, "validation: %s: %s\n", id ? id : "", text);
     };
   }
+  return dd;
+}
+
+int runWindow(const Options& o, const VegetationModel& model, const std::string& label) {
+  GLFWwindow* win = openWindow(o);
+  if (!win) return -1;
+  int messages = 0;
+  const DeviceDesc dd = windowDeviceDesc(o, &messages);
   Device dev;
   VkSurfaceKHR surface = VK_NULL_HANDLE;
   Swapchain sc;
@@ -362,37 +461,9 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
         }
         recreate = false;
       }
-      // Input: orbit with the left button, a motor under the cursor with the right one.
-      double cx = 0, cy = 0;
-      glfwGetCursorPos(win, &cx, &cy);
-      int ww = 1, wh = 1;
-      glfwGetWindowSize(win, &ww, &wh);
-      const double sx = double(sc.extent.width) / std::max(ww, 1), sy = double(sc.extent.height) / std::max(wh, 1);
-      if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS) {
-        live.rig.yaw -= float(cx - live.lastX) * 0.3f;
-        live.rig.pitch = std::clamp(live.rig.pitch + float(cy - live.lastY) * 0.3f, -80.0f, 85.0f);
-      }
       const double now = glfwGetTime();
-      if (live.autoOrbit) live.rig.yaw += float(now - orbitClock) * 10.0f;
+      applyInput(win, live, host, sc.extent, now - orbitClock);
       orbitClock = now;
-      live.lastX = cx;
-      live.lastY = cy;
-      std::vector<Motor> motors;
-      float mx = 0, my = 0;
-      if (glfwGetMouseButton(win, GLFW_MOUSE_BUTTON_RIGHT) == GLFW_PRESS &&
-          cursorOnPlane(canopyDynamics(host.canopy).current, cx * sx, cy * sy, &mx, &my))
-        motors.push_back({mx, my, 0.08f, 3.0f * std::max(0.3f, live.params.simulation.wind.strength)});
-      if (motors.size() != live.params.simulation.motors.size() ||
-          (!motors.empty() && (motors[0].x != live.params.simulation.motors[0].x || motors[0].y != live.params.simulation.motors[0].y))) {
-        live.params.simulation.motors = motors;
-        live.paramsChanged = true;
-      }
-      if (live.paramsChanged) {
-        const Status ps = setCanopyParams(host.canopy, live.params);
-        if (!ps.ok()) std::fprintf(stderr, "canopy-demo: %s\n", ps.message().c_str());
-        live.params = canopyParams(host.canopy);
-        live.paramsChanged = false;
-      }
 
       // The slot's previous frame (two frames ago) must be done before its command buffer, fence,
       // acquire semaphore and read-back buffer are reused; the frame just before may still run.
@@ -424,33 +495,8 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       const Status rs = recordHostFrame(host, cmd, f, &sc.images[index], slot);
       vkEndCommandBuffer(cmd);
       CANOPY_TRY(rs);
-      VkSemaphoreSubmitInfo wait{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO}, signal{VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO};
-      wait.semaphore = ring.acquired[slot];
-      wait.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-      signal.semaphore = sc.rendered[index];
-      signal.stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-      VkCommandBufferSubmitInfo cbi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO};
-      cbi.commandBuffer = cmd;
-      VkSubmitInfo2 submit{VK_STRUCTURE_TYPE_SUBMIT_INFO_2};
-      submit.waitSemaphoreInfoCount = 1;
-      submit.pWaitSemaphoreInfos = &wait;
-      submit.commandBufferInfoCount = 1;
-      submit.pCommandBufferInfos = &cbi;
-      submit.signalSemaphoreInfoCount = 1;
-      submit.pSignalSemaphoreInfos = &signal;
-      auto queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2"));
-      if (!queueSubmit2) queueSubmit2 = reinterpret_cast<PFN_vkQueueSubmit2>(vkGetDeviceProcAddr(dev.device, "vkQueueSubmit2KHR"));
-      if (!queueSubmit2 || queueSubmit2(dev.queue, 1, &submit, ring.fences[slot]) != VK_SUCCESS) return Status::error("vkQueueSubmit2 failed");
+      CANOPY_TRY(submitAndPresent(dev, ring, sc, slot, index, &recreate));
       pending[slot] = true;
-      VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
-      pi.waitSemaphoreCount = 1;
-      pi.pWaitSemaphores = &sc.rendered[index];
-      pi.swapchainCount = 1;
-      pi.pSwapchains = &sc.swapchain;
-      pi.pImageIndices = &index;
-      r = vkQueuePresentKHR(dev.queue, &pi);
-      if (r == VK_ERROR_OUT_OF_DATE_KHR || r == VK_SUBOPTIMAL_KHR) recreate = true;
-      else if (r != VK_SUCCESS) return Status::error("vkQueuePresentKHR failed (" + std::to_string(int(r)) + ")");
       // Frame interval, wall clock (with frames in flight a frame's own submit-to-fence overlaps the next).
       const auto frameEnd = std::chrono::steady_clock::now();
       if (frames > 0) recentWall.push_back(std::chrono::duration<double, std::milli>(frameEnd - lastFrameEnd).count());
@@ -460,19 +506,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       const bool last = o.frames && frames >= o.frames;
       if (live.screenshotRequested || (last && !o.screenshot.empty())) {
         CANOPY_TRY(retire(slot));  // this frame's pixels: wait for it alone
-        std::vector<uint8_t> rgba;
-        readPixels(host, slot, &rgba);
-        std::string path = o.screenshot;
-        if (live.screenshotRequested || path.empty()) {
-          std::filesystem::create_directories(o.outDir);
-          path = o.outDir + "/screenshot_" + std::to_string(screenshots++) + ".png";
-        }
-        live.screenshotRequested = false;
-        std::error_code ec;
-        if (std::filesystem::path(path).has_parent_path()) std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
-        CANOPY_TRY(writePng(path, host.width, host.height, rgba));
-        std::printf("screenshot %s: %ux%u read back from the swapchain image\n", path.c_str(), host.width, host.height);
-        if (!notBlank(rgba)) return Status::error("the screenshot " + path + " is blank (one colour)");
+        CANOPY_TRY(saveScreenshot(o, host, slot, live, &screenshots));
       }
       if (now - lastTitle > 0.5) {
         const double fps = 1000.0 / std::max(median(recentWall), 1e-3);

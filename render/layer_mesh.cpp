@@ -110,12 +110,15 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
 }
 
 
+}  // namespace
+
+
 // Where the compact mesh lives (docs/design.md "Layers: mesh budget and staging ring"): resident
 // when it fits the budget beside everything else this object allocates, with room for the second
 // layer set (a spread re-slice needs it, and settings may ask for it later); else in host memory,
 // streamed through rings sized from desc.stagingRingBytes, which needs the second set now. Called
 // after the textures, frame block and targets, so the bytes are the allocator's, not estimates.
-Status chooseMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes) {
+Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes) {
   const uint64_t budget = lv.desc.deviceMemoryBudget;
   lv.mesh.streamed = false;
   if (budget == 0) return Status();
@@ -138,7 +141,7 @@ Status chooseMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t
 }
 
 // Creates the resident buffers and fills them, or the staging rings; the mesh stays in lv.mesh.hostMesh.
-Status placeMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtStart) {
+Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtStart) {
   Device& d = *lv.device;
   lv.mesh.hostMesh = std::move(compact);
   const CompactMesh& mesh = lv.mesh.hostMesh;
@@ -210,7 +213,6 @@ Status placeMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtSt
                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots");
 }
 
-}  // namespace
 
 Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, CompactMesh* out, uint64_t* rootKey) {
   const LayeredVegetationDesc& desc = lv.desc;
@@ -256,14 +258,6 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
   roots = LeafRoots{};
   CANOPY_TRY(uploadTextures(lv, m));
   return Status();
-}
-
-Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes) {
-  return chooseMeshResidency(lv, liveAtStart, meshBytes);
-}
-
-Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart) {
-  return placeMesh(lv, std::move(mesh), liveAtStart);
 }
 
 void destroyLayerMesh(LayeredVegetation& lv) {

@@ -36,7 +36,7 @@ constexpr VkFormat kLayerIdsFormat = VK_FORMAT_R32G32_UINT;
 // Creates the layer images for lv.settings' layer count (and the next set where spread re-slicing or
 // a streamed mesh needs it); destroyLayerTargets frees them once no frame in flight reads them
 // (`now`: at once, for images no frame has used). A spread re-slice drawing into them must be
-// abandoned by the caller (abandonSpreadRebuild).
+// dropped by the caller (rescheduleAfterChange with targetsRecreated).
 Status createLayerTargets(LayeredVegetation& lv);
 void destroyLayerTargets(LayeredVegetation& lv, bool now = false);
 // Whether re-slices go through the next set: spread re-slicing (not with the id output) or a

@@ -243,8 +243,6 @@ void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targ
   }
 }
 
-void abandonSpreadRebuild(LayeredVegetation& lv) { lv.reslice.spread = SpreadRebuild{}; }
-
 void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immediate) {
   lv.reslice.forcedReason = reason;
   lv.reslice.forceImmediate = lv.reslice.forceImmediate || immediate;

@@ -84,9 +84,6 @@ void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immed
 // baseline carries over).
 void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targetsRecreated, bool budgetChanged);
 
-// Drops a spread re-slice in progress (its next set or placement is about to go).
-void abandonSpreadRebuild(LayeredVegetation& lv);
-
 // Applies the re-slicing policy for the new view and advances a spread re-slice: *changed tells
 // whether the next recorded layer passes change the visible layers (a re-slice at once, whose
 // placement has been recomputed for `view`, or a cross-fade step); lv.layers is then the placement

@@ -245,7 +245,7 @@ Status cpuSplitMs(Device& d, int frames, double* stepMs, double* uploadMs) {
     const double t0 = nowMs();
     ref::step(fr, st);
     const double t1 = nowMs();
-    s = uploadBuffer(d, staging, field.data(), field.size() * sizeof(float), rg::stateOf(rg::Use::ComputeStorageRead));
+    s = uploadBuffer(d, nullptr, staging, field.data(), field.size() * sizeof(float), rg::stateOf(rg::Use::ComputeStorageRead));
     const double t2 = nowMs();
     t += 1.0 / 30.0;
     if (f >= 2) {

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "engine/device.h"
+#include "engine/pass_slots.h"
 
 namespace canopy {
 namespace {
@@ -27,34 +28,12 @@ SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth
   return p;
 }
 
-Status validateDynamicsParams(const DynamicsParams& p) {
-  auto range = [](const char* name, float v, float lo, float hi) -> Status {
-    if (!(v >= lo && v <= hi))
-      return Status::error(std::string("dynamics: ") + name + " = " + std::to_string(v) + " is outside [" +
-                           std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    return Status();
-  };
-  if (p.delay != DelayMode::Exact && p.delay != DelayMode::Approximate)
-    return Status::error("dynamics: delay = " + std::to_string(uint32_t(p.delay)) + " is outside Exact (0)..Approximate (1)");
-  CANOPY_TRY(range("vd (V_D)", p.vd, -1000, 1000));
-  CANOPY_TRY(range("propagationSpeed (s)", p.propagationSpeed, 0, 1000));
-  CANOPY_TRY(range("lambda.x", p.lambda.x, 0, 1e6f));
-  CANOPY_TRY(range("lambda.y", p.lambda.y, 0, 1e6f));
-  CANOPY_TRY(range("lambda.z", p.lambda.z, 0, 1e6f));
-  CANOPY_TRY(range("rigidity (r)", p.rigidity, 0, 10));
-  CANOPY_TRY(range("depthAttenuation (m)", p.depthAttenuation, 0, 1));
-  if (!(p.dt > 0 && p.dt <= 10)) return Status::error("dynamics: dt = " + std::to_string(p.dt) + " is outside (0, 10]");
-  if (!(p.maxDelay > 0 && p.maxDelay <= 3600))
-    return Status::error("dynamics: maxDelay = " + std::to_string(p.maxDelay) + " is outside (0, 3600]");
-  if (p.cellSize < 2 || p.cellSize > 256)
-    return Status::error("dynamics: cellSize = " + std::to_string(p.cellSize) + " is outside [2, 256] pixels");
-  return Status();
-}
+Status validateDynamicsParams(const DynamicsParams& p) { return checkParams(p, "DynamicsParams."); }
 
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize) { return (pixels + cellSize - 1) / cellSize + 1; }
 
 Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::AnimFrame* out) {
-  CANOPY_TRY(validateDynamicsParams(p));
+  // `p` was checked when it was given (validateDynamicsParams; setCanopyParams), not every frame.
   const uint32_t n = uint32_t(d.layers.size());
   if (n < 1 || n > CANOPY_MAX_LAYERS)
     return Status::error("dynamics: " + std::to_string(n) + " layers, expected 1.." + std::to_string(CANOPY_MAX_LAYERS));
@@ -154,23 +133,18 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
      return Status();
    }).write(frame, rg::Use::TransferDst);
-  g.addPass("dynamics: displacement", [p, tiled, ring, ringTimes](rg::PassContext& c) {
-     const gpu::AnimFrame& f = p->current;
-     const uint32_t corners = f.gridX * f.gridY;
-     if (corners > p->maxCorners || f.layerCount > p->maxLayers)
-       return Status::error("dynamics: the warp grid (" + std::to_string(f.gridX) + "x" + std::to_string(f.gridY) +
-                            ", " + std::to_string(f.layerCount) + " layers) exceeds what the dynamics were created for");
-     return dispatch(*c.device, c.cmd, p->pipeline, corners, f.layerCount, 1,
-                     {bindBuffer(p->frame.buffer), bindBuffer(c.buffer(tiled)), bindBuffer(c.buffer(ring)),
-                      bindBuffer(c.buffer(ringTimes)), bindBuffer(p->displacement.buffer), bindBuffer(p->previous.buffer)},
-                     nullptr, 0);
-   })
-      .read(frame, rg::Use::ComputeStorageRead)
-      .read(tiled, rg::Use::ComputeStorageRead)
-      .read(ring, rg::Use::ComputeStorageRead)
-      .read(ringTimes, rg::Use::ComputeStorageRead)
-      .write(disp, rg::Use::ComputeStorageReadWrite)
-      .write(prev, rg::Use::ComputeStorageWrite);
+  using rg::Use;
+  const rg::Slots slots = {rg::slot(frame, Use::ComputeStorageRead),     rg::slot(tiled, Use::ComputeStorageRead),
+                           rg::slot(ring, Use::ComputeStorageRead),      rg::slot(ringTimes, Use::ComputeStorageRead),
+                           rg::slot(disp, Use::ComputeStorageReadWrite), rg::slot(prev, Use::ComputeStorageWrite)};
+  rg::addSlotPass(g, "dynamics: displacement", slots, [p](rg::PassContext& c, const rg::Slots& s) {
+    const gpu::AnimFrame& f = p->current;
+    const uint32_t corners = f.gridX * f.gridY;
+    if (corners > p->maxCorners || f.layerCount > p->maxLayers)
+      return Status::error("dynamics: the warp grid (" + std::to_string(f.gridX) + "x" + std::to_string(f.gridY) +
+                           ", " + std::to_string(f.layerCount) + " layers) exceeds what the dynamics were created for");
+    return rg::dispatchSlots(c, p->pipeline, s, corners, f.layerCount, 1, nullptr, 0);
+  });
   CANOPY_TRY(g.bindBuffer(frame, x.frame.buffer));
   CANOPY_TRY(g.bindBuffer(disp, x.displacement.buffer));
   CANOPY_TRY(g.bindBuffer(prev, x.previous.buffer));

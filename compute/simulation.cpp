@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "engine/device.h"
+#include "engine/pass_slots.h"
 #include "engine/transfer.h"
 
 namespace canopy {
@@ -17,12 +18,6 @@ std::string fmt(double v) {
   return o.str();
 }
 
-// "name = value: must be ... in [lo, hi] (unit)" when v is NaN/inf or outside [lo, hi].
-Status checkRange(const char* name, double v, double lo, double hi, const char* unit) {
-  if (std::isfinite(v) && v >= lo && v <= hi) return Status();
-  return Status::error(std::string(name) + " = " + fmt(v) + ": must be a finite number in [" + fmt(lo) + ", " + fmt(hi) +
-                       "]" + (unit[0] ? std::string(" (") + unit + ")" : std::string()));
-}
 Status checkPositive(const char* name, double v, double hi, const char* unit) {
   if (std::isfinite(v) && v > 0 && v <= hi) return Status();
   return Status::error(std::string(name) + " = " + fmt(v) + ": must be a finite number in (0, " + fmt(hi) + "] (" + unit + ")");
@@ -31,72 +26,43 @@ Status checkPositive(const char* name, double v, double hi, const char* unit) {
 const rg::State kPersistent = rg::stateOf(rg::Use::ComputeStorageReadWrite);
 const rg::State kFrameRest = rg::stateOf(rg::Use::ComputeStorageRead);
 
-// Every simulation kernel sees the same seven buffers (shaders/sim_common.glsl); what each pass
-// really reads and writes is declared to the render graph where the pass is added.
-Status simDispatch(Simulation& s, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty,
+// Every simulation kernel binds the same seven buffers (shaders/sim_common.glsl), in this order.
+// A pass's slots name what its kernels read and write (`uses`); the others are bound untouched. A
+// buffer that is not a resource of the graph (kInvalidResource in `r`) is bound outside it.
+rg::Slots simSlots(const Simulation& s, const SimulationResources& r,
+                   std::initializer_list<std::pair<rg::ResourceId, rg::Use>> uses) {
+  const std::pair<rg::ResourceId, const Buffer*> all[] = {{r.frame, &s.frame}, {r.velocity, &s.velocity},
+                                                          {r.multigrid, &s.multigrid}, {r.wave, &s.wave},
+                                                          {r.tiled, &s.tiled}, {r.ring, &s.ring},
+                                                          {r.ringTimes, &s.ringTimes}};
+  rg::Slots slots;
+  for (const auto& [id, buffer] : all) {
+    rg::Slot x = id == rg::kInvalidResource ? rg::outsideGraph(bindBuffer(buffer->buffer)) : rg::untouched(id);
+    for (const auto& [used, use] : uses)
+      if (used == id && id != rg::kInvalidResource) x = rg::slot(id, use);
+    slots.push_back(x);
+  }
+  return slots;
+}
+
+Status simDispatch(rg::PassContext& c, const rg::Slots& slots, const ComputePipeline& p, uint32_t tx, uint32_t ty,
                    uint32_t phase) {
-  gpu::SimPush push{phase, 0, 0, 0};
-  return dispatch(*s.device, cmd, p, tx, ty, 1,
-                  {bindBuffer(s.frame.buffer), bindBuffer(s.velocity.buffer), bindBuffer(s.multigrid.buffer),
-                   bindBuffer(s.wave.buffer), bindBuffer(s.tiled.buffer), bindBuffer(s.ring.buffer),
-                   bindBuffer(s.ringTimes.buffer)},
-                  push);
+  const gpu::SimPush push{phase, 0, 0, 0};
+  return rg::dispatchSlots(c, p, slots, tx, ty, 1, push);
 }
 
 }  // namespace
 
 Status validateSimulationDesc(const SimulationDesc& d) {
-  const uint32_t n = d.gridSize;
-  if (n < 4 || n > 1024 || (n & (n - 1)))
-    return Status::error("gridSize = " + std::to_string(n) +
-                         ": must be a power of two in [4, 1024] (the multigrid pyramid and the red-black kernels need it)");
-  CANOPY_TRY(checkPositive("historySeconds", d.historySeconds, 3600, "s"));
-  CANOPY_TRY(checkPositive("nominalDt", d.nominalDt, 10, "s"));
-  if (d.historySize > 4096) return Status::error("historySize = " + std::to_string(d.historySize) + ": must be in [0, 4096]");
-  if (d.groupSize != 0 && (d.groupSize < 32 || d.groupSize > SIM_MAX_GROUP_SIZE || (d.groupSize & (d.groupSize - 1))))
-    return Status::error("groupSize = " + std::to_string(d.groupSize) + ": must be 0 (by device class) or a power of two in [32, " +
-                         std::to_string(SIM_MAX_GROUP_SIZE) + "]");
-  return Status();
+  // SIM_MAX_GROUP_SIZE is the schema's groupSize bound (<canopy/canopy.h>, CANOPY_SIMULATION_DESC).
+  static_assert(SIM_MAX_GROUP_SIZE == 1024u, "CANOPY_SIMULATION_DESC's groupSize range");
+  return checkParams(d, "SimulationDesc.");
 }
 
 Status validateSimulationParams(const SimulationParams& p, float dt) {
+  static_assert(SIM_MAX_MOTORS == kMaxMotors, "CANOPY_SIMULATION_PARAMS's motor count");
   CANOPY_TRY(checkPositive("dt", dt, 10, "s"));
-  const WindParams& w = p.wind;
-  if (w.sides > 15) return Status::error("wind.sides = " + std::to_string(w.sides) + ": must be a WindSide mask in [0, 15]");
-  CANOPY_TRY(checkRange("wind.strength", w.strength, 0, 1000, "domain units/s"));
-  CANOPY_TRY(checkRange("wind.frequency", w.frequency, 0, 1000, "Hz"));
-  CANOPY_TRY(checkRange("wind.baseline", w.baseline, -10, 10, ""));
-  CANOPY_TRY(checkRange("wind.modulation", w.modulation, -10, 10, ""));
-  CANOPY_TRY(checkRange("wind.gust", w.gust, 0, 1, ""));
-  CANOPY_TRY(checkPositive("wind.gustScale", w.gustScale, 100, "domain units"));
-  CANOPY_TRY(checkRange("wind.gustSpeed", w.gustSpeed, -1000, 1000, "domain units/s"));
-  const FluidParams& f = p.fluid;
-  if (f.scheme != FluidScheme::MacMultigrid && f.scheme != FluidScheme::Stam)
-    return Status::error("fluid.scheme = " + std::to_string(uint32_t(f.scheme)) + ": must be MacMultigrid (0) or Stam (1)");
-  if (f.boundary != FluidBoundary::WindTunnel && f.boundary != FluidBoundary::Walls)
-    return Status::error("fluid.boundary = " + std::to_string(uint32_t(f.boundary)) + ": must be WindTunnel (0) or Walls (1)");
-  CANOPY_TRY(checkRange("fluid.viscosity", f.viscosity, 0, 10, "domain units^2/s"));
-  if (f.iterations < 1 || f.iterations > 10000)
-    return Status::error("fluid.iterations = " + std::to_string(f.iterations) + ": must be in [1, 10000]");
-  if (f.multigridCycles < 1 || f.multigridCycles > 64)
-    return Status::error("fluid.multigridCycles = " + std::to_string(f.multigridCycles) + ": must be in [1, 64]");
-  const WaveParams& v = p.wave;
-  CANOPY_TRY(checkRange("wave.stiffness", v.stiffness, 0, 1e6, "1/s^2"));
-  CANOPY_TRY(checkRange("wave.speed", v.speed, 0, 100, "domain units/s"));
-  CANOPY_TRY(checkRange("wave.damping", v.damping, 0, 1000, "1/s"));
-  CANOPY_TRY(checkRange("wave.gain", v.gain, -100, 100, ""));
-  if (v.maxSubsteps < 1 || v.maxSubsteps > 4096)
-    return Status::error("wave.maxSubsteps = " + std::to_string(v.maxSubsteps) + ": must be in [1, 4096]");
-  if (p.motors.size() > SIM_MAX_MOTORS)
-    return Status::error("motors: " + std::to_string(p.motors.size()) + " given, at most " + std::to_string(SIM_MAX_MOTORS));
-  for (size_t i = 0; i < p.motors.size(); ++i) {
-    const std::string m = "motors[" + std::to_string(i) + "]";
-    CANOPY_TRY(checkRange((m + ".x").c_str(), p.motors[i].x, -100, 100, "domain units"));
-    CANOPY_TRY(checkRange((m + ".y").c_str(), p.motors[i].y, -100, 100, "domain units"));
-    CANOPY_TRY(checkPositive((m + ".radius").c_str(), p.motors[i].radius, 100, "domain units"));
-    CANOPY_TRY(checkRange((m + ".strength").c_str(), p.motors[i].strength, -1000, 1000, "domain units/s"));
-  }
-  return Status();
+  return checkParams(p, "SimulationParams.");
 }
 
 float maxStableWaveDt(const WaveParams& w, uint32_t n) {
@@ -203,7 +169,9 @@ const ComputePipeline& projectionKernel(const Simulation& s, const gpu::SimFrame
 
 Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt, uint32_t ringSlot, uint32_t ringSize,
                     gpu::SimFrame* out) {
-  CANOPY_TRY(validateSimulationParams(p, dt));
+  // The parameters were checked when they were given (validateSimulationParams; setCanopyParams),
+  // not every frame; the step's dt is this frame's.
+  CANOPY_TRY(checkPositive("dt", dt, 10, "s"));
   gpu::SimFrame f{};
   f.n = n;
   f.scheme = uint32_t(p.fluid.scheme);
@@ -272,7 +240,7 @@ Status checkLoopBudget(const gpu::SimFrame& f) {
   return Status::error(o.str());
 }
 
-Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) {
+Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, PreparedList* deferred) {
   CANOPY_TRY(validateSimulationDesc(desc));
   Simulation& s = *out;
   s.device = &d;
@@ -363,7 +331,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out) 
     pass.write(ids[i], rg::Use::TransferDst);
     CANOPY_TRY(g.bindBuffer(ids[i], bufs[i]->buffer));
   }
-  CANOPY_TRY(submitOrDefer(d, std::move(work)));  // recorded into the host's first frame on its device
+  CANOPY_TRY(submitOrDefer(d, std::move(work), deferred));  // the host's first frame records it on its device
 
   CANOPY_TRY(addSimulationPasses(s, s.graph, &s.graphIds));
   CANOPY_TRY(s.graph.compile());
@@ -402,9 +370,6 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   CANOPY_TRY(g.bindBuffer(r.ring, s.ring.buffer));
   CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
   Simulation* sp = &s;
-  auto run = [sp](VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t phase) {
-    return simDispatch(*sp, cmd, p, tx, ty, phase);
-  };
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
   // Which passes run this frame is the graph's to know (when): none while held, the MAC passes or
   // Stam's step by the scheme of this step; a pass left out records neither work nor barriers.
@@ -414,56 +379,46 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   // Single-workgroup kernels: the width prepareSimulationStep chose for this step.
   auto wide = [sp] { return sp->wideGroupSize != 0 && sp->next.groupSize == sp->wideGroupSize; };
   auto one = [sp] { return sp->next.groupSize; };
-  auto project = [sp, run](VkCommandBuffer cmd, uint32_t phase) {
+  auto project = [sp](rg::PassContext& c, const rg::Slots& slots, uint32_t phase) {
     uint32_t threads = 0;
     const ComputePipeline& kernel = projectionKernel(*sp, sp->next, &threads);
-    return run(cmd, kernel, threads, 1, phase);
+    return simDispatch(c, slots, kernel, threads, 1, phase);
   };
+  using rg::Use;
+  const Use read = Use::ComputeStorageRead, readWrite = Use::ComputeStorageReadWrite, write = Use::ComputeStorageWrite;
+  const rg::Slots velocityStep = simSlots(s, r, {{r.frame, read}, {r.velocity, readWrite}});
+  const rg::Slots projection = simSlots(s, r, {{r.frame, read}, {r.velocity, readWrite}, {r.multigrid, readWrite}});
   g.addPass("sim: upload step parameters", [sp](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, sp->frame.buffer, 0, sizeof(gpu::SimFrame), &sp->next);
      return Status();
    })
       .write(r.frame, rg::Use::TransferDst)
       .when(stepping);
-  g.addPass("sim: sources + diffuse", [=](rg::PassContext& c) {
-     if (sp->laneDiffuseNext) return run(c.cmd, sp->laneDiffuse, sp->laneWidth, 1, 0);
-     return run(c.cmd, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0);
-   })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .when(stepMac);
-  g.addPass("sim: project", [=](rg::PassContext& c) { return project(c.cmd, 0); })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .write(r.multigrid, rg::Use::ComputeStorageReadWrite)
-      .when(stepMac);
-  g.addPass("sim: advect", [=](rg::PassContext& c) { return run(c.cmd, sp->advect, sp->n + 1, sp->n + 1, 0); })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .when(stepMac);
-  g.addPass("sim: project again", [=](rg::PassContext& c) { return project(c.cmd, 1); })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .write(r.multigrid, rg::Use::ComputeStorageReadWrite)
-      .when(stepMac);
-  g.addPass("sim: stam velocity step", [=](rg::PassContext& c) { return run(c.cmd, wide() ? sp->wideStam : sp->stam, one(), 1, 0); })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .write(r.velocity, rg::Use::ComputeStorageReadWrite)
-      .when(stepStam);
-  g.addPass("sim: wave oscillator", [=](rg::PassContext& c) {
-     if (sp->laneOscillatorNext) return run(c.cmd, sp->laneOscillator, sp->laneWidth, 1, 0);
-     return run(c.cmd, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0);
-   })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .read(r.velocity, rg::Use::ComputeStorageRead)
-      .write(r.wave, rg::Use::ComputeStorageReadWrite)
+  rg::addSlotPass(g, "sim: sources + diffuse", velocityStep, [=](rg::PassContext& c, const rg::Slots& slots) {
+    if (sp->laneDiffuseNext) return simDispatch(c, slots, sp->laneDiffuse, sp->laneWidth, 1, 0);
+    return simDispatch(c, slots, wide() ? sp->wideDiffuse : sp->diffuse, one(), 1, 0);
+  }).when(stepMac);
+  rg::addSlotPass(g, "sim: project", projection, [=](rg::PassContext& c, const rg::Slots& slots) {
+    return project(c, slots, 0);
+  }).when(stepMac);
+  rg::addSlotPass(g, "sim: advect", velocityStep, [=](rg::PassContext& c, const rg::Slots& slots) {
+    return simDispatch(c, slots, sp->advect, sp->n + 1, sp->n + 1, 0);
+  }).when(stepMac);
+  rg::addSlotPass(g, "sim: project again", projection, [=](rg::PassContext& c, const rg::Slots& slots) {
+    return project(c, slots, 1);
+  }).when(stepMac);
+  rg::addSlotPass(g, "sim: stam velocity step", velocityStep, [=](rg::PassContext& c, const rg::Slots& slots) {
+    return simDispatch(c, slots, wide() ? sp->wideStam : sp->stam, one(), 1, 0);
+  }).when(stepStam);
+  rg::addSlotPass(g, "sim: wave oscillator", simSlots(s, r, {{r.frame, read}, {r.velocity, read}, {r.wave, readWrite}}),
+                  [=](rg::PassContext& c, const rg::Slots& slots) {
+                    if (sp->laneOscillatorNext) return simDispatch(c, slots, sp->laneOscillator, sp->laneWidth, 1, 0);
+                    return simDispatch(c, slots, wide() ? sp->wideOscillator : sp->oscillator, one(), 1, 0);
+                  })
       .when(stepping);
-  g.addPass("sim: tile + history", [=](rg::PassContext& c) { return run(c.cmd, sp->tile, sp->n, sp->n, 0); })
-      .read(r.frame, rg::Use::ComputeStorageRead)
-      .read(r.wave, rg::Use::ComputeStorageRead)
-      .write(r.tiled, rg::Use::ComputeStorageWrite)
-      .write(r.ring, rg::Use::ComputeStorageWrite)
-      .write(r.ringTimes, rg::Use::ComputeStorageWrite)
+  rg::addSlotPass(g, "sim: tile + history",
+                  simSlots(s, r, {{r.frame, read}, {r.wave, read}, {r.tiled, write}, {r.ring, write}, {r.ringTimes, write}}),
+                  [=](rg::PassContext& c, const rg::Slots& slots) { return simDispatch(c, slots, sp->tile, sp->n, sp->n, 0); })
       .when(stepping);
   *out = r;
   return Status();
@@ -498,6 +453,7 @@ Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt)
 }
 
 Status runSimulationSteps(Simulation& s, const SimulationParams& p, float dt, uint32_t count) {
+  CANOPY_TRY(validateSimulationParams(p, dt));  // this call is where these parameters are given
   gpu::SimFrame probe;  // every check, before anything is recorded
   CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, 0, s.ringSize, &probe));
   probe.mgSerialSize = s.mgSerialSize;
@@ -535,14 +491,16 @@ Status runProjectionOnly(Simulation& s, const SimulationParams& p) {
    })
       .write(frame, rg::Use::TransferDst)
       .write(mg, rg::Use::TransferDst);
-  g.addPass("sim: project", [sp, &f](rg::PassContext& c) {
-     uint32_t threads = 0;
-     const ComputePipeline& kernel = projectionKernel(*sp, f, &threads);
-     return simDispatch(*sp, c.cmd, kernel, threads, 1, 0);
-   })
-      .read(frame, rg::Use::ComputeStorageRead)
-      .write(vel, rg::Use::ComputeStorageReadWrite)
-      .write(mg, rg::Use::ComputeStorageReadWrite);
+  SimulationResources ids{frame, vel, mg, rg::kInvalidResource, rg::kInvalidResource, rg::kInvalidResource,
+                          rg::kInvalidResource};
+  rg::addSlotPass(g, "sim: project",
+                  simSlots(s, ids, {{frame, rg::Use::ComputeStorageRead}, {vel, rg::Use::ComputeStorageReadWrite},
+                                    {mg, rg::Use::ComputeStorageReadWrite}}),
+                  [sp, &f](rg::PassContext& c, const rg::Slots& slots) {
+                    uint32_t threads = 0;
+                    const ComputePipeline& kernel = projectionKernel(*sp, f, &threads);
+                    return simDispatch(c, slots, kernel, threads, 1, 0);
+                  });
   CANOPY_TRY(g.bindBuffer(frame, s.frame.buffer));
   CANOPY_TRY(g.bindBuffer(vel, s.velocity.buffer));
   CANOPY_TRY(g.bindBuffer(mg, s.multigrid.buffer));
@@ -577,12 +535,12 @@ Status writeSimulationState(Simulation& s, const std::vector<float>& velocity, c
   if (!velocity.empty()) {
     if (velocity.size() * sizeof(float) != s.velocity.size)
       return Status::error("writeSimulationState: velocity needs " + std::to_string(s.velocity.size / 4) + " floats");
-    CANOPY_TRY(uploadBuffer(d, s.velocity, velocity.data(), s.velocity.size, kPersistent));
+    CANOPY_TRY(uploadBuffer(d, nullptr, s.velocity, velocity.data(), s.velocity.size, kPersistent));
   }
   if (!wave.empty()) {
     if (wave.size() * sizeof(float) != s.wave.size)
       return Status::error("writeSimulationState: wave needs " + std::to_string(s.wave.size / 4) + " floats");
-    CANOPY_TRY(uploadBuffer(d, s.wave, wave.data(), s.wave.size, kPersistent));
+    CANOPY_TRY(uploadBuffer(d, nullptr, s.wave, wave.data(), s.wave.size, kPersistent));
   }
   return Status();
 }

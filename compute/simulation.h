@@ -16,6 +16,7 @@
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"
 #include "engine/status.h"
+#include "engine/transfer.h"
 #include "shaders/shared/sim.h"
 
 namespace canopy {
@@ -82,7 +83,9 @@ Status checkLoopBudget(const gpu::SimFrame& frame);
 // Stable wave substep length for the given parameters and grid (s).
 float maxStableWaveDt(const WaveParams& wave, uint32_t n);
 
-Status createSimulation(Device& device, const SimulationDesc& desc, Simulation* out);
+// The state's first clear goes to `deferred` on a device that defers its work (engine/transfer.h,
+// submitOrDefer); null: submitted at once.
+Status createSimulation(Device& device, const SimulationDesc& desc, Simulation* out, PreparedList* deferred = nullptr);
 void destroySimulation(Simulation& sim);
 
 // Adds one step's passes to `graph` (the host's, or Canopy's own), importing the simulation's
@@ -115,7 +118,8 @@ struct SimulationFields {
   std::vector<float> multigrid;
 };
 Status readSimulationFields(Simulation& sim, SimulationFields* out);
-// Overwrites device state from host data (tests: initial conditions). Empty vectors are skipped.
+// Overwrites device state from host data (tests: initial conditions), submitted at once. Empty
+// vectors are skipped.
 Status writeSimulationState(Simulation& sim, const std::vector<float>& velocity, const std::vector<float>& wave);
 
 }  // namespace canopy

@@ -11,10 +11,24 @@
 #include "demo/cli.h"
 #include "demo/progress.h"
 #include "render/gltf_loader.h"
+#include "tools/param_table.h"
 
 namespace canopy::demo {
 
 // ---- options ------------------------------------------------------------------------------------
+
+namespace {
+// The --help line of an option that mirrors a parameter: its text, unit and range from the schema
+// (<canopy/canopy_schema.h>), the demo's own default.
+std::string mirrored(const char* option, const char* param, double demoDefault) {
+  const ParamInfo* p = findParam(param);
+  if (!p) return std::string("  ") + option + " (no schema line " + param + ")\n";
+  char line[512];
+  std::snprintf(line, sizeof line, "  %-19s %s%s%s, %s%g, %g] (default %g)\n", option, p->doc, *p->unit ? ", " : "", p->unit,
+                p->check == ParamCheck::AboveMin ? "(" : "[", p->min, p->max, demoDefault);
+  return line;
+}
+}  // namespace
 
 void printHelp() {
   const Options d;
@@ -32,18 +46,17 @@ void printHelp() {
       "Method:\n"
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
       "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
-      "  --strength V        wind strength, domain units/s, [0, 1000] (default %g)\n"
-      "  --frequency F       wind modulation frequency f, Hz, [0, 1000] (default %g)\n"
-      "  --modulation B      wind modulation depth b, [0, 10] (default %g): the inflow speed is\n"
-      "                      strength * (1 + b sin(2 pi f t)) * (1 + G * noise travelling along the side)\n"
-      "  --gust G            gust noise amplitude G, [0, 1] (default %g)\n"
+      "%s%s%s"
+      "                      the inflow speed is strength * (1 + b sin(2 pi f t)) * (1 + G * noise\n"
+      "                      travelling along the side)\n"
+      "%s"
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
       "  --method M          2d (the paper's layers) or per-vertex (the 3D baseline: every vertex bent through\n"
       "                      its branch hierarchy each frame, Habel); the window switches with M (default 2d)\n"
       "  --impostors MODE    off, far (boxes in the far region) or size (any box) drawn as Lluch et al.'s\n"
       "                      impostors when their projected size is below --impostor-pixels; re-slices\n"
       "                      are then at once (default off)\n"
-      "  --impostor-pixels P the switch size, pixels, [1, 4096] (default %g)\n"
+      "%s"
       "  --impostor-debug    colour leaves and impostors by their box's hierarchy level\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
@@ -51,10 +64,7 @@ void printHelp() {
       "  --light X,Y,Z       direction towards the light, world space, y up; the camera looks from +Z\n"
       "                      (default %g,%g,%g; behind the plant: e.g. 0.2,0.35,-1)\n"
       "  --light-color R,G,B linear light colour, each [0, 1000] (default %g,%g,%g)\n"
-      "  --ambient A         ambient share of the light, [0, 1] (default %g)\n"
-      "  --leaf-ior N        effective refractive index of the leaf's specular lobe, [1.2, 1.7] (default %g)\n"
-      "  --leaf-roughness S  Beckmann roughness of the lobe, [0.078, 0.5] (default %g)\n"
-      "  --leaf-transmission T  diffuse transmission of leaves whose file gives none, [0, 1] (default %g)\n"
+      "%s%s%s%s"
       "  --no-translucency   unlit leaf sides get the ambient term only\n"
       "  --light-sheet       headless: after the frames, write light_sheet.png: the last frame lit by --light,\n"
       "                      by the light turned 180 degrees about the vertical (from behind), and by that\n"
@@ -67,8 +77,8 @@ void printHelp() {
       "  --fps F             animation frames per second, dt = 1/F, [1, 1000] (default %g)\n"
       "  --camera PATH       still or orbit (default still)\n"
       "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
-      "  --rebuild-budget MS a re-slice after a camera move is spread over frames, about MS ms of work a\n"
-      "                      frame, then cross-faded in; 0: at once in one frame, [0, 1000] (default %g)\n"
+      "%s"
+      "                      (a re-slice after a camera move is spread over frames, then cross-faded in)\n"
       "  --device-budget MIB device memory Canopy may allocate; a mesh that does not fit is streamed\n"
       "                      through a staging ring at each re-slice; 0: no limit, [0, 1048576] (default %g)\n"
       "  --ring MIB          the staging ring of a streamed mesh, [1, 4096] (default %g)\n"
@@ -91,12 +101,22 @@ void printHelp() {
       "  --device NAME       substring of the Vulkan device name (default: best device, or $CANOPY_DEVICE)\n"
       "  --inject-fault oom:N|lost:N  Canopy's Vulkan calls fail (out of device memory, device lost) after N\n"
       "                      successful object creations (tools/fault_loader.h; reliability tests)\n"
+      "  --param-table       print every API parameter's default, range and unit (docs/parameters.md)\n"
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
-      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(), d.windStrength, d.windFrequency, d.windModulation, d.windGust,
-      d.impostorPixels, d.light.x, d.light.y, d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, d.ambient, d.leafIor, d.leafRoughness,
-      d.leafTransmission, d.width,
-      d.height, d.frames, d.warmupSeconds, d.fps, d.orbitDegrees, d.rebuildBudgetMs, d.deviceBudgetMiB, d.ringMiB, d.outDir.c_str());
+      (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(),
+      mirrored("--strength V", "WindParams.strength", d.windStrength).c_str(),
+      mirrored("--frequency F", "WindParams.frequency", d.windFrequency).c_str(),
+      mirrored("--modulation B", "WindParams.modulation", d.windModulation).c_str(),
+      mirrored("--gust G", "WindParams.gust", d.windGust).c_str(),
+      mirrored("--impostor-pixels P", "ImpostorSettings.switchPixels", d.impostorPixels).c_str(), d.light.x, d.light.y,
+      d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, mirrored("--ambient A", "LayerSettings.ambient", d.ambient).c_str(),
+      mirrored("--leaf-ior N", "LayerSettings.leafRefractiveIndex", d.leafIor).c_str(),
+      mirrored("--leaf-roughness S", "LayerSettings.leafRoughness", d.leafRoughness).c_str(),
+      mirrored("--leaf-transmission T", "LayerSettings.leafTransmission", d.leafTransmission).c_str(), d.width, d.height,
+      d.frames, d.warmupSeconds, d.fps, d.orbitDegrees,
+      mirrored("--rebuild-budget MS", "LayerSettings.rebuildBudgetMs", d.rebuildBudgetMs).c_str(), d.deviceBudgetMiB,
+      d.ringMiB, d.outDir.c_str());
   std::printf("Caches of a --gltf model (leaf roots, impostor views; docs/design.md \"Files\"):\n%s", cli::cacheHelp());
 }
 
@@ -111,26 +131,29 @@ std::string quoted(const std::string& text) {
 }  // namespace
 
 // The options that set one number in a range, and the switches: one line each (parseOptions).
+// An option that mirrors a parameter names its schema line (`param`): its range is the
+// parameter's (lo and hi are then not read).
 struct NumberOption {
   const char* name;
   float lo, hi;
   float Options::*field;
   const char* what;
+  const char* param = nullptr;
 };
 const NumberOption kNumberOptions[] = {
-    {"--strength", 0, 1000, &Options::windStrength, "a number"},
-    {"--frequency", 0, 1000, &Options::windFrequency, "a number"},
-    {"--modulation", 0, 10, &Options::windModulation, "a number"},
-    {"--gust", 0, 1, &Options::windGust, "a number"},
+    {"--strength", 0, 0, &Options::windStrength, "a number", "WindParams.strength"},
+    {"--frequency", 0, 0, &Options::windFrequency, "a number", "WindParams.frequency"},
+    {"--modulation", 0, 0, &Options::windModulation, "a number", "WindParams.modulation"},
+    {"--gust", 0, 0, &Options::windGust, "a number", "WindParams.gust"},
     {"--warmup", 0, 60, &Options::warmupSeconds, "seconds"},
-    {"--impostor-pixels", 1, 4096, &Options::impostorPixels, "a number"},
-    {"--ambient", 0, 1, &Options::ambient, "a number"},
-    {"--leaf-ior", 1.2f, 1.7f, &Options::leafIor, "a number"},
-    {"--leaf-roughness", 0.078f, 0.5f, &Options::leafRoughness, "a number"},
-    {"--leaf-transmission", 0, 1, &Options::leafTransmission, "a number"},
+    {"--impostor-pixels", 0, 0, &Options::impostorPixels, "a number", "ImpostorSettings.switchPixels"},
+    {"--ambient", 0, 0, &Options::ambient, "a number", "LayerSettings.ambient"},
+    {"--leaf-ior", 0, 0, &Options::leafIor, "a number", "LayerSettings.leafRefractiveIndex"},
+    {"--leaf-roughness", 0, 0, &Options::leafRoughness, "a number", "LayerSettings.leafRoughness"},
+    {"--leaf-transmission", 0, 0, &Options::leafTransmission, "a number", "LayerSettings.leafTransmission"},
     {"--fps", 1, 1000, &Options::fps, "a number"},
     {"--orbit-degrees", -3600, 3600, &Options::orbitDegrees, "a number"},
-    {"--rebuild-budget", 0, 1000, &Options::rebuildBudgetMs, "a number"},
+    {"--rebuild-budget", 0, 0, &Options::rebuildBudgetMs, "a number", "LayerSettings.rebuildBudgetMs"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
 };
@@ -175,11 +198,16 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     for (const SwitchOption& n : kSwitchOptions)
       if (a == n.name) sw = &n;
     if (num) {
-      if (const int rc = number(num->lo, num->hi, &(o->*(num->field)), num->what)) return rc;
+      const ParamInfo* p = num->param ? findParam(num->param) : nullptr;
+      const float lo = p ? float(p->min) : num->lo, hi = p ? float(p->max) : num->hi;
+      if (const int rc = number(lo, hi, &(o->*(num->field)), num->what)) return rc;
     } else if (sw) {
       o->*(sw->field) = sw->value;
     } else if (a == "--help" || a == "-h") {
       printHelp();
+      return 1;
+    } else if (a == "--param-table") {
+      std::fputs(paramTableMarkdown().c_str(), stdout);  // docs/parameters.md
       return 1;
     } else if (a == "--scene") {
       if (!takes()) return bad("needs a name: shrub, tree, grass, kelp, field");

@@ -14,7 +14,6 @@
 namespace canopy {
 
 struct Allocator;
-struct PreparedWork;
 
 // Receives every validation-layer message of severity warning or error (the test helper turns
 // them into test failures). messageId is e.g. "SYNC-HAZARD-READ-AFTER-WRITE" or "VUID-...".
@@ -65,10 +64,8 @@ struct Device {
   bool anyFrame = false;        // a frame was recorded on this device
   std::vector<PendingRelease> pending;
   // Work prepared outside a frame is recorded into the host's next command buffer instead of being
-  // submitted (engine/transfer.h, submitOrDefer); deferTarget is the list it goes to while a
-  // context creates or recreates its parts (null: submitted at once).
+  // submitted (engine/transfer.h, submitOrDefer: into the list its caller passes).
   bool deferUploads = false;
-  std::vector<PreparedWork>* deferTarget = nullptr;
 
   // Only for a device made by createDevice(): what it created beside the adopted objects.
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;

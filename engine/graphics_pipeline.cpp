@@ -145,12 +145,23 @@ Status pushGraphicsConstants(VkCommandBuffer cmd, const GraphicsPipeline& p, con
   return Status();
 }
 
-Status bindGraphics(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, std::initializer_list<Binding> bindings,
-                    const void* push, uint32_t pushSize) {
+namespace {
+Status bindGraphicsList(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, const Binding* bindings, size_t count,
+                        const void* push, uint32_t pushSize) {
   if (pushSize != p.pushConstantSize) return pushGraphicsConstants(cmd, p, push, pushSize);
   d.vk.CmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.pipeline);
-  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.layout, p.bindings, bindings, p.name));
+  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p.layout, p.bindings, bindings, count, p.name));
   return pushGraphicsConstants(cmd, p, push, pushSize);
+}
+}  // namespace
+
+Status bindGraphics(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, std::initializer_list<Binding> bindings,
+                    const void* push, uint32_t pushSize) {
+  return bindGraphicsList(d, cmd, p, bindings.begin(), bindings.size(), push, pushSize);
+}
+Status bindGraphics(Device& d, VkCommandBuffer cmd, const GraphicsPipeline& p, const std::vector<Binding>& bindings,
+                    const void* push, uint32_t pushSize) {
+  return bindGraphicsList(d, cmd, p, bindings.data(), bindings.size(), push, pushSize);
 }
 
 void setViewportScissor(const Device& d, VkCommandBuffer cmd, uint32_t width, uint32_t height) {

@@ -24,9 +24,6 @@ struct VertexAttribute {
 // writes the new value already weighted.
 enum class BlendMode { None, PremultipliedOver, ConstantMix };
 
-struct EmbeddedShader;
-using ShaderLookup = const EmbeddedShader* (*)(const char* name);
-
 struct GraphicsPipelineDesc {
   const char* vertexShader = nullptr;    // embedded shader names, e.g. "layers.vert"
   const char* fragmentShader = nullptr;
@@ -61,6 +58,8 @@ void destroyGraphicsPipeline(Device& device, GraphicsPipeline& pipeline);
 // Binds the pipeline and pushes its descriptors and constants (refusing a size or count mismatch).
 Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline& pipeline,
                     std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize);
+Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline& pipeline,
+                    const std::vector<Binding>& bindings, const void* push, uint32_t pushSize);
 template <class Push>
 Status bindGraphics(Device& device, VkCommandBuffer cmd, const GraphicsPipeline& pipeline,
                     std::initializer_list<Binding> bindings, const Push& push) {

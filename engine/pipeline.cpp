@@ -44,7 +44,7 @@ Status createPushDescriptorLayouts(Device& d, const std::vector<VkDescriptorType
 
 Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, ComputePipeline* out) {
   *out = ComputePipeline{};
-  const EmbeddedShader* sh = desc.shader ? findEmbeddedShader(desc.shader) : nullptr;
+  const EmbeddedShader* sh = desc.shader ? (desc.shaderLookup ? desc.shaderLookup : &findEmbeddedShader)(desc.shader) : nullptr;
   if (!sh) return Status::error(std::string("no embedded shader named '") + (desc.shader ? desc.shader : "") + "'");
   const std::string what = std::string("compute pipeline '") + desc.shader + "'";
   if (!spirvLocalSize(sh->code, sh->sizeBytes / 4, out->localSize))
@@ -106,16 +106,16 @@ void destroyComputePipeline(Device& d, ComputePipeline& p) {
 }
 
 Status pushDescriptors(Device& d, VkCommandBuffer cmd, VkPipelineBindPoint bindPoint, VkPipelineLayout layout,
-                       const std::vector<VkDescriptorType>& types, std::initializer_list<Binding> bindings,
+                       const std::vector<VkDescriptorType>& types, const Binding* bindings, size_t count,
                        const std::string& what) {
-  if (bindings.size() != types.size())
-    return Status::error(what + ": " + std::to_string(bindings.size()) + " bindings given, " +
-                         std::to_string(types.size()) + " declared");
-  std::vector<VkWriteDescriptorSet> writes(bindings.size());
-  std::vector<VkDescriptorBufferInfo> bufs(bindings.size());
-  std::vector<VkDescriptorImageInfo> imgs(bindings.size());
-  size_t i = 0;
-  for (const Binding& b : bindings) {
+  if (count != types.size())
+    return Status::error(what + ": " + std::to_string(count) + " bindings given, " + std::to_string(types.size()) +
+                         " declared");
+  std::vector<VkWriteDescriptorSet> writes(count);
+  std::vector<VkDescriptorBufferInfo> bufs(count);
+  std::vector<VkDescriptorImageInfo> imgs(count);
+  for (size_t i = 0; i < count; ++i) {
+    const Binding& b = bindings[i];
     VkWriteDescriptorSet& w = writes[i];
     w = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstBinding = uint32_t(i);
@@ -136,42 +136,59 @@ Status pushDescriptors(Device& d, VkCommandBuffer cmd, VkPipelineBindPoint bindP
         w.pImageInfo = &imgs[i];
         break;
     }
-    ++i;
   }
   if (!writes.empty()) d.cmdPushDescriptorSet(cmd, bindPoint, layout, 0, uint32_t(writes.size()), writes.data());
   return Status();
 }
 
 namespace {
-Status bindCompute(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, std::initializer_list<Binding> bindings,
+Status bindCompute(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, const Binding* bindings, size_t count,
                    const void* push, uint32_t pushSize) {
   if (pushSize != p.pushConstantSize)
     return Status::error("dispatch '" + p.name + "': push constants are " + std::to_string(pushSize) +
                          " bytes, the pipeline declares " + std::to_string(p.pushConstantSize));
-  if (bindings.size() != p.bindings.size())
-    return Status::error("dispatch '" + p.name + "': " + std::to_string(bindings.size()) + " bindings given, " +
+  if (count != p.bindings.size())
+    return Status::error("dispatch '" + p.name + "': " + std::to_string(count) + " bindings given, " +
                          std::to_string(p.bindings.size()) + " declared");
   d.vk.CmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
-  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, p.bindings, bindings,
+  CANOPY_TRY(pushDescriptors(d, cmd, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, p.bindings, bindings, count,
                              "dispatch '" + p.name + "'"));
   if (pushSize) d.vk.CmdPushConstants(cmd, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, pushSize, push);
+  return Status();
+}
+
+Status dispatchList(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
+                    const Binding* bindings, size_t count, const void* push, uint32_t pushSize) {
+  CANOPY_TRY(bindCompute(d, cmd, p, bindings, count, push, pushSize));
+  auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
+  d.vk.CmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
+  return Status();
+}
+
+Status dispatchIndirectList(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, VkBuffer args, VkDeviceSize offset,
+                            const Binding* bindings, size_t count, const void* push, uint32_t pushSize) {
+  CANOPY_TRY(bindCompute(d, cmd, p, bindings, count, push, pushSize));
+  d.vk.CmdDispatchIndirect(cmd, args, offset);
   return Status();
 }
 }  // namespace
 
 Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
                 std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
-  CANOPY_TRY(bindCompute(d, cmd, p, bindings, push, pushSize));
-  auto groups = [](uint32_t n, uint32_t l) { return (n + l - 1) / l; };
-  d.vk.CmdDispatch(cmd, groups(tx, p.localSize[0]), groups(ty, p.localSize[1]), groups(tz, p.localSize[2]));
-  return Status();
+  return dispatchList(d, cmd, p, tx, ty, tz, bindings.begin(), bindings.size(), push, pushSize);
+}
+Status dispatch(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, uint32_t tx, uint32_t ty, uint32_t tz,
+                const std::vector<Binding>& bindings, const void* push, uint32_t pushSize) {
+  return dispatchList(d, cmd, p, tx, ty, tz, bindings.data(), bindings.size(), push, pushSize);
 }
 
 Status dispatchIndirect(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, VkBuffer args, VkDeviceSize offset,
                         std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize) {
-  CANOPY_TRY(bindCompute(d, cmd, p, bindings, push, pushSize));
-  d.vk.CmdDispatchIndirect(cmd, args, offset);
-  return Status();
+  return dispatchIndirectList(d, cmd, p, args, offset, bindings.begin(), bindings.size(), push, pushSize);
+}
+Status dispatchIndirect(Device& d, VkCommandBuffer cmd, const ComputePipeline& p, VkBuffer args, VkDeviceSize offset,
+                        const std::vector<Binding>& bindings, const void* push, uint32_t pushSize) {
+  return dispatchIndirectList(d, cmd, p, args, offset, bindings.data(), bindings.size(), push, pushSize);
 }
 
 }  // namespace canopy

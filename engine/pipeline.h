@@ -12,6 +12,10 @@
 
 namespace canopy {
 struct Device;
+struct EmbeddedShader;
+// A registry of embedded SPIR-V (engine/shader_registry.h): Canopy's own (findEmbeddedShader) or
+// another library's, such as the tests' shaders (tools/test_shaders.h).
+using ShaderLookup = const EmbeddedShader* (*)(const char* name);
 
 struct ComputePipeline {
   VkPipeline pipeline = VK_NULL_HANDLE;
@@ -24,12 +28,13 @@ struct ComputePipeline {
 };
 
 struct ComputePipelineDesc {
-  const char* shader = nullptr;               // embedded shader name, e.g. "example_write.comp"
+  const char* shader = nullptr;               // embedded shader name, e.g. "sim_tile.comp"
   uint32_t pushConstantSize = 0;              // sizeof the shared push-constant struct
   // Specialization constants: value i for constant_id i (32-bit). A shader declaring
   // local_size_x_id = 0 takes its workgroup width from specialization[0]: set workgroupXFromSpec.
   std::vector<uint32_t> specialization;
   bool workgroupXFromSpec = false;
+  ShaderLookup shaderLookup = nullptr;        // where `shader` is looked up; null: Canopy's shaders
 };
 
 // One descriptor for a push: a buffer range, a storage/sampled image view, or both with a sampler.
@@ -72,7 +77,7 @@ void destroyComputePipeline(Device& device, ComputePipeline& pipeline);
 // Writes `bindings` (binding i of set 0, typed by `types`) as push descriptors; refuses a count
 // mismatch or a binding without the buffer/view/sampler its type needs. `what` prefixes errors.
 Status pushDescriptors(Device& device, VkCommandBuffer cmd, VkPipelineBindPoint bindPoint, VkPipelineLayout layout,
-                       const std::vector<VkDescriptorType>& types, std::initializer_list<Binding> bindings,
+                       const std::vector<VkDescriptorType>& types, const Binding* bindings, size_t count,
                        const std::string& what);
 
 // Binds, pushes descriptors and constants, and dispatches enough workgroups to cover `threads`
@@ -80,6 +85,10 @@ Status pushDescriptors(Device& device, VkCommandBuffer cmd, VkPipelineBindPoint 
 // count differs from the pipeline's declaration.
 Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, uint32_t threadsX,
                 uint32_t threadsY, uint32_t threadsZ, std::initializer_list<Binding> bindings, const void* push,
+                uint32_t pushSize);
+// The same with a built list (a pass's slots, engine/pass_slots.h).
+Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, uint32_t threadsX,
+                uint32_t threadsY, uint32_t threadsZ, const std::vector<Binding>& bindings, const void* push,
                 uint32_t pushSize);
 
 template <class Push>
@@ -92,6 +101,8 @@ Status dispatch(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipe
 // (VkDispatchIndirectCommand, written by an earlier pass).
 Status dispatchIndirect(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, VkBuffer args,
                         VkDeviceSize offset, std::initializer_list<Binding> bindings, const void* push, uint32_t pushSize);
+Status dispatchIndirect(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, VkBuffer args,
+                        VkDeviceSize offset, const std::vector<Binding>& bindings, const void* push, uint32_t pushSize);
 template <class Push>
 Status dispatchIndirect(Device& device, VkCommandBuffer cmd, const ComputePipeline& pipeline, VkBuffer args,
                         VkDeviceSize offset, std::initializer_list<Binding> bindings, const Push& push) {

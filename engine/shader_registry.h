@@ -6,7 +6,7 @@
 namespace canopy {
 
 struct EmbeddedShader {
-  const char* name;      // source file name, e.g. "example_write.comp"
+  const char* name;      // source file name, e.g. "sim_tile.comp"
   const uint32_t* code;  // SPIR-V words
   size_t sizeBytes;
 };

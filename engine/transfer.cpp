@@ -20,11 +20,11 @@ Status runGraph(Device& d, rg::RenderGraph& g) {
 
 }  // namespace
 
-Status submitOrDefer(Device& d, PreparedWork work) {
+Status submitOrDefer(Device& d, PreparedWork work, PreparedList* deferred) {
   CANOPY_TRY(work.graph->compile());
   CANOPY_TRY(work.graph->realize(d));
-  if (d.deferUploads && d.deferTarget) {
-    d.deferTarget->push_back(std::move(work));
+  if (d.deferUploads && deferred) {
+    deferred->push_back(std::move(work));
     return Status();
   }
   Status s = submitAndWait(d, [&](VkCommandBuffer cmd) { return work.graph->record(cmd); });
@@ -33,7 +33,7 @@ Status submitOrDefer(Device& d, PreparedWork work) {
   return s;
 }
 
-Status flushPreparedWork(Device& d, std::vector<PreparedWork>& list, VkCommandBuffer cmd) {
+Status flushPreparedWork(Device& d, PreparedList& list, VkCommandBuffer cmd) {
   Status s;
   for (PreparedWork& w : list) {
     if (s.ok()) s = w.graph->record(cmd);
@@ -49,7 +49,7 @@ Status flushPreparedWork(Device& d, std::vector<PreparedWork>& list, VkCommandBu
   return s.context("recording prepared uploads");
 }
 
-void dropPreparedWork(Device& d, std::vector<PreparedWork>& list) {
+void dropPreparedWork(Device& d, PreparedList& list) {
   for (PreparedWork& w : list) {
     w.graph->release(d);
     for (Buffer& b : w.staging) destroyBuffer(d, b);
@@ -57,7 +57,7 @@ void dropPreparedWork(Device& d, std::vector<PreparedWork>& list) {
   list.clear();
 }
 
-Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
+Status uploadBuffer(Device& d, PreparedList* deferred, const Buffer& dst, const void* data, VkDeviceSize size, rg::State state,
                     VkDeviceSize offset) {
   if (offset + size > dst.size || offset + size < offset)
     return Status::error("uploadBuffer: " + std::to_string(size) + " bytes at " + std::to_string(offset) +
@@ -80,12 +80,12 @@ Status uploadBuffer(Device& d, const Buffer& dst, const void* data, VkDeviceSize
       .write(dstId, rg::Use::TransferDst);
   Status s = g.bindBuffer(src, staging.buffer);
   if (s.ok()) s = g.bindBuffer(dstId, dst.buffer);
-  if (s.ok()) s = submitOrDefer(d, std::move(w));
+  if (s.ok()) s = submitOrDefer(d, std::move(w), deferred);
   else destroyBuffer(d, staging);
   return s.context("uploadBuffer");
 }
 
-Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize size, rg::State final) {
+Status uploadImage(Device& d, PreparedList* deferred, const Image& img, const void* texels, VkDeviceSize size, rg::State final) {
   const uint32_t texel = texelBytes(img.format);
   const VkDeviceSize want = VkDeviceSize(img.extent.width) * img.extent.height * img.layers * texel;
   if (texel == 0 || size != want)
@@ -116,7 +116,7 @@ Status uploadImage(Device& d, const Image& img, const void* texels, VkDeviceSize
       .write(dst, rg::Use::TransferDst);
   Status s = g.bindBuffer(src, staging.buffer);
   if (s.ok()) s = g.bindImage(dst, img);
-  if (s.ok()) s = submitOrDefer(d, std::move(w));
+  if (s.ok()) s = submitOrDefer(d, std::move(w), deferred);
   else destroyBuffer(d, staging);
   return s.context("uploadImage");
 }

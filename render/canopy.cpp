@@ -21,22 +21,13 @@ namespace canopy {
 // last context that follows it.
 struct SharedSimulation {
   Simulation sim;
-  std::vector<PreparedWork> pending;  // its first clear, recorded by whichever context records first
+  PreparedList pending;  // its first clear, recorded by whichever context records first
   uint64_t lastStepFrame = 0;
   bool everStepped = false;
   ~SharedSimulation() {
     if (sim.device) dropPreparedWork(*sim.device, pending);
     destroySimulation(sim);
   }
-};
-
-// While a context creates or recreates parts, work prepared on a host's device goes to `list`
-// (recorded by the next recordCanopy) instead of being submitted.
-struct DeferInto {
-  Device& d;
-  std::vector<PreparedWork>* before;
-  DeferInto(Device& device, std::vector<PreparedWork>* list) : d(device), before(device.deferTarget) { d.deferTarget = list; }
-  ~DeferInto() { d.deferTarget = before; }
 };
 
 struct RecordGraph {
@@ -69,7 +60,7 @@ struct CanopyContext {
   std::vector<RecordGraph> graphs;
   uint64_t graphUses = 0;
   uint64_t graphBuilds = 0;
-  std::vector<PreparedWork> pending;  // uploads not yet recorded (host devices: the first frame records them)
+  PreparedList pending;  // the per-vertex baseline's uploads not yet recorded (host devices: the first frame records them)
   std::vector<CanopyTargetUse> groupUses;  // <canopy/canopy_graph.h>: how the passes use the host's images
 };
 
@@ -82,34 +73,30 @@ Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi) {
   return Status();
 }
 
+// The plane's axes, checked together (its fields one by one: the schema).
 Status validatePlane(const SimulationPlane& p) {
-  const glm::vec3 o = toGlm(p.origin), r = toGlm(p.right), u = toGlm(p.up);
-  const bool finite = std::isfinite(p.tileSize) && std::isfinite(glm::dot(o, o)) && std::isfinite(glm::dot(r, r)) &&
-                      std::isfinite(glm::dot(u, u));
-  if (!finite || !(p.tileSize > 0.0f)) return Status::error("CanopyParams.plane: tileSize must be > 0 and every field finite");
+  CANOPY_TRY(checkParams(p, "CanopyParams.plane."));
+  const glm::vec3 r = toGlm(p.right), u = toGlm(p.up);
   if (std::abs(glm::length(r) - 1.0f) > 1e-3f || std::abs(glm::length(u) - 1.0f) > 1e-3f || std::abs(glm::dot(r, u)) > 1e-3f)
     return Status::error("CanopyParams.plane: right and up must be orthogonal unit vectors");
   return Status();
 }
 
+// Every field against its schema line, then what is checked together and against the context's
+// creation. Run when parameters are given (createCanopy, setCanopyParams), never per frame.
 Status validateParams(const CanopyContext& c, const CanopyParams& p) {
+  CANOPY_TRY(checkParams(p, "CanopyParams."));
   CANOPY_TRY(validateLayerSettings(p.layers));
   if (p.layers.layout.count() > c.desc.maxLayers)
     return Status::error("CanopyParams.layers.layout " + toString(p.layers.layout) + " has " +
                          std::to_string(p.layers.layout.count()) + " layers; CanopyDesc.maxLayers is " +
                          std::to_string(c.desc.maxLayers));
-  CANOPY_TRY(validateSimulationParams(p.simulation, c.desc.simulation.nominalDt));
-  CANOPY_TRY(validateDynamicsParams(p.dynamics));
   if (p.dynamics.cellSize < c.desc.minCellSize)
     return Status::error("CanopyParams.dynamics.cellSize = " + std::to_string(p.dynamics.cellSize) +
                          " is below CanopyDesc.minCellSize = " + std::to_string(c.desc.minCellSize));
-  CANOPY_TRY(validateCompositeParams(p.composite));
   if (p.customPlane) CANOPY_TRY(validatePlane(p.plane));
-  if (p.animation != AnimationMode::Layers2D && p.animation != AnimationMode::PerVertex)
-    return Status::error("CanopyParams.animation = " + std::to_string(uint32_t(p.animation)) + " is outside 0..1");
   if (p.animation == AnimationMode::PerVertex && !c.desc.allowPerVertex)
     return Status::error("CanopyParams.animation = PerVertex needs CanopyDesc.allowPerVertex at creation");
-  CANOPY_TRY(validatePerVertexParams(p.perVertex));
   return Status();
 }
 
@@ -297,28 +284,11 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   *out = nullptr;
   CANOPY_TRY(checkVersion(desc.headerVersion));
   if (!d.device || !d.vk.CreateBuffer) return Status::error("createCanopy: the device was not adopted");
-  CANOPY_TRY(checkRange("CanopyDesc.width", desc.width, 1, 16384));
-  CANOPY_TRY(checkRange("CanopyDesc.height", desc.height, 1, 16384));
-  CANOPY_TRY(checkRange("CanopyDesc.maxLayers", desc.maxLayers, 1, CANOPY_MAX_LAYERS));
-  CANOPY_TRY(checkRange("CanopyDesc.minCellSize", desc.minCellSize, 2, 256));
-  if (desc.meshStagingRingBytes < (1ull << 20) || desc.meshStagingRingBytes > (4ull << 30))
-    return Status::error("CanopyDesc.meshStagingRingBytes = " + std::to_string(desc.meshStagingRingBytes) +
-                         " is outside [1 MiB, 4 GiB]");
-  if (desc.depthConvention != DepthConvention::Standard && desc.depthConvention != DepthConvention::Reverse)
-    return Status::error("CanopyDesc.depthConvention = " + std::to_string(uint32_t(desc.depthConvention)) + " is outside 0..1");
-  if (desc.impostors.enable) {
-    const ImpostorDesc& im = desc.impostors;
-    if (im.tilePixels < 8 || im.tilePixels > 512 || (im.tilePixels & (im.tilePixels - 1)))
-      return Status::error("CanopyDesc.impostors.tilePixels = " + std::to_string(im.tilePixels) +
-                           " is not a power of two in [8, 512]");
-    CANOPY_TRY(checkRange("CanopyDesc.impostors.maxLevel", im.maxLevel, 0, 64));
-    CANOPY_TRY(checkRange("CanopyDesc.impostors.maxLeavesPerBox", im.maxLeavesPerBox, 1, 1u << 30));
-    if (im.maxBoxTriangles < 1 || im.maxBoxTriangles > (1ull << 40))
-      return Status::error("CanopyDesc.impostors.maxBoxTriangles = " + std::to_string(im.maxBoxTriangles) + " is outside [1, 2^40]");
-    if (im.memoryBudget < (1ull << 20) || im.memoryBudget > (16ull << 30))
-      return Status::error("CanopyDesc.impostors.memoryBudget = " + std::to_string(im.memoryBudget) +
-                           " is outside [1 MiB, 16 GiB]");
-  }
+  static_assert(CANOPY_MAX_LAYERS == kMaxLayers, "CANOPY_DESC's maxLayers range");
+  // The description's fields (params are checked with the context's limits below), and the
+  // impostors' only when they are built.
+  CANOPY_TRY(checkParams(desc, "CanopyDesc."));
+  if (desc.impostors.enable) CANOPY_TRY(checkParams(desc.impostors, "CanopyDesc.impostors."));
   if (desc.shareSimulationWith && desc.shareSimulationWith->device != &d)
     return Status::error("CanopyDesc.shareSimulationWith belongs to another Device");
   // Nothing to animate is a mistake in the input (a glTF whose scene reaches no triangle mesh),
@@ -383,8 +353,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       c->shared = desc.shareSimulationWith->shared;
     } else {
       c->shared = std::make_shared<SharedSimulation>();
-      DeferInto defer(d, &c->shared->pending);
-      CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim));
+      CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim, &c->shared->pending));
     }
     CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     // The layers last: what the budget leaves after the compositor, simulation and dynamics decides
@@ -398,13 +367,10 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       ld.deviceMemoryBudget = desc.deviceMemoryBudget - used;
     }
     ld.stagingRingBytes = desc.meshStagingRingBytes;
-    {
-      DeferInto defer(d, &c->pending);
-      CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
-      if (desc.allowPerVertex) {
-        CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex));
-      }
-    }
+    // The layers' parts keep their own uploads (flushLayerWork); the baseline's go to the context's list.
+    CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    if (desc.allowPerVertex)
+      CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->pending));
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
     // written, motion) are among them.
     const AnimationMode mode = c->params.animation;
@@ -585,7 +551,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
-  if (!c->pending.empty() || !c->shared->pending.empty() || layerClearsPending(c->layers))
+  if (!c->pending.empty() || !c->shared->pending.empty() || layerWorkPending(c->layers))
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
   return declarePasses(*c, g, targets);
@@ -608,8 +574,8 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
     CANOPY_TRY(beginCanopyFrame(c, in.frame));
     // Uploads and clears prepared since the last frame, before anything reads them.
     CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
+    CANOPY_TRY(flushLayerWork(c->layers, cmd));
     CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
-    CANOPY_TRY(flushLayerClears(c->layers, cmd));
     RecordGraph* graph = nullptr;
     for (RecordGraph& g : c->graphs)
       if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&

@@ -5,6 +5,7 @@
 
 #include "compute/dynamics.h"
 #include "engine/device.h"
+#include "engine/pass_slots.h"
 
 namespace canopy {
 namespace {
@@ -44,17 +45,14 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
   // The compute path's passes run in the frames prepareComposite chose it (the graph leaves them
   // and their barriers out in the others; the fragment path's passes are their complement).
   auto computePath = [cp] { return cp->computeThisFrame; };
-  const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, gen = VK_IMAGE_LAYOUT_GENERAL;
-  g.addPass("composite: displacement image", [cp, displacement, previous](rg::PassContext& x) {
-     const gpu::CompositePush& p = cp->push;
-     return dispatch(*x.device, x.cmd, cp->displacementPipeline, p.gridX * p.gridY, p.layerCount, 1,
-                     {bindBuffer(x.buffer(displacement)), bindBuffer(x.buffer(previous)),
-                      bindImage(cp->displacementImage.view, VK_IMAGE_LAYOUT_GENERAL)},
-                     p);
-   })
-      .read(displacement, rg::Use::ComputeStorageRead)
-      .read(previous, rg::Use::ComputeStorageRead)
-      .write(dispImage, rg::Use::ComputeStorageWrite)
+  using rg::Use;
+  rg::addSlotPass(g, "composite: displacement image",
+                  {rg::slot(displacement, Use::ComputeStorageRead), rg::slot(previous, Use::ComputeStorageRead),
+                   rg::slot(dispImage, Use::ComputeStorageWrite)},
+                  [cp](rg::PassContext& x, const rg::Slots& s) {
+                    const gpu::CompositePush& p = cp->push;
+                    return rg::dispatchSlots(x, cp->displacementPipeline, s, p.gridX * p.gridY, p.layerCount, 1, p);
+                  })
       .when(computePath);
   g.addPass("composite: tile list reset", [cp](rg::PassContext& x) {
      const gpu::CompositeTileHeader empty{0, 1, 1, 0, 6, 0, 0, 0};
@@ -63,51 +61,43 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
    })
       .write(tileList, rg::Use::TransferDst)
       .when(computePath);
-  g.addPass("composite: classify", [cp, displacement](rg::PassContext& x) {
-     const gpu::CompositePush& p = cp->push;
-     return dispatch(*x.device, x.cmd, cp->classifyPipeline, p.tilesX * p.tilesY, 1, 1,
-                     {bindBuffer(x.buffer(displacement)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->tileList.buffer)},
-                     p);
-   })
-      .read(displacement, rg::Use::ComputeStorageRead)
-      .read(occupancy, rg::Use::ComputeStorageRead)
-      .write(tileList, rg::Use::ComputeStorageReadWrite)
+  rg::addSlotPass(g, "composite: classify",
+                  {rg::slot(displacement, Use::ComputeStorageRead), rg::slot(occupancy, Use::ComputeStorageRead),
+                   rg::slot(tileList, Use::ComputeStorageReadWrite)},
+                  [cp](rg::PassContext& x, const rg::Slots& s) {
+                    const gpu::CompositePush& p = cp->push;
+                    return rg::dispatchSlots(x, cp->classifyPipeline, s, p.tilesX * p.tilesY, 1, 1, p);
+                  })
       .when(computePath);
-  g.addPass("composite: warp + composite (tiles)", [cp, l, t, ro, gen](rg::PassContext& x) {
-     const gpu::CompositePush& p = cp->push;
-     return dispatchIndirect(*x.device, x.cmd, cp->tilesPipeline, cp->tileList.buffer, 0,
-                             {bindImage(x.image(l.color).view, ro, cp->params.bilinear ? cp->linear : cp->nearest),
-                              bindImage(x.image(l.depth).view, ro, cp->depthSampler),
-                              bindImage(x.image(l.backgroundColor).view, ro, cp->nearest),
-                              bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler),
-                              bindImage(x.graph->image(t.depth).view, ro, cp->depthSampler),
-                              bindImage(cp->displacementImage.view, ro, cp->displacementSampler),
-                              bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, gen)},
-                             p);
-   })
-      .read(l.color, rg::Use::ComputeSampled)
-      .read(l.depth, rg::Use::ComputeSampled)
-      .read(l.backgroundColor, rg::Use::ComputeSampled)
-      .read(l.backgroundDepth, rg::Use::ComputeSampled)
-      .read(t.depth, rg::Use::ComputeSampled)
-      .read(dispImage, rg::Use::ComputeSampled)
-      .read(tileList, rg::Use::IndirectBuffer)
-      .read(tileList, rg::Use::ComputeStorageRead)
-      .write(composed, rg::Use::ComputeStorageWrite)
+  // The layer colour's sampler follows CompositeParams.bilinear (slot 0's, chosen per frame).
+  const rg::Slots tileSlots = {rg::slot(l.color, Use::ComputeSampled, c.linear),
+                               rg::slot(l.depth, Use::ComputeSampled, c.depthSampler),
+                               rg::slot(l.backgroundColor, Use::ComputeSampled, c.nearest),
+                               rg::slot(l.backgroundDepth, Use::ComputeSampled, c.depthSampler),
+                               rg::slot(t.depth, Use::ComputeSampled, c.depthSampler),
+                               rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler),
+                               rg::slot(tileList, Use::ComputeStorageRead),
+                               rg::slot(composed, Use::ComputeStorageWrite)};
+  rg::addSlotPass(g, "composite: warp + composite (tiles)", tileSlots, [cp](rg::PassContext& x, const rg::Slots& s) {
+    rg::Slots now = s;
+    now[0].sampler = cp->params.bilinear ? cp->linear : cp->nearest;
+    return rg::dispatchIndirectSlots(x, cp->tilesPipeline, now, cp->tileList.buffer, 0, cp->push);
+  })
+      .read(tileList, rg::Use::IndirectBuffer)  // the dispatch's arguments, not a descriptor
       .when(computePath);
   const bool hasMotion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
-  auto resolve = g.addPass("composite: resolve", [cp, t, hasMotion, ro](rg::PassContext& x) {
-    beginHostRendering(x, t, cp->desc.width, cp->desc.height, hasMotion);
-    Status s = bindGraphics(*x.device, x.cmd, cp->resolve,
-                            {bindBuffer(cp->tileList.buffer), bindImage(cp->composed.view, ro, cp->nearest)},
-                            cp->push);
-    if (s.ok()) x.device->vk.CmdDrawIndirect(x.cmd, cp->tileList.buffer, offsetof(gpu::CompositeTileHeader, vertexCount), 1, 0);
-    x.device->cmdEndRendering(x.cmd);
-    return s;
-  });
+  auto resolve = rg::addSlotPass(g, "composite: resolve",
+                                 {rg::slot(tileList, Use::VertexStorageRead), rg::slot(composed, Use::FragmentSampled, c.nearest)},
+                                 [cp, t, hasMotion](rg::PassContext& x, const rg::Slots& slots) {
+                                   beginHostRendering(x, t, cp->desc.width, cp->desc.height, hasMotion);
+                                   Status s = rg::bindGraphicsSlots(x, cp->resolve, slots, cp->push);
+                                   if (s.ok())
+                                     x.device->vk.CmdDrawIndirect(x.cmd, cp->tileList.buffer,
+                                                                  offsetof(gpu::CompositeTileHeader, vertexCount), 1, 0);
+                                   x.device->cmdEndRendering(x.cmd);
+                                   return s;
+                                 });
   resolve.read(tileList, rg::Use::IndirectBuffer)
-      .read(tileList, rg::Use::VertexStorageRead)
-      .read(composed, rg::Use::FragmentSampled)
       .write(t.color, rg::Use::ColorAttachmentReadWrite)
       .write(t.depth, rg::Use::DepthAttachmentWrite);
   if (hasMotion) resolve.write(t.motion, rg::Use::ColorAttachmentReadWrite);
@@ -146,17 +136,8 @@ void beginHostRendering(rg::PassContext& x, const CompositeTargets& t, uint32_t 
 }
 
 Status validateCompositeParams(const CompositeParams& p) {
-  if (p.path != CompositePath::Compute && p.path != CompositePath::Fragment)
-    return Status::error("CompositeParams.path = " + std::to_string(uint32_t(p.path)) + " is outside Compute (0)..Fragment (1)");
-  if (!(p.depthAlpha > 0.0f && p.depthAlpha <= 1.0f))
-    return Status::error("CompositeParams.depthAlpha = " + std::to_string(p.depthAlpha) + " is outside (0, 1]");
-  if (uint32_t(p.debugView) > COMPOSITE_DEBUG_GRID)
-    return Status::error("CompositeParams.debugView = " + std::to_string(uint32_t(p.debugView)) + " is outside 0..3");
-  if (!(p.exposure >= 0.0f && p.exposure <= 65504.0f))
-    return Status::error("CompositeParams.exposure = " + std::to_string(p.exposure) + " is outside [0, 65504]");
-  if (!(p.debugVelocityScale > 0.0f && p.debugVelocityScale < 1e30f))
-    return Status::error("CompositeParams.debugVelocityScale = " + std::to_string(p.debugVelocityScale) + " must be > 0");
-  return Status();
+  static_assert(COMPOSITE_DEBUG_GRID == 3, "CANOPY_COMPOSITE_PARAMS's debugView range");
+  return checkParams(p, "CompositeParams.");
 }
 
 Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
@@ -302,7 +283,7 @@ void destroyCompositor(Compositor& c) {
 Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu::AnimFrame& anim, bool hasBackground,
                         bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect, bool uniteNext) {
   if (!c.device) return Status::error("prepareComposite: the compositor was not created");
-  CANOPY_TRY(validateCompositeParams(params));
+  // `params` were checked when they were given (validateCompositeParams; setCanopyParams).
   if (anim.layerCount < 1 || anim.layerCount > c.desc.maxLayers)
     return Status::error("prepareComposite: " + std::to_string(anim.layerCount) + " layers, the compositor holds 1.." +
                          std::to_string(c.desc.maxLayers));
@@ -378,44 +359,50 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   const LayerResources l = layers;
   // One dispatch a frame: a pending recompute from the visible layers first, a union with the next
   // set (spread re-slicing) in the frame after if both are pending.
-  auto occupancyPass = g.addPass("composite: occupancy", [cp, l](rg::PassContext& x) {
-    const bool unite = !cp->occupancyPending && cp->occupancyUnitePending && l.nextColor != rg::kInvalidResource;
+  // Slots 3 and 4 are the next set's images (spread re-slicing; without it the visible set's
+  // again); a frame that does not unite the two binds the visible set's there too (the union flag
+  // off, the shader does not read them).
+  using rg::Use;
+  const bool hasNext = l.nextColor != rg::kInvalidResource;
+  const rg::Slots occupancySlots = {rg::slot(l.color, Use::ComputeSampled, c.nearest), rg::slot(occupancy, Use::ComputeStorageReadWrite),
+                                    rg::slot(l.backgroundColor, Use::ComputeSampled, c.nearest),
+                                    rg::slot(hasNext ? l.nextColor : l.color, Use::ComputeSampled, c.nearest),
+                                    rg::slot(hasNext ? l.nextBackgroundColor : l.backgroundColor, Use::ComputeSampled, c.nearest)};
+  rg::addSlotPass(g, "composite: occupancy", occupancySlots, [cp, l, hasNext](rg::PassContext& x, const rg::Slots& s) {
+    const bool unite = !cp->occupancyPending && cp->occupancyUnitePending && hasNext;
     if (unite) cp->occupancyUnitePending = false;
     cp->occupancyPending = false;
     gpu::CompositePush p = cp->push;
     if (unite) p.flags |= COMPOSITE_OCCUPANCY_UNION;
-    const rg::ResourceId nextColor = unite ? l.nextColor : l.color;
-    const rg::ResourceId nextBackground = unite ? l.nextBackgroundColor : l.backgroundColor;
-    return dispatch(*x.device, x.cmd, cp->occupancyPipeline, p.tilesX * p.tilesY, p.layerCount + 1, 1,
-                    {bindImage(x.image(l.color).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
-                     bindBuffer(cp->occupancy.buffer),
-                     bindImage(x.image(l.backgroundColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
-                     bindImage(x.image(nextColor).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest),
-                     bindImage(x.image(nextBackground).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->nearest)},
-                    p);
-  });
-  occupancyPass.read(l.color, rg::Use::ComputeSampled)
-      .read(l.backgroundColor, rg::Use::ComputeSampled)
-      .write(occupancy, rg::Use::ComputeStorageReadWrite)
-      .when([cp, l] {
-        return cp->occupancyPending || (cp->occupancyUnitePending && l.nextColor != rg::kInvalidResource);
-      });
-  if (l.nextColor != rg::kInvalidResource)
-    occupancyPass.read(l.nextColor, rg::Use::ComputeSampled).read(l.nextBackgroundColor, rg::Use::ComputeSampled);
-  g.addPass("composite: scene depth", [cp, t](rg::PassContext& x) {
-     const gpu::CompositePush& p = cp->push;
-     return dispatch(*x.device, x.cmd, cp->sceneDepthPipeline, cp->desc.width * cp->desc.height, 1, 1,
-                     {bindImage(x.image(t.depth).view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, cp->depthSampler),
-                      bindBuffer(cp->sceneDepth.buffer)},
-                     p);
-   })
-      .read(t.depth, rg::Use::ComputeSampled)
-      .write(scene, rg::Use::ComputeStorageWrite)
+    rg::Slots now = s;
+    if (!unite) now[3] = s[0], now[4] = s[2];
+    return rg::dispatchSlots(x, cp->occupancyPipeline, now, p.tilesX * p.tilesY, p.layerCount + 1, 1, p);
+  }).when([cp, hasNext] { return cp->occupancyPending || (cp->occupancyUnitePending && hasNext); });
+  rg::addSlotPass(g, "composite: scene depth",
+                  {rg::slot(t.depth, Use::ComputeSampled, c.depthSampler), rg::slot(scene, Use::ComputeStorageWrite)},
+                  [cp](rg::PassContext& x, const rg::Slots& s) {
+                    return rg::dispatchSlots(x, cp->sceneDepthPipeline, s, cp->desc.width * cp->desc.height, 1, 1, cp->push);
+                  })
       .when([cp] { return !cp->computeThisFrame; });
   const bool debugSources = debug.animFrame != rg::kInvalidResource && debug.tiled != rg::kInvalidResource;
   c.hasDebugSources = debugSources;
-  auto pass = g.addPass("composite: warp + composite", [cp, l, t, displacement, previous, motion, debug,
-                                                        debugSources](rg::PassContext& x) {
+  // Without the simulation's field (CompositeDebugSources) the velocity view's two bindings get a
+  // stand-in outside the graph; the view is then refused.
+  auto debugSlot = [&](rg::ResourceId id) {
+    return debugSources ? rg::slot(id, Use::FragmentStorageRead) : rg::outsideGraph(bindBuffer(c.debugStandIn.buffer));
+  };
+  const rg::Slots fragmentSlots = {rg::slot(l.color, Use::FragmentSampled, c.linear),
+                                   rg::slot(l.depth, Use::FragmentSampled, c.depthSampler),
+                                   rg::slot(l.backgroundColor, Use::FragmentSampled, c.nearest),
+                                   rg::slot(l.backgroundDepth, Use::FragmentSampled, c.depthSampler),
+                                   rg::slot(displacement, Use::FragmentStorageRead),
+                                   rg::slot(previous, Use::FragmentStorageRead),
+                                   rg::slot(occupancy, Use::FragmentStorageRead),
+                                   rg::slot(scene, Use::FragmentStorageRead),
+                                   debugSlot(debug.animFrame),
+                                   debugSlot(debug.tiled)};
+  auto pass = rg::addSlotPass(g, "composite: warp + composite", fragmentSlots, [cp, t, motion, debugSources](rg::PassContext& x,
+                                                                                                        const rg::Slots& slots) {
     const gpu::CompositePush& p = cp->push;
     if (p.debugView == COMPOSITE_DEBUG_VELOCITY && !debugSources)
       return Status::error("composite: the velocity debug view needs the simulation's field (CompositeDebugSources)");
@@ -426,33 +413,15 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
       return Status::error("composite: the host targets are not " + std::to_string(cp->desc.width) + "x" +
                            std::to_string(cp->desc.height));
     beginHostRendering(x, t, cp->desc.width, cp->desc.height, motion);
-    const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-    Status s = bindGraphics(
-        *x.device, x.cmd, cp->composite,
-        {bindImage(x.image(l.color).view, ro, cp->params.bilinear ? cp->linear : cp->nearest),
-         bindImage(x.image(l.depth).view, ro, cp->depthSampler),
-         bindImage(x.image(l.backgroundColor).view, ro, cp->nearest),
-         bindImage(x.image(l.backgroundDepth).view, ro, cp->depthSampler), bindBuffer(x.buffer(displacement)),
-         bindBuffer(x.buffer(previous)), bindBuffer(cp->occupancy.buffer), bindBuffer(cp->sceneDepth.buffer),
-         bindBuffer(debugSources ? x.buffer(debug.animFrame) : cp->debugStandIn.buffer),
-         bindBuffer(debugSources ? x.buffer(debug.tiled) : cp->debugStandIn.buffer)},
-        p);
+    rg::Slots now = slots;
+    now[0].sampler = cp->params.bilinear ? cp->linear : cp->nearest;
+    Status s = rg::bindGraphicsSlots(x, cp->composite, now, p);
     if (s.ok()) x.device->vk.CmdDraw(x.cmd, 3, 1, 0, 0);
     x.device->cmdEndRendering(x.cmd);
     return s;
   });
-  pass.read(l.color, rg::Use::FragmentSampled)
-      .read(l.depth, rg::Use::FragmentSampled)
-      .read(l.backgroundColor, rg::Use::FragmentSampled)
-      .read(l.backgroundDepth, rg::Use::FragmentSampled)
-      .read(displacement, rg::Use::FragmentStorageRead)
-      .read(previous, rg::Use::FragmentStorageRead)
-      .read(occupancy, rg::Use::FragmentStorageRead)
-      .read(scene, rg::Use::FragmentStorageRead)
-      .write(t.color, rg::Use::ColorAttachmentReadWrite)
-      .write(t.depth, rg::Use::DepthAttachmentWrite);
+  pass.write(t.color, rg::Use::ColorAttachmentReadWrite).write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
-  if (debugSources) pass.read(debug.animFrame, rg::Use::FragmentStorageRead).read(debug.tiled, rg::Use::FragmentStorageRead);
   pass.when([cp] { return !cp->computeThisFrame; });
   if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy));
   return Status();

@@ -96,8 +96,8 @@ bool readCache(Device& d, Impostors& imp, uint64_t key, std::string* why) {
   std::vector<uint8_t> payload;
   if (!readCacheFile(imp.cachePath, CacheKind::ImpostorViews, key, 2 * bytes, &payload, why)) return false;
   const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
-  Status s = uploadImage(d, imp.color, payload.data(), bytes, sampled);
-  if (s.ok()) s = uploadImage(d, imp.depth, payload.data() + bytes, bytes, sampled);
+  Status s = uploadImage(d, &imp.pendingUploads, imp.color, payload.data(), bytes, sampled);
+  if (s.ok()) s = uploadImage(d, &imp.pendingUploads, imp.depth, payload.data() + bytes, bytes, sampled);
   if (!s.ok()) {
     *why = s.message();
     return false;
@@ -209,8 +209,8 @@ Status bake(LayeredVegetation& lv) {
   CANOPY_TRY(g.bindImage(color, imp.color));
   CANOPY_TRY(g.bindImage(depth, imp.depth));
   CANOPY_TRY(g.bindBuffer(frameId, frameBuf.buffer));
-  const bool deferred = d.deferUploads && d.deferTarget;
-  CANOPY_TRY(submitOrDefer(d, std::move(work)));
+  const bool deferred = d.deferUploads;
+  CANOPY_TRY(submitOrDefer(d, std::move(work), &imp.pendingUploads));
   imp.bakeMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   if (!imp.cachePath.empty()) {
     if (deferred) {
@@ -273,7 +273,7 @@ Status createImpostors(LayeredVegetation& lv) {
   const VkDeviceSize tableBytes = table.size() * sizeof(gpu::ImpostorBox);
   CANOPY_TRY(createBuffer(d, tableBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                           MemoryUsage::DeviceLocal, &imp.boxTable, "impostors: boxes"));
-  CANOPY_TRY(uploadBuffer(d, imp.boxTable, table.data(), tableBytes, kImpostorRead));
+  CANOPY_TRY(uploadBuffer(d, &imp.pendingUploads, imp.boxTable, table.data(), tableBytes, kImpostorRead));
   imp.instanceCapacity = std::max<uint32_t>(imp.baked, 1);
   CANOPY_TRY(createBuffer(d, imp.instanceCapacity * sizeof(gpu::ImpostorInstance),
                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
@@ -286,6 +286,7 @@ void destroyImpostors(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
   Impostors& imp = lv.impostors;
+  dropPreparedWork(d, imp.pendingUploads);
   for (VkImageView v : imp.colorLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
   for (VkImageView v : imp.depthLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
   imp.colorLayerViews.clear();

@@ -22,6 +22,7 @@
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
 #include "engine/status.h"
+#include "engine/transfer.h"
 #include "render/model.h"
 #include "render/leaf_roots.h"
 #include "shared/impostor.h"
@@ -56,6 +57,7 @@ struct Impostors {
   Image color, depth;                                   // the atlas (2D arrays)
   std::vector<VkImageView> colorLayerViews, depthLayerViews;
   Buffer boxTable, instances;                            // gpu::ImpostorBox per baked node; this re-slice's list
+  PreparedList pendingUploads;  // the bake (or the cached views' upload) and the box table, not yet recorded (host devices)
   uint32_t instanceCapacity = 0;
   GraphicsPipeline bake, layered, layeredFade, perLayer, perLayerFade;
   VkSampler linearSampler = VK_NULL_HANDLE, nearestSampler = VK_NULL_HANDLE;

@@ -97,7 +97,7 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
     Image img;
     CANOPY_TRY(createImage(d, t, &img, isWhite ? "white texel" : m.images[i].name.c_str()));
     lv.mesh.textures.push_back(img);
-    CANOPY_TRY(uploadImage(d, img, isWhite ? white : m.images[i].rgba.data(),
+    CANOPY_TRY(uploadImage(d, &lv.mesh.pendingUploads, img, isWhite ? white : m.images[i].rgba.data(),
                            isWhite ? 4 : m.images[i].rgba.size(), sampled));
   }
   VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -200,7 +200,7 @@ Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liv
       std::memcpy(direct, data, bytes);
       return Status();
     }
-    return uploadBuffer(d, buf, data, bytes, rg::stateOf(use));
+    return uploadBuffer(d, &lv.mesh.pendingUploads, buf, data, bytes, rg::stateOf(use));
   };
   CANOPY_TRY(upload(lv.mesh.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
@@ -262,6 +262,7 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
 
 void destroyLayerMesh(LayeredVegetation& lv) {
   Device& d = *lv.device;
+  dropPreparedWork(d, lv.mesh.pendingUploads);  // uploads never recorded: nothing waits for them
   for (Image& t : lv.mesh.textures) destroyImage(d, t);
   if (lv.mesh.sampler) d.vk.DestroySampler(d.device, lv.mesh.sampler, d.allocationCallbacks);
   for (Buffer* b : {&lv.mesh.vertices, &lv.mesh.indexBuffer, &lv.mesh.leafRoots, &lv.mesh.bendVertices}) destroyBuffer(d, *b);

@@ -10,6 +10,7 @@
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
 #include "engine/render_graph.h"
+#include "engine/transfer.h"
 #include "engine/status.h"
 #include "render/material_split.h"
 #include "render/mesh_chunks.h"
@@ -49,6 +50,7 @@ struct LayerMesh {
   VkSampler sampler = VK_NULL_HANDLE;
   bool streamed = false;                  // not resident: re-slices stream it through `ring`
   MeshRing ring;
+  PreparedList pendingUploads;            // textures and buffers not yet recorded (host devices)
 };
 
 // A part of a mesh chunk drawn by one spread slice; a streamed mesh has the chunk's vertices,

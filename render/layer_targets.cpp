@@ -146,11 +146,7 @@ Status createLayerTargets(LayeredVegetation& lv) {
     CANOPY_TRY(g.bindImage(id, *img));
   }
   // On a host's device the clear is recorded into its next frame (lv.targets.pendingClear), else now.
-  std::vector<PreparedWork>* before = d.deferTarget;
-  d.deferTarget = &lv.targets.pendingClear;
-  Status s = submitOrDefer(d, std::move(work));
-  d.deferTarget = before;
-  return s;
+  return submitOrDefer(d, std::move(work), &lv.targets.pendingClear);
 }
 
 
@@ -158,12 +154,6 @@ Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImag
   return layerView(device, image, layer, out);
 }
 
-
-bool layerClearsPending(const LayeredVegetation& lv) { return !lv.targets.pendingClear.empty(); }
-
-Status flushLayerClears(LayeredVegetation& lv, VkCommandBuffer cmd) {
-  return flushPreparedWork(*lv.device, lv.targets.pendingClear, cmd);
-}
 
 namespace {
 Status readColorImage(LayeredVegetation& lv, const Image& img, uint32_t layer, std::vector<glm::vec4>* rgba) {

@@ -27,7 +27,7 @@ struct LayerTargets {
   Image color, depth, ids, backgroundColor, backgroundDepth;
   std::vector<VkImageView> colorLayerViews, depthLayerViews, idsLayerViews;  // per layer (fallback)
   LayerTargetSet next;                      // spread re-slicing only
-  std::vector<PreparedWork> pendingClear;   // the targets' first clear, not yet recorded (host devices)
+  PreparedList pendingClear;                // the targets' first clear, not yet recorded (host devices)
 };
 
 constexpr VkFormat kLayerDepthFormat = VK_FORMAT_D32_SFLOAT;
@@ -43,11 +43,6 @@ void destroyLayerTargets(LayeredVegetation& lv, bool now = false);
 // streamed mesh.
 bool spreadEnabled(const LayeredVegetation& lv);
 bool usesNextSet(const LayeredVegetation& lv);
-
-// The targets' first clear on a device that defers uploads (LayerTargets.pendingClear): whether one
-// waits, and its recording into the host's command buffer ahead of the frame's passes.
-bool layerClearsPending(const LayeredVegetation& lv);
-Status flushLayerClears(LayeredVegetation& lv, VkCommandBuffer cmd);
 
 // A 2D view of one layer of an array image.
 Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImageView* out);

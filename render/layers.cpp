@@ -99,63 +99,19 @@ Status chooseDrawPath(const LayeredVegetation& lv, const LayerSettings& s, bool*
 }
 }  // namespace
 
-bool operator==(const LayerSettings& a, const LayerSettings& b) {
-  return a.layout == b.layout && a.regions == b.regions && a.slice == b.slice && a.draw == b.draw && a.policy == b.policy &&
-         a.moveThreshold == b.moveThreshold && a.turnThresholdDegrees == b.turnThresholdDegrees &&
-         a.lightDirection == b.lightDirection && a.lightColor == b.lightColor && a.ambient == b.ambient &&
-         a.leafRefractiveIndex == b.leafRefractiveIndex && a.leafRoughness == b.leafRoughness &&
-         a.leafTransmission == b.leafTransmission && a.translucency == b.translucency &&
-         a.rebuildBudgetMs == b.rebuildBudgetMs && a.crossFadeFrames == b.crossFadeFrames && a.impostors == b.impostors;
-}
-
 Status validateLayerSettings(const LayerSettings& s) {
   // Each region first: their sum could wrap around 2^32.
   for (int i = 0; i < 3; ++i)
     if (s.layout.region[i] > kMaxLayers)
-      return Status::error("layer settings: layout.region[" + std::to_string(i) + "] = " + std::to_string(s.layout.region[i]) +
+      return Status::error("LayerSettings.layout.region[" + std::to_string(i) + "] = " + std::to_string(s.layout.region[i]) +
                            " is outside [0, " + std::to_string(kMaxLayers) + "]");
-  if (uint32_t(s.slice) > uint32_t(SliceMode::Geometry))
-    return Status::error("layer settings: slice = " + std::to_string(uint32_t(s.slice)) + " is outside LeafRoots (0)..Geometry (1)");
-  if (uint32_t(s.draw) > uint32_t(LayerDrawMode::PerLayer))
-    return Status::error("layer settings: draw = " + std::to_string(uint32_t(s.draw)) + " is outside Auto (0)..PerLayer (2)");
-  if (uint32_t(s.policy) > uint32_t(ReslicePolicy::EveryFrame))
-    return Status::error("layer settings: policy = " + std::to_string(uint32_t(s.policy)) + " is outside OnViewChange (0)..EveryFrame (1)");
   if (s.layout.count() < 1 || s.layout.count() > kMaxLayers)
-    return Status::error("layer settings: layout " + toString(s.layout) + " must hold 1.." + std::to_string(kMaxLayers) + " layers");
-  CANOPY_TRY(validateRegionSplit(s.regions));
-  if (!(s.moveThreshold >= 0 && s.moveThreshold <= 10))
-    return Status::error("layer settings: moveThreshold " + std::to_string(s.moveThreshold) + " is outside [0, 10]");
-  if (!(s.turnThresholdDegrees >= 0 && s.turnThresholdDegrees <= 180))
-    return Status::error("layer settings: turnThresholdDegrees " + std::to_string(s.turnThresholdDegrees) + " is outside [0, 180]");
-  if (!(s.rebuildBudgetMs >= 0 && s.rebuildBudgetMs <= 1000))
-    return Status::error("layer settings: rebuildBudgetMs " + std::to_string(s.rebuildBudgetMs) + " is outside [0, 1000]");
-  if (s.crossFadeFrames < 1 || s.crossFadeFrames > 240)
-    return Status::error("layer settings: crossFadeFrames " + std::to_string(s.crossFadeFrames) + " is outside [1, 240]");
-  if (!(s.ambient >= 0 && s.ambient <= 1))
-    return Status::error("layer settings: ambient " + std::to_string(s.ambient) + " is outside [0, 1]");
-  // The measured ranges Habel takes from Bousquet et al. (seed 004, III.B).
-  if (!(s.leafRefractiveIndex >= LEAF_IOR_MIN && s.leafRefractiveIndex <= LEAF_IOR_MAX))
-    return Status::error("layer settings: leafRefractiveIndex " + std::to_string(s.leafRefractiveIndex) +
-                         " is outside the measured range [1.2, 1.7]");
-  if (!(s.leafRoughness >= LEAF_ROUGHNESS_MIN && s.leafRoughness <= LEAF_ROUGHNESS_MAX))
-    return Status::error("layer settings: leafRoughness " + std::to_string(s.leafRoughness) +
-                         " is outside the measured range [0.078, 0.5]");
-  if (!(s.leafTransmission >= 0 && s.leafTransmission <= 1))
-    return Status::error("layer settings: leafTransmission " + std::to_string(s.leafTransmission) + " is outside [0, 1]");
-  for (int i = 0; i < 3; ++i) {
-    if (!std::isfinite(toGlm(s.lightDirection)[i])) return Status::error("layer settings: lightDirection must be finite");
-    if (!(toGlm(s.lightColor)[i] >= 0 && toGlm(s.lightColor)[i] <= 1000))
-      return Status::error("layer settings: lightColor[" + std::to_string(i) + "] = " + std::to_string(toGlm(s.lightColor)[i]) +
-                           " is outside [0, 1000]");
-  }
-  const ImpostorSettings& im = s.impostors;
-  if (uint32_t(im.mode) > uint32_t(ImpostorMode::ByProjectedSize))
-    return Status::error("layer settings: impostors.mode " + std::to_string(uint32_t(im.mode)) + " is not an ImpostorMode");
-  if (!(im.switchPixels >= 1.0f && im.switchPixels <= 4096.0f))
-    return Status::error("layer settings: impostors.switchPixels " + std::to_string(im.switchPixels) + " is outside [1, 4096]");
-  if (!(im.band >= 0.0f && im.band <= 4.0f))
-    return Status::error("layer settings: impostors.band " + std::to_string(im.band) + " is outside [0, 4]");
-  return Status();
+    return Status::error("LayerSettings.layout " + toString(s.layout) + " must hold 1.." + std::to_string(kMaxLayers) + " layers");
+  // The schema's leaf ranges are Habel's measured ones (seed 004, III.B), as the shader clamps them.
+  static_assert(LEAF_IOR_MIN == 1.2f && LEAF_IOR_MAX == 1.7f, "CANOPY_LAYER_SETTINGS's leafRefractiveIndex range");
+  static_assert(LEAF_ROUGHNESS_MIN == 0.078f && LEAF_ROUGHNESS_MAX == 0.5f, "CANOPY_LAYER_SETTINGS's leafRoughness range");
+  CANOPY_TRY(checkParams(s, "LayerSettings."));
+  return validateRegionSplit(s.regions);
 }
 
 Status createLayeredVegetation(Device& d, const VegetationModel& m, const LayeredVegetationDesc& desc,
@@ -248,6 +204,16 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   if (lv.pipelines.nearestSampler) d.vk.DestroySampler(d.device, lv.pipelines.nearestSampler, d.allocationCallbacks);
   destroyBuffer(d, lv.visible.frameBuffer);
   lv = LayeredVegetation{};
+}
+
+bool layerWorkPending(const LayeredVegetation& lv) {
+  return !lv.mesh.pendingUploads.empty() || !lv.impostors.pendingUploads.empty() || !lv.targets.pendingClear.empty();
+}
+
+Status flushLayerWork(LayeredVegetation& lv, VkCommandBuffer cmd) {
+  CANOPY_TRY(flushPreparedWork(*lv.device, lv.mesh.pendingUploads, cmd));
+  CANOPY_TRY(flushPreparedWork(*lv.device, lv.impostors.pendingUploads, cmd));
+  return flushPreparedWork(*lv.device, lv.targets.pendingClear, cmd);
 }
 
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* targetsRecreated) {

@@ -95,6 +95,13 @@ Status createLayeredVegetation(Device& device, const VegetationModel& model, con
                                LayeredVegetation* out);
 void destroyLayeredVegetation(LayeredVegetation& lv);
 
+// Work the parts prepared on a device that defers it (engine/transfer.h, submitOrDefer): the
+// mesh's uploads, the impostors' bake and the targets' first clear, each kept in its part's list.
+// Whether any waits, and its recording into the host's command buffer ahead of the frame's passes
+// (the mesh before the bake that draws it).
+bool layerWorkPending(const LayeredVegetation& lv);
+Status flushLayerWork(LayeredVegetation& lv, VkCommandBuffer cmd);
+
 // Changes settings at run time; a different layer count recreates the layer images (a graph
 // holding them must be rebuilt), anything else only marks the layers for a rebuild.
 // *targetsRecreated (optional) tells whether the layer images were recreated.

@@ -6,6 +6,7 @@
 
 #include "engine/camera.h"
 #include "engine/device.h"
+#include "engine/pass_slots.h"
 #include "engine/transfer.h"
 
 namespace canopy {
@@ -18,28 +19,9 @@ const rg::State kFrameRead{VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | VK_PIPELINE_
                                VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
 
-Status checkField(const std::string& name, float v, float lo, float hi, bool openLow = false) {
-  if (!std::isfinite(v) || v > hi || (openLow ? v <= lo : v < lo))
-    return Status::error("CanopyParams.perVertex." + name + " = " + std::to_string(v) + " is outside " +
-                         (openLow ? "(" : "[") + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return Status();
-}
-
 }  // namespace
 
-Status validatePerVertexParams(const PerVertexParams& p) {
-  for (int i = 0; i < 4; ++i) {
-    CANOPY_TRY(checkField("flexibility[" + std::to_string(i) + "]", p.flexibility[i], 0.0f, 100.0f));
-    CANOPY_TRY(checkField("frequency[" + std::to_string(i) + "]", p.frequency[i], 0.0f, 100.0f));
-  }
-  CANOPY_TRY(checkField("leafFlexibility", p.leafFlexibility, 0.0f, 100.0f));
-  CANOPY_TRY(checkField("leafFrequency", p.leafFrequency, 0.0f, 100.0f));
-  CANOPY_TRY(checkField("referenceSpeed", p.referenceSpeed, 0.0f, 1000.0f, true));
-  CANOPY_TRY(checkField("lateral", p.lateral, 0.0f, 1.0f));
-  CANOPY_TRY(checkField("maxAngle", p.maxAngle, 0.0f, 1.5f, true));
-  CANOPY_TRY(checkField("taper", p.taper, 0.5f, 4.0f));
-  return Status();
-}
+Status validatePerVertexParams(const PerVertexParams& p) { return checkParams(p, "PerVertexParams."); }
 
 Status validateBendHierarchy(const std::vector<gpu::BendVertex>& bend, const std::vector<gpu::BendBranch>& branches,
                              size_t vertexCount, const std::string& what) {
@@ -125,7 +107,7 @@ gpu::BendFrame makeBendFrame(const PerVertexParams& p, const WindParams& wind, c
 }
 
 Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector<gpu::BendBranch>& branches,
-                       const PerVertexDesc& desc, PerVertexAnimation* out) {
+                       const PerVertexDesc& desc, PerVertexAnimation* out, PreparedList* deferred) {
   *out = PerVertexAnimation{};
   PerVertexAnimation& pv = *out;
   pv.device = &d;
@@ -153,11 +135,11 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   CANOPY_TRY(createBuffer(d, branchBytes, usage, MemoryUsage::DeviceLocal, &pv.branches, "per-vertex: branches"));
   std::vector<gpu::BendBranch> table = branches;
   if (table.empty()) table.push_back(gpu::BendBranch{glm::vec3(0), BEND_NO_PARENT, glm::vec3(0, 1, 0), 0});  // never read
-  CANOPY_TRY(uploadBuffer(d, pv.branches, table.data(), branchBytes, kFrameRead));
+  CANOPY_TRY(uploadBuffer(d, deferred, pv.branches, table.data(), branchBytes, kFrameRead));
   if (!pv.hierarchy) {
     CANOPY_TRY(createBuffer(d, 16, usage, MemoryUsage::DeviceLocal, &pv.dummy, "per-vertex: no hierarchy"));
     const uint32_t zero[4] = {};
-    CANOPY_TRY(uploadBuffer(d, pv.dummy, zero, sizeof zero, rg::stateOf(rg::Use::VertexStorageRead)));
+    CANOPY_TRY(uploadBuffer(d, deferred, pv.dummy, zero, sizeof zero, rg::stateOf(rg::Use::VertexStorageRead)));
   }
   return Status();
 }
@@ -212,15 +194,15 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
    })
       .write(frame, rg::Use::TransferDst)
       .write(bendFrame, rg::Use::TransferDst);
-  g.addPass("per-vertex: branch motion", [p](rg::PassContext& c) {
-     const uint32_t n = std::min<uint32_t>(p->current.tipCount, 64u * 4096u);  // the shader strides over the rest
-     if (n == 0) return Status();
-     return dispatch(*c.device, c.cmd, p->tipsPipeline, n, 1, 1,
-                     {bindBuffer(p->bendFrame.buffer), bindBuffer(p->branches.buffer), bindBuffer(p->tips.buffer)},
-                     nullptr, 0);
-   })
-      .read(bendFrame, rg::Use::ComputeStorageRead)
-      .write(tips, rg::Use::ComputeStorageWrite);
+  // The branch table is uploaded at creation and never written again: bound outside the graph.
+  rg::addSlotPass(g, "per-vertex: branch motion",
+                  {rg::slot(bendFrame, rg::Use::ComputeStorageRead), rg::outsideGraph(bindBuffer(pv.branches.buffer)),
+                   rg::slot(tips, rg::Use::ComputeStorageWrite)},
+                  [p](rg::PassContext& c, const rg::Slots& s) {
+                    const uint32_t n = std::min<uint32_t>(p->current.tipCount, 64u * 4096u);  // the shader strides over the rest
+                    if (n == 0) return Status();
+                    return rg::dispatchSlots(c, p->tipsPipeline, s, n, 1, 1, nullptr, 0);
+                  });
   const bool motion = pv.desc.motionFormat != VK_FORMAT_UNDEFINED;
   LayeredVegetation* l = &lv;
   auto draw = g.addPass("per-vertex: draw", [p, l, t, motion](rg::PassContext& x) {

@@ -43,8 +43,10 @@ Status validateBendHierarchy(const std::vector<gpu::BendVertex>& bend, const std
                              size_t vertexCount, const std::string& what);
 
 // Creates the pipeline and uploads the branch table (`branches` may be empty: the fallback).
+// The branch table's upload goes to `deferred` on a device that defers its work (engine/transfer.h,
+// submitOrDefer); null: submitted at once.
 Status createPerVertex(Device& device, const LayeredVegetation& lv, const std::vector<gpu::BendBranch>& branches,
-                       const PerVertexDesc& desc, PerVertexAnimation* out);
+                       const PerVertexDesc& desc, PerVertexAnimation* out, PreparedList* deferred = nullptr);
 void destroyPerVertex(PerVertexAnimation& pv);
 
 // The bend frame for the wind and parameters at time t (the model's bounds give the fallback

@@ -101,7 +101,7 @@ class CompositeTest : public GpuTest {
                     depthW = rg::stateOf(rg::Use::DepthAttachmentWrite), src = rg::stateOf(rg::Use::TransferSrc),
                     read = rg::stateOf(rg::Use::ComputeStorageRead);
     auto upload = [&](const Image& img, const void* data, size_t bytes, rg::State st) {
-      Status s = uploadImage(dev, img, data, bytes, st);
+      Status s = uploadImage(dev, nullptr, img, data, bytes, st);
       EXPECT_TRUE(s.ok()) << s.message();
     };
     const auto lcHalf = toHalf(sc.layerColor), bgHalf = toHalf(sc.bgColor), scHalf = toHalf(sc.sceneColor);
@@ -117,7 +117,7 @@ class CompositeTest : public GpuTest {
     for (auto [buf, data] : {std::pair{&disp, &sc.disp}, std::pair{&prev, &sc.prev}}) {
       EXPECT_TRUE(createBuffer(dev, data->size() * 8, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                MemoryUsage::DeviceLocal, buf).ok());
-      EXPECT_TRUE(uploadBuffer(dev, *buf, data->data(), data->size() * 8, read).ok());
+      EXPECT_TRUE(uploadBuffer(dev, nullptr, *buf, data->data(), data->size() * 8, read).ok());
     }
     Compositor c;
     CompositorDesc cd;

@@ -50,11 +50,11 @@ TEST_F(DeviceCore, UploadReadbackRoundTrip) {
   ASSERT_TRUE(createBuffer(dev, data.size() * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT |
                            VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::DeviceLocal, &b).ok());
   const rg::State st = rg::stateOf(rg::Use::ComputeStorageRead);
-  ASSERT_TRUE(uploadBuffer(dev, b, data.data(), data.size() * 4, st).ok());
+  ASSERT_TRUE(uploadBuffer(dev, nullptr, b, data.data(), data.size() * 4, st).ok());
   std::vector<uint32_t> back(data.size(), 0);
   ASSERT_TRUE(readbackBuffer(dev, b, back.data(), back.size() * 4, st).ok());
   EXPECT_EQ(back, data);
-  Status s = uploadBuffer(dev, b, data.data(), data.size() * 4, st, 8);
+  Status s = uploadBuffer(dev, nullptr, b, data.data(), data.size() * 4, st, 8);
   EXPECT_FALSE(s.ok()) << "an upload past the end must be refused";
   destroyBuffer(dev, b);
 }

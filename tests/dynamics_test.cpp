@@ -56,7 +56,7 @@ class DynamicsTest : public GpuTest {
     for (int i = 0; i < 3; ++i) {
       EXPECT_TRUE(createBuffer(dev, bytes[i], VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                                MemoryUsage::DeviceLocal, &b[i]).ok());
-      EXPECT_TRUE(uploadBuffer(dev, b[i], data[i], bytes[i], read).ok());
+      EXPECT_TRUE(uploadBuffer(dev, nullptr, b[i], data[i], bytes[i], read).ok());
     }
     rg::RenderGraph g;
     rg::ResourceId ids[3];

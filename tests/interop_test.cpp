@@ -8,6 +8,7 @@
 #include "engine/transfer.h"
 #include "shaders/shared/interop_probe.h"
 #include "tests/gpu_test.h"
+#include "tools/test_shaders.h"
 
 using namespace canopy;
 
@@ -28,7 +29,7 @@ TEST_F(Interop, PushConstantLayoutMatchesCpp) {
   for (int i = 0; i < 16; ++i) expected.push_back(float(100 + i));
 
   ComputePipeline pipe;
-  Status s = createComputePipeline(dev, {"interop_probe.comp", sizeof probe}, &pipe);
+  Status s = createComputePipeline(dev, {"interop_probe.comp", sizeof probe, {}, false, &canopy_test::findEmbeddedShader}, &pipe);
   ASSERT_TRUE(s.ok()) << s.message();
   Buffer out;
   ASSERT_TRUE(createBuffer(dev, expected.size() * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT |
@@ -54,8 +55,8 @@ TEST_F(Interop, PushConstantLayoutMatchesCpp) {
 // dispatch() checks the push-constant size against the pipeline and records nothing on mismatch.
 TEST_F(Interop, DispatchRefusesWrongPushSize) {
   ComputePipeline pipe;
-  ASSERT_TRUE(createComputePipeline(dev, {"interop_probe.comp",
-                                          sizeof(gpu::InteropProbe)}, &pipe).ok());
+  ASSERT_TRUE(createComputePipeline(dev, {"interop_probe.comp", sizeof(gpu::InteropProbe), {}, false,
+                                          &canopy_test::findEmbeddedShader}, &pipe).ok());
   struct Wrong { float x[3]; } wrong{};
   Status s = submitAndWait(dev, [&](VkCommandBuffer cmd) {
     return dispatch(dev, cmd, pipe, 1, 1, 1, {bindBuffer(VkBuffer(VK_NULL_HANDLE))}, wrong);

@@ -965,7 +965,7 @@ TEST_F(LayersTest, ABacklitLeafGlowsOnItsUnlitSideAndOutOfRangeLeafParametersAre
   s.leafRefractiveIndex = 1.1f;
   Status st = validateLayerSettings(s);
   EXPECT_FALSE(st.ok());
-  EXPECT_NE(st.message().find("leafRefractiveIndex 1.1"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("leafRefractiveIndex = 1.1"), std::string::npos) << st.message();
   EXPECT_NE(st.message().find("[1.2, 1.7]"), std::string::npos) << st.message();
   s = LayerSettings{};
   s.leafRoughness = 0.6f;

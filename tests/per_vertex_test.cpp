@@ -22,6 +22,7 @@
 #include "tests/gpu_test.h"
 #include "tests/test_host.h"
 #include "tools/leaf_cloud.h"
+#include "tools/test_shaders.h"
 #include "tools/scene_generator.h"
 
 using namespace canopy;
@@ -95,7 +96,7 @@ class PerVertexTest : public GpuTest {
     f.branchCount = uint32_t(m.branches.size());
     f.tipCount = f.branchCount + leaves;
     ComputePipeline pipe, tipsPipe;
-    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", sizeof(uint32_t)}, &pipe);
+    Status s = createComputePipeline(dev, {"per_vertex_probe.comp", sizeof(uint32_t), {}, false, &canopy_test::findEmbeddedShader}, &pipe);
     if (s.ok()) s = createComputePipeline(dev, {"per_vertex_tips.comp", 0}, &tipsPipe);
     EXPECT_TRUE(s.ok()) << s.message();
     const VkBufferUsageFlags usage =
@@ -108,7 +109,7 @@ class PerVertexTest : public GpuTest {
     if (perVertex.empty()) perVertex.push_back(gpu::BendVertex{});
     auto make = [&](Buffer& b, const void* data, size_t bytes, const char* name) {
       if (s.ok()) s = createBuffer(dev, bytes, usage, MemoryUsage::DeviceLocal, &b, name);
-      if (s.ok() && data) s = uploadBuffer(dev, b, data, bytes, read);
+      if (s.ok() && data) s = uploadBuffer(dev, nullptr, b, data, bytes, read);
     };
     make(frame, &f, sizeof f, "probe frame");
     make(branches, table.data(), table.size() * sizeof(gpu::BendBranch), "probe branches");

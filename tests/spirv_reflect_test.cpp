@@ -14,6 +14,7 @@
 
 #include "engine/shader_registry.h"
 #include "engine/spirv_reflect.h"
+#include "tools/test_shaders.h"
 
 using namespace canopy;
 
@@ -43,6 +44,7 @@ std::string run(const std::string& command) {
 // glslang's reflection of the active bindings: "name: offset -1, type 8b5e, ..., binding 4, ..."
 // lines under "Uniform reflection:" (opaque types) and the block sections (buffers).
 std::map<int, Kind> glslangBindings(const std::string& source, std::string* log) {
+  // The include folder is the runtime's shaders/ for both registries (cmake/CanopyShaders.cmake).
   const std::string cmd = std::string(CANOPY_GLSLANG_VALIDATOR) + " -V --target-env vulkan1.2 -I" +
                           CANOPY_SHADER_SOURCES + " -q -o /dev/null " + source + " 2>&1";
   *log = run(cmd);
@@ -90,31 +92,57 @@ Status reflectSource(const std::string& name, const std::string& glsl, Descripto
 }  // namespace
 
 // The layout each embedded shader's pipelines are built with, against glslang's reflection of the
-// same source: every binding glslang sees active is there with its kind.
+// same source: every binding glslang sees active is there with its kind. Both registries: the
+// runtime's (shaders/) and the tests' (tests/shaders, tools/test_shaders.h).
 TEST(SpirVReflect, EveryEmbeddedShaderLayoutMatchesGlslangReflection) {
-  size_t shaders = 0, bindings = 0;
-  for (size_t i = 0; const EmbeddedShader* sh = embeddedShaderAt(i); ++i) {
-    SCOPED_TRACE(sh->name);
-    ++shaders;
-    DescriptorTypes ours;
-    Status s = reflectDescriptors(sh->code, sh->sizeBytes / 4, &ours);
-    ASSERT_TRUE(s.ok()) << s.message();
-    // (No gap is checked per pipeline at creation: a fragment shader may hold only the bindings
-    // after its vertex shader's, as composite_resolve.frag does.)
-    std::string log;
-    const std::map<int, Kind> theirs = glslangBindings(std::string(CANOPY_SHADER_SOURCES) + "/" + sh->name, &log);
-    ASSERT_NE(log.find("Uniform reflection:"), std::string::npos) << "glslang printed no reflection:\n" << log;
-    for (const auto& [binding, kind] : theirs) {
-      ASSERT_LT(size_t(binding), ours.size()) << "glslang sees binding " << binding << " (" << kindName(kind)
-                                              << "), the SPIR-V reading has " << ours.size() << " bindings";
-      EXPECT_EQ(kindName(kindOf(ours[binding])), std::string(kindName(kind)))
-          << "binding " << binding << ": ours " << descriptorTypeName(ours[binding]) << "\n" << log;
-      ++bindings;
+  struct Registry {
+    const EmbeddedShader* (*at)(size_t);
+    const char* sources;
+  };
+  const Registry registries[] = {{&embeddedShaderAt, CANOPY_SHADER_SOURCES},
+                                 {&canopy_test::embeddedShaderAt, CANOPY_TEST_SHADER_SOURCES}};
+  size_t shaders = 0, testShaders = 0, bindings = 0;
+  for (const Registry& r : registries) {
+    for (size_t i = 0; const EmbeddedShader* sh = r.at(i); ++i) {
+      SCOPED_TRACE(sh->name);
+      ++(r.at == &embeddedShaderAt ? shaders : testShaders);
+      DescriptorTypes ours;
+      Status s = reflectDescriptors(sh->code, sh->sizeBytes / 4, &ours);
+      ASSERT_TRUE(s.ok()) << s.message();
+      // (No gap is checked per pipeline at creation: a fragment shader may hold only the bindings
+      // after its vertex shader's, as composite_resolve.frag does.)
+      std::string log;
+      const std::map<int, Kind> theirs = glslangBindings(std::string(r.sources) + "/" + sh->name, &log);
+      ASSERT_NE(log.find("Uniform reflection:"), std::string::npos) << "glslang printed no reflection:\n" << log;
+      for (const auto& [binding, kind] : theirs) {
+        ASSERT_LT(size_t(binding), ours.size()) << "glslang sees binding " << binding << " (" << kindName(kind)
+                                                << "), the SPIR-V reading has " << ours.size() << " bindings";
+        EXPECT_EQ(kindName(kindOf(ours[binding])), std::string(kindName(kind)))
+            << "binding " << binding << ": ours " << descriptorTypeName(ours[binding]) << "\n" << log;
+        ++bindings;
+      }
     }
   }
-  std::printf("%zu embedded shaders, %zu active bindings compared with glslang's reflection\n", shaders, bindings);
+  std::printf("%zu runtime shaders + %zu test shaders, %zu active bindings compared with glslang's reflection\n",
+              shaders, testShaders, bindings);
   EXPECT_GT(shaders, 30u);
+  EXPECT_EQ(testShaders, 5u);
   EXPECT_GT(bindings, 100u);
+}
+
+// The tests' shaders are not in the runtime a host links, and the runtime's are not duplicated
+// into the tests' registry.
+TEST(SpirVReflect, TestShadersLiveOutsideTheRuntime) {
+  size_t n = 0;
+  for (size_t i = 0; const EmbeddedShader* sh = canopy_test::embeddedShaderAt(i); ++i, ++n) {
+    EXPECT_EQ(findEmbeddedShader(sh->name), nullptr) << sh->name << " is embedded in the runtime library";
+    EXPECT_EQ(canopy_test::findEmbeddedShader(sh->name), sh);
+  }
+  for (size_t i = 0; const EmbeddedShader* sh = embeddedShaderAt(i); ++i)
+    EXPECT_EQ(canopy_test::findEmbeddedShader(sh->name), nullptr) << sh->name;
+  EXPECT_EQ(n, 5u);
+  for (const char* name : {"example_write.comp", "interop_probe.comp", "per_vertex_probe.comp"})
+    EXPECT_NE(canopy_test::findEmbeddedShader(name), nullptr) << name;
 }
 
 TEST(SpirVReflect, ReadsEachDescriptorKind) {

@@ -3,15 +3,22 @@
 #include <algorithm>
 
 #include "engine/device.h"
+#include "engine/pass_slots.h"
+#include "tools/test_shaders.h"
 
 namespace canopy {
 
 Status createExamplePipelines(Device& d, ExamplePipelines* out) {
   *out = ExamplePipelines{};
-  CANOPY_TRY(createComputePipeline(d, {"example_write.comp", sizeof(gpu::ExampleWriteParams)}, &out->write));
-  CANOPY_TRY(createComputePipeline(d, {"example_transform.comp", sizeof(gpu::ExampleTransformParams)},
-                                   &out->transform));
-  CANOPY_TRY(createComputePipeline(d, {"example_reduce.comp", sizeof(gpu::ExampleReduceParams)}, &out->reduce));
+  // The example passes' shaders are the tests' (tools/test_shaders.h), not the runtime's.
+  auto desc = [](const char* shader, uint32_t push) {
+    ComputePipelineDesc x{shader, push};
+    x.shaderLookup = &canopy_test::findEmbeddedShader;
+    return x;
+  };
+  CANOPY_TRY(createComputePipeline(d, desc("example_write.comp", sizeof(gpu::ExampleWriteParams)), &out->write));
+  CANOPY_TRY(createComputePipeline(d, desc("example_transform.comp", sizeof(gpu::ExampleTransformParams)), &out->transform));
+  CANOPY_TRY(createComputePipeline(d, desc("example_reduce.comp", sizeof(gpu::ExampleReduceParams)), &out->reduce));
   return Status();
 }
 
@@ -36,29 +43,25 @@ Status buildExampleGraph(Device& d, const ExamplePipelines& pipes, const Example
   out->image = g.createImage("transformed", img);
   out->result = g.importBuffer("result", sizeof(gpu::ExampleResult), {}, rg::stateOf(rg::Use::HostRead));
   const ExamplePipelines* p = &pipes;
-  const ExampleGraph* o = out;
-  Device* dev = &d;
 
-  g.addPass("write", [=](rg::PassContext& c) {
-     gpu::ExampleWriteParams pc{n, prm.seed, prm.scale};
-     return dispatch(*dev, c.cmd, p->write, n, 1, 1, {bindBuffer(c.buffer(o->values))}, pc);
-   }).write(out->values, rg::Use::ComputeStorageWrite);
+  // Each pass's descriptors and graph uses from one slot list (engine/pass_slots.h).
+  using rg::Use;
+  rg::addSlotPass(g, "write", {rg::slot(out->values, Use::ComputeStorageWrite)}, [=](rg::PassContext& c, const rg::Slots& s) {
+    const gpu::ExampleWriteParams pc{n, prm.seed, prm.scale};
+    return rg::dispatchSlots(c, p->write, s, n, 1, 1, pc);
+  });
   if (prm.passCount >= 2)
-    g.addPass("transform", [=](rg::PassContext& c) {
-       gpu::ExampleTransformParams pc{prm.width, prm.height, prm.gain, prm.bias};
-       return dispatch(*dev, c.cmd, p->transform, prm.width, prm.height, 1,
-                       {bindBuffer(c.buffer(o->values)), bindImage(c.image(o->image).view)}, pc);
-     })
-        .read(out->values, rg::Use::ComputeStorageRead)
-        .write(out->image, rg::Use::ComputeStorageWrite);
+    rg::addSlotPass(g, "transform", {rg::slot(out->values, Use::ComputeStorageRead), rg::slot(out->image, Use::ComputeStorageWrite)},
+                    [=](rg::PassContext& c, const rg::Slots& s) {
+                      const gpu::ExampleTransformParams pc{prm.width, prm.height, prm.gain, prm.bias};
+                      return rg::dispatchSlots(c, p->transform, s, prm.width, prm.height, 1, pc);
+                    });
   if (prm.passCount >= 3)
-    g.addPass("reduce", [=](rg::PassContext& c) {
-       gpu::ExampleReduceParams pc{prm.width, prm.height};
-       return dispatch(*dev, c.cmd, p->reduce, 256, 1, 1,
-                       {bindImage(c.image(o->image).view), bindBuffer(c.buffer(o->result))}, pc);
-     })
-        .read(out->image, rg::Use::ComputeStorageRead)
-        .write(out->result, rg::Use::ComputeStorageWrite);
+    rg::addSlotPass(g, "reduce", {rg::slot(out->image, Use::ComputeStorageRead), rg::slot(out->result, Use::ComputeStorageWrite)},
+                    [=](rg::PassContext& c, const rg::Slots& s) {
+                      const gpu::ExampleReduceParams pc{prm.width, prm.height};
+                      return rg::dispatchSlots(c, p->reduce, s, 256, 1, 1, pc);
+                    });
   // Prefix graphs (timing a pass alone) keep their last pass alive explicitly.
   if (prm.passCount == 1) g.markOutput(out->values);
   if (prm.passCount == 2) g.markOutput(out->image);

@@ -20,6 +20,8 @@
 
 // The version, Result and Status, Float3 / Float4x4 / CanopyCamera, and the host's device.
 #include <canopy/canopy_core.h>
+// The parameter schema the parameter structs are declared with.
+#include <canopy/canopy_schema.h>
 
 namespace canopy {
 
@@ -110,7 +112,9 @@ struct LeafRootOptions {
 };
 
 // ---------------------------------------------------------------------------------------------
-// Parameters (all changeable every frame through setCanopyParams unless said otherwise)
+// Parameters (all changeable every frame through setCanopyParams unless said otherwise). Each
+// struct is declared by its field list (<canopy/canopy_schema.h>): one line per field with its
+// type, name, default, check, range, unit and what it does; docs/parameters.md is the same table.
 
 inline constexpr uint32_t kMaxLayers = 32;
 inline constexpr uint32_t kMaxMotors = 8;
@@ -128,57 +132,64 @@ enum WindSide : uint32_t { kWindFromLeft = 1, kWindFromRight = 2, kWindFromBotto
 
 // Injected wind: speed through a source side = strength * (baseline + modulation sin(2 pi f t))
 // * (1 + gust * noise), the noise travelling along the side.
-struct WindParams {
-  uint32_t sides = kWindFromLeft;  // WindSide mask, 0..15 (0: no boundary wind)
-  float strength = 0.5f;           // domain units/s, [0, 1000]
-  float frequency = 0.25f;         // Hz, [0, 1000]
-  float baseline = 1.0f;           // a, [-10, 10]
-  float modulation = 0.3f;         // b, [-10, 10]
-  float gust = 0.3f;               // relative gust amplitude, [0, 1]
-  float gustScale = 0.25f;         // gust wavelength along a side, domain units, (0, 100]
-  float gustSpeed = 0.3f;          // gust travel speed along a side, domain units/s, [-1000, 1000]
-  uint32_t seed = 1;               // gust noise seed
-};
+#define CANOPY_WIND_PARAMS(X)                                                                                           \
+  X(uint32_t, sides, kWindFromLeft, Closed, 0, 15, "WindSide mask", "the source sides (0: no boundary wind)")          \
+  X(float, strength, 0.5f, Closed, 0, 1000, "domain units/s", "wind speed through a source side")                     \
+  X(float, frequency, 0.25f, Closed, 0, 1000, "Hz", "f of the speed profile a + b sin(2 pi f t)")                      \
+  X(float, baseline, 1.0f, Closed, -10, 10, "", "a of the speed profile")                                              \
+  X(float, modulation, 0.3f, Closed, -10, 10, "", "b of the speed profile")                                            \
+  X(float, gust, 0.3f, Closed, 0, 1, "", "relative gust amplitude")                                                    \
+  X(float, gustScale, 0.25f, AboveMin, 0, 100, "domain units", "gust wavelength along a side")                         \
+  X(float, gustSpeed, 0.3f, Closed, -1000, 1000, "domain units/s", "gust travel speed along a side")                   \
+  X(uint32_t, seed, 1, None, 0, 0, "", "gust noise seed")
+CANOPY_PARAM_STRUCT(WindParams, CANOPY_WIND_PARAMS)
+
 // A point "motor" (a character, an explosion): a mass source in the fluid, so air flows outward
 // around it (negative strength: inward). The source density falls linearly to zero at the radius.
-struct Motor {
-  float x = 0.5f, y = 0.5f;  // centre, domain units (may lie outside [0,1])
-  float radius = 0.1f;       // domain units, (0, 100]
-  float strength = 1.0f;     // outward flow speed at the radius, domain units/s, [-1000, 1000]
-};
-struct FluidParams {
-  FluidScheme scheme = FluidScheme::MacMultigrid;
-  FluidBoundary boundary = FluidBoundary::WindTunnel;  // MAC scheme only; Stam's has walls
-  float viscosity = 1e-4f;       // domain units^2/s, [0, 10]
-  uint32_t iterations = 20;      // relaxation sweeps, [1, 10000]
-  uint32_t multigridCycles = 2;  // V-cycles per MAC projection, [1, 64]
-};
+#define CANOPY_MOTOR_PARAMS(X)                                                                                          \
+  X(float, x, 0.5f, Closed, -100, 100, "domain units", "centre x (may lie outside [0, 1])")                            \
+  X(float, y, 0.5f, Closed, -100, 100, "domain units", "centre y (may lie outside [0, 1])")                            \
+  X(float, radius, 0.1f, AboveMin, 0, 100, "domain units", "where the source density reaches zero")                    \
+  X(float, strength, 1.0f, Closed, -1000, 1000, "domain units/s", "outward flow speed at the radius")
+CANOPY_PARAM_STRUCT(Motor, CANOPY_MOTOR_PARAMS)
+
+#define CANOPY_FLUID_PARAMS(X)                                                                                          \
+  X(FluidScheme, scheme, FluidScheme::MacMultigrid, Enum, 0, 1, "MacMultigrid | Stam", "the stable-fluids solver")      \
+  X(FluidBoundary, boundary, FluidBoundary::WindTunnel, Enum, 0, 1, "WindTunnel | Walls",                                \
+    "the domain's edges (MAC scheme only; Stam's has walls)")                                                          \
+  X(float, viscosity, 1e-4f, Closed, 0, 10, "domain units^2/s", "kinematic viscosity")                                 \
+  X(uint32_t, iterations, 20, Closed, 1, 10000, "", "relaxation sweeps")                                               \
+  X(uint32_t, multigridCycles, 2, Closed, 1, 64, "", "V-cycles per MAC projection")
+CANOPY_PARAM_STRUCT(FluidParams, CANOPY_FLUID_PARAMS)
+
 // The oscillator V'' = c^2 lap V - k (V - g V_wind) - zeta V' (docs/design.md).
-struct WaveParams {
-  float stiffness = 40.0f;    // k, 1/s^2, [0, 1e6]
-  float speed = 0.05f;        // c, domain units/s, [0, 100]
-  float damping = 2.0f;       // zeta, 1/s, [0, 1000]
-  float gain = 1.0f;          // g, [-100, 100]
-  uint32_t maxSubsteps = 64;  // [1, 4096]: a longer step is clamped (stats.clampedSeconds)
-};
-struct SimulationParams {
-  WindParams wind;
-  FluidParams fluid;
-  WaveParams wave;
-  std::vector<Motor> motors;  // at most kMaxMotors
-};
+#define CANOPY_WAVE_PARAMS(X)                                                                                           \
+  X(float, stiffness, 40.0f, Closed, 0, 1e6, "1/s^2", "k: pull towards the driven rest state")                         \
+  X(float, speed, 0.05f, Closed, 0, 100, "domain units/s", "c: wave propagation speed")                                \
+  X(float, damping, 2.0f, Closed, 0, 1000, "1/s", "zeta")                                                              \
+  X(float, gain, 1.0f, Closed, -100, 100, "", "g: how strongly the wind drives the wave")                              \
+  X(uint32_t, maxSubsteps, 64, Closed, 1, 4096, "", "stable substeps per step; a longer step is clamped (stats.clampedSeconds)")
+CANOPY_PARAM_STRUCT(WaveParams, CANOPY_WAVE_PARAMS)
+
+#define CANOPY_SIMULATION_PARAMS(X)                                                                                     \
+  X(WindParams, wind, {}, Nested, 0, 0, "", "injected wind")                                                            \
+  X(FluidParams, fluid, {}, Nested, 0, 0, "", "the fluid solver")                                                       \
+  X(WaveParams, wave, {}, Nested, 0, 0, "", "the wave oscillator")                                                      \
+  X(std::vector<Motor>, motors, {}, Each, 0, kMaxMotors, "", "point motors, at most kMaxMotors")
+CANOPY_PARAM_STRUCT(SimulationParams, CANOPY_SIMULATION_PARAMS)
+
 // Fixed at creation. The simulation domain is the unit square of the simulation plane.
-struct SimulationDesc {
-  uint32_t gridSize = 64;        // N: a power of two in [4, 1024]
-  uint32_t historySize = 0;      // H tiled fields kept; 0: enough for historySeconds at nominalDt
-  float historySeconds = 1.0f;   // (0, 3600]
-  float nominalDt = 1.0f / 30.0f;
-  // Invocations of the single-workgroup solver kernels, a power of two in [32, 1024]; 0: chosen by
-  // device class (docs/performance.md): on CPU devices such as lavapipe, grids of 16..128 run the
-  // diffusion, projection and oscillator as one subgroup with the fields in registers (other steps
-  // at 64), GPUs take 1024. A non-zero value forces the workgroup kernels at that width.
-  uint32_t groupSize = 0;
-};
+// groupSize: invocations of the single-workgroup solver kernels; 0: chosen by device class
+// (docs/performance.md): on CPU devices such as lavapipe, grids of 16..128 run the diffusion,
+// projection and oscillator as one subgroup with the fields in registers (other steps at 64),
+// GPUs take 1024. A non-zero value forces the workgroup kernels at that width.
+#define CANOPY_SIMULATION_DESC(X)                                                                                       \
+  X(uint32_t, gridSize, 64, PowerOfTwo, 4, 1024, "cells", "N: the grid is N x N (the multigrid and red-black kernels need a power of two)") \
+  X(uint32_t, historySize, 0, Closed, 0, 4096, "fields", "H tiled fields kept; 0: enough for historySeconds at nominalDt") \
+  X(float, historySeconds, 1.0f, AboveMin, 0, 3600, "s", "the delayed fields' reach")                                  \
+  X(float, nominalDt, 1.0f / 30.0f, AboveMin, 0, 10, "s", "the step the history is sized for")                        \
+  X(uint32_t, groupSize, 0, PowerOfTwoOrZero, 32, 1024, "invocations", "single-workgroup kernels' width; 0: by device class")
+CANOPY_PARAM_STRUCT(SimulationDesc, CANOPY_SIMULATION_DESC)
 
 // Layers per depth region, written like the paper: {3, 1, 1} is "5(3-1-1)".
 struct LayerLayout {
@@ -188,16 +199,15 @@ struct LayerLayout {
 inline bool operator==(const LayerLayout& a, const LayerLayout& b) {
   return a.region[0] == b.region[0] && a.region[1] == b.region[1] && a.region[2] == b.region[2];
 }
+inline bool operator!=(const LayerLayout& a, const LayerLayout& b) { return !(a == b); }
 // Where the near region ends and the far region begins: fractions of the foliage's depth range
-// (0 <= nearEnd <= farStart <= 1), or with `absolute` view distances in world units.
-struct RegionSplit {
-  float nearEnd = 1.0f / 3.0f;
-  float farStart = 2.0f / 3.0f;
-  bool absolute = false;
-};
-inline bool operator==(const RegionSplit& a, const RegionSplit& b) {
-  return a.nearEnd == b.nearEnd && a.farStart == b.farStart && a.absolute == b.absolute;
-}
+// (0 <= nearEnd <= farStart <= 1), or with `absolute` view distances in world units (checked
+// together: "region split").
+#define CANOPY_REGION_SPLIT(X)                                                                                          \
+  X(float, nearEnd, 1.0f / 3.0f, None, 0, 1, "fraction (or world units)", "end of the near region")                    \
+  X(float, farStart, 2.0f / 3.0f, None, 0, 1, "fraction (or world units)", "start of the far region")                  \
+  X(bool, absolute, false, None, 0, 0, "", "the two are view distances in world units")
+CANOPY_PARAM_STRUCT(RegionSplit, CANOPY_REGION_SPLIT)
 enum class SliceMode {
   LeafRoots,  // a leaf goes whole into the layer of its root (default)
   Geometry,   // near/far planes on each fragment's depth (leaves crossing a boundary are cut)
@@ -215,86 +225,78 @@ enum class ImpostorMode {
                     // foliage's depth range / the layer count) before the far region's start
   ByProjectedSize,  // any box whose projected size is below switchPixels, whatever its depth
 };
-struct ImpostorSettings {
-  ImpostorMode mode = ImpostorMode::Off;  // not Off: needs CanopyDesc.impostors.enable, rebuildBudgetMs 0
-                                          // and a resident mesh
-  // A box is an impostor where its projected size (bounding-sphere diameter, pixels of the layer
-  // images) is at most switchPixels; its leaves fade out and its impostor in while the size falls
-  // from switchPixels x (1 + band) to switchPixels (a distance band: size ~ 1 / distance). At
-  // switchPixels = CanopyDesc.impostors.tilePixels the views are shown 1:1 (Lluch et al. 4.1).
-  float switchPixels = 64.0f;             // [1, 4096]
-  float band = 0.2f;                      // [0, 4]; 0: a hard switch
-  bool debugView = false;                 // colour leaves and impostors by their box's hierarchy level
-                                          // (also with mode Off; needs what the modes need)
-};
-inline bool operator==(const ImpostorSettings& a, const ImpostorSettings& b) {
-  return a.mode == b.mode && a.switchPixels == b.switchPixels && a.band == b.band && a.debugView == b.debugView;
-}
-// Fixed at creation: the foliage's box hierarchy and its baked views.
-struct ImpostorDesc {
-  bool enable = false;        // build the hierarchy and bake the views (ImpostorSettings.mode may then be on)
-  uint32_t tilePixels = 64;   // side of each view's image, a power of two in [8, 512]
-  // Boxes of hierarchy levels 0..maxLevel get views (12 each: six faces, six diagonal planes), level
-  // by level from the top while memoryBudget allows; a box over maxBoxTriangles (its subtree's
-  // leaves) gets none (its children do). Levels count boxes with other leaves than their only
-  // child's (an L-system's bracketed axiom is not a level of its own). [0, 64]
-  uint32_t maxLevel = 2;
-  // Baking costs 12 draws of a box's leaves (the bake's time grows with levels x faces), and a box
-  // this large is rarely small on screen.
-  uint64_t maxBoxTriangles = 1'000'000;    // [1, 2^40]
-  // The views' colour (RGBA8) and depth (32-bit) in bytes; when not even the top level fits, the
-  // tiles are halved (down to 8 pixels) before the creation is refused. [1 MiB, 16 GiB]
-  uint64_t memoryBudget = 256ull << 20;
-  // Models without a box hierarchy of their own (glTF): a k-d split of the leaf roots with at most
-  // this many leaves per box. [1, 2^30]
-  uint32_t maxLeavesPerBox = 256;
-};
+// mode other than Off needs CanopyDesc.impostors.enable, rebuildBudgetMs 0 and a resident mesh.
+// A box is an impostor where its projected size (bounding-sphere diameter, pixels of the layer
+// images) is at most switchPixels; its leaves fade out and its impostor in while the size falls
+// from switchPixels x (1 + band) to switchPixels (a distance band: size ~ 1 / distance). At
+// switchPixels = CanopyDesc.impostors.tilePixels the views are shown 1:1 (Lluch et al. 4.1).
+#define CANOPY_IMPOSTOR_SETTINGS(X)                                                                                     \
+  X(ImpostorMode, mode, ImpostorMode::Off, Enum, 0, 2, "Off | FarRegion | ByProjectedSize", "which boxes are drawn as impostors") \
+  X(float, switchPixels, 64.0f, Closed, 1, 4096, "pixels", "projected size at and below which a box is an impostor")   \
+  X(float, band, 0.2f, Closed, 0, 4, "", "the fade's width above switchPixels, relative; 0: a hard switch")            \
+  X(bool, debugView, false, None, 0, 0, "", "colour leaves and impostors by their box's level (also with mode Off)")
+CANOPY_PARAM_STRUCT(ImpostorSettings, CANOPY_IMPOSTOR_SETTINGS)
 
-struct LayerSettings {
-  LayerLayout layout;                    // default 5(3-1-1), at most CanopyDesc.maxLayers layers
-  RegionSplit regions;
-  SliceMode slice = SliceMode::LeafRoots;
-  LayerDrawMode draw = LayerDrawMode::Auto;
-  ReslicePolicy policy = ReslicePolicy::OnViewChange;
-  float moveThreshold = 0.01f;           // camera travel that re-slices, fraction of the model's radius, [0, 10]
-  float turnThresholdDegrees = 0.5f;     // camera turn that re-slices, [0, 180]
-  Float3 lightDirection{0.35f, 0.8f, 0.5f};  // towards the light, world space, finite (normalised; zero: straight up)
-  Float3 lightColor{1.0f, 1.0f, 1.0f};   // linear RGB, each in [0, 1000]
-  float ambient = 0.35f;                 // [0, 1]
-  // Leaf shading (Habel et al.'s leaf model, section III; docs/design.md "Layers: leaf shading"): on the side
-  // the light falls on, Lambert plus a Cook-Torrance lobe on the leaf's front; on the unlit side,
-  // diffuse transmission. Rigid parts are Lambert only. A change re-slices, like a light change.
-  float leafRefractiveIndex = 1.45f;     // effective refractive index n of the lobe, [1.2, 1.7] (Bousquet et al.)
-  float leafRoughness = 0.25f;           // Beckmann roughness sigma of the lobe, [0.078, 0.5]
-  float leafTransmission = 0.35f;        // diffuse transmission of foliage materials whose file gives none, [0, 1]
-  bool translucency = true;              // false: unlit sides get the ambient term only
-  // Spread re-slicing (docs/design.md "Layers: spread re-slicing"). > 0: a re-slice caused by a
-  // camera move, turn or projection change, a light change or requestCanopyRebuild(spread) is done
-  // over several frames, each adding about this much work: the placement on the CPU (timed), then
-  // triangles drawn into a second layer set (as many as the measured drawing rate fits); the old
-  // layers keep animating meanwhile, and the new ones replace them over crossFadeFrames frames.
-  // 0: every re-slice is drawn at once in the frame that asks for it. The first view, a camera
-  // cut, a new layer count or size, ReslicePolicy::EveryFrame and the id output always re-slice
-  // at once. ms, [0, 1000].
-  float rebuildBudgetMs = 0.0f;
-  uint32_t crossFadeFrames = 8;          // frames a spread re-slice fades in over, [1, 240]
-  ImpostorSettings impostors;            // a change re-slices
-};
-bool operator==(const LayerSettings& a, const LayerSettings& b);
+// Fixed at creation: the foliage's box hierarchy and its baked views. Boxes of hierarchy levels
+// 0..maxLevel get views (12 each: six faces, six diagonal planes), level by level from the top
+// while memoryBudget allows; a box over maxBoxTriangles (its subtree's leaves) gets none (its
+// children do): baking costs 12 draws of a box's leaves, and a box this large is rarely small on
+// screen. Levels count boxes with other leaves than their only child's (an L-system's bracketed
+// axiom is not a level of its own). When not even the top level fits memoryBudget (RGBA8 colour
+// and 32-bit depth), the tiles are halved (down to 8 pixels) before the creation is refused.
+#define CANOPY_IMPOSTOR_DESC(X)                                                                                         \
+  X(bool, enable, false, None, 0, 0, "", "build the hierarchy and bake the views (ImpostorSettings.mode may then be on)") \
+  X(uint32_t, tilePixels, 64, PowerOfTwo, 8, 512, "pixels", "side of each view's image")                               \
+  X(uint32_t, maxLevel, 2, Closed, 0, 64, "", "the deepest hierarchy level baked")                                     \
+  X(uint64_t, maxBoxTriangles, 1'000'000, Closed, 1, 1099511627776.0, "triangles", "a larger box gets no views")      \
+  X(uint64_t, memoryBudget, 256ull << 20, Closed, 1048576, 17179869184.0, "bytes", "the views' colour and depth")      \
+  X(uint32_t, maxLeavesPerBox, 256, Closed, 1, 1073741824, "leaves", "models without a box hierarchy (glTF): k-d split of the leaf roots")
+CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
+
+// Leaf shading (Habel et al.'s leaf model, section III; docs/design.md "Layers: leaf shading"): on
+// the side the light falls on, Lambert plus a Cook-Torrance lobe on the leaf's front; on the unlit
+// side, diffuse transmission. Rigid parts are Lambert only. A change re-slices, like a light change.
+// Spread re-slicing (docs/design.md "Layers: spread re-slicing"): rebuildBudgetMs > 0: a re-slice
+// caused by a camera move, turn or projection change, a light change or
+// requestCanopyRebuild(spread) is done over several frames, each adding about this much work: the
+// placement on the CPU (timed), then triangles drawn into a second layer set (as many as the
+// measured drawing rate fits); the old layers keep animating meanwhile, and the new ones replace
+// them over crossFadeFrames frames. 0: every re-slice is drawn at once in the frame that asks for
+// it. The first view, a camera cut, a new layer count or size, ReslicePolicy::EveryFrame and the
+// id output always re-slice at once.
+#define CANOPY_LAYER_SETTINGS(X)                                                                                        \
+  X(LayerLayout, layout, {}, None, 1, kMaxLayers, "layers", "default 5(3-1-1), at most CanopyDesc.maxLayers layers (checked as a whole)") \
+  X(RegionSplit, regions, {}, Nested, 0, 0, "", "where the depth regions meet")                                        \
+  X(SliceMode, slice, SliceMode::LeafRoots, Enum, 0, 1, "LeafRoots | Geometry", "how leaves go into layers")          \
+  X(LayerDrawMode, draw, LayerDrawMode::Auto, Enum, 0, 2, "Auto | SinglePass | PerLayer", "how the layers are drawn") \
+  X(ReslicePolicy, policy, ReslicePolicy::OnViewChange, Enum, 0, 1, "OnViewChange | EveryFrame", "when layers are re-sliced") \
+  X(float, moveThreshold, 0.01f, Closed, 0, 10, "fraction of the model's radius", "camera travel that re-slices")      \
+  X(float, turnThresholdDegrees, 0.5f, Closed, 0, 180, "degrees", "camera turn that re-slices")                        \
+  X(Float3, lightDirection, (Float3{0.35f, 0.8f, 0.5f}), Finite, 0, 0, "world space", "towards the light (normalised; zero: straight up)") \
+  X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \
+  X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \
+  X(float, leafRefractiveIndex, 1.45f, Closed, 1.2, 1.7, "", "effective refractive index n of the lobe (Bousquet et al.'s measured range)") \
+  X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range)")     \
+  X(float, leafTransmission, 0.35f, Closed, 0, 1, "", "diffuse transmission of foliage materials whose file gives none") \
+  X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \
+  X(float, rebuildBudgetMs, 0.0f, Closed, 0, 1000, "ms", "work a frame of a spread re-slice; 0: re-slices at once")   \
+  X(uint32_t, crossFadeFrames, 8, Closed, 1, 240, "frames", "a spread re-slice fades in over this many frames")       \
+  X(ImpostorSettings, impostors, {}, Nested, 0, 0, "", "Lluch et al.'s impostors (a change re-slices)")
+CANOPY_PARAM_STRUCT(LayerSettings, CANOPY_LAYER_SETTINGS)
 
 enum class DelayMode { Exact, Approximate };  // paper eq. 3-4, or eq. 5
-struct DynamicsParams {
-  DelayMode delay = DelayMode::Exact;
-  float vd = 2.0f;                  // V_D of eq. 4, domain units/s, [-1000, 1000]
-  float propagationSpeed = 1.0f;    // s of eq. 5, [0, 1000]
-  Float3 lambda{300.0f, 300.0f, 150.0f};  // lambda_x,y,z of eq. 6: pixels per domain unit, [0, 1e6]
-  float rigidity = 1.0f;            // r of eq. 7, [0, 10]
-  bool everyPartMoves = false;      // eq. 7: R = 1 everywhere
-  float depthAttenuation = 0.3f;    // m of eq. 6, [0, 1]
-  float dt = 1.0f / 30.0f;          // Delta t of eq. 6, s, (0, 10]
-  uint32_t cellSize = 16;           // warp-grid cell, pixels, [CanopyDesc.minCellSize, 256]
-  float maxDelay = 10.0f;           // |gamma| bound for a vanishing eq. 4 denominator, s, (0, 3600]
-};
+#define CANOPY_DYNAMICS_PARAMS(X)                                                                                       \
+  X(DelayMode, delay, DelayMode::Exact, Enum, 0, 1, "Exact | Approximate", "eq. 3-4, or eq. 5")                         \
+  X(float, vd, 2.0f, Closed, -1000, 1000, "domain units/s", "V_D of eq. 4")                                             \
+  X(float, propagationSpeed, 1.0f, Closed, 0, 1000, "", "s of eq. 5")                                                  \
+  X(Float3, lambda, (Float3{300.0f, 300.0f, 150.0f}), Closed, 0, 1e6, "pixels per domain unit", "lambda_x,y,z of eq. 6") \
+  X(float, rigidity, 1.0f, Closed, 0, 10, "", "r of eq. 7")                                                            \
+  X(bool, everyPartMoves, false, None, 0, 0, "", "eq. 7: R = 1 everywhere")                                            \
+  X(float, depthAttenuation, 0.3f, Closed, 0, 1, "", "m of eq. 6")                                                     \
+  X(float, dt, 1.0f / 30.0f, AboveMin, 0, 10, "s", "Delta t of eq. 6")                                                 \
+  X(uint32_t, cellSize, 16, Closed, 2, 256, "pixels", "warp-grid cell (at least CanopyDesc.minCellSize)")             \
+  X(float, maxDelay, 10.0f, AboveMin, 0, 3600, "s", "|gamma| bound for a vanishing eq. 4 denominator")
+CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
   None = 0,
@@ -307,29 +309,29 @@ enum class CompositePath : uint32_t {
   Compute = 0,   // tile-classified compute kernel + a resolve draw over the listed tiles (default)
   Fragment = 1,  // one fused full-screen fragment pass (also used for the debug views)
 };
-struct CompositeParams {
-  CompositePath path = CompositePath::Compute;
-  bool earlyExit = true;       // front to back, stop at accumulated alpha >= 1 - 1/1024
-  // Skip layers that cannot reach a pixel: per 8x8 screen tile in the compute path (a layer is
-  // listed when its occupancy meets the tile moved by the displacement's range), per pixel in the
-  // fragment path.
-  bool skipEmptyTiles = true;
-  bool bilinear = true;        // bilinear layer colour (false: nearest texel)
-  float depthAlpha = 0.5f;     // alpha at which a layer writes the depth output, (0, 1]
-  // The vegetation's linear colour is multiplied by this before it is blended over the host's
-  // target (HDR hosts: scene-referred intensity), [0, 65504].
-  float exposure = 1.0f;
-  CompositeDebugView debugView = CompositeDebugView::None;
-  float debugVelocityScale = 1.0f;  // velocity view: speed at full brightness, domain units/s, > 0
-};
+// skipEmptyTiles: per 8x8 screen tile in the compute path (a layer is listed when its occupancy
+// meets the tile moved by the displacement's range), per pixel in the fragment path. exposure:
+// the vegetation's linear colour is multiplied by it before it is blended over the host's target
+// (HDR hosts: scene-referred intensity).
+#define CANOPY_COMPOSITE_PARAMS(X)                                                                                      \
+  X(CompositePath, path, CompositePath::Compute, Enum, 0, 1, "Compute | Fragment", "how the warp and composite run")   \
+  X(bool, earlyExit, true, None, 0, 0, "", "front to back, stop at accumulated alpha >= 1 - 1/1024")                   \
+  X(bool, skipEmptyTiles, true, None, 0, 0, "", "skip layers that cannot reach a pixel")                              \
+  X(bool, bilinear, true, None, 0, 0, "", "bilinear layer colour (false: nearest texel)")                              \
+  X(float, depthAlpha, 0.5f, AboveMin, 0, 1, "", "alpha at which a layer writes the depth output")                    \
+  X(float, exposure, 1.0f, Closed, 0, 65504, "", "multiplies the vegetation's linear colour")                          \
+  X(CompositeDebugView, debugView, CompositeDebugView::None, Enum, 0, 3, "None | Layers | Velocity | Grid", "debug views") \
+  X(float, debugVelocityScale, 1.0f, AboveMin, 0, 1e30, "domain units/s", "velocity view: speed at full brightness")
+CANOPY_PARAM_STRUCT(CompositeParams, CANOPY_COMPOSITE_PARAMS)
 
-// The simulation plane in world space: the 2D field is the same on every parallel plane.
-struct SimulationPlane {
-  Float3 origin{0.0f, 0.0f, 0.0f};  // world point at simulation coordinate (0, 0)
-  Float3 right{1.0f, 0.0f, 0.0f};   // unit x axis
-  Float3 up{0.0f, 1.0f, 0.0f};      // unit y axis, orthogonal to right
-  float tileSize = 1.0f;            // world units covered by one tile, > 0
-};
+// The simulation plane in world space: the 2D field is the same on every parallel plane (right
+// and up checked together: orthogonal unit vectors).
+#define CANOPY_SIMULATION_PLANE(X)                                                                                      \
+  X(Float3, origin, (Float3{0.0f, 0.0f, 0.0f}), Finite, 0, 0, "world space", "world point at simulation coordinate (0, 0)") \
+  X(Float3, right, (Float3{1.0f, 0.0f, 0.0f}), Finite, 0, 0, "world space", "unit x axis")                             \
+  X(Float3, up, (Float3{0.0f, 1.0f, 0.0f}), Finite, 0, 0, "world space", "unit y axis, orthogonal to right")           \
+  X(float, tileSize, 1.0f, AboveMin, 0, 1e30, "world units", "covered by one tile")
+CANOPY_PARAM_STRUCT(SimulationPlane, CANOPY_SIMULATION_PLANE)
 
 // How the vegetation is animated (docs/design.md "Per-vertex wind baseline"). A host switches
 // between the two on the same context and scene (CanopyDesc.allowPerVertex) to compare them.
@@ -342,35 +344,34 @@ enum class AnimationMode : uint32_t {
 // The per-vertex baseline's hierarchical bending. The wind is SimulationParams.wind's: its speed
 // profile strength * (baseline + modulation sin(2 pi frequency t)), its direction from the source
 // sides on the simulation plane, its gust as the relative amplitude of the spectral sway noise.
-// Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root.
-struct PerVertexParams {
-  // Tip bend at referenceSpeed, rad, each in [0, 100]; drag makes it grow with the speed squared.
-  // The defaults sway the demo's shrub as much as the 2D method does in the same wind
-  // (docs/performance.md "The 2D method against the per-vertex baseline").
-  float flexibility[4] = {0.036f, 0.063f, 0.09f, 0.108f};
-  float leafFlexibility = 0.27f;
-  // Sway frequency at referenceSpeed (it scales as 0.5 + 0.5 speed / referenceSpeed), Hz, [0, 100].
-  float frequency[4] = {0.35f, 0.8f, 1.6f, 2.6f};
-  float leafFrequency = 4.0f;
-  float referenceSpeed = 2.0f;  // the mean wind speed the two above are given at, domain units/s, (0, 1000]
-  float lateral = 0.4f;         // sway across the wind relative to the sway along it, [0, 1]
-  float maxAngle = 0.5f;        // saturation of any one bend, rad, (0, 1.5]
-  float taper = 1.5f;           // the rotation at coordinate x along a branch is tip * x^taper, [0.5, 4]
-  uint32_t seed = 1;            // noise phases
-};
+// Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root. Tip bends are given at
+// referenceSpeed (drag makes them grow with the speed squared); the defaults sway the demo's shrub
+// as much as the 2D method does in the same wind (docs/performance.md "The 2D method against the
+// per-vertex baseline"). Sway frequencies scale as 0.5 + 0.5 speed / referenceSpeed.
+#define CANOPY_PER_VERTEX_PARAMS(X)                                                                                     \
+  X(Float4, flexibility, (Float4{{0.036f, 0.063f, 0.09f, 0.108f}}), Closed, 0, 100, "rad", "tip bend per level")      \
+  X(float, leafFlexibility, 0.27f, Closed, 0, 100, "rad", "a leaf's bend about its root")                             \
+  X(Float4, frequency, (Float4{{0.35f, 0.8f, 1.6f, 2.6f}}), Closed, 0, 100, "Hz", "sway frequency per level")         \
+  X(float, leafFrequency, 4.0f, Closed, 0, 100, "Hz", "a leaf's sway frequency")                                       \
+  X(float, referenceSpeed, 2.0f, AboveMin, 0, 1000, "domain units/s", "the mean wind speed the two above are given at") \
+  X(float, lateral, 0.4f, Closed, 0, 1, "", "sway across the wind relative to the sway along it")                      \
+  X(float, maxAngle, 0.5f, AboveMin, 0, 1.5, "rad", "saturation of any one bend")                                      \
+  X(float, taper, 1.5f, Closed, 0.5, 4, "", "the rotation at coordinate x along a branch is tip * x^taper")            \
+  X(uint32_t, seed, 1, None, 0, 0, "", "noise phases")
+CANOPY_PARAM_STRUCT(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
 
-struct CanopyParams {
-  AnimationMode animation = AnimationMode::Layers2D;  // PerVertex needs CanopyDesc.allowPerVertex
-  PerVertexParams perVertex;
-  LayerSettings layers;
-  SimulationParams simulation;  // ignored by a context that shares another's simulation
-  DynamicsParams dynamics;
-  CompositeParams composite;
-  // Unset: the plane is fixed from the first frame's camera, one tile over the visible region at
-  // the vegetation's centre depth.
-  bool customPlane = false;
-  SimulationPlane plane;
-};
+// customPlane unset: the plane is fixed from the first frame's camera, one tile over the visible
+// region at the vegetation's centre depth (plane is then not read).
+#define CANOPY_PARAMS(X)                                                                                                \
+  X(AnimationMode, animation, AnimationMode::Layers2D, Enum, 0, 1, "Layers2D | PerVertex", "PerVertex needs CanopyDesc.allowPerVertex") \
+  X(PerVertexParams, perVertex, {}, Nested, 0, 0, "", "the per-vertex baseline")                                       \
+  X(LayerSettings, layers, {}, Nested, 0, 0, "", "depth layers, light and leaf shading, re-slicing, impostors")       \
+  X(SimulationParams, simulation, {}, Nested, 0, 0, "", "ignored by a context that shares another's simulation")      \
+  X(DynamicsParams, dynamics, {}, Nested, 0, 0, "", "the paper's eq. 1-7")                                              \
+  X(CompositeParams, composite, {}, Nested, 0, 0, "", "inverse warp and compositing")                                 \
+  X(bool, customPlane, false, None, 0, 0, "", "use `plane` instead of the one fixed from the first camera")           \
+  X(SimulationPlane, plane, {}, None, 0, 0, "", "checked (as a SimulationPlane) with customPlane only")
+CANOPY_PARAM_STRUCT(CanopyParams, CANOPY_PARAMS)
 
 // ---------------------------------------------------------------------------------------------
 // Contexts
@@ -383,53 +384,78 @@ enum class DepthConvention : uint32_t {
   Reverse = 1,   // near = 1, far = 0, compared GREATER (reverse-Z, also with an infinite far plane)
 };
 
+// Host colour target: any blendable colour-attachment format (UNORM, SRGB, R16G16B16A16_SFLOAT,
+// B10G11R11_UFLOAT_PACK32, ...); Canopy blends linear colour, SRGB formats encode on write. Host
+// depth: D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT or D32_SFLOAT_S8_UINT with SAMPLED usage, single
+// sampled (a multisampled host names its resolved depth); the stencil aspect is never written.
+// shareSimulationWith: another context on the same Device whose simulation this one follows (one
+// wind over a whole scene), stepped once per host frame number, whichever context records first.
+// rootCacheDir: Canopy's cache files (the leaf roots, seconds saved on big models, and the
+// impostor views) are read and written only in this folder (userCacheFolder() gives the user's);
+// empty: no file is read or written. A cache is checked before use (version, key, size, checksum)
+// and rebuilt when it does not match; a link, FIFO or folder at a cache's name is never followed
+// or waited on (docs/design.md "Files"). Every write is a new file renamed into place.
+// cacheMaxBytes: after a write the least recently used cache files beyond it are removed (a single
+// cache over it is not written); 0: no cap.
+// deviceMemoryBudget: device memory this context may allocate (buffers and images; Canopy's own
+// allocator rounds up to 64 MiB blocks); the default fits lavapipe's 2 GiB heap. When the compact
+// foliage mesh does not fit beside the other resources (two layer sets included), it stays in host
+// memory and every re-slice streams it through a staging ring of about meshStagingRingBytes, a
+// slice a frame (a re-slice asked at once then takes several frames; docs/design.md "Layers: mesh
+// budget and staging ring"). 0: no limit, the mesh is always resident. Planned for the layer count
+// and size at creation.
+// allowPerVertex: keeps the model's branch hierarchy (8 bytes a vertex, host and device) and the
+// per-vertex pipeline; the mesh must then be resident (createCanopy refuses a model whose mesh
+// would be streamed, naming the budget).
+#define CANOPY_DESC(X)                                                                                                  \
+  X(uint32_t, headerVersion, CANOPY_HEADER_VERSION, None, 0, 0, "", "leave as is: checked against the library")        \
+  X(uint32_t, width, 1024, Closed, 1, 16384, "pixels", "host targets' width")                                          \
+  X(uint32_t, height, 768, Closed, 1, 16384, "pixels", "host targets' height")                                         \
+  X(VkFormat, colorFormat, VK_FORMAT_R8G8B8A8_UNORM, None, 0, 0, "", "host colour target (any blendable colour format)") \
+  X(VkFormat, depthFormat, VK_FORMAT_D32_SFLOAT, None, 0, 0, "", "host depth (D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT)") \
+  X(DepthConvention, depthConvention, DepthConvention::Standard, Enum, 0, 1, "Standard | Reverse", "how the host's depth is read and written") \
+  X(VkFormat, motionFormat, VK_FORMAT_UNDEFINED, None, 0, 0, "", "R16G16_SFLOAT / R32G32_SFLOAT; UNDEFINED: no motion output") \
+  X(VkFormat, layerFormat, VK_FORMAT_R16G16B16A16_SFLOAT, None, 0, 0, "", "Canopy's layer images (or R8G8B8A8_UNORM)") \
+  X(uint32_t, maxLayers, 8, Closed, 1, 32, "layers", "the most layers CanopyParams may ask for")                      \
+  X(uint32_t, minCellSize, 4, Closed, 2, 256, "pixels", "the smallest warp-grid cell CanopyParams may ask for")       \
+  X(SimulationDesc, simulation, {}, Nested, 0, 0, "", "the simulation's grid and history")                             \
+  X(CanopyContext*, shareSimulationWith, nullptr, None, 0, 0, "", "follow this context's simulation")                  \
+  X(MaterialSplitOptions, split, {}, None, 0, 0, "", "rigid vs foliage materials")                                     \
+  X(LeafRootOptions, roots, {}, None, 0, 0, "", "how leaves are found")                                                \
+  X(std::string, rootCacheDir, {}, None, 0, 0, "", "the cache files' folder; empty: none read or written")             \
+  X(uint64_t, cacheMaxBytes, 2048ull << 20, None, 0, 0, "bytes", "cap on the cache files in rootCacheDir; 0: none")   \
+  X(Progress, progress, {}, None, 0, 0, "", "optional: called during createCanopy (\"leaf roots\", \"vertices\")")  \
+  X(CanopyParams, params, {}, None, 0, 0, "", "the initial parameters (checked as setCanopyParams checks them)")       \
+  X(uint64_t, deviceMemoryBudget, 1536ull << 20, None, 0, 0, "bytes", "device memory this context may allocate; 0: no limit") \
+  X(uint64_t, meshStagingRingBytes, 64ull << 20, Closed, 1048576, 4294967296.0, "bytes", "a streamed mesh's staging ring (at least the largest chunk per frame in flight)") \
+  X(bool, allowPerVertex, false, None, 0, 0, "", "lets CanopyParams.animation be PerVertex")                           \
+  X(ImpostorDesc, impostors, {}, None, 0, 0, "", "the box hierarchy and its baked views (checked when enable is set)")
 struct CanopyDesc {
-  uint32_t headerVersion = CANOPY_HEADER_VERSION;  // leave as is: checked against the library
-  uint32_t width = 1024, height = 768;               // host targets, pixels, 1..16384 each
-  // Host colour target: any blendable colour-attachment format (UNORM, SRGB, R16G16B16A16_SFLOAT,
-  // B10G11R11_UFLOAT_PACK32, ...). Canopy blends linear colour; SRGB formats encode on write.
-  VkFormat colorFormat = VK_FORMAT_R8G8B8A8_UNORM;
-  // Host depth: D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT or D32_SFLOAT_S8_UINT with SAMPLED usage.
-  // The stencil aspect is never written. Single-sampled (a multisampled host names its resolved depth).
-  VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;
-  DepthConvention depthConvention = DepthConvention::Standard;
-  VkFormat motionFormat = VK_FORMAT_UNDEFINED;       // R16G16_SFLOAT / R32G32_SFLOAT; UNDEFINED: none
-  VkFormat layerFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // Canopy's layer images (or R8G8B8A8_UNORM)
-  uint32_t maxLayers = 8;     // the most layers CanopyParams may ask for, 1..32
-  uint32_t minCellSize = 4;   // the smallest warp-grid cell CanopyParams may ask for, pixels, 2..256
-  SimulationDesc simulation;
-  // Another context on the same Device whose simulation this one follows (one wind over a whole
-  // scene); it is stepped once per host frame number, whichever context records first.
-  CanopyContext* shareSimulationWith = nullptr;
-  MaterialSplitOptions split;
-  LeafRootOptions roots;
-  // Canopy's cache files (the leaf roots, seconds saved on big models, and the impostor views)
-  // are read and written only in this folder (userCacheFolder() gives the user's); empty: no file
-  // is read or written. A cache is checked before use (version, key, size, checksum) and rebuilt
-  // when it does not match; a link, FIFO or folder at a cache's name is never followed or waited
-  // on (docs/design.md "Files"). Every write is a new file renamed into place.
-  std::string rootCacheDir;
-  // The most bytes Canopy's cache files may take in rootCacheDir: after a write the least recently
-  // used ones beyond it are removed (a single cache over it is not written). 0: no cap.
-  uint64_t cacheMaxBytes = 2048ull << 20;
-  Progress progress;          // optional: called during createCanopy ("leaf roots", "vertices")
-  CanopyParams params;        // the initial parameters
-  // Device memory this context may allocate, bytes (buffers and images; Canopy's own allocator
-  // rounds up to 64 MiB blocks): the default fits lavapipe's 2 GiB heap. When the compact foliage
-  // mesh does not fit beside the other resources (two layer sets included), it stays in host memory
-  // and every re-slice streams it through a staging ring of about meshStagingRingBytes, a slice a
-  // frame (a re-slice asked at once then takes several frames; docs/design.md "Layers: mesh budget
-  // and staging ring"). 0: no limit, the mesh is always resident. The budget is planned for the
-  // layer count and size at creation.
-  uint64_t deviceMemoryBudget = 1536ull << 20;
-  uint64_t meshStagingRingBytes = 64ull << 20;  // [1 MiB, 4 GiB]; at least the largest chunk per frame in flight
-  // Lets CanopyParams.animation be AnimationMode::PerVertex: keeps the model's branch hierarchy
-  // (8 bytes a vertex, host and device) and the per-vertex pipeline; the mesh must then be
-  // resident (createCanopy refuses a model whose mesh would be streamed, naming the budget).
-  bool allowPerVertex = false;
-  // The foliage's box hierarchy and its baked views, for LayerSettings.impostors.
-  ImpostorDesc impostors;
+  CANOPY_DESC(CANOPY_PARAM_FIELD)
 };
+
+// Checks each field of a parameter struct against its line of the schema (the check over [min,
+// max], finiteness, enumerators); the message names the field as `prefix` + its path, with its
+// range and unit. Only what one line states: fields checked together (a layout against
+// CanopyDesc.maxLayers, the region split's order, the simulation plane's axes, a warp cell against
+// minCellSize, PerVertex against allowPerVertex) are checked by createCanopy and setCanopyParams,
+// which run this on the values they are given.
+Status checkParams(const WindParams& params, const std::string& prefix = "WindParams.");
+Status checkParams(const Motor& params, const std::string& prefix = "Motor.");
+Status checkParams(const FluidParams& params, const std::string& prefix = "FluidParams.");
+Status checkParams(const WaveParams& params, const std::string& prefix = "WaveParams.");
+Status checkParams(const SimulationParams& params, const std::string& prefix = "SimulationParams.");
+Status checkParams(const SimulationDesc& params, const std::string& prefix = "SimulationDesc.");
+Status checkParams(const RegionSplit& params, const std::string& prefix = "RegionSplit.");
+Status checkParams(const ImpostorSettings& params, const std::string& prefix = "ImpostorSettings.");
+Status checkParams(const ImpostorDesc& params, const std::string& prefix = "ImpostorDesc.");
+Status checkParams(const LayerSettings& params, const std::string& prefix = "LayerSettings.");
+Status checkParams(const DynamicsParams& params, const std::string& prefix = "DynamicsParams.");
+Status checkParams(const CompositeParams& params, const std::string& prefix = "CompositeParams.");
+Status checkParams(const SimulationPlane& params, const std::string& prefix = "SimulationPlane.");
+Status checkParams(const PerVertexParams& params, const std::string& prefix = "PerVertexParams.");
+Status checkParams(const CanopyParams& params, const std::string& prefix = "CanopyParams.");
+Status checkParams(const CanopyDesc& params, const std::string& prefix = "CanopyDesc.");
 
 // The user's cache folder for Canopy: $XDG_CACHE_HOME/canopy (when that is an absolute path),
 // else $HOME/.cache/canopy, created with mode 0700 when missing. An error when neither variable

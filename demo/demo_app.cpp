@@ -139,6 +139,8 @@ struct NumberOption {
   float Options::*field;
   const char* what;
   const char* param = nullptr;
+  float low() const { return param && findParam(param) ? float(findParam(param)->min) : lo; }
+  float high() const { return param && findParam(param) ? float(findParam(param)->max) : hi; }
 };
 const NumberOption kNumberOptions[] = {
     {"--strength", 0, 0, &Options::windStrength, "a number", "WindParams.strength"},
@@ -198,16 +200,12 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     for (const SwitchOption& n : kSwitchOptions)
       if (a == n.name) sw = &n;
     if (num) {
-      const ParamInfo* p = num->param ? findParam(num->param) : nullptr;
-      const float lo = p ? float(p->min) : num->lo, hi = p ? float(p->max) : num->hi;
-      if (const int rc = number(lo, hi, &(o->*(num->field)), num->what)) return rc;
+      if (const int rc = number(num->low(), num->high(), &(o->*(num->field)), num->what)) return rc;
     } else if (sw) {
       o->*(sw->field) = sw->value;
-    } else if (a == "--help" || a == "-h") {
-      printHelp();
-      return 1;
-    } else if (a == "--param-table") {
-      std::fputs(paramTableMarkdown().c_str(), stdout);  // docs/parameters.md
+    } else if (a == "--help" || a == "-h" || a == "--param-table") {
+      if (a == "--param-table") std::fputs(paramTableMarkdown().c_str(), stdout);  // docs/parameters.md
+      else printHelp();
       return 1;
     } else if (a == "--scene") {
       if (!takes()) return bad("needs a name: shrub, tree, grass, kelp, field");

@@ -96,15 +96,16 @@ Status slotBindings(const PassContext& c, const Slots& slots, const std::vector<
       out->push_back(s.outside);
       continue;
     }
-    const std::string name = "'" + c.graph->resourceName(s.id) + "'";
+    // The resource's name only for a message: nothing is built on the per-dispatch path.
+    auto name = [&] { return "'" + c.graph->resourceName(s.id) + "'"; };
     if (!fits(types[i], s.use))
       return Status::error(what + ": binding " + std::to_string(i) + " is a " + descriptorTypeName(types[i]) +
-                           " in the SPIR-V; its slot declares " + name + " as " + useName(s.use));
+                           " in the SPIR-V; its slot declares " + name() + " as " + useName(s.use));
     if (isBufferType(types[i])) {
       out->push_back(bindBuffer(c.buffer(s.id), s.offset, s.range));
     } else {
       if (types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && !s.sampler)
-        return Status::error(what + ": binding " + std::to_string(i) + " (" + name + ") is sampled and its slot has no sampler");
+        return Status::error(what + ": binding " + std::to_string(i) + " (" + name() + ") is sampled and its slot has no sampler");
       out->push_back(bindImage(c.image(s.id).view, stateOf(s.use).layout, s.sampler));
     }
   }
@@ -114,14 +115,14 @@ Status slotBindings(const PassContext& c, const Slots& slots, const std::vector<
 Status dispatchSlots(PassContext& c, const ComputePipeline& p, const Slots& s, uint32_t tx, uint32_t ty, uint32_t tz,
                      const void* push, uint32_t pushSize) {
   std::vector<Binding> b;
-  CANOPY_TRY(slotBindings(c, s, p.bindings, "dispatch '" + p.name + "'", &b));
+  CANOPY_TRY(slotBindings(c, s, p.bindings, p.name, &b));  // the pipeline's name: no string built per dispatch
   return dispatch(*c.device, c.cmd, p, tx, ty, tz, b, push, pushSize);
 }
 
 Status dispatchIndirectSlots(PassContext& c, const ComputePipeline& p, const Slots& s, VkBuffer args, VkDeviceSize offset,
                              const void* push, uint32_t pushSize) {
   std::vector<Binding> b;
-  CANOPY_TRY(slotBindings(c, s, p.bindings, "dispatch '" + p.name + "'", &b));
+  CANOPY_TRY(slotBindings(c, s, p.bindings, p.name, &b));  // the pipeline's name: no string built per dispatch
   return dispatchIndirect(*c.device, c.cmd, p, args, offset, b, push, pushSize);
 }
 

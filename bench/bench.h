@@ -5,6 +5,7 @@
 
 #include "render/canopy.h"
 #include "render/model.h"
+#include "tools/camera_paths.h"
 
 namespace canopy {
 struct Device;
@@ -51,6 +52,21 @@ int runPerVertexBench(Device& dev, const std::vector<uint64_t>& faceCounts, cons
 // Impostors (issue 18): re-slice time with and without Lluch et al.'s impostors (off, far region,
 // by projected size, alternated) and the far layers' image difference, per face count; with
 // `imageDir` (empty: none) the far layers and the debug view as PNG.
+// The moving camera (docs/design.md "Moving camera: paths and the world-lock measure"): per camera
+// path, the re-slicing policy against re-slicing every frame, frame by frame (world-lock error,
+// frame times), beside the still camera of the same run.
+struct CameraBenchOptions {
+  std::vector<uint64_t> faces = {80000};
+  std::string scene = "shrub";
+  std::vector<CameraMotion> paths = {CameraMotion::Orbit, CameraMotion::Dolly, CameraMotion::Strafe, CameraMotion::Turn,
+                                     CameraMotion::Zoom};
+  int frames = 60;
+  uint32_t width = 1024, height = 768;
+  float degreesPerFrame = 0.25f, radiiPerFrame = 0.005f, swingDegrees = 5.0f;  // tools/camera_paths.h
+  float budgetMs = 4.0f;  // the policy side's LayerSettings.rebuildBudgetMs (0: re-slice at once)
+};
+int runCameraBench(Device& dev, const CameraBenchOptions& options);
+
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int rebuilds,
                      uint32_t width, uint32_t height, const std::string& imageDir);
 }

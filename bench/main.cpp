@@ -8,6 +8,8 @@
 //                [--spread-max-faces N] [--device-budget MIB]
 //   canopy-bench pervertex [--faces 80000,1000000,10000000] [--scene shrub] [--frames N] [--size WxH] [--csv FILE]
 //   canopy-bench impostors [--faces 10000000] [--scene field] [--rebuilds N] [--size WxH] [--images DIR]
+//   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
+//                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -38,6 +40,11 @@ static int usage(const char* why) {
                "  impostors      Lluch et al.'s impostors: re-slice time off / far region / by projected size and the\n"
                "                 far layers' image difference, per face count (default 10000000, --scene field,\n"
                "                 --rebuilds 5, --size 1024x768); --images DIR writes the far layers and the debug view\n"
+               "  camera         the moving camera: per path (--paths, default orbit,dolly,strafe,turn,zoom; also walk)\n"
+               "                 the re-slicing policy (--budget MS spread, 0 at once) against re-slicing every frame,\n"
+               "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"
+               "                 (--faces default 80000, --frames default 60, --size default 1024x768;\n"
+               "                 --degrees-per-frame 0.25, --radii-per-frame 0.005, --swing 5: tools/camera_paths.h)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -82,7 +89,17 @@ int main(int argc, char** argv) {
     return !out->empty();
   };
   uint32_t rebuildEvery = 100;
-  bool runRebuild = false, runPerVertex = false, runImpostors = false;
+  bool runRebuild = false, runPerVertex = false, runImpostors = false, runCamera = false;
+  bench::CameraBenchOptions cam;
+  bool budgetGiven = false;
+  // A float in [lo, hi] from the next argument.
+  auto parseNumber = [](const char* v, float lo, float hi, float* out) {
+    char* end = nullptr;
+    const float f = v ? std::strtof(v, &end) : 0.0f;
+    if (!v || *end || !(f >= lo && f <= hi)) return false;
+    *out = f;
+    return true;
+  };
   std::string csvPath, imagesDir;
   float budgetMs = 4.0f;
   uint64_t spreadMaxFaces = 10000000;
@@ -104,6 +121,26 @@ int main(int argc, char** argv) {
     else if (a == "rebuild") runRebuild = true;
     else if (a == "pervertex") runPerVertex = true;
     else if (a == "impostors") runImpostors = true;
+    else if (a == "camera") runCamera = true;
+    else if (a == "--paths") {
+      const char* v = next();
+      if (!v) return usage("--paths needs a list: orbit,dolly,strafe,turn,zoom,walk");
+      cam.paths.clear();
+      std::stringstream ss(v);
+      std::string item;
+      while (std::getline(ss, item, ',')) {
+        CameraMotion m;
+        const Status ps = parseCameraMotion(item, &m);
+        if (!ps.ok()) return usage(("--paths: " + ps.message()).c_str());
+        cam.paths.push_back(m);
+      }
+    } else if (a == "--degrees-per-frame") {
+      if (!parseNumber(next(), -90, 90, &cam.degreesPerFrame)) return usage("--degrees-per-frame needs degrees in [-90, 90]");
+    } else if (a == "--radii-per-frame") {
+      if (!parseNumber(next(), 0, 10, &cam.radiiPerFrame)) return usage("--radii-per-frame needs radii in [0, 10]");
+    } else if (a == "--swing") {
+      if (!parseNumber(next(), 0, 80, &cam.swingDegrees)) return usage("--swing needs degrees in [0, 80]");
+    }
     else if (a == "--images") {
       const char* v = next();
       if (!v) return usage("--images needs a folder");
@@ -127,7 +164,8 @@ int main(int argc, char** argv) {
       const char* v = next();
       char* end = nullptr;
       budgetMs = v ? std::strtof(v, &end) : 0.0f;
-      if (!v || *end || !(budgetMs > 0.0f && budgetMs <= 1000.0f)) return usage("--budget needs ms in (0, 1000]");
+      if (!v || *end || !(budgetMs >= 0.0f && budgetMs <= 1000.0f)) return usage("--budget needs ms in [0, 1000]");
+      budgetGiven = true;
     }
     else if (a == "--series") t1.series = true;
     else if (a == "--series-faces") {
@@ -210,6 +248,7 @@ int main(int argc, char** argv) {
       return usage(("unknown argument '" + a + "'").c_str());
     }
   }
+  if (runRebuild && !(budgetMs > 0.0f)) return usage("rebuild: --budget needs ms in (0, 1000]");
   Device dev;
   Status s = createDevice(desc, &dev);
   if (!s.ok()) {
@@ -217,7 +256,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors) runSim = true;
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera)
+    runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
   if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
@@ -239,6 +279,15 @@ int main(int argc, char** argv) {
   if (rc == 0 && runImpostors)
     rc = bench::runImpostorBench(dev, facesGiven ? faces : std::vector<uint64_t>{10000000}, scene, int(rebuilds),
                                  t1.width, t1.height, imagesDir);
+  if (rc == 0 && runCamera) {
+    if (facesGiven) cam.faces.assign(faces.begin(), faces.end());
+    if (!scene.empty()) cam.scene = scene;
+    if (frames) cam.frames = frames;
+    cam.width = t1.width;
+    cam.height = t1.height;
+    if (budgetGiven) cam.budgetMs = budgetMs;
+    rc = bench::runCameraBench(dev, cam);
+  }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

@@ -19,8 +19,10 @@ extern char** environ;
 
 #include "demo/cli.h"
 #include "demo/demo_app.h"
+#include "demo/frame_writer.h"
 #include "tools/fault_loader.h"
 #include "tools/image_io.h"
+#include "tools/world_lock.h"
 
 using namespace canopy;
 using namespace canopy::demo;
@@ -177,8 +179,12 @@ Status createDemoDevice(const Options& o, int* messages, Device* dev) {
 
 // timing.txt: the run's settings and re-slices, the first and the steady frames' timings, the sway
 // (still camera), memory.
+// Frames measured alone after the sequence (Canopy's frame with no PNG written beside it).
+constexpr uint32_t kHeldFrames = 10;
+
 std::string timingReport(const Options& o, const std::string& label, const Device& dev, const CanopyStats& st,
-                         uint32_t warmup, const TimingLog& first, const TimingLog& steady, const SwayMeter* sway) {
+                         uint32_t warmup, const TimingLog& first, const TimingLog& steady, const TimingLog& alone,
+                         const std::vector<double>& pngMs, const SwayMeter* sway) {
   char head[2048];
   std::snprintf(head, sizeof head,
                 "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
@@ -187,14 +193,37 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
                 "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
                 "(docs/design.md): the wall-clock line is the figure to trust there.\n",
                 label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
-                o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, o.camera == CameraPath::Orbit ? "orbit" : "still",
+                o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, cameraMotionName(o.camera),
                 dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
                 st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles);
   std::string text = head;
   text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
   if (!steady.wallMs.empty())
     text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
-                           (o.camera == CameraPath::Orbit ? std::string(o.rebuildBudgetMs > 0 ? ", re-slices spread over frames" : ", every frame re-slices") : std::string()) + "):");
+                           (o.reslice == ReslicePolicy::EveryFrame ? std::string(", every frame re-slices")
+                            : o.camera != CameraMotion::Still
+                                ? std::string(o.rebuildBudgetMs > 0 ? ", re-slices spread over frames" : ", re-slices at once")
+                                : std::string()) + "):");
+  if (!pngMs.empty()) {
+    std::vector<double> v = pngMs;
+    std::sort(v.begin(), v.end());
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "  %-40s %10.3f %10.3f\n  (the demo's own work, on a worker thread; on a CPU driver it shares the cores with "
+                  "the frames above)\n",
+                  "PNG file per frame (encode + write)", v[v.size() / 2], v.back());
+    text += line;
+  }
+  if (!alone.wallMs.empty()) {
+    std::vector<double> v = alone.wallMs;
+    std::sort(v.begin(), v.end());
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "Canopy's frame alone (the last view held, %u frames one at a time, submit to fence, no file written):\n"
+                  "  %-40s %10.3f %10.3f   (%.1f FPS)\n",
+                  kHeldFrames, "whole frame, wall clock", v[v.size() / 2], v.back(), 1000.0 / std::max(v[v.size() / 2], 1e-6));
+    text += line;
+  }
   if (sway) text += "\n" + sway->summary();
   char ringNote[128];
   std::snprintf(ringNote, sizeof ringNote, st.layers.meshResident ? "resident" : "streamed through a %.1f MiB ring",
@@ -308,23 +337,24 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(prepareOutputFolder(o));
     CANOPY_TRY(createHost(dev, model, o, o.width, o.height, true, VK_FORMAT_UNDEFINED, &host));
     const CameraRig rig0 = defaultRig(o);
-    TimingLog first, steady;
+    TimingLog first, steady, alone;
+    bool held = false;  // the frames measured alone after the sequence
+    FrameWriter writer;
     const std::vector<size_t> picked = contactSheetFrames(o.frames);
     std::vector<std::vector<uint8_t>> sheetFrames;
     SwayMeter sway;
     sway.width = o.width;
     sway.height = o.height;
     for (int c = 0; c < 3; ++c) sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(host.clearSrgb[c], 0.0f, 1.0f)));
-    const bool measureSway = o.camera == CameraPath::Still && o.debug == CompositeDebugView::None;
+    const bool measureSway = o.camera == CameraMotion::Still && o.debug == CompositeDebugView::None;
     // Warm-up: whole frames at the same dt and camera as frame 0, not written, so the wind has
     // reached the plant and the history ring (exact delay) is full when the first frame is written.
     const uint32_t warmup = uint32_t(std::lround(double(o.warmupSeconds) * o.fps));
     bool firstSubmitted = false;
     auto frameAt = [&](uint32_t i) {
-      CameraRig rig = rig0;
-      if (o.camera == CameraPath::Orbit && o.frames > 1) rig.yaw += o.orbitDegrees * float(i) / float(o.frames - 1);
       CanopyFrame f;
-      f.camera = toCamera(cameraView(rig, model, o.width, o.height));
+      f.camera = toCamera(cameraPathView(cameraPathOf(o, rig0), model.boundsMin, model.boundsMax,
+                                         float(o.width) / float(o.height), i));
       f.dt = 1.0f / o.fps;
       return f;
     };
@@ -355,7 +385,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       CANOPY_TRY(host.timer[slot].read(dev, &t));
       // The first frame slices the layers (and every orbit frame re-slices): kept apart from the steady state.
       if (!firstSubmitted) first.add(t, wall);
-      else if (p.keep) steady.add(t, wall);
+      else if (p.keep) (held ? alone : steady).add(t, wall);
       firstSubmitted = true;
       if (p.index >= 0) {
         std::vector<uint8_t> rgba;
@@ -402,7 +432,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       std::vector<uint8_t> rgba = pixels;
       char name[64];
       std::snprintf(name, sizeof name, "/frame_%04u.png", i);
-      CANOPY_TRY(writePng(o.outDir + name, o.width, o.height, rgba));
+      CANOPY_TRY(writer.push(o.outDir + name, o.width, o.height, rgba));
       if (measureSway) sway.add(rgba);
       if (std::find(picked.begin(), picked.end(), size_t(i)) != picked.end()) sheetFrames.push_back(std::move(rgba));
       // On a terminal one line rewritten in place; in a log at most one line a second, and the last.
@@ -416,11 +446,22 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     };
     for (uint32_t i = 0; i < o.frames; ++i) CANOPY_TRY(submit(frameAt(i), true, int64_t(i)));
     CANOPY_TRY(drain());
+    CANOPY_TRY(writer.finish());
+    // Canopy's frame with nothing else running: the last view held, one frame at a time (submit to
+    // fence), no file written; the first two are not kept (a moving path's last view re-slices).
+    held = true;
+    for (uint32_t k = 0; k < kHeldFrames + 2; ++k) {
+      CANOPY_TRY(submit(frameAt(o.frames - 1), k >= 2, -1));
+      CANOPY_TRY(drain());
+    }
+    held = false;
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
     const CanopyStats st = canopyStats(host.canopy);  // the sequence's, before the light sheet's re-slices
     if (o.lightSheet) CANOPY_TRY(writeLightSheet(o, host, sway.clear, frameAt, submit, drain, written));
-    const std::string text = timingReport(o, label, dev, st, warmup, first, steady, measureSway ? &sway : nullptr);
+    CANOPY_TRY(writer.finish());
+    const std::string text =
+        timingReport(o, label, dev, st, warmup, first, steady, alone, writer.writeMs(), measureSway ? &sway : nullptr);
     if (FILE* f = std::fopen((o.outDir + "/timing.txt").c_str(), "w")) {
       std::fputs(text.c_str(), f);
       std::fclose(f);
@@ -442,6 +483,57 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
   return s.ok() ? 0 : 1;
 }
 
+// --compare-frames A B: each frame_NNNN.png of A against B's (tools/world_lock.h), one line each,
+// then the worst of each measure. Exit 1 when a folder has no frames or the two differ in count or size.
+int compareFolders(const Options& o) {
+  const glm::vec3 sky = skySrgb(o);
+  const uint8_t clear[3] = {uint8_t(std::lround(255.0f * sky.r)), uint8_t(std::lround(255.0f * sky.g)),
+                            uint8_t(std::lround(255.0f * sky.b))};
+  std::printf("world-lock error of %s against %s (covered: differs from the clear colour by > 1 level)\n", o.compareA.c_str(),
+              o.compareB.c_str());
+  std::printf("%6s %9s %11s %10s %10s %9s\n", "frame", "IoU", "sil. mean", "sil. p99", "centroid", "colour");
+  WorldLockError worst;
+  uint32_t n = 0, worstFrame = 0;
+  double colourSum = 0, silSum = 0;
+  for (;; ++n) {
+    char name[32];
+    std::snprintf(name, sizeof name, "/frame_%04u.png", n);
+    const std::string fa = o.compareA + name, fb = o.compareB + name;
+    const bool haveA = access(fa.c_str(), F_OK) == 0, haveB = access(fb.c_str(), F_OK) == 0;
+    if (!haveA && !haveB) break;
+    uint32_t wa = 0, ha = 0, wb = 0, hb = 0;
+    std::vector<uint8_t> a, b;
+    Status s = haveA && haveB ? readPng(fa, &wa, &ha, &a) : Status::error((haveA ? fb : fa) + " is missing");
+    if (s.ok()) s = readPng(fb, &wb, &hb, &b);
+    if (s.ok() && (wa != wb || ha != hb))
+      s = Status::error(fa + " is " + std::to_string(wa) + "x" + std::to_string(ha) + ", " + fb + " " + std::to_string(wb) + "x" +
+                        std::to_string(hb));
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
+      return 1;
+    }
+    const WorldLockError e = compareFrames(a, b, wa, ha, clear);
+    std::printf("%6u %9.4f %9.3f px %7.2f px %7.2f px %9.2f\n", n, e.coverageIoU, e.silhouetteMeanPx, e.silhouetteP99Px,
+                e.centroidPx, e.colourMean);
+    if (n == 0 || e.coverageIoU < worst.coverageIoU) worst.coverageIoU = e.coverageIoU, worstFrame = n;
+    worst.silhouetteMeanPx = std::max(worst.silhouetteMeanPx, e.silhouetteMeanPx);
+    worst.silhouetteP99Px = std::max(worst.silhouetteP99Px, e.silhouetteP99Px);
+    worst.centroidPx = std::max(worst.centroidPx, e.centroidPx);
+    worst.colourMean = std::max(worst.colourMean, e.colourMean);
+    colourSum += e.colourMean;
+    silSum += e.silhouetteMeanPx;
+  }
+  if (n == 0) {
+    std::fprintf(stderr, "canopy-demo: no frame_0000.png in %s or %s\n", o.compareA.c_str(), o.compareB.c_str());
+    return 1;
+  }
+  std::printf("%u frames: IoU min %.4f (frame %u); silhouette mean: worst frame %.3f px, average %.3f px; p99 worst %.2f px; "
+              "centroid worst %.2f px; colour worst %.2f, average %.2f levels\n",
+              n, worst.coverageIoU, worstFrame, worst.silhouetteMeanPx, silSum / n, worst.silhouetteP99Px, worst.centroidPx,
+              worst.colourMean, colourSum / n);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -453,6 +545,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "canopy-demo: %s\n", err.c_str());
     return 2;
   }
+  if (!o.compareA.empty()) return compareFolders(o);
   if (o.cache.clear) return cli::clearCacheCommand("canopy-demo", o.cache, o.gltf);
   if (!o.gltf.empty()) {
     const Status where = cli::resolveCacheFolder(o.cache, o.gltf, &o.cacheFolder);

@@ -75,8 +75,18 @@ void printHelp() {
       "  --warmup S          headless: seconds of animation run (not written) before the first frame,\n"
       "                      so the wind has reached the plant, [0, 60] (default %g)\n"
       "  --fps F             animation frames per second, dt = 1/F, [1, 1000] (default %g)\n"
-      "  --camera PATH       still or orbit (default still)\n"
+      "  --camera PATH       still, orbit, dolly, strafe, turn (a pure rotation), zoom, walk (first person;\n"
+      "                      for --scene field) (default still)\n"
       "  --orbit-degrees D   orbit path: total turn over the sequence, [-3600, 3600] (default %g)\n"
+      "  --degrees-per-frame D  orbit/turn: yaw, zoom: field of view, walk: looking around, per frame,\n"
+      "                      [-90, 90] (default 0.25; orbit without it: --orbit-degrees over the sequence)\n"
+      "  --radii-per-frame R dolly, strafe, walk: the vegetation's bounding radius per frame, [0, 10]\n"
+      "                      (default 0.005)\n"
+      "  --swing D           turn, zoom, walk: degrees either side of the start, [0, 80] (default 5)\n"
+      "  --reslice MODE      auto (re-slice by the policy) or every-frame (the reference a moving camera's\n"
+      "                      frames are measured against) (default auto)\n"
+      "  --compare-frames A B  the world-lock error of folder A's frame_NNNN.png against folder B's (coverage\n"
+      "                      IoU, silhouette distance, colour; tools/world_lock.h), then exit\n"
       "%s"
       "                      (a re-slice after a camera move is spread over frames, then cross-faded in)\n"
       "  --device-budget MIB device memory Canopy may allocate; a mesh that does not fit is streamed\n"
@@ -155,6 +165,8 @@ const NumberOption kNumberOptions[] = {
     {"--leaf-transmission", 0, 0, &Options::leafTransmission, "a number", "LayerSettings.leafTransmission"},
     {"--fps", 1, 1000, &Options::fps, "a number"},
     {"--orbit-degrees", -3600, 3600, &Options::orbitDegrees, "a number"},
+    {"--radii-per-frame", 0, 10, &Options::radiiPerFrame, "a number"},
+    {"--swing", 0, 80, &Options::swingDegrees, "a number"},
     {"--rebuild-budget", 0, 0, &Options::rebuildBudgetMs, "a number", "LayerSettings.rebuildBudgetMs"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
@@ -291,10 +303,21 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (!takes() || !cli::parseUint(v, 1, 100000, &o->frames)) return bad("needs an integer in [1, 100000]");
       framesGiven = true;
     } else if (a == "--camera") {
-      if (!takes()) return bad("needs still or orbit");
-      if (std::string(v) == "still") o->camera = CameraPath::Still;
-      else if (std::string(v) == "orbit") o->camera = CameraPath::Orbit;
-      else return bad(quoted(v) + " is not still or orbit");
+      if (!takes()) return bad("needs a path: still, orbit, dolly, strafe, turn, zoom, walk");
+      const Status s = parseCameraMotion(v, &o->camera);
+      if (!s.ok()) return bad(s.message());
+    } else if (a == "--degrees-per-frame") {
+      if (const int rc = number(-90, 90, &o->degreesPerFrame)) return rc;
+      o->degreesGiven = true;
+    } else if (a == "--reslice") {
+      if (!takes()) return bad("needs auto or every-frame");
+      if (std::string(v) == "auto") o->reslice = ReslicePolicy::OnViewChange;
+      else if (std::string(v) == "every-frame") o->reslice = ReslicePolicy::EveryFrame;
+      else return bad(quoted(v) + " is not auto or every-frame");
+    } else if (a == "--compare-frames") {
+      if (i + 2 >= argc || !*argv[i + 1] || !*argv[i + 2]) return bad("needs two folders");
+      o->compareA = argv[++i];
+      o->compareB = argv[++i];
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
@@ -383,6 +406,26 @@ LayerView cameraView(const CameraRig& rig, const VegetationModel& m, uint32_t w,
   return orbitView(m.boundsMin, m.boundsMax, rig.yaw, rig.pitch, rig.fov, float(w) / float(h), rig.distance);
 }
 
+CameraPath cameraPathOf(const Options& o, const CameraRig& rig) {
+  CameraPath p;
+  p.motion = o.camera;
+  p.degreesPerFrame = o.degreesPerFrame;
+  if (o.camera == CameraMotion::Orbit && !o.degreesGiven)
+    p.degreesPerFrame = o.frames > 1 ? o.orbitDegrees / float(o.frames - 1) : 0.0f;
+  p.radiiPerFrame = o.radiiPerFrame;
+  p.amplitudeDegrees = o.swingDegrees;
+  p.yaw = rig.yaw;
+  p.pitch = rig.pitch;
+  p.fovY = rig.fov;
+  p.distanceScale = rig.distance;
+  return p;
+}
+
+glm::vec3 skySrgb(const Options& o) {
+  return o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
+                                                      : glm::vec3(0.62f, 0.75f, 0.88f);
+}
+
 CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   CanopyParams p = base;
   if (!parseLayerLayout(o.layout, &p.layers.layout).ok()) p.layers.layout = base.layers.layout;  // checked by parseOptions
@@ -394,6 +437,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.dynamics.delay = o.delay;
   p.animation = o.method;
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
+  p.layers.policy = o.reslice;
   p.layers.lightDirection = o.light;
   p.layers.lightColor = o.lightColor;
   p.layers.ambient = o.ambient;
@@ -557,8 +601,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   host.wantsReadback = readback;
   host.presentFormat = presentFormat;
   auto linear = [](float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); };
-  const glm::vec3 sky = o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
-                                                                     : glm::vec3(0.62f, 0.75f, 0.88f);
+  const glm::vec3 sky = skySrgb(o);
   host.clear = glm::vec4(linear(sky.r), linear(sky.g), linear(sky.b), 1.0f);
   host.clearSrgb = sky;
   CANOPY_TRY(createTargets(host));

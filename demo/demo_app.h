@@ -15,11 +15,10 @@
 #include "engine/render_graph.h"
 #include "engine/timing.h"
 #include "render/canopy.h"
+#include "tools/camera_paths.h"
 #include "tools/scene_generator.h"
 
 namespace canopy::demo {
-
-enum class CameraPath { Still, Orbit };
 
 struct Options {
   // Scene
@@ -61,8 +60,14 @@ struct Options {
   uint32_t width = 640, height = 480;
   uint32_t frames = 60;
   float fps = 30.0f;                   // simulation steps per second of animation (dt = 1 / fps)
-  CameraPath camera = CameraPath::Still;
-  float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence
+  CameraMotion camera = CameraMotion::Still;  // tools/camera_paths.h
+  float orbitDegrees = 60.0f;          // orbit path: total yaw over the sequence (unless --degrees-per-frame)
+  float degreesPerFrame = 0.25f;       // orbit, turn, zoom, walk (tools/camera_paths.h CameraPath)
+  bool degreesGiven = false;
+  float radiiPerFrame = 0.005f;        // dolly, strafe, walk
+  float swingDegrees = 5.0f;           // turn, zoom, walk: either side of the start
+  ReslicePolicy reslice = ReslicePolicy::OnViewChange;  // --reslice auto | every-frame
+  std::string compareA, compareB;      // --compare-frames: two output folders measured against each other
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
   float deviceBudgetMiB = 1536.0f;     // CanopyDesc.deviceMemoryBudget (0: no limit)
   float ringMiB = 64.0f;               // CanopyDesc.meshStagingRingBytes
@@ -99,6 +104,10 @@ struct CameraRig {
 };
 CameraRig defaultRig(const Options& o);
 LayerView cameraView(const CameraRig& rig, const VegetationModel& model, uint32_t width, uint32_t height);
+// The headless run's camera path (--camera and its speeds), starting at `rig`.
+CameraPath cameraPathOf(const Options& o, const CameraRig& rig);
+// The host's clear colour as the sRGB frames store it (sky; water for the kelp scene).
+glm::vec3 skySrgb(const Options& o);
 
 CanopyParams paramsFrom(const Options& o, const CanopyParams& base);
 

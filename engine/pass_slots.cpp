@@ -52,13 +52,6 @@ Slot slot(ResourceId id, Use use, VkSampler sampler) {
   return s;
 }
 
-Slot slotRange(ResourceId id, Use use, VkDeviceSize offset, VkDeviceSize range) {
-  Slot s = slot(id, use);
-  s.offset = offset;
-  s.range = range;
-  return s;
-}
-
 Slot untouched(ResourceId id) {
   Slot s = slot(id, Use::ComputeStorageRead);
   s.touched = false;
@@ -102,7 +95,7 @@ Status slotBindings(const PassContext& c, const Slots& slots, const std::vector<
       return Status::error(what + ": binding " + std::to_string(i) + " is a " + descriptorTypeName(types[i]) +
                            " in the SPIR-V; its slot declares " + name() + " as " + useName(s.use));
     if (isBufferType(types[i])) {
-      out->push_back(bindBuffer(c.buffer(s.id), s.offset, s.range));
+      out->push_back(bindBuffer(c.buffer(s.id)));
     } else {
       if (types[i] == VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER && !s.sampler)
         return Status::error(what + ": binding " + std::to_string(i) + " (" + name() + ") is sampled and its slot has no sampler");

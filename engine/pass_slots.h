@@ -22,15 +22,13 @@ struct Slot {
   Use use = Use::ComputeStorageRead; // how the shader uses it: the pass's declared access
   bool touched = true;               // false: bound for a shared include's declaration, not accessed
   VkSampler sampler = VK_NULL_HANDLE;
-  VkDeviceSize offset = 0, range = VK_WHOLE_SIZE;  // a buffer's bound range
   Binding outside;                   // bound as is (id == kInvalidResource): no graph use
 };
 using Slots = std::vector<Slot>;
 
-// A graph resource used by the shader as `use` (an image with a sampler: a combined image sampler).
+// A graph resource used by the shader as `use` (a buffer: all of it; an image with a sampler: a
+// combined image sampler).
 Slot slot(ResourceId id, Use use, VkSampler sampler = VK_NULL_HANDLE);
-// A buffer range of a graph resource.
-Slot slotRange(ResourceId id, Use use, VkDeviceSize offset, VkDeviceSize range);
 // A graph resource bound because the shaders' shared include declares it, which this kernel does
 // not access: bound, no access declared (so no barrier for it).
 Slot untouched(ResourceId id);

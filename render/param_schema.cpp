@@ -11,6 +11,7 @@
 #include <canopy/canopy.h>
 
 #include "engine/status.h"
+#include "render/param_schema.h"
 
 namespace canopy {
 namespace {
@@ -34,34 +35,20 @@ namespace {
   S(CanopyParams, CANOPY_PARAMS)                           \
   S(CanopyDesc, CANOPY_DESC)
 
-// A number as a reader writes it: integers in full (16384, 1048576), others in 6 digits.
-std::string number(double v) {
-  if (std::isfinite(v) && v == std::floor(v) && std::fabs(v) < 9007199254740992.0) {
-    std::ostringstream o;
-    o.precision(17);
-    o << v;
-    return o.str();
-  }
-  std::ostringstream o;
-  o << v;
-  return o.str();
-}
-
 std::string unitText(ParamCheck check, const char* unit) {
   if (!unit || !*unit) return std::string();
   return check == ParamCheck::Enum ? std::string(": one of ") + unit : std::string(" (") + unit + ")";
 }
 
 Status refuse(const std::string& path, const std::string& value, ParamCheck check, double lo, double hi, const char* unit) {
+  const std::string range = formatParamNumber(lo) + ", " + formatParamNumber(hi) + "]";
   std::string why;
   switch (check) {
-    case ParamCheck::AboveMin: why = "is outside (" + number(lo) + ", " + number(hi) + "]"; break;
-    case ParamCheck::PowerOfTwo: why = "is not a power of two in [" + number(lo) + ", " + number(hi) + "]"; break;
-    case ParamCheck::PowerOfTwoOrZero:
-      why = "is neither 0 nor a power of two in [" + number(lo) + ", " + number(hi) + "]";
-      break;
+    case ParamCheck::AboveMin: why = "is outside (" + range; break;
+    case ParamCheck::PowerOfTwo: why = "is not a power of two in [" + range; break;
+    case ParamCheck::PowerOfTwoOrZero: why = "is neither 0 nor a power of two in [" + range; break;
     case ParamCheck::Finite: why = "is not finite"; break;
-    default: why = "is outside [" + number(lo) + ", " + number(hi) + "]"; break;
+    default: why = "is outside [" + range; break;
   }
   return Status::error(path + " = " + value + " " + why + unitText(check, unit));
 }
@@ -70,7 +57,7 @@ Status checkReal(const std::string& path, double v, ParamCheck c, double lo, dou
   bool ok = std::isfinite(v);
   if (c == ParamCheck::Closed) ok = ok && v >= lo && v <= hi;
   if (c == ParamCheck::AboveMin) ok = ok && v > lo && v <= hi;
-  return ok ? Status() : refuse(path, number(v), c, lo, hi, unit);
+  return ok ? Status() : refuse(path, formatParamNumber(v), c, lo, hi, unit);
 }
 
 Status checkInteger(const std::string& path, uint64_t v, ParamCheck c, double lo, double hi, const char* unit) {
@@ -112,7 +99,7 @@ Status checkValue(const std::string& path, const T& v, ParamCheck c, double lo, 
     return Status();
   } else if constexpr (IsVector<T>::value) {
     if (double(v.size()) > hi)
-      return Status::error(path + ": " + std::to_string(v.size()) + " given, at most " + number(hi));
+      return Status::error(path + ": " + std::to_string(v.size()) + " given, at most " + formatParamNumber(hi));
     for (size_t i = 0; i < v.size(); ++i) CANOPY_TRY(checkParams(v[i], path + "[" + std::to_string(i) + "]."));
     return Status();
   } else if constexpr (HasParams<T>::value) {
@@ -164,6 +151,13 @@ const ParamInfo* findParam(const char* qualifiedName) {
       return &t[i];
   }
   return nullptr;
+}
+
+std::string formatParamNumber(double v) {
+  std::ostringstream o;
+  if (std::isfinite(v) && v == std::floor(v) && std::fabs(v) < 9007199254740992.0) o.precision(17);
+  o << v;
+  return o.str();
 }
 
 }  // namespace canopy

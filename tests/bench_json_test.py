@@ -40,7 +40,7 @@ def main():
     if (p["width"], p["height"], p["frames"]) != (128, 96, 3):
         fail("params do not record the run: %r" % p)
     rows = doc["rows"]
-    want = {(l, c) for l in ("3(1-1-1)", "5(3-1-1)") for c in ("still", "orbit")}
+    want = {(l, c) for l in ("3(1-1-1)", "5(3-1-1)") for c in ("still", "orbit", "every-frame")}
     got = {(r["layout"], r["camera"]) for r in rows}
     if got != want:
         fail("rows %r, expected %r" % (sorted(got), sorted(want)))
@@ -51,8 +51,10 @@ def main():
             fail(tag + ": frame times not positive and ordered: %r" % fm)
         if not math.isclose(r["fps"] * fm["median"], 1000.0, rel_tol=1e-3):
             fail(tag + ": FPS %g inconsistent with %g ms" % (r["fps"], fm["median"]))
-        if r["paperFps"] not in (70, 65):
-            fail(tag + ": paper FPS %r" % r["paperFps"])
+        # The paper's FPS only beside a row measured as the paper measured (re-sliced every frame)
+        # at its own face counts (80K, 50M): none at 2000 and 4000 faces.
+        if r["paperFps"] != 0:
+            fail(tag + ": paper FPS %r beside a row not measured as the paper's" % r["paperFps"])
         if r["camera"] == "still" and not (0.0 < r["coverage"] <= 1.0):
             fail(tag + ": coverage %r" % r["coverage"])
         for name in EXPECTED_PASSES:
@@ -60,7 +62,7 @@ def main():
                 fail(tag + ": pass '%s' missing" % name)
         # The layer draws are conditional render-graph passes: recorded (and timed) only in frames
         # that re-slice, so every orbit frame has them and a still frame (after the first) not.
-        if r["camera"] == "orbit" and "layers: foliage" not in r["passes"]:
+        if r["camera"] in ("orbit", "every-frame") and "layers: foliage" not in r["passes"]:
             fail(tag + ": pass 'layers: foliage' missing from the orbit row")
         total = 0.0
         for name, s in r["passes"].items():

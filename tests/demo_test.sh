@@ -16,6 +16,8 @@ done
 grep -q "composite: warp + composite" "$out/headless/timing.txt" || fail "timing.txt lacks the composite pass"
 grep -q "wall clock" "$out/headless/timing.txt" || fail "timing.txt lacks the wall-clock line"
 grep -q "^Sway (top third" "$out/headless/timing.txt" || fail "timing.txt lacks the sway line"
+grep -q "PNG file per frame" "$out/headless/timing.txt" || fail "timing.txt lacks the PNG writing line (the demo's own work)"
+grep -q "^Canopy's frame alone" "$out/headless/timing.txt" || fail "timing.txt lacks Canopy's frame measured alone"
 echo "headless: $(grep -c . "$out/headless/timing.txt") lines of timing, $(ls "$out/headless" | wc -l) files"
 
 # An output folder with a space and quotes (ffmpeg is run without a shell: nothing is injected);
@@ -49,6 +51,20 @@ echo "sway over 24 frames at 320x240: wind $wind px, no wind $calm px"
 "$demo" --gltf "$out/kelp.glb" --frames 3 --size 128x96 --camera orbit --delay approx --debug velocity --layers 3 \
   --validate --no-mp4 --out "$out/kelp" >"$out/stdout2" 2>"$out/stderr2" || fail "kelp.glb: exit $? ($(tail -5 "$out/stderr2"))"
 [ -s "$out/kelp/contact_sheet.png" ] || fail "kelp contact sheet missing"
+
+# A moving camera (a pure rotation), drawn by the policy and re-sliced every frame, wind off:
+# --compare-frames measures one against the other (frames identical to themselves: IoU 1).
+"$demo" --camera turn --degrees-per-frame 1 --frames 4 --size 160x120 --warmup 0 --strength 0 --validate --no-mp4 \
+  --out "$out/turn" >/dev/null 2>"$out/stderr6" || fail "turn: exit $? ($(tail -5 "$out/stderr6"))"
+"$demo" --camera turn --degrees-per-frame 1 --frames 4 --size 160x120 --warmup 0 --strength 0 --reslice every-frame \
+  --validate --no-mp4 --out "$out/turn_every" >/dev/null 2>"$out/stderr7" || fail "turn every-frame: exit $? ($(tail -5 "$out/stderr7"))"
+grep -q "camera turn" "$out/turn_every/timing.txt" && grep -q "every frame re-slices" "$out/turn_every/timing.txt" ||
+  fail "timing.txt does not name the path and the every-frame policy"
+"$demo" --compare-frames "$out/turn" "$out/turn" >"$out/cmp_same" || fail "--compare-frames: exit $?"
+grep -q "^4 frames: IoU min 1.0000" "$out/cmp_same" || fail "a folder against itself: $(tail -1 "$out/cmp_same")"
+"$demo" --compare-frames "$out/turn" "$out/turn_every" >"$out/cmp" || fail "--compare-frames: exit $?"
+echo "turn 1 deg/frame, policy vs every frame: $(tail -1 "$out/cmp")"
+"$demo" --compare-frames "$out/turn" "$out/absent" >/dev/null 2>"$out/err" && fail "--compare-frames with a missing folder passed"
 
 # The per-vertex baseline on the same scene (validation on): it sways in the wind and stands still without.
 "$demo" --method per-vertex --frames 24 --size 320x240 --warmup 1 --validate --no-mp4 --out "$out/pv" >/dev/null 2>"$out/stderr4" ||
@@ -91,6 +107,8 @@ expect_refusal "--gust" --gust 2
 expect_refusal "--warmup" --warmup -1
 expect_refusal "--bogus" --bogus
 expect_refusal "--method" --method 3d
+expect_refusal "spin" --camera spin
+expect_refusal "--reslice" --reslice sometimes
 "$demo" --help | grep -q -- "--frames N .*default 60" || fail "--help does not document --frames with its default"
 "$demo" --help | grep -q -- "--warmup S .*" || fail "--help does not document --warmup"
 "$demo" --gltf "$out/absent.glb" --frames 1 >/dev/null 2>"$out/err" && fail "a missing glTF file was accepted"

@@ -80,12 +80,12 @@ TEST(PassSlots, SlotsDeclareThePassUses) {
 }
 
 // The bind list comes from the same slots: the graph's buffers and views (an image in its use's
-// layout, with its sampler), an object outside the graph as given, a buffer's range.
+// layout, with its sampler), an object outside the graph as given, a buffer whole.
 TEST(PassSlots, BindListFollowsTheSlots) {
   BoundGraph bg("buf", "img");
   const ResourceId buf = bg.buf, img = bg.img;
   const PassContext& c = bg.context;
-  const Slots slots = {slotRange(buf, Use::ComputeStorageRead, 64, 128), slot(img, Use::ComputeSampled, fakeSampler(0x30)),
+  const Slots slots = {slot(buf, Use::ComputeStorageRead), slot(img, Use::ComputeSampled, fakeSampler(0x30)),
                        outsideGraph(bindBuffer(fakeBuffer(0x40))), slot(img, Use::ComputeStorageWrite)};
   const std::vector<VkDescriptorType> types = {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                                                VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE};
@@ -93,8 +93,8 @@ TEST(PassSlots, BindListFollowsTheSlots) {
   ASSERT_TRUE(slotBindings(c, slots, types, "test pass", &b).ok());
   ASSERT_EQ(b.size(), 4u);
   EXPECT_EQ(b[0].buffer, fakeBuffer(0x10));
-  EXPECT_EQ(b[0].offset, 64u);
-  EXPECT_EQ(b[0].range, 128u);
+  EXPECT_EQ(b[0].offset, 0u);
+  EXPECT_EQ(b[0].range, VK_WHOLE_SIZE);
   EXPECT_EQ(b[1].view, fakeView(0x20));
   EXPECT_EQ(b[1].layout, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
   EXPECT_EQ(b[1].sampler, fakeSampler(0x30));

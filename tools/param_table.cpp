@@ -6,19 +6,14 @@
 
 #include <canopy/canopy.h>
 
+#include "render/param_schema.h"
+
 namespace canopy {
 namespace {
 
-std::string number(double v) {
-  std::ostringstream o;
-  if (std::isfinite(v) && v == std::floor(v) && std::fabs(v) < 9007199254740992.0) o.precision(17);
-  o << v;
-  return o.str();
-}
-
 // What a reader needs of the check: the allowed values.
 std::string allowed(const ParamInfo& p) {
-  const std::string lo = number(p.min), hi = number(p.max);
+  const std::string lo = formatParamNumber(p.min), hi = formatParamNumber(p.max);
   switch (p.check) {
     case ParamCheck::Closed: return "[" + lo + ", " + hi + "]";
     case ParamCheck::AboveMin: return "(" + lo + ", " + hi + "]";

@@ -1,0 +1,181 @@
+// canopy-bench camera: the moving camera (docs/design.md "Moving camera: paths and the world-lock
+// measure"). For each camera path (tools/camera_paths.h) two contexts on the same scene, wind off
+// so they differ only by the method: one re-slices by its policy ("auto", spread over frames with
+// --budget ms, 0: at once), the other every frame (the reference). Each frame of the path is drawn
+// by both and compared (tools/world_lock.h: coverage IoU, silhouette distance, colour), and each
+// one's frame time is kept; the still camera of the same run is the baseline.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "bench/bench.h"
+#include "bench/bench_host.h"
+#include "engine/device.h"
+#include "engine/transfer.h"
+#include "render/canopy.h"
+#include "tools/camera_paths.h"
+#include "tools/scene_generator.h"
+#include "tools/world_lock.h"
+
+namespace canopy::bench {
+namespace {
+
+double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(std::ceil(q * double(v.size()))) - (q > 0 ? 1 : 0))];
+}
+
+// One context with its host targets and frame graph.
+struct Side {
+  Device& d;
+  CanopyContext* ctx = nullptr;
+  HostTargets host;
+  rg::RenderGraph graph;
+  uint32_t w = 0, h = 0;
+  explicit Side(Device& dev) : d(dev) {}
+  ~Side() {
+    graph.release(d);
+    destroyHostTargets(d, host);
+    destroyCanopy(ctx);
+  }
+  Status init(const VegetationModel& model, uint32_t width, uint32_t height, ReslicePolicy policy, float budgetMs) {
+    w = width;
+    h = height;
+    CanopyDesc desc;
+    desc.width = w;
+    desc.height = h;
+    CANOPY_TRY(createCanopy(d, model, desc, &ctx));
+    CanopyParams p = canopyParams(ctx);
+    CANOPY_TRY(parseLayerLayout("5(3-1-1)", &p.layers.layout));
+    p.simulation.wind.strength = 0.0f;  // both sides then differ only by the method
+    p.layers.policy = policy;
+    p.layers.rebuildBudgetMs = policy == ReslicePolicy::EveryFrame ? 0.0f : budgetMs;
+    CANOPY_TRY(setCanopyParams(ctx, p));
+    CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
+    return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
+  }
+  // One frame at `view`: its wall clock (submit to fence), and its pixels when `pixels` is given.
+  Status frame(const LayerView& view, double* ms, std::vector<uint8_t>* pixels) {
+    CanopyFrame f;
+    f.camera = toCamera(view);
+    f.dt = 1.0f / 30.0f;
+    CANOPY_TRY(beginCanopyFrame(ctx, f));
+    const double t0 = nowMs();
+    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) { return graph.record(cmd, nullptr); }));
+    *ms = nowMs() - t0;
+    if (!pixels) return Status();
+    pixels->resize(size_t(w) * h * 4);
+    return readbackImage(d, host.color, 0, 4, pixels->data(), rg::stateOf(rg::Use::ColorAttachmentReadWrite));
+  }
+};
+
+struct PathResult {
+  std::string name;
+  std::vector<double> autoMs, everyMs;
+  WorldLockError worst;          // min IoU, max of the distances and colour
+  double silhouetteMeanAvg = 0;  // the silhouette mean over the frames
+  uint32_t reslices = 0;         // the auto side's re-slices along the path
+};
+
+}  // namespace
+
+int runCameraBench(Device& d, const CameraBenchOptions& o) {
+  const uint8_t clear[3] = {115, 153, 204};  // bench_host.cpp's clear (0.45, 0.6, 0.8) in RGBA8
+  char policy[64] = "at once";
+  if (o.budgetMs > 0) std::snprintf(policy, sizeof policy, "spread over frames, %.1f ms budget", double(o.budgetMs));
+  std::printf("\nMoving camera at %ux%u, 5(3-1-1), generated scene '%s', wind off: each path's %d frames drawn with the\n"
+              "re-slicing policy (auto: %s) and re-sliced every frame (the reference), compared frame by frame\n"
+              "(coverage IoU, silhouette distance in pixels, colour difference in 8-bit levels over covered pixels);\n"
+              "frame times are wall clock, submit to fence, ms.\n",
+              o.width, o.height, o.scene.c_str(), o.frames, policy);
+  for (uint64_t faces : o.faces) {
+    SceneDesc sd;
+    sd.faces = faces;
+    VegetationModel model;
+    Status s = parseSceneKind(o.scene, &sd.kind);
+    if (s.ok()) s = generateScene(sd, &model);
+    const float aspect = float(o.width) / float(o.height);
+    // The still camera: a context's frames after its first two (the first slices the layers).
+    std::vector<double> stillMs;
+    const LayerView view0 = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, aspect, 0);
+    {
+      Side still(d);
+      if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs);
+      for (int i = 0; i < o.frames + 2 && s.ok(); ++i) {
+        double ms = 0;
+        s = still.frame(view0, &ms, nullptr);
+        if (i >= 2) stillMs.push_back(ms);
+      }
+    }
+    std::vector<PathResult> results;
+    for (CameraMotion m : o.paths) {
+      if (!s.ok()) break;
+      PathResult r;
+      r.name = cameraMotionName(m);
+      CameraPath path;
+      path.motion = m;
+      path.degreesPerFrame = o.degreesPerFrame;
+      path.radiiPerFrame = o.radiiPerFrame;
+      path.amplitudeDegrees = o.swingDegrees;
+      // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
+      Side autoSide(d), every(d);
+      s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs);
+      if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
+      const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);
+      for (int k = 0; k < 2 && s.ok(); ++k) {
+        double ms = 0;
+        s = autoSide.frame(first, &ms, nullptr);
+        if (s.ok()) s = every.frame(first, &ms, nullptr);
+      }
+      const uint32_t before = s.ok() ? uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) : 0;
+      std::vector<uint8_t> a, b;
+      double silSum = 0;
+      for (int i = 0; i < o.frames && s.ok(); ++i) {
+        const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
+        double ma = 0, mb = 0;
+        s = autoSide.frame(v, &ma, &a);
+        if (s.ok()) s = every.frame(v, &mb, &b);
+        if (!s.ok()) break;
+        r.autoMs.push_back(ma);
+        r.everyMs.push_back(mb);
+        const WorldLockError e = compareFrames(a, b, o.width, o.height, clear);
+        if (i == 0 || e.coverageIoU < r.worst.coverageIoU) r.worst.coverageIoU = e.coverageIoU;
+        r.worst.silhouetteMeanPx = std::max(r.worst.silhouetteMeanPx, e.silhouetteMeanPx);
+        r.worst.silhouetteP99Px = std::max(r.worst.silhouetteP99Px, e.silhouetteP99Px);
+        r.worst.centroidPx = std::max(r.worst.centroidPx, e.centroidPx);
+        r.worst.colourMean = std::max(r.worst.colourMean, e.colourMean);
+        silSum += e.silhouetteMeanPx;
+      }
+      if (s.ok()) r.reslices = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) - before;
+      r.silhouetteMeanAvg = silSum / std::max(1.0, double(r.autoMs.size()));
+      results.push_back(r);
+    }
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+      return 1;
+    }
+    const double stillMed = quantile(stillMs, 0.5);
+    std::printf("\n%llu faces: still camera %.2f ms (median), p95 %.2f ms\n", (unsigned long long)faces, stillMed,
+                quantile(stillMs, 0.95));
+    std::printf("  %-7s %9s %8s %7s %10s %8s %7s %9s %9s %8s %8s %8s\n", "path", "auto ms", "p95", "x still", "every ms",
+                "p95", "x still", "re-slices", "IoU min", "sil. avg", "sil. max", "p99 max");
+    for (const PathResult& r : results) {
+      const double am = quantile(r.autoMs, 0.5), em = quantile(r.everyMs, 0.5);
+      std::printf("  %-7s %9.2f %8.2f %7.2f %10.2f %8.2f %7.2f %9u %9.4f %8.3f %8.3f %8.2f\n", r.name.c_str(), am,
+                  quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
+                  em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
+                  r.worst.silhouetteP99Px);
+    }
+  }
+  return 0;
+}
+
+}  // namespace canopy::bench

@@ -1,0 +1,107 @@
+// Reprojection of a layer between re-slices (render/reprojection.h): the slab plane's homography
+// takes a pixel of the current camera to the slice camera's pixel of the same plane point; for a
+// pure rotation it is exact at every depth (no re-slice needed); off the plane under translation the
+// error is the parallax of the distance to the plane.
+#include <cmath>
+#include <random>
+
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+
+#include "engine/camera.h"
+#include "render/reprojection.h"
+#include "tools/camera_paths.h"
+
+namespace canopy {
+namespace {
+
+const glm::vec3 kMin(-1.0f, 0.0f, -1.0f), kMax(1.0f, 2.0f, 1.0f);
+const glm::dvec2 kSize(1024, 768);
+
+// Pixel (y down, centres at +0.5) and view depth of world point x seen by `v`.
+glm::dvec2 pixelOf(const LayerView& v, const glm::dvec3& x, const glm::dvec2& size = kSize) {
+  const glm::dvec4 c = glm::dmat4(v.proj) * glm::dmat4(v.view) * glm::dvec4(x, 1.0);
+  return (glm::dvec2(c) / c.w + 1.0) * 0.5 * size;
+}
+double viewDepth(const LayerView& v, const glm::dvec3& x) { return -(glm::dmat4(v.view) * glm::dvec4(x, 1.0)).z; }
+// The world point at view depth `depth` on the ray of pixel p of `v`.
+glm::dvec3 pointAt(const LayerView& v, const glm::dvec2& p, double depth) {
+  const glm::dvec2 ndc = p / kSize * 2.0 - 1.0;
+  const glm::dmat4 inv = glm::inverse(glm::dmat4(v.proj) * glm::dmat4(v.view));
+  const glm::dvec4 a = inv * glm::dvec4(ndc, 0.0, 1.0), b = inv * glm::dvec4(ndc, 1.0, 1.0);
+  const glm::dvec3 x0 = glm::dvec3(a) / a.w, x1 = glm::dvec3(b) / b.w;
+  const double d0 = viewDepth(v, x0), d1 = viewDepth(v, x1);
+  return x0 + (x1 - x0) * ((depth - d0) / (d1 - d0));
+}
+
+LayerView along(CameraMotion m, uint32_t frame, float degrees = 0.25f, float radii = 0.005f) {
+  CameraPath p;
+  p.motion = m;
+  p.degreesPerFrame = degrees;
+  p.radiiPerFrame = radii;
+  return cameraPathView(p, kMin, kMax, float(kSize.x / kSize.y), frame);
+}
+
+TEST(Reprojection, TheSlabPlaneMapsExactly) {
+  const LayerView slice = along(CameraMotion::Still, 0);
+  const double depth = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.1, 0.9);
+  for (CameraMotion m : {CameraMotion::Orbit, CameraMotion::Dolly, CameraMotion::Strafe, CameraMotion::Turn, CameraMotion::Zoom}) {
+    const LayerView current = along(m, 20);
+    const glm::dmat3 h = layerHomography(slice, current, depth, kSize, kSize);
+    for (int k = 0; k < 50; ++k) {
+      const glm::dvec3 x = pointAt(slice, glm::dvec2(u(rng), u(rng)) * kSize, depth);
+      const glm::dvec2 got = applyHomography(h, pixelOf(current, x)), want = pixelOf(slice, x);
+      EXPECT_LT(glm::length(got - want), 1e-3) << cameraMotionName(m) << " point " << k;
+      EXPECT_GT((h * glm::dvec3(pixelOf(current, x), 1.0)).z, 0.0) << cameraMotionName(m);
+    }
+  }
+  // The same camera: the identity.
+  const glm::dmat3 id = layerHomography(slice, slice, depth, kSize, kSize);
+  EXPECT_LT(glm::length(applyHomography(id, glm::dvec2(100.5, 700.5)) - glm::dvec2(100.5, 700.5)), 1e-6);
+  // A layer image twice the size: the same point at twice the pixel coordinates.
+  const glm::dmat3 big = layerHomography(slice, slice, depth, kSize, 2.0 * kSize);
+  EXPECT_LT(glm::length(applyHomography(big, glm::dvec2(100.5, 700.5)) - glm::dvec2(201.0, 1401.0)), 1e-6);
+}
+
+TEST(Reprojection, APureRotationIsExactAtEveryDepth) {
+  const LayerView slice = along(CameraMotion::Turn, 0), current = along(CameraMotion::Turn, 16, 0.25f);  // 4 degrees
+  const double plane = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  const glm::dmat3 h = layerHomography(slice, current, plane, kSize, kSize);
+  for (double depth : {0.6 * plane, plane, 1.4 * plane}) {
+    const glm::dvec3 x = pointAt(slice, glm::dvec2(300.5, 400.5), depth);
+    EXPECT_LT(glm::length(applyHomography(h, pixelOf(current, x)) - pixelOf(slice, x)), 1e-3) << depth;
+  }
+}
+
+TEST(Reprojection, OffThePlaneTheErrorIsTheParallax) {
+  // A translation: a point at the plane's depth + delta lands off by about the parallax
+  // |t| f delta / z^2 (small motion), which grows with delta.
+  const LayerView slice = along(CameraMotion::Strafe, 0), current = along(CameraMotion::Strafe, 10, 0.25f, 0.01f);
+  const double plane = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  const glm::dmat3 h = layerHomography(slice, current, plane, kSize, kSize);
+  double last = 0.0;
+  for (double delta : {0.0, 0.05, 0.1, 0.2}) {
+    const glm::dvec3 x = pointAt(slice, 0.5 * kSize, plane + delta);
+    const double err = glm::length(applyHomography(h, pixelOf(current, x)) - pixelOf(slice, x));
+    if (delta == 0.0) EXPECT_LT(err, 1e-3);
+    else EXPECT_GT(err, last);
+    last = err;
+  }
+  const double moved = glm::length(viewPosition(current.view) - viewPosition(slice.view));
+  const double focal = 0.5 * kSize.y * double(slice.proj[1][1]);
+  EXPECT_NEAR(last, moved * std::fabs(focal) * 0.2 / (plane * (plane + 0.2)), 0.2 * last);
+}
+
+TEST(Reprojection, ClipToClipCarriesAWorldPoint) {
+  const LayerView a = along(CameraMotion::Still, 0), b = along(CameraMotion::Orbit, 30);
+  const glm::dvec3 x(0.2, 1.3, -0.4);
+  const glm::dvec4 ca = glm::dmat4(a.proj) * glm::dmat4(a.view) * glm::dvec4(x, 1.0);
+  const glm::dvec4 cb = glm::dmat4(b.proj) * glm::dmat4(b.view) * glm::dvec4(x, 1.0);
+  const glm::dvec4 got = clipToClip(a, b) * (ca / ca.w);
+  EXPECT_LT(glm::length(glm::dvec3(got) / got.w - glm::dvec3(cb) / cb.w), 1e-9);
+}
+
+}  // namespace
+}  // namespace canopy

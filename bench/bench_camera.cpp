@@ -62,8 +62,9 @@ struct Side {
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
   }
-  // One frame at `view`: its wall clock (submit to fence), and its pixels when `pixels` is given.
-  Status frame(const LayerView& view, double* ms, std::vector<uint8_t>* pixels) {
+  // One frame at `view`: its wall clock (submit to fence), and its pixels and depth coverage (1
+  // where Canopy wrote the host's depth: a layer's alpha >= depthAlpha, or a trunk) when asked.
+  Status frame(const LayerView& view, double* ms, std::vector<uint8_t>* pixels, std::vector<uint8_t>* covered = nullptr) {
     CanopyFrame f;
     f.camera = toCamera(view);
     f.dt = 1.0f / 30.0f;
@@ -73,7 +74,13 @@ struct Side {
     *ms = nowMs() - t0;
     if (!pixels) return Status();
     pixels->resize(size_t(w) * h * 4);
-    return readbackImage(d, host.color, 0, 4, pixels->data(), rg::stateOf(rg::Use::ColorAttachmentReadWrite));
+    CANOPY_TRY(readbackImage(d, host.color, 0, 4, pixels->data(), rg::stateOf(rg::Use::ColorAttachmentReadWrite)));
+    if (!covered) return Status();
+    std::vector<float> z(size_t(w) * h);
+    CANOPY_TRY(readbackImage(d, host.depth, 0, 4, z.data(), rg::stateOf(rg::Use::DepthAttachmentWrite)));
+    covered->resize(z.size());
+    for (size_t i = 0; i < z.size(); ++i) (*covered)[i] = z[i] < 1.0f;  // the host clears to 1
+    return Status();
   }
 };
 
@@ -81,6 +88,7 @@ struct PathResult {
   std::string name;
   std::vector<double> autoMs, everyMs;
   WorldLockError worst;          // min IoU, max of the distances and colour
+  WorldLockError worstDepth;     // the same over depth coverage (alpha >= depthAlpha)
   double silhouetteMeanAvg = 0;  // the silhouette mean over the frames
   uint32_t reslices = 0;         // the auto side's re-slices along the path
 };
@@ -136,13 +144,13 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
         if (s.ok()) s = every.frame(first, &ms, nullptr);
       }
       const uint32_t before = s.ok() ? uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) : 0;
-      std::vector<uint8_t> a, b;
+      std::vector<uint8_t> a, b, ca, cb;
       double silSum = 0;
       for (int i = 0; i < o.frames && s.ok(); ++i) {
         const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
         double ma = 0, mb = 0;
-        s = autoSide.frame(v, &ma, &a);
-        if (s.ok()) s = every.frame(v, &mb, &b);
+        s = autoSide.frame(v, &ma, &a, &ca);
+        if (s.ok()) s = every.frame(v, &mb, &b, &cb);
         if (!s.ok()) break;
         r.autoMs.push_back(ma);
         r.everyMs.push_back(mb);
@@ -153,6 +161,10 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
         r.worst.centroidPx = std::max(r.worst.centroidPx, e.centroidPx);
         r.worst.colourMean = std::max(r.worst.colourMean, e.colourMean);
         silSum += e.silhouetteMeanPx;
+        const WorldLockError z = compareMasks(ca, cb, a, b, o.width, o.height);
+        if (i == 0 || z.coverageIoU < r.worstDepth.coverageIoU) r.worstDepth.coverageIoU = z.coverageIoU;
+        r.worstDepth.silhouetteMeanPx = std::max(r.worstDepth.silhouetteMeanPx, z.silhouetteMeanPx);
+        r.worstDepth.silhouetteP99Px = std::max(r.worstDepth.silhouetteP99Px, z.silhouetteP99Px);
       }
       if (s.ok()) r.reslices = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) - before;
       r.silhouetteMeanAvg = silSum / std::max(1.0, double(r.autoMs.size()));
@@ -165,14 +177,16 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
     const double stillMed = quantile(stillMs, 0.5);
     std::printf("\n%llu faces: still camera %.2f ms (median), p95 %.2f ms\n", (unsigned long long)faces, stillMed,
                 quantile(stillMs, 0.95));
-    std::printf("  %-7s %9s %8s %7s %10s %8s %7s %9s %9s %8s %8s %8s\n", "path", "auto ms", "p95", "x still", "every ms",
-                "p95", "x still", "re-slices", "IoU min", "sil. avg", "sil. max", "p99 max");
+    std::printf("  (IoU, sil.: covered = differs from the clear colour by > 1 level; depth IoU, sil.: covered = Canopy wrote\n"
+                "   the host's depth there, alpha >= 0.5)\n");
+    std::printf("  %-7s %9s %8s %7s %10s %8s %7s %9s %9s %8s %8s %8s %9s %8s\n", "path", "auto ms", "p95", "x still", "every ms",
+                "p95", "x still", "re-slices", "IoU min", "sil. avg", "sil. max", "p99 max", "depth IoU", "sil. max");
     for (const PathResult& r : results) {
       const double am = quantile(r.autoMs, 0.5), em = quantile(r.everyMs, 0.5);
-      std::printf("  %-7s %9.2f %8.2f %7.2f %10.2f %8.2f %7.2f %9u %9.4f %8.3f %8.3f %8.2f\n", r.name.c_str(), am,
+      std::printf("  %-7s %9.2f %8.2f %7.2f %10.2f %8.2f %7.2f %9u %9.4f %8.3f %8.3f %8.2f %9.4f %8.3f\n", r.name.c_str(), am,
                   quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
                   em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
-                  r.worst.silhouetteP99Px);
+                  r.worst.silhouetteP99Px, r.worstDepth.coverageIoU, r.worstDepth.silhouetteMeanPx);
     }
   }
   return 0;

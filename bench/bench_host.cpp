@@ -15,7 +15,8 @@ Status createHostTargets(Device& d, uint32_t w, uint32_t h, VkFormat format, Hos
   c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
   CANOPY_TRY(createImage(d, c, &t->color, "bench host colour"));
   c.format = VK_FORMAT_D32_SFLOAT;
-  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
+            VK_IMAGE_USAGE_TRANSFER_SRC_BIT;  // canopy-bench camera reads it back
   return createImage(d, c, &t->depth, "bench host depth");
 }
 

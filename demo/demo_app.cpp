@@ -85,6 +85,7 @@ void printHelp() {
       "  --swing D           turn, zoom, walk: degrees either side of the start, [0, 80] (default 5)\n"
       "  --reslice MODE      auto (re-slice by the policy) or every-frame (the reference a moving camera's\n"
       "                      frames are measured against) (default auto)\n"
+      "%s"
       "  --compare-frames A B  the world-lock error of folder A's frame_NNNN.png against folder B's (coverage\n"
       "                      IoU, silhouette distance, colour; tools/world_lock.h), then exit\n"
       "%s"
@@ -125,6 +126,7 @@ void printHelp() {
       mirrored("--leaf-roughness S", "LayerSettings.leafRoughness", d.leafRoughness).c_str(),
       mirrored("--leaf-transmission T", "LayerSettings.leafTransmission", d.leafTransmission).c_str(), d.width, d.height,
       d.frames, d.warmupSeconds, d.fps, d.orbitDegrees,
+      mirrored("--reslice-error PX", "LayerSettings.errorThresholdPixels", d.resliceErrorPixels).c_str(),
       mirrored("--rebuild-budget MS", "LayerSettings.rebuildBudgetMs", d.rebuildBudgetMs).c_str(), d.deviceBudgetMiB,
       d.ringMiB, d.outDir.c_str());
   std::printf("Caches of a --gltf model (leaf roots, impostor views; docs/design.md \"Files\"):\n%s", cli::cacheHelp());
@@ -168,6 +170,7 @@ const NumberOption kNumberOptions[] = {
     {"--radii-per-frame", 0, 10, &Options::radiiPerFrame, "a number"},
     {"--swing", 0, 80, &Options::swingDegrees, "a number"},
     {"--rebuild-budget", 0, 0, &Options::rebuildBudgetMs, "a number", "LayerSettings.rebuildBudgetMs"},
+    {"--reslice-error", 0, 0, &Options::resliceErrorPixels, "a number", "LayerSettings.errorThresholdPixels"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
 };
@@ -437,6 +440,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.dynamics.delay = o.delay;
   p.animation = o.method;
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
+  p.layers.errorThresholdPixels = o.resliceErrorPixels;
   p.layers.policy = o.reslice;
   p.layers.lightDirection = o.light;
   p.layers.lightColor = o.lightColor;

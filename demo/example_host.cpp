@@ -4,8 +4,8 @@
 // The host creates its own instance, device, queue, memory allocator, images and pipeline; it asks
 // Canopy which device features to enable before creating the device, then adopts the device into
 // Canopy. It renders with 2 frames in flight (a command buffer and a fence per frame, never waiting
-// for the device between frames) and reverse-Z depth (cleared to 0, compared GREATER). Per frame
-// it draws a ground plane and a box, lets Canopy record the animated vegetation into the same
+// for the device between frames) and reverse-Z depth (cleared to 0, compared GREATER), its camera
+// orbiting the plant 0.5 degrees a frame. Per frame it draws a ground plane and a box, lets Canopy record the animated vegetation into the same
 // command buffer (recordCanopy), then draws one more box after Canopy, depth-tested against the
 // depth Canopy wrote. It checks its own result: the post-vegetation box must be hidden exactly
 // where the vegetation is in front of it.
@@ -341,6 +341,12 @@ bool createPipeline(Host& h) {
 }
 
 // The host's reverse-Z perspective (right-handed view, Vulkan clip y down): depth 1 at zNear, 0 at zFar.
+// The host's camera: on a circle of radius 3.3 around the plant, `yawDegrees` about the vertical.
+glm::mat4 orbitView(float yawDegrees) {
+  const glm::vec3 eye = glm::vec3(std::sin(glm::radians(yawDegrees)), 0.25f, std::cos(glm::radians(yawDegrees))) * 3.3f;
+  return glm::lookAt(eye, glm::vec3(0.0f), glm::vec3(0, 1, 0));
+}
+
 glm::mat4 reverseZPerspective(float fovY, float aspect, float zNear, float zFar) {
   const float f = 1.0f / std::tan(fovY * 0.5f);
   glm::mat4 p(0.0f);
@@ -620,8 +626,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     canopy::Status s = canopy::adoptDevice(ad, adopted);
     canopy::Model* plant = s.ok() ? makePlant() : nullptr;
     if (s.ok() && !plant) return false;
-    glm::vec3 eye = glm::vec3(std::sin(glm::radians(25.0f)), 0.25f, std::cos(glm::radians(25.0f))) * 3.3f;
-    h.view = glm::lookAt(eye, glm::vec3(0.0f), glm::vec3(0, 1, 0));
+    h.view = orbitView(25.0f);
     h.proj = reverseZPerspective(glm::radians(45.0f), float(kW) / float(kH), 0.1f, 100.0f);
     canopy::CanopyDesc desc;
     desc.width = kW;
@@ -645,8 +650,12 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
       if (!acquire(h, f) || !recordFrame(h, *ctx, f, frameNumber, v)) return nullptr;
       return &f;
     };
-    for (int i = 0; i < frames; ++i)
+    // The camera orbits 0.5 degrees a frame (a game's camera moves): between re-slices Canopy shows
+    // its layers reprojected, and the depth it writes must follow them. The check holds the last pose.
+    for (int i = 0; i < frames; ++i) {
+      h.view = orbitView(25.0f + 0.5f * float(i));
       if (!submit(Variant{})) return false;
+    }
     // The check, on four variants of the last pose (dt = 0 holds the wind): both, the vegetation
     // alone, the post box alone, and neither. Each is read back after its own fence.
     const Variant variants[4] = {{true, true, true, 0.0f}, {true, false, true, 0.0f}, {false, true, true, 0.0f}, {false, false, true, 0.0f}};

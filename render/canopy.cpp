@@ -13,6 +13,7 @@
 #include "engine/memory.h"
 #include "render/material_split.h"
 #include "render/per_vertex.h"
+#include "render/reprojection.h"
 
 namespace canopy {
 
@@ -55,6 +56,7 @@ struct CanopyContext {
   bool layersRebuilt = false;
   bool cut = false;       // the last frame was a camera cut
   gpu::AnimFrame last{};  // the previous frame's dynamics constants (motion-vector validity)
+  LayerView lastView;     // the previous frame's camera (motion vectors: the camera's motion)
   // recordCanopy(): one compiled graph per set of host images it has seen recently (a host that
   // renders into its swapchain images cycles through 2-4 of them), least recently used first out.
   std::vector<RecordGraph> graphs;
@@ -524,8 +526,11 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   fixPlane(*c, view);
+  // The dynamics run in the slice camera's pixels, where the layers and their warp grid are
+  // (docs/design.md "Layers: reprojection"); the composite maps the current camera into them.
+  const LayerView& slice = c->layers.visible.view;
   DynamicsFrameDesc fd;
-  fd.view = view;
+  fd.view = slice;
   fd.plane = c->plane;
   for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
   fd.width = c->desc.width;
@@ -543,6 +548,18 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   const VkRect2D footprint = layerFootprint(c->layers);
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.mesh.hasRigid, c->layers.reslice.occupancyDirty,
                               motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
+  const LayerView& previous = motionValid ? c->lastView : view;
+  if (!sameCamera(slice, view) || !sameCamera(previous, view)) {
+    std::vector<float> depths;
+    for (const LayerInfo& l : c->layers.visible.layers) depths.push_back(l.slab.depth);
+    // The rigid background's plane: the vegetation's centre.
+    const glm::vec3 centre = 0.5f * (c->layers.mesh.boundsMin + c->layers.mesh.boundsMax);
+    const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
+    const gpu::CompositeView cv =
+        compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height));
+    setCompositeReprojection(c->compositor, &cv);
+  }
+  c->lastView = view;
   c->last = a;
   c->layersRebuilt = rebuild;
   c->frames++;

@@ -29,7 +29,7 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
 // The compute path (CompositePath::Compute; docs/performance.md): displacement image, tile list
 // reset, classification, the tile kernel (indirect dispatch) and the resolve draw (indirect).
 Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l, rg::ResourceId displacement,
-                      rg::ResourceId previous, const CompositeTargets& t, rg::ResourceId occupancy) {
+                      rg::ResourceId previous, const CompositeTargets& t, rg::ResourceId occupancy, rg::ResourceId view) {
   // Every frame rewrites these images before reading them: they enter with their contents
   // discarded (UNDEFINED), ordered after the previous frame's reads.
   const rg::State fs = rg::stateOf(rg::Use::FragmentSampled), indirect = rg::stateOf(rg::Use::IndirectBuffer);
@@ -63,7 +63,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .when(computePath);
   rg::addSlotPass(g, "composite: classify",
                   {rg::slot(displacement, Use::ComputeStorageRead), rg::slot(occupancy, Use::ComputeStorageRead),
-                   rg::slot(tileList, Use::ComputeStorageReadWrite)},
+                   rg::slot(tileList, Use::ComputeStorageReadWrite), rg::slot(view, Use::ComputeStorageRead)},
                   [cp](rg::PassContext& x, const rg::Slots& s) {
                     const gpu::CompositePush& p = cp->push;
                     return rg::dispatchSlots(x, cp->classifyPipeline, s, p.tilesX * p.tilesY, 1, 1, p);
@@ -77,7 +77,8 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
                                rg::slot(t.depth, Use::ComputeSampled, c.depthSampler),
                                rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler),
                                rg::slot(tileList, Use::ComputeStorageRead),
-                               rg::slot(composed, Use::ComputeStorageWrite)};
+                               rg::slot(composed, Use::ComputeStorageWrite),
+                               rg::slot(view, Use::ComputeStorageRead)};
   rg::addSlotPass(g, "composite: warp + composite (tiles)", tileSlots, [cp](rg::PassContext& x, const rg::Slots& s) {
     rg::Slots now = s;
     now[0].sampler = cp->params.bilinear ? cp->linear : cp->nearest;
@@ -251,6 +252,8 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
                             MemoryUsage::DeviceLocal, &out->sceneDepth, "composite: scene depth"));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
                             &out->debugStandIn, "composite: debug stand-in"));
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::CompositeView), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::DeviceLocal, &out->viewBuffer, "composite: view"));
     CANOPY_TRY(makeSampler(d, VK_FILTER_LINEAR, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->linear));
     CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->nearest));
     CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_OPAQUE_WHITE, &out->depthSampler));
@@ -275,6 +278,7 @@ void destroyCompositor(Compositor& c) {
   destroyBuffer(d, c.occupancy);
   destroyBuffer(d, c.sceneDepth);
   destroyBuffer(d, c.debugStandIn);
+  destroyBuffer(d, c.viewBuffer);
   for (VkSampler s : {c.linear, c.nearest, c.depthSampler, c.displacementSampler})
     if (s) d.vk.DestroySampler(d.device, s, d.allocationCallbacks);
   c = Compositor{};
@@ -341,6 +345,15 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   return Status();
 }
 
+void setCompositeReprojection(Compositor& c, const gpu::CompositeView* view) {
+  if (view) {
+    c.view = *view;
+    c.push.flags |= COMPOSITE_REPROJECT;
+  } else {
+    c.push.flags &= ~COMPOSITE_REPROJECT;
+  }
+}
+
 Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResources& layers, rg::ResourceId displacement,
                           rg::ResourceId previous, const CompositeTargets& t, const CompositeDebugSources& debug) {
   if (!c.device) return Status::error("addCompositePasses: the compositor was not created");
@@ -353,9 +366,17 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   const rg::State storageRead = rg::stateOf(rg::Use::ComputeStorageRead);
   const auto occupancy = g.importBuffer("composite: occupancy", c.occupancy.size, storageRead, storageRead);
   const auto scene = g.importBuffer("composite: scene depth", c.sceneDepth.size, storageRead, storageRead);
+  const auto view = g.importBuffer("composite: view", c.viewBuffer.size, storageRead, storageRead);
   CANOPY_TRY(g.bindBuffer(occupancy, c.occupancy.buffer));
   CANOPY_TRY(g.bindBuffer(scene, c.sceneDepth.buffer));
+  CANOPY_TRY(g.bindBuffer(view, c.viewBuffer.buffer));
   Compositor* cp = &c;
+  g.addPass("composite: view", [cp](rg::PassContext& x) {
+     x.device->vk.CmdUpdateBuffer(x.cmd, cp->viewBuffer.buffer, 0, sizeof(gpu::CompositeView), &cp->view);
+     return Status();
+   })
+      .write(view, rg::Use::TransferDst)
+      .when([cp] { return (cp->push.flags & COMPOSITE_REPROJECT) != 0u; });
   const LayerResources l = layers;
   // One dispatch a frame: a pending recompute from the visible layers first, a union with the next
   // set (spread re-slicing) in the frame after if both are pending.
@@ -400,7 +421,8 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
                                    rg::slot(occupancy, Use::FragmentStorageRead),
                                    rg::slot(scene, Use::FragmentStorageRead),
                                    debugSlot(debug.animFrame),
-                                   debugSlot(debug.tiled)};
+                                   debugSlot(debug.tiled),
+                                   rg::slot(view, Use::FragmentStorageRead)};
   auto pass = rg::addSlotPass(g, "composite: warp + composite", fragmentSlots, [cp, t, motion, debugSources](rg::PassContext& x,
                                                                                                         const rg::Slots& slots) {
     const gpu::CompositePush& p = cp->push;
@@ -423,7 +445,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   pass.write(t.color, rg::Use::ColorAttachmentReadWrite).write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   pass.when([cp] { return !cp->computeThisFrame; });
-  if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy));
+  if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy, view));
   return Status();
 }
 

@@ -8,8 +8,9 @@
 // Host targets: colour in any blendable colour-attachment format; depth D32_SFLOAT or D16_UNORM
 // with SAMPLED usage (a small compute pass copies it first, so layers behind the host's geometry
 // are hidden per layer); motion, when wanted, an R16G16_SFLOAT or R32G32_SFLOAT attachment that is
-// written only where the vegetation is frontmost (current minus previous displacement, pixels,
-// y down) and left alone elsewhere.
+// written only where the vegetation is frontmost (current minus previous position, pixels, y down:
+// the displacement's change and, between re-slices, the camera's motion; docs/design.md "Layers:
+// reprojection") and left alone elsewhere.
 #include <cstdint>
 #include <vulkan/vulkan.h>
 
@@ -63,6 +64,8 @@ struct Compositor {
   Buffer occupancy;   // (maxLayers + 1) x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage;
                       // slot layerCount: the rigid background
   Buffer sceneDepth;  // width x height float: the host's depth before the composite
+  Buffer viewBuffer;    // gpu::CompositeView (reprojection), rewritten by the frames that reproject
+  gpu::CompositeView view{};
   Buffer debugStandIn;  // bound for the debug views' inputs when the graph has none
   bool hasDebugSources = false;
   VkSampler linear = VK_NULL_HANDLE, nearest = VK_NULL_HANDLE, depthSampler = VK_NULL_HANDLE;
@@ -84,6 +87,11 @@ void destroyCompositor(Compositor& compositor);
 Status prepareComposite(Compositor& compositor, const CompositeParams& params, const gpu::AnimFrame& anim,
                         bool hasBackground, bool layersRebuilt, bool motionValid, const VkRect2D* foliageRect = nullptr,
                         bool uniteNext = false);
+
+// Shows the layers from another camera than the slice camera they were drawn with (docs/design.md
+// "Layers: reprojection"): `view` for the next recorded composite, or null (the current camera is
+// the slice camera: layer pixel = output pixel). Call after prepareComposite.
+void setCompositeReprojection(Compositor& compositor, const gpu::CompositeView* view);
 
 struct CompositeTargets {
   rg::ResourceId color = rg::kInvalidResource;   // host colour (blended over)

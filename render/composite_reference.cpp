@@ -22,6 +22,11 @@ glm::vec2 displacementAt(const std::vector<glm::vec2>& d, uint32_t base, const g
   return gpu::blendCorners(g, d[base + g.i00], d[base + g.i10], d[base + g.i01], d[base + g.i11]);
 }
 
+// Plane i's homogeneous layer pixel under p (shared/composite.h, CompositeView).
+glm::vec3 planePoint(const gpu::CompositeView& v, uint32_t i, const glm::vec2& p) {
+  return gpu::compositeHomogeneous(v.homography[3 * i], v.homography[3 * i + 1], v.homography[3 * i + 2], p);
+}
+
 }  // namespace
 
 void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceInputs& in, CompositeReferenceOutputs* out) {
@@ -41,23 +46,46 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       const float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) ? gpu::compositeStandardDepth(pc.flags, sceneRaw) : 1.0f;
       glm::vec4 bg(0.0f);
       float bgZ = 1.0f;
+      const bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0;
+      const glm::vec2 size{float(w), float(h)};
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
-        bg = in.backgroundColor[pix];
-        bgZ = bg.a > 0.0f ? in.backgroundDepth[pix] : 1.0f;
+        int bx = int(x), by = int(y);
+        bool inside = true;
+        if (reproject) {
+          const glm::vec3 hp = planePoint(in.view, COMPOSITE_VIEW_BACKGROUND, p);
+          const glm::vec2 s = glm::vec2(hp) / hp.z;
+          bx = int(std::floor(s.x));
+          by = int(std::floor(s.y));
+          inside = hp.z > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < size.x && s.y < size.y;
+        }
+        if (inside) {
+          const size_t b = size_t(by) * w + size_t(bx);
+          bg = in.backgroundColor[b];
+          bgZ = bg.a > 0.0f ? in.backgroundDepth[b] : 1.0f;
+          if (reproject && bg.a > 0.0f)
+            bgZ = gpu::compositeClipDepth(gpu::compositeClipOf(in.view.sliceToCurrent, glm::vec2(bx, by) + 0.5f, bgZ, size));
+        }
       }
       if (bgZ >= sceneZ) {
         bg = glm::vec4(0.0f);
         bgZ = 1.0f;
       }
       const float opaqueZ = std::min(sceneZ, bgZ);
-      const gpu::GridSample g = gpu::gridSample(pc, p);
+      gpu::GridSample g = gpu::gridSample(pc, p);
+      glm::vec2 s = p;
       glm::vec4 acc(0.0f);
       float frontZ = 1.0f;
       bool front = false;
       glm::vec2 motion(0.0f);
       for (uint32_t i = 0; i < n; ++i) {
+        if (reproject) {
+          const glm::vec3 hp = planePoint(in.view, i, p);
+          if (hp.z <= 0.0f) continue;
+          s = glm::vec2(hp) / hp.z;
+          g = gpu::gridSample(pc, s);
+        }
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
-        const glm::vec2 q = p - d;
+        const glm::vec2 q = s - d;
         // Texel space: centres at integer + 0.5.
         const glm::vec2 t = q - 0.5f;
         const int x0 = int(std::floor(t.x)), y0 = int(std::floor(t.y));
@@ -74,12 +102,24 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           c = tex.color(i, xn, yn);
           z = tex.depth(i, xn, yn);
         }
-        if (c.a < COMPOSITE_MIN_ALPHA || z >= opaqueZ) continue;
+        if (c.a < COMPOSITE_MIN_ALPHA) continue;
+        const float zSlice = z;
+        glm::vec4 clip(0.0f);
+        if (reproject) {
+          clip = gpu::compositeClipOf(in.view.sliceToCurrent, s, z, size);
+          z = gpu::compositeClipDepth(clip);
+        }
+        if (z >= opaqueZ) continue;
         acc = gpu::underPremultiplied(acc, c);
         if (!front && c.a >= pc.depthAlpha) {
           front = true;
           frontZ = z;
-          if (pc.flags & COMPOSITE_MOTION_VALID) motion = d - displacementAt(in.previous, i * corners, g);
+          if (pc.flags & COMPOSITE_MOTION_VALID) {
+            const glm::vec2 dPrev = displacementAt(in.previous, i * corners, g);
+            motion = reproject ? gpu::compositeClipPixel(clip, size) -
+                                     gpu::compositeClipPixel(gpu::compositeClipOf(in.view.sliceToPrevious, s - d + dPrev, zSlice, size), size)
+                               : d - dPrev;
+          }
         }
         if ((pc.flags & COMPOSITE_EARLY_EXIT) && acc.a >= COMPOSITE_OPAQUE) break;
       }

@@ -21,6 +21,7 @@ struct CompositeReferenceInputs {
   std::vector<float> sceneDepth;         // the host's depth before the composite
   std::vector<glm::vec2> displacement;   // layers x gridY x gridX, pixels
   std::vector<glm::vec2> previous;       // same shape (motion vectors)
+  gpu::CompositeView view{};             // read where push.flags has COMPOSITE_REPROJECT
 };
 struct CompositeReferenceOutputs {
   std::vector<glm::vec4> color;   // premultiplied result over sceneColor

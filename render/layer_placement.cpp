@@ -15,6 +15,7 @@ namespace canopy {
 // Starts the placement for `view`: the frame constants the layer draws read.
 void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job) {
   job = PlacementJob{};
+  job.view = view;
   const LayerSettings& s = lv.settings;
   gpu::LayerFrame& f = job.frame;
   f = cameraFrame(s, view);
@@ -198,6 +199,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   beginPlacement(lv, view, job);
   bool done = false;
   CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
+  lv.visible.view = job.view;
   lv.visible.frame = job.frame;
   lv.visible.layers = std::move(job.layers);
   lv.stats.lastPlacementMs = job.ms;

@@ -33,6 +33,7 @@ struct LayerInfo {
 // The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
 // bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
 struct PlacementJob {
+  LayerView view;  // the camera the placement (and the set it draws) is for
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
@@ -48,6 +49,9 @@ struct PlacementJob {
 // and the impostor cut it draws (CanopyDesc.impostors): the cut, its foliage as chunk parts, its
 // impostor list (the opaque ones first, uploaded with the frame block).
 struct VisibleLayers {
+  // The slice camera: the view the visible images were drawn from (docs/design.md "Layers:
+  // reprojection"); the composite maps the current camera's pixels into its pixels.
+  LayerView view;
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   Buffer frameBuffer;

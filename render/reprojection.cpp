@@ -1,8 +1,29 @@
 #include "render/reprojection.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace canopy {
 namespace {
 glm::dmat4 viewProj(const LayerView& v) { return glm::dmat4(v.proj) * glm::dmat4(v.view); }
+
+// The world point shown at pixel s of camera v at view depth z (a point on the pixel's ray).
+glm::dvec3 pointAtDepth(const LayerView& v, const glm::dmat4& inverseViewProj, const glm::dvec2& s, double z, const glm::dvec2& size) {
+  const glm::dvec2 ndc = s / size * 2.0 - 1.0;
+  const glm::dvec4 a4 = inverseViewProj * glm::dvec4(ndc, 0.0, 1.0), b4 = inverseViewProj * glm::dvec4(ndc, 1.0, 1.0);
+  const glm::dvec3 a = glm::dvec3(a4) / a4.w, b = glm::dvec3(b4) / b4.w;
+  const glm::dmat4 vv(v.view);
+  const glm::dvec3 row(-vv[0][2], -vv[1][2], -vv[2][2]);
+  const double za = glm::dot(row, a) - vv[3][2], zb = glm::dot(row, b) - vv[3][2];
+  const double t = std::abs(zb - za) > 1e-12 ? (z - za) / (zb - za) : 0.0;
+  return a + t * (b - a);
+}
+
+// Pixel of world point x in camera `viewProjection`'s image; w <= 0: behind the camera.
+glm::dvec3 pixelOf(const glm::dmat4& viewProjection, const glm::dvec3& x, const glm::dvec2& size) {
+  const glm::dvec4 c = viewProjection * glm::dvec4(x, 1.0);
+  return glm::dvec3((glm::dvec2(c) / c.w + 1.0) * 0.5 * size, c.w);
+}
 }  // namespace
 
 glm::dmat3 layerHomography(const LayerView& slice, const LayerView& current, double depth, const glm::dvec2& outSize,
@@ -40,6 +61,93 @@ glm::dmat4 clipToClip(const LayerView& from, const LayerView& to) { return viewP
 glm::dvec2 applyHomography(const glm::dmat3& h, const glm::dvec2& p) {
   const glm::dvec3 q = h * glm::dvec3(p, 1.0);
   return glm::dvec2(q) / q.z;
+}
+
+bool sameCamera(const LayerView& a, const LayerView& b) { return a.view == b.view && a.proj == b.proj; }
+
+gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
+                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& size) {
+  gpu::CompositeView v{};
+  v.sliceToCurrent = glm::mat4(clipToClip(slice, current));
+  v.sliceToPrevious = glm::mat4(clipToClip(slice, previous));
+  for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) {
+    const bool background = i == COMPOSITE_VIEW_BACKGROUND;
+    if (!background && i >= layerDepths.size()) continue;  // no such layer: never read
+    glm::dmat3 h = layerHomography(slice, current, background ? backgroundDepth : layerDepths[i], size, size);
+    // Scaled so that w is about 1 near the image (float precision), its sign kept.
+    const double w = std::abs((h * glm::dvec3(0.5 * size, 1.0)).z);
+    if (w > 0 && std::isfinite(w)) h /= w;
+    for (int r = 0; r < 3; ++r) v.homography[3 * i + r] = glm::vec4(float(h[0][r]), float(h[1][r]), float(h[2][r]), 0.0f);
+  }
+  return v;
+}
+
+ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
+                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size) {
+  ReprojectionError e;
+  const glm::dmat4 sliceVP = viewProj(slice), currentVP = viewProj(current), sliceInv = glm::inverse(sliceVP);
+  // The vegetation's footprint in the slice camera's image (its bounding box's corners).
+  glm::dvec2 lo(1e300), hi(-1e300);
+  bool behind = false;
+  for (int k = 0; k < 8; ++k) {
+    const glm::dvec3 x((k & 1) ? boundsMax.x : boundsMin.x, (k & 2) ? boundsMax.y : boundsMin.y, (k & 4) ? boundsMax.z : boundsMin.z);
+    const glm::dvec3 p = pixelOf(sliceVP, x, size);
+    if (p.z <= 0) behind = true;
+    lo = glm::min(lo, glm::dvec2(p));
+    hi = glm::max(hi, glm::dvec2(p));
+  }
+  if (behind) {  // the camera is inside the bounds: the whole image
+    lo = glm::dvec2(0.0);
+    hi = size;
+  }
+  const glm::dvec2 clo = glm::clamp(lo, glm::dvec2(0.0), size), chi = glm::clamp(hi, glm::dvec2(0.0), size);
+  // Parallax: a 3 x 3 grid of slice pixels over the footprint, each at its slab's plane, near and
+  // far depth, seen from the current camera.
+  for (const SlabRange& slab : slabs)
+    for (int gy = 0; gy < 3; ++gy)
+      for (int gx = 0; gx < 3; ++gx) {
+        const glm::dvec2 s = clo + (chi - clo) * glm::dvec2(0.5 * gx, 0.5 * gy);
+        const glm::dvec3 onPlane = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, slab.depth, size), size);
+        for (float z : {slab.zNear, slab.zFar}) {
+          const glm::dvec3 off = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, z, size), size);
+          if (onPlane.z <= 0 || off.z <= 0) {
+            e.parallaxPx = INFINITY;
+            continue;
+          }
+          e.parallaxPx = std::max(e.parallaxPx, glm::length(glm::dvec2(off) - glm::dvec2(onPlane)));
+        }
+      }
+  // Content beyond the slice image: the current image's corners on the middle slab's plane, in
+  // slice pixels, intersected with the footprint, against the slice image.
+  const double mid = slabs.empty() ? 0.0 : 0.5 * (slabs.front().depth + slabs.back().depth);
+  const glm::dmat3 h = layerHomography(slice, current, mid, size, size);
+  glm::dvec2 nlo(1e300), nhi(-1e300);
+  bool wrapped = false;
+  for (int k = 0; k < 4; ++k) {
+    const glm::dvec3 q = h * glm::dvec3((k & 1) ? size.x : 0.0, (k & 2) ? size.y : 0.0, 1.0);
+    if (q.z <= 0) wrapped = true;
+    nlo = glm::min(nlo, glm::dvec2(q) / q.z);
+    nhi = glm::max(nhi, glm::dvec2(q) / q.z);
+  }
+  if (wrapped) {
+    nlo = lo;
+    nhi = hi;
+  }
+  nlo = glm::max(nlo, lo);
+  nhi = glm::min(nhi, hi);
+  if (nlo.x < nhi.x && nlo.y < nhi.y)
+    e.outsidePx = std::max({0.0, -nlo.x, -nlo.y, nhi.x - size.x, nhi.y - size.y});
+  // Magnification: the homography's Jacobian at the image centre (layer texels per current pixel).
+  const glm::dvec2 c0 = 0.5 * size;
+  const glm::dvec2 m0 = applyHomography(h, c0), mx = applyHomography(h, c0 + glm::dvec2(1, 0)), my = applyHomography(h, c0 + glm::dvec2(0, 1));
+  const double det = std::abs((mx.x - m0.x) * (my.y - m0.y) - (mx.y - m0.y) * (my.x - m0.x));
+  if (!wrapped && det > 0 && std::isfinite(det)) e.magnification = 1.0 / std::sqrt(det);
+  // Shading: the eyes' directions to the centre.
+  const glm::dvec3 centre = 0.5 * (glm::dvec3(boundsMin) + glm::dvec3(boundsMax));
+  const glm::dvec3 a = glm::normalize(centre - glm::dvec3(viewPosition(slice.view)));
+  const glm::dvec3 b = glm::normalize(centre - glm::dvec3(viewPosition(current.view)));
+  e.turnDegrees = glm::degrees(std::acos(std::clamp(glm::dot(a, b), -1.0, 1.0)));
+  return e;
 }
 
 }  // namespace canopy

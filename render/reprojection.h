@@ -3,9 +3,11 @@
 // image holds a depth slab as the slice camera saw it; a pixel of the current camera reads it
 // through the homography of the slab's plane (exact on the plane; off it, the error grows with
 // the slab's thickness times the parallax between the two cameras).
+#include <vector>
 #include <glm/glm.hpp>
 
 #include "engine/camera.h"
+#include "shared/composite.h"
 
 namespace canopy {
 
@@ -23,5 +25,30 @@ glm::dmat4 clipToClip(const LayerView& from, const LayerView& to);
 // A pixel through a homography (the point at infinity maps to a huge value; check w with the
 // homogeneous product when it matters).
 glm::dvec2 applyHomography(const glm::dmat3& h, const glm::dvec2& p);
+
+// Whether two cameras are the same, bit for bit (then the composite reads layer pixel = pixel).
+bool sameCamera(const LayerView& a, const LayerView& b);
+
+// The composite's view block: layer i's plane at slice-camera view depth `layerDepths[i]`, the
+// rigid background's at `backgroundDepth`; images of `size` pixels (layers = output).
+gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
+                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& size);
+
+// The reprojection's estimated screen error (pixels of the current camera) of showing layers drawn
+// from `slice` from `current` (docs/design.md "Layers: reprojection", the policy):
+struct ReprojectionError {
+  double parallaxPx = 0;   // the most a point of a slab (its near and far depth) lands off its plane's mapping
+  double outsidePx = 0;    // how far the current view needs content beyond the slice camera's image
+  double magnification = 1;  // current pixels per layer texel at the image centre (> 1: zoomed in, blurred)
+  double turnDegrees = 0;  // the angle between the two eyes' directions to the vegetation's centre
+                           // (view-dependent shading baked into the layers: the specular lobe)
+};
+// Zooming in beyond this many current pixels per layer texel re-slices (the reprojected layers blur).
+constexpr double kMaxMagnification = 1.1;
+struct SlabRange {
+  float zNear = 0, zFar = 0, depth = 0;  // slice-camera view depths
+};
+ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
+                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size);
 
 }  // namespace canopy

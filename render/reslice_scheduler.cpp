@@ -10,20 +10,30 @@
 #include "engine/transfer.h"
 #include "render/layer_common.h"
 #include "render/layers.h"
+#include "render/reprojection.h"
 
 namespace canopy {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-bool matricesDiffer(const glm::mat4& a, const glm::mat4& b) {
-  for (int c = 0; c < 4; ++c)
-    for (int r = 0; r < 4; ++r)
-      if (std::abs(a[c][r] - b[c][r]) > 1e-5f * std::max(1.0f, std::abs(b[c][r]))) return true;
-  return false;
-}
-
-float angleDegrees(const glm::vec3& a, const glm::vec3& b) {
-  return glm::degrees(std::acos(std::clamp(glm::dot(a, b), -1.0f, 1.0f)));
+// Why the layers drawn from `slice` no longer serve `view` (docs/design.md "Layers: reprojection",
+// the policy), or "" while the reprojection's estimated error stays within the settings.
+std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& slice, const LayerView& view) {
+  const LayerSettings& s = lv.settings;
+  std::vector<SlabRange> slabs;
+  for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
+  const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
+  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size);
+  auto px = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("unbounded"); };
+  const std::string limit = " px (threshold " + std::to_string(s.errorThresholdPixels) + ")";
+  if (e.parallaxPx > s.errorThresholdPixels) return "reprojection error " + px(e.parallaxPx) + limit + ": parallax within the slabs";
+  if (e.outsidePx > s.errorThresholdPixels) return "reprojection error " + px(e.outsidePx) + limit + ": content beyond the layers";
+  if (e.magnification > kMaxMagnification)
+    return "layer texels magnified " + std::to_string(e.magnification) + "x (limit " + std::to_string(kMaxMagnification) + ")";
+  if (e.turnDegrees > s.turnThresholdDegrees)
+    return "view direction to the vegetation turned " + std::to_string(e.turnDegrees) + " degrees (threshold " +
+           std::to_string(s.turnThresholdDegrees) + "): baked shading";
+  return "";
 }
 
 using Clock = std::chrono::steady_clock;
@@ -134,6 +144,7 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
 // The frame of the last step (the copy of the next set): its placement becomes the visible one.
 void finishSpread(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.reslice.spread;
+  lv.visible.view = sp.job.view;
   lv.visible.frame = sp.job.frame;
   lv.visible.layers = std::move(sp.job.layers);
   lv.stats.spreadRebuilds++;
@@ -164,6 +175,7 @@ Status advanceSpread(LayeredVegetation& lv) {
         // streamed mesh): the new one describes the visible images, still empty, until the copy.
         if (lv.visible.layers.size() != sp.job.layers.size()) {
           lv.visible.layers = sp.job.layers;
+          lv.visible.view = sp.job.view;
           lv.visible.frame = sp.job.frame;
         }
       }
@@ -195,7 +207,10 @@ Status advanceSpread(LayeredVegetation& lv) {
       // every other image (layers and background alternate), which halves a blend frame's cost; an
       // image blended H times before the copy takes weight 1 / (H + 2 - j) at its j-th blend, so its
       // new share is j / (H + 1) and the copy ends it at 1.
-      const uint32_t f = lv.settings.crossFadeFrames, n = lv.settings.layout.count(), blends = f - 1;
+      // Sets drawn from two cameras are not blended texel by texel (their texels hold different
+      // points): the composite shows the visible set reprojected to the current camera, and the next
+      // set replaces it in one copy (docs/design.md "Layers: reprojection", the refresh).
+      const uint32_t f = sameCamera(sp.job.view, lv.visible.view) ? lv.settings.crossFadeFrames : 1u, n = lv.settings.layout.count(), blends = f - 1;
       if (sp.fadeStep == 0) sp.fadeFrom = lv.visible.layers;
       sp.fadeStep++;
       sp.fadeCopy = sp.fadeStep >= f;
@@ -268,17 +283,9 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   } else if (s.policy == ReslicePolicy::EveryFrame) {
     reason = "every frame";
   } else {
-    const float radius = std::max(0.5f * glm::length(lv.mesh.boundsMax - lv.mesh.boundsMin), 1e-6f);
-    const float moved = glm::length(viewPosition(view.view) - viewPosition(lv.reslice.lastRebuildView.view)) / radius;
-    const float turned = std::max(angleDegrees(viewForward(view.view), viewForward(lv.reslice.lastRebuildView.view)),
-                                  angleDegrees(viewUp(view.view), viewUp(lv.reslice.lastRebuildView.view)));
-    if (moved > s.moveThreshold) {
-      reason = "camera moved " + std::to_string(moved) + " radii (threshold " + std::to_string(s.moveThreshold) + ")";
-    } else if (turned > s.turnThresholdDegrees) {
-      reason = "camera turned " + std::to_string(turned) + " degrees (threshold " + std::to_string(s.turnThresholdDegrees) + ")";
-    } else if (matricesDiffer(view.proj, lv.reslice.lastRebuildView.proj)) {
-      reason = "projection changed";
-    }
+    // Error-driven: the visible layers are shown reprojected until that shows (the newest set's
+    // camera, which the visible set has once a spread re-slice ends).
+    if (!sameCamera(view, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view);
   }
   const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring

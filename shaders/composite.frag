@@ -21,10 +21,18 @@ layout(binding = 7, scalar) readonly buffer SceneBuf { float sceneDepth[]; };
 // Debug views only (a stand-in buffer otherwise): the dynamics frame and the tiled field.
 layout(binding = 8, scalar) readonly buffer AnimBuf { AnimFrame anim; };
 layout(binding = 9, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
+layout(binding = 10, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 layout(location = 0) out vec4 outColor;   // premultiplied, blended over the host's colour
 layout(location = 1) out vec4 outMotion;  // (motion * a, 0, a): a = 1 where the vegetation is frontmost
+
+// Pixel p of the current camera on plane i (a layer, or the background) in the slice camera's
+// layer pixels, homogeneous (shared/composite.h, CompositeView).
+vec3 planePoint(uint i, vec2 p) {
+  uint b = 3u * i;
+  return compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
+}
 
 vec2 displacementAt(uint base, GridSample g, bool previous) {
   if (previous)
@@ -58,6 +66,13 @@ vec4 velocityOnPlane(vec2 p) {
   return vec4(v, min(edge.x, edge.y) < 1.5 ? 2.0 : 1.0, 0.0);
 }
 
+// The debug views draw layer 0's plane (the dynamics frame is the slice camera's).
+vec2 layerPixel0(vec2 p) {
+  if ((pc.flags & COMPOSITE_REPROJECT) == 0u) return p;
+  vec3 h = planePoint(0u, p);
+  return h.xy / max(h.z, 1e-6);
+}
+
 void main() {
   vec2 p = gl_FragCoord.xy;
   ivec2 ip = ivec2(p);
@@ -67,9 +82,21 @@ void main() {
   float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? compositeStandardDepth(pc.flags, sceneRaw) : 1.0;
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
+  bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
-    bg = texelFetch(backgroundColor, ip, 0);
-    bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, ip, 0).r : 1.0;
+    ivec2 is = ip;
+    bool inside = true;
+    if (reproject) {
+      vec3 h = planePoint(COMPOSITE_VIEW_BACKGROUND, p);
+      vec2 s = h.xy / h.z;
+      is = ivec2(floor(s));
+      inside = h.z > 0.0 && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
+    }
+    if (inside) {
+      bg = texelFetch(backgroundColor, is, 0);
+      bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
+      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(view.sliceToCurrent, vec2(is) + 0.5, bgZ, size));
+    }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
   float opaqueZ = min(sceneZ, bgZ);                    // what hides a layer sample
@@ -81,9 +108,16 @@ void main() {
   float frontZ = 1.0;
   vec2 motion = vec2(0.0);
   bool front = false;
+  vec2 s = p;  // layer i's pixel under p (the slice camera's)
   for (uint i = 0u; i < pc.layerCount; ++i) {
+    if (reproject) {
+      vec3 h = planePoint(i, p);
+      if (h.z <= 0.0) continue;
+      s = h.xy / h.z;
+      g = gridSample(pc, s);
+    }
     vec2 d = displacementAt(i * corners, g, false);
-    vec2 q = p - d;
+    vec2 q = s - d;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {
       uvec2 tile = uvec2(clamp(q, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
@@ -101,6 +135,12 @@ void main() {
     } else {
       z = texture(layerDepth, uvw).r;
     }
+    vec4 clip = vec4(0.0);
+    float zSlice = z;
+    if (reproject) {
+      clip = compositeClipOf(view.sliceToCurrent, s, z, size);
+      z = compositeClipDepth(clip);
+    }
     if (z >= opaqueZ) continue;
     if (pc.debugView == COMPOSITE_DEBUG_LAYERS) {
       float shade = 0.55 + 0.45 * dot(c.rgb / c.a, vec3(0.3, 0.59, 0.11));
@@ -110,14 +150,21 @@ void main() {
     if (!front && c.a >= pc.depthAlpha) {
       front = true;
       frontZ = z;
-      if ((pc.flags & COMPOSITE_MOTION_VALID) != 0u) motion = d - displacementAt(i * corners, g, true);
+      // Where the texel is shown now minus where it was shown in the previous frame (its
+      // displacement then and the previous camera).
+      if ((pc.flags & COMPOSITE_MOTION_VALID) != 0u) {
+        vec2 dPrev = displacementAt(i * corners, g, true);
+        motion = reproject ? compositeClipPixel(clip, size) -
+                                 compositeClipPixel(compositeClipOf(view.sliceToPrevious, s - d + dPrev, zSlice, size), size)
+                           : d - dPrev;
+      }
     }
     if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
   }
   acc = underPremultiplied(acc, bg);
   if (pc.debugView == COMPOSITE_DEBUG_VELOCITY) {
     // Hue = direction, brightness = speed / debugScale, over 40 % of the composite.
-    vec4 v = velocityOnPlane(p);
+    vec4 v = velocityOnPlane(layerPixel0(p));
     if (v.z > 0.0) {
       vec3 col = debugHue(fract(atan(v.y, v.x) / 6.2831853 + 1.0)) * min(length(v.xy) / max(pc.debugScale, 1e-6), 1.0);
       if (v.z > 1.5) col = vec3(1.0);
@@ -125,7 +172,8 @@ void main() {
     }
   } else if (pc.debugView == COMPOSITE_DEBUG_GRID) {
     // p is on a displaced grid line where p - d_0(p) is on an undisplaced one.
-    vec2 q = (p - displacementAt(0u, g, false)) / pc.cellSize;
+    vec2 s0 = layerPixel0(p);
+    vec2 q = (s0 - displacementAt(0u, gridSample(pc, s0), false)) / pc.cellSize;
     vec2 dist = min(fract(q), 1.0 - fract(q)) * pc.cellSize;
     if (min(dist.x, dist.y) < 0.75) acc = vec4(1.0, 0.85, 0.1, 1.0);
   }

@@ -1,7 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // Compute path, tile classification (docs/performance.md): for every COMPOSITE_TILE screen tile, which
-// layers can reach it under p - d_i(p). d_i is bilinear between warp-grid corners, so over the tile
+// layers can reach it under q = s - d_i(s), s = H_i p (the reprojection, shared/composite.h; s = p
+// for a still camera). d_i is bilinear between warp-grid corners, so over the tile
 // it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
 // layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
 // rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
@@ -14,7 +15,41 @@ layout(local_size_x = COMPOSITE_CLASSIFY_GROUP) in;
 layout(binding = 0, scalar) readonly buffer DispBuf { vec2 disp[]; };
 layout(binding = 1, scalar) readonly buffer OccBuf { uint occupancy[]; };
 layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
+layout(binding = 3, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
+
+// Whether an occupancy tile of `slot` (a layer, or layerCount: the background) meets the layer-pixel
+// rectangle [qlo, qhi] (the composite reads within [-1, size + 1]); a rectangle too wide to search
+// counts as reached.
+bool reaches(uint slot, vec2 qlo, vec2 qhi, vec2 size) {
+  qlo = max(qlo, vec2(-1.0));
+  qhi = min(qhi, size + 1.0);
+  if (any(greaterThan(qlo, qhi))) return false;
+  uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
+  uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
+  if (t1.x - t0.x >= COMPOSITE_CLASSIFY_MAX_SPAN || t1.y - t0.y >= COMPOSITE_CLASSIFY_MAX_SPAN) return true;
+  for (uint ty = t0.y; ty <= t1.y; ++ty)
+    for (uint tx = t0.x; tx <= t1.x; ++tx)
+      if (occupancy[(slot * pc.tilesY + ty) * pc.tilesX + tx] != 0u) return true;
+  return false;
+}
+
+// The layer-pixel bounds of the screen rectangle [lo, hi] through plane `plane`'s homography (the
+// image of a convex region in front of the camera is the hull of its corners' images); false where
+// a corner is behind either camera.
+bool layerBounds(uint plane, vec2 lo, vec2 hi, out vec2 slo, out vec2 shi) {
+  slo = vec2(1e30);
+  shi = vec2(-1e30);
+  uint b = 3u * plane;
+  for (uint k = 0u; k < 4u; ++k) {
+    vec2 p = vec2((k & 1u) != 0u ? hi.x : lo.x, (k & 2u) != 0u ? hi.y : lo.y);
+    vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
+    if (h.z <= 0.0) return false;
+    slo = min(slo, h.xy / h.z);
+    shi = max(shi, h.xy / h.z);
+  }
+  return true;
+}
 
 void main() {
   uint tileCount = pc.tilesX * pc.tilesY;
@@ -25,17 +60,38 @@ void main() {
   // Pixel centres of the tile (clipped to the image).
   vec2 lo = vec2(tile * COMPOSITE_TILE) + 0.5;
   vec2 hi = min(lo + float(COMPOSITE_TILE - 1u), size - 0.5);
+  bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   uint mask = 0u;
   uint position = compositeTilePosition(tile.x, tile.y);
-  if ((pc.flags & COMPOSITE_BACKGROUND) != 0u && occupancy[pc.layerCount * tileCount + id] != 0u)
-    position |= COMPOSITE_TILE_BACKGROUND;
+  if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
+    bool reached;
+    if (!reproject) {
+      reached = occupancy[pc.layerCount * tileCount + id] != 0u;
+    } else {
+      // The background is read at the nearest texel of H p (the occupancy tiles are dilated by a pixel).
+      vec2 slo, shi;
+      reached = !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi) || reaches(pc.layerCount, slo, shi, size);
+    }
+    if (reached) position |= COMPOSITE_TILE_BACKGROUND;
+  }
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
     mask = compositeLayerBits(pc.layerCount);
   } else {
-    GridSample g0 = gridSample(pc, lo), g1 = gridSample(pc, hi);
-    uint gx0 = uint(g0.cell.x), gy0 = uint(g0.cell.y), gx1 = uint(g1.cell.x) + 1u, gy1 = uint(g1.cell.y) + 1u;
     uint corners = pc.gridX * pc.gridY;
     for (uint i = 0u; i < pc.layerCount; ++i) {
+      // The tile in layer i's pixels (the slice camera's), where its warp grid lies.
+      vec2 slo = lo, shi = hi;
+      if (reproject && !layerBounds(i, lo, hi, slo, shi)) {
+        mask |= 1u << i;
+        continue;
+      }
+      if (shi.x - slo.x > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN) ||
+          shi.y - slo.y > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN)) {
+        mask |= 1u << i;
+        continue;
+      }
+      GridSample g0 = gridSample(pc, slo), g1 = gridSample(pc, shi);
+      uint gx0 = uint(g0.cell.x), gy0 = uint(g0.cell.y), gx1 = uint(g1.cell.x) + 1u, gy1 = uint(g1.cell.y) + 1u;
       vec2 dmin = vec2(1e30), dmax = vec2(-1e30);
       for (uint gy = gy0; gy <= gy1; ++gy)
         for (uint gx = gx0; gx <= gx1; ++gx) {
@@ -43,21 +99,9 @@ void main() {
           dmin = min(dmin, d);
           dmax = max(dmax, d);
         }
-      // The composite samples layer i at q = p - d in [-1, size + 1] (bilinear reach included by the
+      // The composite samples layer i at q = s - d in [-1, size + 1] (bilinear reach included by the
       // occupancy's one-pixel dilation).
-      vec2 qlo = max(lo - dmax, vec2(-1.0)), qhi = min(hi - dmin, size + 1.0);
-      if (any(greaterThan(qlo, qhi))) continue;
-      uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-      uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-      if (t1.x - t0.x >= COMPOSITE_CLASSIFY_MAX_SPAN || t1.y - t0.y >= COMPOSITE_CLASSIFY_MAX_SPAN) {
-        mask |= 1u << i;
-        continue;
-      }
-      bool reached = false;
-      for (uint ty = t0.y; ty <= t1.y && !reached; ++ty)
-        for (uint tx = t0.x; tx <= t1.x; ++tx)
-          if (occupancy[(i * pc.tilesY + ty) * pc.tilesX + tx] != 0u) { reached = true; break; }
-      if (reached) mask |= 1u << i;
+      if (reaches(i, slo - dmax, shi - dmin, size)) mask |= 1u << i;
     }
   }
   if (mask == 0u && (position & COMPOSITE_TILE_BACKGROUND) == 0u) return;

@@ -20,6 +20,7 @@ layout(binding = 6, scalar) readonly buffer TileBuf { CompositeTileHeader header
 // Colour (premultiplied), the host's depth to write and motion where frontmost, packed
 // (compositePackPixel, shared/composite.h).
 layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
+layout(binding = 8, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 // One listed tile: its pixel at this invocation.
@@ -34,14 +35,28 @@ void compositeTile(uvec2 tileEntry) {
   float sceneZ = compositeStandardDepth(pc.flags, sceneRaw);
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
+  bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   if ((tileEntry.x & COMPOSITE_TILE_BACKGROUND) != 0u) {
-    bg = texelFetch(backgroundColor, ip, 0);
-    bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, ip, 0).r : 1.0;
+    ivec2 is = ip;
+    bool inside = true;
+    if (reproject) {
+      const uint b = 3u * COMPOSITE_VIEW_BACKGROUND;
+      vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
+      vec2 s = h.xy / h.z;
+      is = ivec2(floor(s));
+      inside = h.z > 0.0 && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
+    }
+    if (inside) {
+      bg = texelFetch(backgroundColor, is, 0);
+      bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
+      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(view.sliceToCurrent, vec2(is) + 0.5, bgZ, size));
+    }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
   float opaqueZ = min(sceneZ, bgZ);
 
   vec2 uvGrid = gridTexcoord(pc, gridSample(pc, p));
+  vec2 s = p;  // layer i's pixel under p (the slice camera's)
   bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0u;
   vec4 acc = vec4(0.0);
   float frontZ = 1.0;
@@ -51,8 +66,15 @@ void compositeTile(uvec2 tileEntry) {
   while (layers != 0u) {
     uint i = uint(findLSB(layers));
     layers &= layers - 1u;
+    if (reproject) {
+      const uint b = 3u * i;
+      vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
+      if (h.z <= 0.0) continue;
+      s = h.xy / h.z;
+      uvGrid = gridTexcoord(pc, gridSample(pc, s));
+    }
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
-    vec2 q = p - dd.xy;
+    vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     vec3 uvw = vec3(q / size, float(i));
     vec4 c = textureLod(layerColor, uvw, 0.0);
@@ -64,12 +86,24 @@ void compositeTile(uvec2 tileEntry) {
     } else {
       z = textureLod(layerDepth, uvw, 0.0).r;
     }
+    vec4 clip = vec4(0.0);
+    float zSlice = z;
+    if (reproject) {
+      clip = compositeClipOf(view.sliceToCurrent, s, z, size);
+      z = compositeClipDepth(clip);
+    }
     if (z >= opaqueZ) continue;
     acc = underPremultiplied(acc, c);
     if (!front && c.a >= pc.depthAlpha) {
       front = true;
       frontZ = z;
-      motion = dd.xy - dd.zw;  // zw = xy when the previous frame is not valid
+      // Where the texel is shown now minus where it was shown in the previous frame (its
+      // displacement then, dd.zw, and the previous camera); zw = xy when that frame is not valid.
+      if (reproject && (pc.flags & COMPOSITE_MOTION_VALID) != 0u)
+        motion = compositeClipPixel(clip, size) -
+                 compositeClipPixel(compositeClipOf(view.sliceToPrevious, s - dd.xy + dd.zw, zSlice, size), size);
+      else
+        motion = dd.xy - dd.zw;
     }
     if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
   }

@@ -449,7 +449,7 @@ TEST_F(LayersTest, ChunkBordersInsideLeavesCutNoLeaf) {
 TEST_F(LayersTest, ReslicingFollowsThePolicy) {
   const VegetationModel m = straddlingLeaves(4, 3, false);
   LayeredVegetationDesc d = smallDesc("3(1-1-1)");
-  d.settings.moveThreshold = 0.05f;
+  d.settings.errorThresholdPixels = 1.0f;
   d.settings.turnThresholdDegrees = 2.0f;
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
@@ -460,26 +460,31 @@ TEST_F(LayersTest, ReslicingFollowsThePolicy) {
   ASSERT_TRUE(updateLayerView(lv, v, &rebuild).ok());
   EXPECT_FALSE(rebuild) << "a still camera must not rebuild";
   const float radius = 0.5f * glm::length(m.boundsMax - m.boundsMin);
+  // Issue 34: re-slices driven by the reprojection's estimated error, not by fixed angles.
   LayerView small = v;
-  small.view[3][0] += 0.01f * radius;  // 1 % of the radius: below the 5 % threshold
+  small.view[3][0] += 0.001f * radius;  // a strafe whose parallax stays far below a pixel
   ASSERT_TRUE(updateLayerView(lv, small, &rebuild).ok());
-  EXPECT_FALSE(rebuild);
+  EXPECT_FALSE(rebuild) << lv.stats.lastRebuildReason;
   LayerView moved = v;
-  moved.view[3][0] += 0.1f * radius;
+  moved.view[3][0] += 0.5f * radius;  // the slabs' parallax: pixels
   ASSERT_TRUE(updateLayerView(lv, moved, &rebuild).ok());
   EXPECT_TRUE(rebuild);
-  EXPECT_NE(lv.stats.lastRebuildReason.find("moved"), std::string::npos) << lv.stats.lastRebuildReason;
-  LayerView turned = moved;
-  turned.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * moved.view;
+  EXPECT_NE(lv.stats.lastRebuildReason.find("parallax"), std::string::npos) << lv.stats.lastRebuildReason;
+  LayerView turned = moved;  // a pure rotation (the eye stays): no parallax, the vegetation in view
+  turned.view = glm::rotate(glm::mat4(1.0f), glm::radians(-1.0f), glm::vec3(0, 1, 0)) * moved.view;
   ASSERT_TRUE(updateLayerView(lv, turned, &rebuild).ok());
+  EXPECT_FALSE(rebuild) << "a pure rotation is reprojected exactly: " << lv.stats.lastRebuildReason;
+  LayerView orbited = turned;  // the eye moves around the vegetation: the baked shading's angle
+  orbited.view = turned.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));
+  ASSERT_TRUE(updateLayerView(lv, orbited, &rebuild).ok());
   EXPECT_TRUE(rebuild);
-  EXPECT_NE(lv.stats.lastRebuildReason.find("turned"), std::string::npos) << lv.stats.lastRebuildReason;
-  LayerView zoomed = turned;
+  LayerView zoomed = orbited;  // 40 to 30 degrees: layer texels magnified 1.35x
   zoomed.proj = perspectiveVulkan(glm::radians(30.0f), float(kW) / kH, 1.0f, 30.0f);
   ASSERT_TRUE(updateLayerView(lv, zoomed, &rebuild).ok());
   EXPECT_TRUE(rebuild);
+  EXPECT_NE(lv.stats.lastRebuildReason.find("magnified"), std::string::npos) << lv.stats.lastRebuildReason;
   EXPECT_EQ(lv.stats.rebuilds, 4u);
-  EXPECT_EQ(lv.stats.viewUpdates, 6u);
+  EXPECT_EQ(lv.stats.viewUpdates, 7u);
   LayerSettings every = lv.settings;
   every.policy = ReslicePolicy::EveryFrame;
   ASSERT_TRUE(setLayerSettings(lv, every).ok());
@@ -545,9 +550,15 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
     std::vector<std::vector<glm::vec4>> oldColor, newColor, mid;
     readAll(x, &oldColor);
     const std::vector<LayerInfo> oldLayers = x.visible.layers;
-    // A 3-degree turn: placement, slices, the occupancy frame, the fade.
-    LayerView b = a;
-    b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+    // A light change (the same camera, so the new set fades in; sets drawn from two cameras are
+    // swapped in one copy): placement, slices, the occupancy frame, the fade.
+    const LayerView b = a;
+    LayerSettings lit = x.settings;
+    lit.lightDirection = Float3{-0.6f, 0.5f, 0.4f};
+    ASSERT_TRUE(setLayerSettings(x, lit).ok());
+    LayerSettings litOnce = y.settings;
+    litOnce.lightDirection = lit.lightDirection;
+    ASSERT_TRUE(setLayerSettings(y, litOnce).ok());
     ASSERT_TRUE(renderOnce(dev, y, b).ok());
     readAll(y, &newColor);
     uint64_t triangles = 0;
@@ -637,13 +648,13 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   ASSERT_TRUE(updateLayerView(lv, a, &changed).ok());
   EXPECT_TRUE(changed) << "first view: at once";
   LayerView b = a;
-  b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+  b.view = a.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));  // an orbit
   ASSERT_TRUE(updateLayerView(lv, b, &changed).ok());
   EXPECT_FALSE(changed);
   EXPECT_NE(lv.stats.spreadPhase, 0u);
   EXPECT_EQ(lv.stats.rebuilds, 2u);
   LayerView c = b;
-  c.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * b.view;
+  c.view = b.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
   EXPECT_EQ(lv.stats.rebuilds, 2u) << "a turn during a spread re-slice waits for it";
   lv.reslice.forcedReason = "camera cut";
@@ -808,7 +819,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       expectClose(bx, by, 0.0f, 0.0, what + "_background", k.width);
       expectIdentical(zx, zy, 1, what + "_background_depth", k.width);
       for (uint32_t l = 0; l < x.settings.layout.count(); ++l) EXPECT_EQ(x.visible.layers[l].slab.depth, y.visible.layers[l].slab.depth);
-      // A spread re-slice (a 3-degree turn with a budget): the same layers once its fade is done.
+      // A spread re-slice (a 3-degree orbit with a budget): the same layers once it is done.
       LayerSettings s = x.settings;
       s.rebuildBudgetMs = 2.0f;
       s.crossFadeFrames = 3;
@@ -816,7 +827,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       ASSERT_TRUE(setLayerSettings(x, s, &recreated).ok());
       EXPECT_FALSE(recreated) << "a streamed mesh has the second set already";
       LayerView b = a;
-      b.view = glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0)) * a.view;
+      b.view = a.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));
       dev.allocator->peakLiveBytes = dev.allocator->liveBytes;
       frames = 0;
       do {

@@ -43,7 +43,7 @@ std::vector<Field> fields() {
       {"slice", [](CanopyParams& p, float, uint32_t u) { p.layers.slice = SliceMode(u); }},
       {"draw", [](CanopyParams& p, float, uint32_t u) { p.layers.draw = LayerDrawMode(u); }},
       {"policy", [](CanopyParams& p, float, uint32_t u) { p.layers.policy = ReslicePolicy(u); }},
-      {"moveThreshold", [](CanopyParams& p, float f, uint32_t) { p.layers.moveThreshold = f; }},
+      {"errorThresholdPixels", [](CanopyParams& p, float f, uint32_t) { p.layers.errorThresholdPixels = f; }},
       {"turnThresholdDegrees", [](CanopyParams& p, float f, uint32_t) { p.layers.turnThresholdDegrees = f; }},
       {"lightDirection", [](CanopyParams& p, float f, uint32_t) { p.layers.lightDirection.x = f; }},
       {"lightColor", [](CanopyParams& p, float f, uint32_t) { p.layers.lightColor.y = f; }},

@@ -103,5 +103,48 @@ TEST(Reprojection, ClipToClipCarriesAWorldPoint) {
   EXPECT_LT(glm::length(glm::dvec3(got) / got.w - glm::dvec3(cb) / cb.w), 1e-9);
 }
 
+// The policy's estimate (estimateReprojectionError) against the parallax in closed form: a strafe
+// by t parallel to the image plane shifts a point at view depth z by f t / z pixels (f the focal
+// length in pixels), so a slab [zNear, zFar] shown on its plane at depth z_p is off by
+// f t max(|1/zNear - 1/z_p|, |1/zFar - 1/z_p|) everywhere in the image. A path strafing a fixed
+// step per frame therefore crosses a threshold at a frame known in advance.
+TEST(Reprojection, TheEstimatedErrorIsTheStrafesParallaxAndCrossesTheThresholdWhereExpected) {
+  const LayerView slice = along(CameraMotion::Still, 0);
+  const double zp = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  const std::vector<SlabRange> slabs = {{float(zp - 0.3), float(zp + 0.5), float(zp)}};
+  const double f = 0.5 * kSize.y * double(slice.proj[1][1] < 0 ? -slice.proj[1][1] : slice.proj[1][1]);
+  const double perUnit = f * std::max(std::abs(1.0 / (zp - 0.3) - 1.0 / zp), std::abs(1.0 / (zp + 0.5) - 1.0 / zp));
+  const double step = 0.0005;  // world units a frame, along the view's right axis
+  auto strafed = [&](int frame) {
+    LayerView v = slice;
+    v.view[3][0] -= float(step * frame);  // the eye moves +x in view space: the world moves -x
+    return v;
+  };
+  const double threshold = 1.0;
+  const int expected = int(std::floor(threshold / (perUnit * step))) + 1;  // first frame beyond
+  ASSERT_GT(expected, 3);
+  for (int k = 1; k <= expected + 2; ++k) {
+    const ReprojectionError e = estimateReprojectionError(slice, strafed(k), slabs, kMin, kMax, kSize);
+    EXPECT_NEAR(e.parallaxPx, perUnit * step * k, 1e-3 * perUnit * step * k) << "frame " << k;
+    EXPECT_EQ(e.parallaxPx > threshold, k >= expected) << "frame " << k << ": " << e.parallaxPx << " px";
+  }
+}
+
+TEST(Reprojection, APureRotationEstimatesNoErrorWhileTheVegetationStaysInTheImage) {
+  const LayerView slice = along(CameraMotion::Still, 0);
+  const double zp = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  const std::vector<SlabRange> slabs = {{float(zp - 1.0), float(zp - 0.2), float(zp - 0.6)}, {float(zp - 0.2), float(zp + 1.0), float(zp + 0.4)}};
+  for (uint32_t frame : {1u, 4u, 8u}) {
+    const ReprojectionError e = estimateReprojectionError(slice, along(CameraMotion::Turn, frame), slabs, kMin, kMax, kSize);
+    EXPECT_LT(e.parallaxPx, 1e-3) << "frame " << frame;
+    EXPECT_LT(e.turnDegrees, 1e-3) << "the eye stays: the vegetation is seen from the same direction";
+    EXPECT_LT(e.magnification, 1.02);
+  }
+  // A zoom keeps the eye too, but magnifies the layers' texels.
+  const ReprojectionError z = estimateReprojectionError(slice, along(CameraMotion::Zoom, 20, 1.0f), slabs, kMin, kMax, kSize);
+  EXPECT_LT(z.parallaxPx, 1e-3);
+  EXPECT_NE(z.magnification, 1.0);
+}
+
 }  // namespace
 }  // namespace canopy

@@ -81,8 +81,12 @@ std::vector<uint8_t> coverageMask(const std::vector<uint8_t>& rgba, uint32_t wid
 
 WorldLockError compareFrames(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, uint32_t width, uint32_t height,
                              const uint8_t clear[3]) {
+  return compareMasks(coverageMask(a, width, height, clear), coverageMask(b, width, height, clear), a, b, width, height);
+}
+
+WorldLockError compareMasks(const std::vector<uint8_t>& ma, const std::vector<uint8_t>& mb, const std::vector<uint8_t>& a,
+                            const std::vector<uint8_t>& b, uint32_t width, uint32_t height) {
   WorldLockError e;
-  const std::vector<uint8_t> ma = coverageMask(a, width, height, clear), mb = coverageMask(b, width, height, clear);
   uint64_t both = 0, either = 0;
   double ax = 0, ay = 0, bx = 0, by = 0, colour = 0;
   for (uint32_t y = 0; y < height; ++y)

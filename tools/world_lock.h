@@ -26,5 +26,10 @@ std::vector<uint8_t> coverageMask(const std::vector<uint8_t>& rgba, uint32_t wid
 // image's diagonal.
 WorldLockError compareFrames(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, uint32_t width, uint32_t height,
                              const uint8_t clear[3]);
+// The same measure over given coverage masks (1 = covered; e.g. where Canopy wrote the host's depth,
+// its alpha >= depthAlpha rule, which leaves out the faint resampling halo a colour threshold counts);
+// colour from the two RGBA8 frames.
+WorldLockError compareMasks(const std::vector<uint8_t>& maskA, const std::vector<uint8_t>& maskB, const std::vector<uint8_t>& a,
+                            const std::vector<uint8_t>& b, uint32_t width, uint32_t height);
 
 }  // namespace canopy

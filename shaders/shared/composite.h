@@ -6,6 +6,7 @@
 #ifndef CANOPY_SHARED_COMPOSITE_H
 #define CANOPY_SHARED_COMPOSITE_H
 #include "interop.h"
+#include "layers.h"
 
 #define COMPOSITE_TILE 8u                // occupancy tile, pixels per side
 #define COMPOSITE_OCCUPANCY_GROUP 64u    // occupancy kernel workgroup (one tile per invocation)
@@ -31,6 +32,8 @@
 #define COMPOSITE_REVERSE_Z 128u    // the host's depth is reverse-Z (1 = near); layers are standard
 #define COMPOSITE_OCCUPANCY_UNION 256u  // occupancy: OR the next layer set's tiles into the current
                                         // occupancy (a spread re-slice, before its cross-fade)
+#define COMPOSITE_REPROJECT 512u  // the current camera differs from the slice camera: read the
+                                  // layers through CompositeView (else pixel p is layer pixel p)
 
 
 // CompositePush.debugView: what the demo's and a host's debug overlays show.
@@ -72,6 +75,36 @@ struct CompositePush {
   uint occupancyY1;
 };
 CANOPY_SIZE_CHECK(CompositePush, 80)
+
+// Reprojection between re-slices (docs/design.md "Layers: reprojection"): the layers and the rigid
+// background were drawn from the slice camera; the composite shows them from the current camera.
+// Pixel p (current camera, centres at +0.5, y down) reads layer i at s = H_i p, H_i the homography of
+// the slab's plane (render/reprojection.h); the inverse warp then reads q = s - d_i(s) (paper 3.2,
+// d_i on the slice camera's warp grid). A texel's depth and its previous-frame position come from
+// its slice-camera clip coordinates (s, z) through the two matrices.
+#define COMPOSITE_VIEW_BACKGROUND CANOPY_MAX_LAYERS  // the background's homography follows the layers'
+struct CompositeView {
+  mat4 sliceToCurrent;   // slice camera clip -> current camera clip
+  mat4 sliceToPrevious;  // slice camera clip -> the previous frame's camera clip (motion vectors)
+  // Row r of plane i's homography (current pixel -> layer pixel) is homography[3 i + r].xyz; the
+  // background's plane is i = COMPOSITE_VIEW_BACKGROUND.
+  vec4 homography[3u * (CANOPY_MAX_LAYERS + 1u)];
+};
+CANOPY_SIZE_CHECK(CompositeView, 128 + 48 * (CANOPY_MAX_LAYERS + 1))
+
+// H p in homogeneous layer pixels: (x, y, w), the point in front of both cameras where w > 0.
+CANOPY_INLINE vec3 compositeHomogeneous(vec4 r0, vec4 r1, vec4 r2, vec2 p) {
+  vec3 ph = vec3(p.x, p.y, 1.0f);
+  return vec3(dot(vec3(r0), ph), dot(vec3(r1), ph), dot(vec3(r2), ph));
+}
+// The point shown at layer pixel s with slice-camera depth z, in camera `toClip`'s clip space.
+CANOPY_INLINE vec4 compositeClipOf(mat4 toClip, vec2 s, float z, vec2 size) {
+  return toClip * vec4(s.x / size.x * 2.0f - 1.0f, s.y / size.y * 2.0f - 1.0f, z, 1.0f);
+}
+CANOPY_INLINE float compositeClipDepth(vec4 c) { return c.z / c.w; }
+CANOPY_INLINE vec2 compositeClipPixel(vec4 c, vec2 size) {
+  return vec2((c.x / c.w + 1.0f) * 0.5f * size.x, (c.y / c.w + 1.0f) * 0.5f * size.y);
+}
 
 // Compute path: the tile list the classification appends to. The header doubles as the indirect
 // dispatch of the warp + composite kernel (one workgroup per tilesPerGroup listed tiles) and the

@@ -257,11 +257,12 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 // the side the light falls on, Lambert plus a Cook-Torrance lobe on the leaf's front; on the unlit
 // side, diffuse transmission. Rigid parts are Lambert only. A change re-slices, like a light change.
 // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): rebuildBudgetMs > 0: a re-slice
-// caused by a camera move, turn or projection change, a light change or
+// caused by the camera (the reprojection's estimated error: errorThresholdPixels, turnThresholdDegrees;
+// docs/design.md "Layers: reprojection"), a light change or
 // requestCanopyRebuild(spread) is done over several frames, each adding about this much work: the
 // placement on the CPU (timed), then triangles drawn into a second layer set (as many as the
 // measured drawing rate fits); the old layers keep animating meanwhile, and the new ones replace
-// them over crossFadeFrames frames. 0: every re-slice is drawn at once in the frame that asks for
+// them over crossFadeFrames frames (in one copy when drawn from another camera). 0: every re-slice is drawn at once in the frame that asks for
 // it. The first view, a camera cut, a new layer count or size, ReslicePolicy::EveryFrame and the
 // id output always re-slice at once.
 #define CANOPY_LAYER_SETTINGS(X)                                                                                        \
@@ -270,8 +271,8 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
   X(SliceMode, slice, SliceMode::LeafRoots, Enum, 0, 1, "LeafRoots | Geometry", "how leaves go into layers")          \
   X(LayerDrawMode, draw, LayerDrawMode::Auto, Enum, 0, 2, "Auto | SinglePass | PerLayer", "how the layers are drawn") \
   X(ReslicePolicy, policy, ReslicePolicy::OnViewChange, Enum, 0, 1, "OnViewChange | EveryFrame", "when layers are re-sliced") \
-  X(float, moveThreshold, 0.01f, Closed, 0, 10, "fraction of the model's radius", "camera travel that re-slices")      \
-  X(float, turnThresholdDegrees, 0.5f, Closed, 0, 180, "degrees", "camera turn that re-slices")                        \
+  X(float, errorThresholdPixels, 1.0f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers)") \
+  X(float, turnThresholdDegrees, 2.0f, Closed, 0, 180, "degrees", "change of the view direction to the vegetation that re-slices (baked shading)") \
   X(Float3, lightDirection, (Float3{0.35f, 0.8f, 0.5f}), Finite, 0, 0, "world space", "towards the light (normalised; zero: straight up)") \
   X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \
   X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \

@@ -55,9 +55,10 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
     const uint32_t l = chunkLeaf(v);
     return l == LAYER_CHUNK_NO_LEAF ? kNoLeaf : hm.roots[c.firstRoot + l].leaf;
   };
+  const glm::vec4 rowX(f.viewProj[0][0], f.viewProj[1][0], f.viewProj[2][0], f.viewProj[3][0]);
   const glm::vec4 rowY(f.viewProj[0][1], f.viewProj[1][1], f.viewProj[2][1], f.viewProj[3][1]);
   const glm::vec4 rowW(f.viewProj[0][3], f.viewProj[1][3], f.viewProj[2][3], f.viewProj[3][3]);
-  const float h = float(lv.desc.height);
+  const float h = float(lv.desc.height), wPx = float(lv.desc.width);
   *done = false;
   while (!*done) {
     size_t end = 0;
@@ -119,9 +120,15 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
           const MeshChunk& c = chunkOf(v, false);
           const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
           const float w = glm::dot(rowW, p);
-          if (w <= 1e-6f) continue;
+          if (w <= 1e-6f) {
+            job.behind = true;
+            continue;
+          }
           const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
           job.bottom = std::max(job.bottom, y);
+          const glm::vec2 px((glm::dot(rowX, p) / w * 0.5f + 0.5f) * wPx, y);
+          job.pixelLo = glm::min(job.pixelLo, px);
+          job.pixelHi = glm::max(job.pixelHi, px);
           const uint32_t leaf = leafOf(c, hm.vertices[v]);
           if (leaf == kNoLeaf) continue;
           const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(f.depthRow, p)) : job.leafLayer[leaf];
@@ -200,6 +207,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   bool done = false;
   CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
   lv.visible.view = job.view;
+  lv.visible.extent = job.behind ? PixelExtent{} : PixelExtent{job.pixelLo, job.pixelHi, true};
   lv.visible.frame = job.frame;
   lv.visible.layers = std::move(job.layers);
   lv.stats.lastPlacementMs = job.ms;

@@ -4,6 +4,7 @@
 // spread re-slice runs it a few ms a frame; the placement the visible layers show, with the
 // impostor cut it draws; the frame block's camera; the layers' screen footprint.
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 #include <vulkan/vulkan.h>
@@ -14,6 +15,7 @@
 #include "render/impostors.h"
 #include "render/layer_layout.h"
 #include "render/layer_mesh.h"
+#include "render/reprojection.h"
 #include "shared/layers.h"
 
 namespace canopy {
@@ -34,6 +36,8 @@ struct LayerInfo {
 // bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
 struct PlacementJob {
   LayerView view;  // the camera the placement (and the set it draws) is for
+  glm::vec2 pixelLo{INFINITY}, pixelHi{-INFINITY};  // the vertices' projected extent, pixels (unclipped)
+  bool behind = false;                               // a vertex is behind the camera (no extent)
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
@@ -52,6 +56,7 @@ struct VisibleLayers {
   // The slice camera: the view the visible images were drawn from (docs/design.md "Layers:
   // reprojection"); the composite maps the current camera's pixels into its pixels.
   LayerView view;
+  PixelExtent extent;  // where the vegetation's vertices project in that camera (unclipped; reprojection policy)
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   Buffer frameBuffer;

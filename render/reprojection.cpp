@@ -83,7 +83,8 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
 }
 
 ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
-                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size) {
+                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size,
+                                            const PixelExtent* drawn) {
   ReprojectionError e;
   const glm::dmat4 sliceVP = viewProj(slice), currentVP = viewProj(current), sliceInv = glm::inverse(sliceVP);
   // The vegetation's footprint in the slice camera's image (its bounding box's corners).
@@ -100,22 +101,27 @@ ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerV
     lo = glm::dvec2(0.0);
     hi = size;
   }
+  if (drawn && drawn->known) {  // the vertices' own extent, inside the box's
+    lo = glm::dvec2(drawn->lo);
+    hi = glm::dvec2(drawn->hi);
+  }
   const glm::dvec2 clo = glm::clamp(lo, glm::dvec2(0.0), size), chi = glm::clamp(hi, glm::dvec2(0.0), size);
-  // Parallax: a 3 x 3 grid of slice pixels over the footprint, each at its slab's plane, near and
-  // far depth, seen from the current camera.
+  // Parallax: a 3 x 3 grid of slice pixels over the footprint; at each, the mean distance between
+  // where a point of the slab (uniform in depth over its range: kDepthSamples midpoints) is seen
+  // from the current camera and where its plane's mapping shows it; the largest over the grid and
+  // the slabs.
   for (const SlabRange& slab : slabs)
     for (int gy = 0; gy < 3; ++gy)
       for (int gx = 0; gx < 3; ++gx) {
         const glm::dvec2 s = clo + (chi - clo) * glm::dvec2(0.5 * gx, 0.5 * gy);
         const glm::dvec3 onPlane = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, slab.depth, size), size);
-        for (float z : {slab.zNear, slab.zFar}) {
+        double sum = 0;
+        for (int k = 0; k < kDepthSamples; ++k) {
+          const double z = slab.zNear + (slab.zFar - slab.zNear) * (k + 0.5) / kDepthSamples;
           const glm::dvec3 off = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, z, size), size);
-          if (onPlane.z <= 0 || off.z <= 0) {
-            e.parallaxPx = INFINITY;
-            continue;
-          }
-          e.parallaxPx = std::max(e.parallaxPx, glm::length(glm::dvec2(off) - glm::dvec2(onPlane)));
+          sum += onPlane.z > 0 && off.z > 0 ? glm::length(glm::dvec2(off) - glm::dvec2(onPlane)) : INFINITY;
         }
+        e.parallaxPx = std::max(e.parallaxPx, sum / kDepthSamples);
       }
   // Content beyond the slice image: the current image's corners on the middle slab's plane, in
   // slice pixels, intersected with the footprint, against the slice image.

@@ -37,18 +37,31 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
 // The reprojection's estimated screen error (pixels of the current camera) of showing layers drawn
 // from `slice` from `current` (docs/design.md "Layers: reprojection", the policy):
 struct ReprojectionError {
-  double parallaxPx = 0;   // the most a point of a slab (its near and far depth) lands off its plane's mapping
+  double parallaxPx = 0;   // how far a point of a slab (uniform over its depth range) lands off its
+                           // plane's mapping, on average; the largest over the image and the slabs
   double outsidePx = 0;    // how far the current view needs content beyond the slice camera's image
   double magnification = 1;  // current pixels per layer texel at the image centre (> 1: zoomed in, blurred)
   double turnDegrees = 0;  // the angle between the two eyes' directions to the vegetation's centre
                            // (view-dependent shading baked into the layers: the specular lobe)
 };
+// Where a layer set's vertices project in its slice camera, pixels, unclipped (known: every vertex
+// was in front of the camera).
+struct PixelExtent {
+  glm::vec2 lo{0.0f}, hi{0.0f};
+  bool known = false;
+};
+
+// Depths averaged over a slab's range by estimateReprojectionError (midpoints).
+constexpr int kDepthSamples = 8;
 // Zooming in beyond this many current pixels per layer texel re-slices (the reprojected layers blur).
 constexpr double kMaxMagnification = 1.1;
 struct SlabRange {
   float zNear = 0, zFar = 0, depth = 0;  // slice-camera view depths
 };
+// `drawn`: the set's vertex extent (null: the bounding box's projection, which a rounded crown
+// overstates).
 ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
-                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size);
+                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size,
+                                            const PixelExtent* drawn = nullptr);
 
 }  // namespace canopy

@@ -23,7 +23,8 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
   std::vector<SlabRange> slabs;
   for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
   const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
-  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size);
+  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size,
+                                                        lv.visible.extent.known ? &lv.visible.extent : nullptr);
   auto px = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("unbounded"); };
   const std::string limit = " px (threshold " + std::to_string(s.errorThresholdPixels) + ")";
   if (e.parallaxPx > s.errorThresholdPixels) return "reprojection error " + px(e.parallaxPx) + limit + ": parallax within the slabs";
@@ -145,6 +146,7 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
 void finishSpread(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.reslice.spread;
   lv.visible.view = sp.job.view;
+  lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
   lv.visible.frame = sp.job.frame;
   lv.visible.layers = std::move(sp.job.layers);
   lv.stats.spreadRebuilds++;
@@ -176,6 +178,7 @@ Status advanceSpread(LayeredVegetation& lv) {
         if (lv.visible.layers.size() != sp.job.layers.size()) {
           lv.visible.layers = sp.job.layers;
           lv.visible.view = sp.job.view;
+          lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
           lv.visible.frame = sp.job.frame;
         }
       }

@@ -105,15 +105,18 @@ TEST(Reprojection, ClipToClipCarriesAWorldPoint) {
 
 // The policy's estimate (estimateReprojectionError) against the parallax in closed form: a strafe
 // by t parallel to the image plane shifts a point at view depth z by f t / z pixels (f the focal
-// length in pixels), so a slab [zNear, zFar] shown on its plane at depth z_p is off by
-// f t max(|1/zNear - 1/z_p|, |1/zFar - 1/z_p|) everywhere in the image. A path strafing a fixed
-// step per frame therefore crosses a threshold at a frame known in advance.
+// length in pixels), so a point of the slab [zNear, zFar] shown on its plane at depth z_p is off by
+// f t |1/z - 1/z_p| everywhere in the image; the estimate is its mean over the slab's depths (the
+// same midpoints). A path strafing a fixed step per frame crosses a threshold at a frame known in
+// advance.
 TEST(Reprojection, TheEstimatedErrorIsTheStrafesParallaxAndCrossesTheThresholdWhereExpected) {
   const LayerView slice = along(CameraMotion::Still, 0);
   const double zp = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
   const std::vector<SlabRange> slabs = {{float(zp - 0.3), float(zp + 0.5), float(zp)}};
   const double f = 0.5 * kSize.y * double(slice.proj[1][1] < 0 ? -slice.proj[1][1] : slice.proj[1][1]);
-  const double perUnit = f * std::max(std::abs(1.0 / (zp - 0.3) - 1.0 / zp), std::abs(1.0 / (zp + 0.5) - 1.0 / zp));
+  double perUnit = 0;
+  for (int k = 0; k < kDepthSamples; ++k) perUnit += f * std::abs(1.0 / (zp - 0.3 + 0.8 * (k + 0.5) / kDepthSamples) - 1.0 / zp);
+  perUnit /= kDepthSamples;
   const double step = 0.0005;  // world units a frame, along the view's right axis
   auto strafed = [&](int frame) {
     LayerView v = slice;

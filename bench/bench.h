@@ -1,4 +1,5 @@
 #pragma once
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -10,6 +11,11 @@
 namespace canopy {
 struct Device;
 namespace bench {
+// Wall clock in milliseconds (steady), for the benchmarks' frame and step times.
+inline double nowMs() {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
 int runSimBench(Device& dev, const std::vector<uint32_t>& sizes, int frames, bool detail);
 // Leaf-root preprocessing and layer rebuilds for synthetic leaf clouds of the given face counts.
 int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layout,

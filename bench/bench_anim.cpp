@@ -23,10 +23,6 @@
 namespace canopy::bench {
 namespace {
 
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 struct FrameStats {
   double wallMs = 0;
   std::map<std::string, double> passMs;  // medians

@@ -23,10 +23,6 @@
 namespace canopy::bench {
 namespace {
 
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
@@ -96,7 +92,7 @@ struct PathResult {
 }  // namespace
 
 int runCameraBench(Device& d, const CameraBenchOptions& o) {
-  const uint8_t clear[3] = {115, 153, 204};  // bench_host.cpp's clear (0.45, 0.6, 0.8) in RGBA8
+  const uint8_t* clear = kHostClearRgba8;
   char policy[64] = "at once";
   if (o.budgetMs > 0) std::snprintf(policy, sizeof policy, "spread over frames, %.1f ms budget", double(o.budgetMs));
   std::printf("\nMoving camera at %ux%u, 5(3-1-1), generated scene '%s', wind off: each path's %d frames drawn with the\n"

@@ -30,7 +30,7 @@ Status buildHostGraph(Device& d, CanopyContext* ctx, HostTargets& t, bool withCa
   ct.color = g->importImage("host colour", descOf(t.color), {}, colorFinal);
   ct.depth = g->importImage("host depth", descOf(t.depth), {}, rg::stateOf(rg::Use::DepthAttachmentWrite));
   g->addPass("host clear", [ct](rg::PassContext& x) {
-     const VkClearColorValue cv{{0.45f, 0.6f, 0.8f, 1.0f}};
+     const VkClearColorValue cv{{kHostClear[0], kHostClear[1], kHostClear[2], kHostClear[3]}};
      const VkClearDepthStencilValue dv{1.0f, 0};
      const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
      vkCmdClearColorImage(x.cmd, x.image(ct.color).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);

@@ -13,14 +13,6 @@
 #include "tools/leaf_cloud.h"
 
 namespace canopy::bench {
-namespace {
-
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-}  // namespace
-
 int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int rebuilds, const std::string& layoutText,
                    uint32_t width, uint32_t height) {
   LayerLayout layout;
@@ -32,8 +24,10 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
   std::printf("\nLayers %s at %ux%u: preprocessing (leaf roots, CPU, one core) and layer rebuilds\n",
               toString(layout).c_str(), width, height);
   std::printf("Rebuild: GPU = timestamps around the foliage pass; wall = submit-to-fence of the rebuild alone;\n"
-              "placement = CPU depth range + per-layer bounds; medians of %d rebuilds.\n\n", rebuilds);
-  std::printf("  %-11s %11s %9s %12s | %-22s %10s %10s %12s %10s\n", "faces", "roots ms", "M tris/s", "cache read ms",
+              "placement = CPU depth range + per-layer bounds; medians of %d rebuilds. Draws: one with gl_Layer or\n"
+              "one per layer (clip distances), each shaded once (LayerSettings.shadeOnce: a depth pre-pass first)\n"
+              "and on every fragment.\n\n", rebuilds);
+  std::printf("  %-11s %11s %9s %12s | %-26s %10s %10s %12s %10s\n", "faces", "roots ms", "M tris/s", "cache read ms",
               "draw", "GPU ms", "wall ms", "M tris/s", "place ms");
   for (uint64_t faces : faceCounts) {
     double t0 = nowMs();
@@ -60,7 +54,10 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
     std::remove(cache.c_str());
     const double mtris = double(m.triangleCount()) / rootsMs / 1e3;
     bool first = true;
-    for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+    // Each draw path shaded once (a depth pre-pass first) and on every fragment, side by side.
+    for (int run = 0; run < 4; ++run) {
+      const LayerDrawMode mode = run < 2 ? LayerDrawMode::SinglePass : LayerDrawMode::PerLayer;
+      const bool once = run % 2 == 0;
       if (mode == LayerDrawMode::SinglePass && !dev.shaderOutputLayer) continue;
       LayeredVegetationDesc d;
       d.width = width;
@@ -68,6 +65,7 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
       d.settings.layout = layout;
       d.settings.draw = mode;
       d.settings.policy = ReslicePolicy::EveryFrame;
+      d.settings.shadeOnce = once;
       LayeredVegetation lv;
       s = createLayeredVegetation(dev, m, d, &lv);
       if (!s.ok()) {
@@ -108,13 +106,15 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
       }
       const double g50 = median(gpu), w50 = median(wall);
       char drawName[64];
-      std::snprintf(drawName, sizeof drawName, "%s", mode == LayerDrawMode::SinglePass ? "one draw (gl_Layer)" : "");
-      if (mode == LayerDrawMode::PerLayer) std::snprintf(drawName, sizeof drawName, "%u draws (clip dist.)", layout.count());
+      if (mode == LayerDrawMode::SinglePass)
+        std::snprintf(drawName, sizeof drawName, "1 draw, %s", once ? "shaded once" : "every fragment");
+      else
+        std::snprintf(drawName, sizeof drawName, "%u draws, %s", layout.count(), once ? "shaded once" : "every fragment");
       if (first)
         std::printf("  %-11llu %11.1f %9.2f %12.1f | ", (unsigned long long)faces, rootsMs, mtris, hit ? cacheMs : -1.0);
       else
         std::printf("  %-11s %11s %9s %12s | ", "", "", "", "");
-      std::printf("%-22s %10.2f %10.2f %12.2f %10.2f\n", drawName, g50, w50, double(faces) / w50 / 1e3, median(place));
+      std::printf("%-26s %10.2f %10.2f %12.2f %10.2f\n", drawName, g50, w50, double(faces) / w50 / 1e3, median(place));
       first = false;
     }
     std::printf("  (%llu faces: %u leaves, generated in %.0f ms)\n", (unsigned long long)faces, roots.leafCount(), genMs);

@@ -26,10 +26,6 @@
 namespace canopy::bench {
 namespace {
 
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 struct Run {
   Device& d;
   VegetationModel model;

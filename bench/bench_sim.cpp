@@ -20,11 +20,6 @@
 namespace canopy::bench {
 namespace {
 
-double nowMs() {
-  using namespace std::chrono;
-  return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
-}
-
 // Lowest-mode gradient energy removed by one MAC projection on the device (walls, phi = cos(pi x)).
 Status macLowestModeRemoval(Device& dev, uint32_t n, uint32_t cycles, double* removed) {
   Simulation sim;

@@ -23,10 +23,6 @@
 namespace canopy::bench {
 namespace {
 
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 double rssMiB() {
   long pages = 0, resident = 0;
   FILE* f = std::fopen("/proc/self/statm", "r");

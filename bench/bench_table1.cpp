@@ -25,13 +25,10 @@
 #include "render/canopy.h"
 #include "render/layer_layout.h"
 #include "tools/scene_generator.h"
+#include "tools/world_lock.h"
 
 namespace canopy::bench {
 namespace {
-
-double nowMs() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 struct Spread {
   double median = 0, p95 = 0, max = 0;
@@ -69,15 +66,11 @@ Status measure(Device& d, CanopyContext* ctx, rg::RenderGraph& g, GpuTimer& time
 
 // Share of pixels whose colour differs from the host's clear (the vegetation's coverage).
 Status coverage(Device& d, const HostTargets& host, uint32_t w, uint32_t h, double* share) {
-  std::vector<uint32_t> px(size_t(w) * h);
+  std::vector<uint8_t> px(size_t(w) * h * 4);
   CANOPY_TRY(readbackImage(d, host.color, 0, 4, px.data(), rg::stateOf(rg::Use::ColorAttachmentReadWrite)));
   size_t covered = 0;
-  // The host's clear colour in RGBA8 (bench_host.cpp clears to (0.45, 0.6, 0.8, 1)).
-  for (uint32_t v : px) {
-    const int r = int(v & 255u), gch = int((v >> 8) & 255u), b = int((v >> 16) & 255u);
-    covered += std::abs(r - 115) > 1 || std::abs(gch - 153) > 1 || std::abs(b - 204) > 1;
-  }
-  *share = double(covered) / double(px.size());
+  for (uint8_t m : coverageMask(px, w, h, kHostClearRgba8)) covered += m;
+  *share = double(covered) / double(size_t(w) * h);
   return Status();
 }
 

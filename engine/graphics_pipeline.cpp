@@ -76,8 +76,9 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
     std::vector<VkPipelineColorBlendAttachmentState> att(desc.colorFormats.size());
     for (size_t i = 0; i < att.size(); ++i) {
       att[i] = {};
-      att[i].colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                              VK_COLOR_COMPONENT_A_BIT;
+      att[i].colorWriteMask = desc.colorWrite ? VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT |
+                                                    VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT
+                                              : 0;
       if (i < desc.blendedAttachments && desc.blend == BlendMode::PremultipliedOver) {
         att[i].blendEnable = VK_TRUE;
         att[i].srcColorBlendFactor = VK_BLEND_FACTOR_ONE;

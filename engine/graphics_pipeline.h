@@ -36,6 +36,7 @@ struct GraphicsPipelineDesc {
   BlendMode blend = BlendMode::None;
   uint32_t blendedAttachments = 1;       // blend applies to colour attachments [0, this)
   bool depthTest = true, depthWrite = true;
+  bool colorWrite = true;                // false: colour write mask 0 on every attachment (a depth-only pass)
   VkCompareOp depthCompare = VK_COMPARE_OP_LESS;
   VkCullModeFlags cullMode = VK_CULL_MODE_NONE;
 };

@@ -287,6 +287,10 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
   // is bound at its own offset (render/mesh_chunks.h).
   auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
     const ModelMaterial& mat = lv.mesh.materials[c.material];
+    if (o.subset != MeshDrawOptions::Subset::All) {
+      const bool prepassed = mat.alphaMode != AlphaMode::Blend && (!part || part->weight >= 1.0f);
+      if (prepassed != (o.subset == MeshDrawOptions::Subset::DepthPrepassed)) return Status();
+    }
     auto textureOf = [&](int32_t image) -> const Image& { return image >= 0 ? lv.mesh.textures[size_t(image)] : lv.mesh.textures.back(); };
     const Image& tex = textureOf(mat.baseColorImage);
     gpu::LayerDrawPush push{};

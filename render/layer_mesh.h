@@ -69,6 +69,10 @@ struct MeshDrawOptions {
   VkDeviceSize frameOffset = 0;
   bool keepViewport = false;        // the caller has set viewport and scissor
   bool debugLevels = false;         // colour each part by its level (LayerDrawPush.lod.y)
+  // Shading once (docs/design.md "Layers: shading once"): the draws a depth pre-pass can hold
+  // (opaque and alpha-masked materials at full weight), the others (blended materials, parts
+  // fading towards their impostors), or every draw.
+  enum class Subset : uint8_t { All, DepthPrepassed, Rest } subset = Subset::All;
 };
 
 // Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh

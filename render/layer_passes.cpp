@@ -56,6 +56,20 @@ DrawTargets nextTargets(const LayeredVegetation& lv) {
           nullptr, lv.targets.next.backgroundColor.view, lv.targets.next.backgroundDepth.view};
 }
 
+// A layer or background draw, shaded once where the path has the pipelines and the settings ask
+// for it (docs/design.md "Layers: shading once"): the depth pre-pass, Habel's shading on the depth
+// it left, then what a pre-pass cannot hold (blended materials, parts fading towards their
+// impostors) the plain way, depth-tested against it.
+Status drawShaded(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& plain, const LayerPipelines::ShadeOnce& once,
+                  bool foliage, uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts, MeshDrawOptions o) {
+  if (!lv.settings.shadeOnce || !once.depth.pipeline) return drawMaterials(lv, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
+  o.subset = MeshDrawOptions::Subset::DepthPrepassed;
+  CANOPY_TRY(drawMaterials(lv, cmd, once.depth, foliage, passKind, target, parts, nullptr, &o));
+  CANOPY_TRY(drawMaterials(lv, cmd, once.shade, foliage, passKind, target, parts, nullptr, &o));
+  o.subset = MeshDrawOptions::Subset::Rest;
+  return drawMaterials(lv, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
+}
+
 Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
                      const std::vector<ChunkPart>* parts) {
   const uint32_t n = lv.settings.layout.count();
@@ -75,8 +89,9 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
       if (cut) CANOPY_TRY(recordImpostors(lv, cmd, false, i));
       const std::vector<ChunkPart>* drawn = cut ? &lv.visible.cutParts : parts;
       if (!cut || !lv.visible.cutParts.empty())
-        CANOPY_TRY(lv.pipelines.singlePass ? drawMaterials(lv, cmd, lv.pipelines.layered, true, LAYER_PASS_LAYERED, 0, drawn, nullptr, &o)
-                                 : drawMaterials(lv, cmd, lv.pipelines.perLayer, true, LAYER_PASS_ONE_LAYER, i, drawn, nullptr, &o));
+        CANOPY_TRY(lv.pipelines.singlePass
+                       ? drawShaded(lv, cmd, lv.pipelines.layered, lv.pipelines.layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
+                       : drawShaded(lv, cmd, lv.pipelines.perLayer, lv.pipelines.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
       return cut ? recordImpostors(lv, cmd, true, i) : Status();
     }));
   }
@@ -88,7 +103,7 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTa
   const VkRenderingAttachmentInfo color = attachment(t.backgroundColor, false, clear);
   const VkRenderingAttachmentInfo depth = attachment(t.backgroundDepth, true, clear);
   return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
-    return drawMaterials(lv, cmd, lv.pipelines.background, false, LAYER_PASS_BACKGROUND, 0, parts);
+    return drawShaded(lv, cmd, lv.pipelines.background, lv.pipelines.backgroundOnce, false, LAYER_PASS_BACKGROUND, 0, parts, {});
   });
 }
 

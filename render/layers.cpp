@@ -62,13 +62,30 @@ Status createTargets(LayeredVegetation& lv) {
   return createLayerTargets(lv);
 }
 
+// Shading once's pair for a draw path (docs/design.md "Layers: shading once"); `p`: the path's
+// plain pipeline. The same vertex shader in both, so the shading pass meets the pre-pass's depth
+// exactly (EQUAL).
+Status createShadeOnce(Device& d, GraphicsPipelineDesc p, LayerPipelines::ShadeOnce* out) {
+  p.fragmentShader = "layers_depth.frag";
+  p.colorWrite = false;
+  CANOPY_TRY(createGraphicsPipeline(d, p, &out->depth));
+  p.fragmentShader = "layers_shade_once.frag";
+  p.colorWrite = true;
+  p.depthWrite = false;
+  p.depthCompare = VK_COMPARE_OP_EQUAL;
+  return createGraphicsPipeline(d, p, &out->shade);
+}
+
 Status createPipelines(LayeredVegetation& lv) {
   Device& d = *lv.device;
   GraphicsPipelineDesc p = layerMeshPipelineDesc(lv.desc.colorFormat, kLayerDepthFormat);
   if (d.shaderClipDistance) {
     p.vertexShader = "layers_clip.vert";
     CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.background));
+    CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.backgroundOnce));
   }
+  // The id output (a test and debug view) writes every triangle's ids: shaded the plain way.
+  const bool once = !lv.desc.writeIds;
   if (lv.desc.writeIds) {
     p.colorFormats.push_back(kLayerIdsFormat);
     p.fragmentShader = "layers_ids.frag";
@@ -76,10 +93,12 @@ Status createPipelines(LayeredVegetation& lv) {
   if (d.shaderClipDistance) {
     p.vertexShader = "layers_clip.vert";
     CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.perLayer));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.perLayerOnce));
   }
   if (d.shaderOutputLayer) {
     p.vertexShader = "layers.vert";
     CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.layered));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.layeredOnce));
   }
   return Status();
 }
@@ -200,6 +219,10 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   destroyImpostors(lv);
   for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground})
     destroyGraphicsPipeline(d, *p);
+  for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce}) {
+    destroyGraphicsPipeline(d, o->depth);
+    destroyGraphicsPipeline(d, o->shade);
+  }
   destroyLayerMesh(lv);
   if (lv.pipelines.nearestSampler) d.vk.DestroySampler(d.device, lv.pipelines.nearestSampler, d.allocationCallbacks);
   destroyBuffer(d, lv.visible.frameBuffer);

@@ -71,6 +71,11 @@ struct LayeredVegetationDesc {
 // the cross-fade's.
 struct LayerPipelines {
   GraphicsPipeline layered, perLayer, background;
+  // Shading once (docs/design.md "Layers: shading once"): each path's depth pre-pass and its
+  // shading on the depth it left (EQUAL, early fragment tests); absent with the id output.
+  struct ShadeOnce {
+    GraphicsPipeline depth, shade;
+  } layeredOnce, perLayerOnce, backgroundOnce;
   GraphicsPipeline fade, fadeBackground;  // spread re-slicing only
   VkSampler nearestSampler = VK_NULL_HANDLE;  // the cross-fade's reads (texel fetches)
   bool singlePass = false;

@@ -25,10 +25,13 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
   const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
   const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size,
                                                         lv.visible.extent.known ? &lv.visible.extent : nullptr);
-  auto px = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("unbounded"); };
-  const std::string limit = " px (threshold " + std::to_string(s.errorThresholdPixels) + ")";
-  if (e.parallaxPx > s.errorThresholdPixels) return "reprojection error " + px(e.parallaxPx) + limit + ": parallax within the slabs";
-  if (e.outsidePx > s.errorThresholdPixels) return "reprojection error " + px(e.outsidePx) + limit + ": content beyond the layers";
+  // The message is built only for a re-slice (this runs every frame the camera moves).
+  auto over = [&](double v, const char* what) {
+    return "reprojection error " + (std::isfinite(v) ? std::to_string(v) : std::string("unbounded")) + " px (threshold " +
+           std::to_string(s.errorThresholdPixels) + "): " + what;
+  };
+  if (e.parallaxPx > s.errorThresholdPixels) return over(e.parallaxPx, "parallax within the slabs");
+  if (e.outsidePx > s.errorThresholdPixels) return over(e.outsidePx, "content beyond the layers");
   if (e.magnification > kMaxMagnification)
     return "layer texels magnified " + std::to_string(e.magnification) + "x (limit " + std::to_string(kMaxMagnification) + ")";
   if (e.turnDegrees > s.turnThresholdDegrees)
@@ -36,9 +39,6 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
            std::to_string(s.turnThresholdDegrees) + "): baked shading";
   return "";
 }
-
-using Clock = std::chrono::steady_clock;
-
 
 // The interval since the last view update tells what the last frame's layer work cost
 // (SliceRateControl); a drawing frame's triangles over its cost above the still baseline update

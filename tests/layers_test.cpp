@@ -328,6 +328,77 @@ TEST_F(LayersTest, SinglePassEqualsPerLayerDrawsPixelForPixel) {
   }
 }
 
+// Shading once (docs/design.md "Layers: shading once") changes which fragments are shaded, not
+// the layers: the depth pre-pass and the EQUAL shading give the plain draw's images on both draw
+// paths, for the leaf grid, the generated shrub (alpha-masked leaves, rigid branches) and a real
+// plant. Colour and depth by a metric (edges of coplanar leaves may resolve a tie the other way).
+TEST_F(LayersTest, ShadingOnceEqualsShadingEveryFragment) {
+  std::vector<std::pair<std::string, VegetationModel>> models;
+  models.push_back({"leaves", straddlingLeaves(12, 8, true)});
+  {
+    SceneDesc sd;
+    sd.kind = SceneKind::Shrub;
+    sd.faces = 20000;
+    sd.seed = 5;
+    sd.textureSize = 32;
+    VegetationModel shrub;
+    ASSERT_TRUE(generateScene(sd, &shrub).ok());
+    models.push_back({"shrub", std::move(shrub)});
+  }
+  const std::string plant = kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
+  if (std::filesystem::exists(plant)) {
+    VegetationModel m;
+    ASSERT_TRUE(loadGltf(plant, {}, &m).ok());
+    models.push_back({"plant", std::move(m)});
+  } else {
+    std::printf("[ note ] shared assets absent: the real-model part of this test is skipped\n");
+  }
+  for (auto& [name, m] : models) {
+    for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
+      const std::string what = "shade_once_" + name + (mode == LayerDrawMode::SinglePass ? "_single_pass" : "_per_layer");
+      SCOPED_TRACE(what);
+      LayeredVegetationDesc a = smallDesc();
+      a.writeIds = false;  // the id output is drawn the plain way
+      a.settings.draw = mode;
+      LayeredVegetationDesc b = a;
+      a.settings.shadeOnce = true;
+      b.settings.shadeOnce = false;
+      LayeredVegetation x, y;
+      ASSERT_TRUE(createLayeredVegetation(dev, m, a, &x).ok());
+      ASSERT_TRUE(createLayeredVegetation(dev, m, b, &y).ok());
+      ASSERT_NE(mode == LayerDrawMode::SinglePass ? x.pipelines.layeredOnce.shade.pipeline : x.pipelines.perLayerOnce.shade.pipeline,
+                VK_NULL_HANDLE);
+      const LayerView view = name == "leaves" ? frontView() : orbitView(m.boundsMin, m.boundsMax, 30, 15, 40, float(kW) / kH, 0.8f);
+      ASSERT_TRUE(renderOnce(dev, x, view).ok());
+      ASSERT_TRUE(renderOnce(dev, y, view).ok());
+      size_t covered = 0;
+      for (uint32_t l = 0; l < x.settings.layout.count(); ++l) {
+        std::vector<glm::vec4> ca, cb;
+        std::vector<float> da, db;
+        ASSERT_TRUE(readLayerColor(x, l, &ca).ok());
+        ASSERT_TRUE(readLayerColor(y, l, &cb).ok());
+        ASSERT_TRUE(readLayerDepth(x, l, &da).ok());
+        ASSERT_TRUE(readLayerDepth(y, l, &db).ok());
+        for (const glm::vec4& p : cb) covered += p.a > 0;
+        std::vector<glm::vec4> va(da.size()), vb(db.size());
+        for (size_t i = 0; i < da.size(); ++i) va[i] = glm::vec4(da[i]), vb[i] = glm::vec4(db[i]);
+        expectClose(ca, cb, 2e-3f, 0.002, what + "_colour_layer" + std::to_string(l));
+        expectClose(va, vb, 1e-6f, 0.002, what + "_depth_layer" + std::to_string(l));
+      }
+      EXPECT_GT(covered, size_t(kW) * kH / 50) << "the comparison must cover a real image";
+      if (x.mesh.hasRigid) {
+        std::vector<glm::vec4> ca, cb;
+        std::vector<float> da, db;
+        ASSERT_TRUE(readBackground(x, &ca, &da).ok());
+        ASSERT_TRUE(readBackground(y, &cb, &db).ok());
+        expectClose(ca, cb, 2e-3f, 0.002, what + "_background");
+      }
+      destroyLayeredVegetation(x);
+      destroyLayeredVegetation(y);
+    }
+  }
+}
+
 TEST_F(LayersWithoutGlLayerTest, FallbackIsChosenAutomaticallyAndKeepsLeavesWhole) {
   ASSERT_FALSE(dev.shaderOutputLayer);
   const VegetationModel m = straddlingLeaves(8, 6, false);

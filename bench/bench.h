@@ -70,6 +70,7 @@ struct CameraBenchOptions {
   uint32_t width = 1024, height = 768;
   float degreesPerFrame = 0.25f, radiiPerFrame = 0.005f, swingDegrees = 5.0f;  // tools/camera_paths.h
   float budgetMs = 4.0f;  // the policy side's LayerSettings.rebuildBudgetMs (0: re-slice at once)
+  float errorPixels = LayerSettings{}.errorThresholdPixels;  // the policy side's LayerSettings.errorThresholdPixels
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -42,7 +43,8 @@ struct Side {
     destroyHostTargets(d, host);
     destroyCanopy(ctx);
   }
-  Status init(const VegetationModel& model, uint32_t width, uint32_t height, ReslicePolicy policy, float budgetMs) {
+  Status init(const VegetationModel& model, uint32_t width, uint32_t height, ReslicePolicy policy, float budgetMs,
+              float errorPixels = LayerSettings{}.errorThresholdPixels) {
     w = width;
     h = height;
     CanopyDesc desc;
@@ -54,6 +56,7 @@ struct Side {
     p.simulation.wind.strength = 0.0f;  // both sides then differ only by the method
     p.layers.policy = policy;
     p.layers.rebuildBudgetMs = policy == ReslicePolicy::EveryFrame ? 0.0f : budgetMs;
+    p.layers.errorThresholdPixels = errorPixels;
     CANOPY_TRY(setCanopyParams(ctx, p));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
@@ -93,8 +96,9 @@ struct PathResult {
 
 int runCameraBench(Device& d, const CameraBenchOptions& o) {
   const uint8_t* clear = kHostClearRgba8;
-  char policy[64] = "at once";
+  char policy[128] = "at once";
   if (o.budgetMs > 0) std::snprintf(policy, sizeof policy, "spread over frames, %.1f ms budget", double(o.budgetMs));
+  std::snprintf(policy + std::strlen(policy), sizeof policy - std::strlen(policy), ", error threshold %g px", double(o.errorPixels));
   std::printf("\nMoving camera at %ux%u, 5(3-1-1), generated scene '%s', wind off: each path's %d frames drawn with the\n"
               "re-slicing policy (auto: %s) and re-sliced every frame (the reference), compared frame by frame\n"
               "(coverage IoU, silhouette distance in pixels, colour difference in 8-bit levels over covered pixels);\n"
@@ -131,7 +135,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       path.amplitudeDegrees = o.swingDegrees;
       // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
       Side autoSide(d), every(d);
-      s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs);
+      s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels);
       if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
       const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);
       for (int k = 0; k < 2 && s.ok(); ++k) {

@@ -9,7 +9,7 @@
 //   canopy-bench pervertex [--faces 80000,1000000,10000000] [--scene shrub] [--frames N] [--size WxH] [--csv FILE]
 //   canopy-bench impostors [--faces 10000000] [--scene field] [--rebuilds N] [--size WxH] [--images DIR]
 //   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
-//                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS]
+//                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS] [--reslice-error PX]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -44,7 +44,8 @@ static int usage(const char* why) {
                "                 the re-slicing policy (--budget MS spread, 0 at once) against re-slicing every frame,\n"
                "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"
                "                 (--faces default 80000, --frames default 60, --size default 1024x768;\n"
-               "                 --degrees-per-frame 0.25, --radii-per-frame 0.005, --swing 5: tools/camera_paths.h)\n"
+               "                 --degrees-per-frame 0.25, --radii-per-frame 0.005, --swing 5: tools/camera_paths.h;\n"
+               "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -134,6 +135,8 @@ int main(int argc, char** argv) {
         if (!ps.ok()) return usage(("--paths: " + ps.message()).c_str());
         cam.paths.push_back(m);
       }
+    } else if (a == "--reslice-error") {
+      if (!parseNumber(next(), 0, 1000, &cam.errorPixels)) return usage("--reslice-error needs pixels in [0, 1000]");
     } else if (a == "--degrees-per-frame") {
       if (!parseNumber(next(), -90, 90, &cam.degreesPerFrame)) return usage("--degrees-per-frame needs degrees in [-90, 90]");
     } else if (a == "--radii-per-frame") {

@@ -291,17 +291,37 @@ TEST_F(LayersTest, PerTriangleSlicingCutsTheSameLeaves) {
   destroyLayeredVegetation(lv);
 }
 
+namespace {
+// The models two draw ways are compared on: the leaf grid, the generated shrub when asked (alpha-
+// masked leaves, rigid branches) and the shared real plant when the assets are there (a note
+// otherwise); false when a model could not be made.
+bool comparisonModels(bool shrub, std::vector<std::pair<std::string, VegetationModel>>* models) {
+  models->push_back({"leaves", straddlingLeaves(12, 8, true)});
+  if (shrub) {
+    SceneDesc sd;
+    sd.kind = SceneKind::Shrub;
+    sd.faces = 20000;
+    sd.seed = 5;
+    sd.textureSize = 32;
+    VegetationModel m;
+    if (!generateScene(sd, &m).ok()) return false;
+    models->push_back({"shrub", std::move(m)});
+  }
+  const std::string plant = kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
+  if (!std::filesystem::exists(plant)) {
+    std::printf("[ note ] shared assets absent: the real-model part of this test is skipped\n");
+    return true;
+  }
+  VegetationModel m;
+  if (!loadGltf(plant, {}, &m).ok()) return false;
+  models->push_back({"plant", std::move(m)});
+  return true;
+}
+}  // namespace
+
 TEST_F(LayersTest, SinglePassEqualsPerLayerDrawsPixelForPixel) {
   std::vector<std::pair<std::string, VegetationModel>> models;
-  models.push_back({"leaves", straddlingLeaves(12, 8, true)});
-  const std::string plant = kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
-  if (std::filesystem::exists(plant)) {
-    VegetationModel m;
-    ASSERT_TRUE(loadGltf(plant, {}, &m).ok());
-    models.push_back({"plant", std::move(m)});
-  } else {
-    std::printf("[ note ] shared assets absent: the real-model half of this test is skipped\n");
-  }
+  ASSERT_TRUE(comparisonModels(false, &models));
   for (auto& [name, m] : models) {
     LayeredVegetationDesc a = smallDesc();
     a.settings.draw = LayerDrawMode::SinglePass;
@@ -334,25 +354,7 @@ TEST_F(LayersTest, SinglePassEqualsPerLayerDrawsPixelForPixel) {
 // plant. Colour and depth by a metric (edges of coplanar leaves may resolve a tie the other way).
 TEST_F(LayersTest, ShadingOnceEqualsShadingEveryFragment) {
   std::vector<std::pair<std::string, VegetationModel>> models;
-  models.push_back({"leaves", straddlingLeaves(12, 8, true)});
-  {
-    SceneDesc sd;
-    sd.kind = SceneKind::Shrub;
-    sd.faces = 20000;
-    sd.seed = 5;
-    sd.textureSize = 32;
-    VegetationModel shrub;
-    ASSERT_TRUE(generateScene(sd, &shrub).ok());
-    models.push_back({"shrub", std::move(shrub)});
-  }
-  const std::string plant = kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
-  if (std::filesystem::exists(plant)) {
-    VegetationModel m;
-    ASSERT_TRUE(loadGltf(plant, {}, &m).ok());
-    models.push_back({"plant", std::move(m)});
-  } else {
-    std::printf("[ note ] shared assets absent: the real-model part of this test is skipped\n");
-  }
+  ASSERT_TRUE(comparisonModels(true, &models));
   for (auto& [name, m] : models) {
     for (LayerDrawMode mode : {LayerDrawMode::SinglePass, LayerDrawMode::PerLayer}) {
       const std::string what = "shade_once_" + name + (mode == LayerDrawMode::SinglePass ? "_single_pass" : "_per_layer");

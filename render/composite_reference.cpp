@@ -103,6 +103,11 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           z = tex.depth(i, xn, yn);
         }
         if (c.a < COMPOSITE_MIN_ALPHA) continue;
+        if (reproject && bilinear) {
+          c = gpu::compositeSharpenEdge(c, glm::vec4(tex.color(i, x0, y0).a, tex.color(i, x0 + 1, y0).a, tex.color(i, x0, y0 + 1).a,
+                                                     tex.color(i, x0 + 1, y0 + 1).a));
+          if (c.a < COMPOSITE_MIN_ALPHA) continue;
+        }
         const float zSlice = z;
         glm::vec4 clip(0.0f);
         if (reproject) {

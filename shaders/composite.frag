@@ -126,6 +126,10 @@ void main() {
     vec3 uvw = vec3(q / size, float(i));
     vec4 c = texture(layerColor, uvw);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
+    if (reproject && bilinear) {
+      c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
+      if (c.a < COMPOSITE_MIN_ALPHA) continue;
+    }
     // Depth of the sample: the nearest texel of the footprint (bilinear reads four texels, and a
     // leaf edge must not be hidden because one of them is empty).
     float z;

@@ -79,6 +79,10 @@ void compositeTile(uvec2 tileEntry) {
     vec3 uvw = vec3(q / size, float(i));
     vec4 c = textureLod(layerColor, uvw, 0.0);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
+    if (reproject && bilinear) {
+      c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
+      if (c.a < COMPOSITE_MIN_ALPHA) continue;
+    }
     float z;
     if (bilinear) {
       vec4 z4 = textureGather(layerDepth, uvw, 0);

@@ -47,6 +47,8 @@
 #define COMPOSITE_MIN_ALPHA (1.0f / 4096.0f)
 // Accumulated alpha at which front-to-back compositing stops: what is behind adds < 1/1024.
 #define COMPOSITE_OPAQUE (1.0f - 1.0f / 1024.0f)
+// A footprint texel's alpha this close to 0 or 1 counts as empty or opaque (compositeSharpenEdge).
+#define COMPOSITE_EDGE_TOLERANCE (1.0f / 512.0f)
 
 CANOPY_NAMESPACE_BEGIN
 
@@ -104,6 +106,20 @@ CANOPY_INLINE vec4 compositeClipOf(mat4 toClip, vec2 s, float z, vec2 size) {
 CANOPY_INLINE float compositeClipDepth(vec4 c) { return c.z / c.w; }
 CANOPY_INLINE vec2 compositeClipPixel(vec4 c, vec2 size) {
   return vec2((c.x / c.w + 1.0f) * 0.5f * size.x, (c.y / c.w + 1.0f) * 0.5f * size.y);
+}
+
+// Reprojection resamples the layers at fractional texel positions (a still camera reads texel
+// centres), where bilinear filtering turns an alpha-tested leaf edge (texels of alpha 0 and 1)
+// into a faint ramp about a pixel wide that neither a still camera nor layers drawn at the new
+// camera have. Where the four footprint texels (alphas `a`) are each empty or opaque, the sample is
+// cut at alpha 1/2 — the edge at the sub-texel position the bilinear ramp puts it — and shown
+// opaque in the footprint's mean colour; footprints with partial alpha (blended materials, parts
+// fading to impostors, a cross-fade) keep the bilinear sample (docs/design.md "Layers:
+// reprojection", edges).
+CANOPY_INLINE vec4 compositeSharpenEdge(vec4 c, vec4 a) {
+  float partial = max(max(min(a.x, 1.0f - a.x), min(a.y, 1.0f - a.y)), max(min(a.z, 1.0f - a.z), min(a.w, 1.0f - a.w)));
+  if (partial > COMPOSITE_EDGE_TOLERANCE) return c;
+  return c.a >= 0.5f ? c / c.a : vec4(0.0f);
 }
 
 // Compute path: the tile list the classification appends to. The header doubles as the indirect

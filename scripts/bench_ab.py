@@ -1,12 +1,15 @@
 #!/usr/bin/env python3
-"""Two builds' `canopy-bench table1` alternated in one run (A B B A A B ..., so a drift of the
-machine falls on both alike), and each row's median frame time compared.
+"""Two builds' `canopy-bench table1` (or `camera`) alternated in one run (A B B A A B ..., so a
+drift of the machine falls on both alike), and each row's median frame time compared.
 
   python3 scripts/bench_ab.py OLD_BENCH NEW_BENCH [--pairs N] [--rows still] [-- table1 options]
+  python3 scripts/bench_ab.py OLD_BENCH NEW_BENCH --section camera [--pairs N] [-- camera options]
 
 Prints, per row (faces, layout, camera), the median over the runs of each build's row median, the
 ratio new/old and how many of the adjacent old/new pairs have the new build slower. Defaults:
-4 pairs, the still rows, `table1 --faces 80000 --frames 30 --json ''`.
+4 pairs, the still rows, `table1 --faces 80000 --frames 30 --json ''`. With `--section camera`
+the rows are each face count's still camera and each path's frame under the policy ("auto ms"),
+default `camera --faces 80000 --frames 20 --paths turn --budget 0`.
 """
 import argparse
 import re
@@ -15,23 +18,35 @@ import subprocess
 import sys
 
 ROW = re.compile(r"^\s+(\d+)\s+(\S+)\s+(still|orbit)\s+([\d.]+)\s")
+CAMERA_STILL = re.compile(r"^(\d+) faces: still camera ([\d.]+) ms")
+CAMERA_PATH = re.compile(r"^\s+(orbit|dolly|strafe|turn|zoom|walk)\s+([\d.]+)\s")
 
 
-def run(bench, extra):
-    out = subprocess.run([bench, "table1"] + extra, check=True, capture_output=True, text=True).stdout
+def run(bench, section, extra):
+    out = subprocess.run([bench, section] + extra, check=True, capture_output=True, text=True).stdout
     rows = {}
+    faces = "?"
     for line in out.splitlines():
-        m = ROW.match(line)
+        if section == "table1":
+            m = ROW.match(line)
+            if m:
+                rows[(m.group(1), m.group(2), m.group(3))] = float(m.group(4))
+            continue
+        m = CAMERA_STILL.match(line)
         if m:
-            rows[(m.group(1), m.group(2), m.group(3))] = float(m.group(4))
+            faces = m.group(1)
+            rows[(faces, "-", "still")] = float(m.group(2))
+        m = CAMERA_PATH.match(line)
+        if m:
+            rows[(faces, "-", m.group(1))] = float(m.group(2))
     if not rows:
-        sys.exit(f"bench_ab: no Table 1 rows in the output of {bench}")
+        sys.exit(f"bench_ab: no {section} rows in the output of {bench}")
     return rows
 
 
 def main():
     argv = sys.argv[1:]
-    extra = ["--faces", "80000", "--frames", "30", "--json", ""]
+    extra = None
     if "--" in argv:
         i = argv.index("--")
         argv, extra = argv[:i], argv[i + 1:]
@@ -40,12 +55,19 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--pairs", type=int, default=4)
     ap.add_argument("--rows", choices=["still", "orbit", "all"], default="still")
+    ap.add_argument("--section", choices=["table1", "camera"], default="table1")
     a = ap.parse_args(argv)
+    if a.section == "camera":
+        a.rows = "all"
+        if extra is None:
+            extra = ["--faces", "80000", "--frames", "20", "--paths", "turn", "--budget", "0"]
+    elif extra is None:
+        extra = ["--faces", "80000", "--frames", "30", "--json", ""]
     runs = {"old": [], "new": []}
     for p in range(a.pairs):
         order = ["old", "new"] if p % 2 == 0 else ["new", "old"]
         for which in order:
-            rows = run(a.old if which == "old" else a.new, extra)
+            rows = run(a.old if which == "old" else a.new, a.section, extra)
             runs[which].append(rows)
             shown = "  ".join(f"{k[1]} {k[2]} {v:.2f}" for k, v in rows.items() if a.rows in ("all", k[2]))
             print(f"pair {p + 1} {which}: {shown}", flush=True)

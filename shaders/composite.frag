@@ -83,6 +83,8 @@ void main() {
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
+  // The view's matrices read once, before the layer loop (as composite_tiles.comp; docs/performance.md).
+  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious;
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
     ivec2 is = ip;
     bool inside = true;
@@ -95,7 +97,7 @@ void main() {
     if (inside) {
       bg = texelFetch(backgroundColor, is, 0);
       bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
-      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(view.sliceToCurrent, vec2(is) + 0.5, bgZ, size));
+      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, bgZ, size));
     }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
@@ -142,7 +144,7 @@ void main() {
     vec4 clip = vec4(0.0);
     float zSlice = z;
     if (reproject) {
-      clip = compositeClipOf(view.sliceToCurrent, s, z, size);
+      clip = compositeClipOf(toCurrent, s, z, size);
       z = compositeClipDepth(clip);
     }
     if (z >= opaqueZ) continue;
@@ -159,7 +161,7 @@ void main() {
       if ((pc.flags & COMPOSITE_MOTION_VALID) != 0u) {
         vec2 dPrev = displacementAt(i * corners, g, true);
         motion = reproject ? compositeClipPixel(clip, size) -
-                                 compositeClipPixel(compositeClipOf(view.sliceToPrevious, s - d + dPrev, zSlice, size), size)
+                                 compositeClipPixel(compositeClipOf(toPrevious, s - d + dPrev, zSlice, size), size)
                            : d - dPrev;
       }
     }

@@ -24,7 +24,7 @@ layout(binding = 8, scalar) readonly buffer ViewBuf { CompositeView view; };  //
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 // One listed tile: its pixel at this invocation.
-void compositeTile(uvec2 tileEntry) {
+void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
   uvec2 tile = uvec2(compositeTileX(tileEntry.x), compositeTileY(tileEntry.x));
   uint mask = tileEntry.y;
   ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
@@ -49,7 +49,7 @@ void compositeTile(uvec2 tileEntry) {
     if (inside) {
       bg = texelFetch(backgroundColor, is, 0);
       bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
-      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(view.sliceToCurrent, vec2(is) + 0.5, bgZ, size));
+      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, bgZ, size));
     }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
@@ -93,7 +93,7 @@ void compositeTile(uvec2 tileEntry) {
     vec4 clip = vec4(0.0);
     float zSlice = z;
     if (reproject) {
-      clip = compositeClipOf(view.sliceToCurrent, s, z, size);
+      clip = compositeClipOf(toCurrent, s, z, size);
       z = compositeClipDepth(clip);
     }
     if (z >= opaqueZ) continue;
@@ -105,7 +105,7 @@ void compositeTile(uvec2 tileEntry) {
       // displacement then, dd.zw, and the previous camera); zw = xy when that frame is not valid.
       if (reproject && (pc.flags & COMPOSITE_MOTION_VALID) != 0u)
         motion = compositeClipPixel(clip, size) -
-                 compositeClipPixel(compositeClipOf(view.sliceToPrevious, s - dd.xy + dd.zw, zSlice, size), size);
+                 compositeClipPixel(compositeClipOf(toPrevious, s - dd.xy + dd.zw, zSlice, size), size);
       else
         motion = dd.xy - dd.zw;
     }
@@ -122,6 +122,9 @@ void compositeTile(uvec2 tileEntry) {
 // A workgroup takes tilesPerGroup consecutive entries of the list: on CPU devices each workgroup
 // launch has a fixed cost that one 8x8 tile does not amortise (CompositorDesc.tilesPerGroup).
 void main() {
+  // The view's matrices read once per invocation, not in the layer loop: lavapipe reloads them lane
+  // by lane for every layer visited otherwise (docs/performance.md, "What a reprojected frame costs").
+  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious;
   uint first = gl_WorkGroupID.x * pc.tilesPerGroup, end = min(first + pc.tilesPerGroup, header.instanceCount);
-  for (uint k = first; k < end; ++k) compositeTile(tiles[k]);
+  for (uint k = first; k < end; ++k) compositeTile(tiles[k], toCurrent, toPrevious);
 }

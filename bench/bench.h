@@ -38,7 +38,7 @@ struct Table1Options {
   int frames = 30;
   int pairFrames = 150;  // frames per context in the alternated face-count comparison
   uint32_t width = 1024, height = 768;
-  float orbitDegrees = 1.0f;  // camera turn per frame in the orbit rows
+  float orbitDegrees = 0.25f;  // camera turn per frame in the orbit and every-frame rows (issue 34: 0.25)
   bool series = false;
   std::string csvDir;         // series CSV files (empty: none)
   std::string json = "bench_table1.json";
@@ -71,6 +71,8 @@ struct CameraBenchOptions {
   float degreesPerFrame = 0.25f, radiiPerFrame = 0.005f, swingDegrees = 5.0f;  // tools/camera_paths.h
   float budgetMs = 4.0f;  // the policy side's LayerSettings.rebuildBudgetMs (0: re-slice at once)
   float errorPixels = LayerSettings{}.errorThresholdPixels;  // the policy side's LayerSettings.errorThresholdPixels
+  std::string csvPath;    // per-frame rows (faces, path, frame, both frame times, re-slice, world-lock error); "" none
+  bool crossFade = true;  // the cross-fade's coverage at one camera (a light change, a layout change)
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -83,6 +84,74 @@ struct Side {
   }
 };
 
+// The alpha channel of a readback: with the host's clear alpha 0 it is what Canopy's premultiplied
+// "over" left there, the vegetation's (and trunks') coverage. Mean alpha, and the share of pixels
+// with alpha >= 1/2.
+struct Coverage {
+  double meanAlpha = 0, covered = 0;
+};
+Coverage coverageOf(const std::vector<uint8_t>& rgba) {
+  Coverage c;
+  const size_t n = rgba.size() / 4;
+  for (size_t i = 0; i < n; ++i) {
+    c.meanAlpha += rgba[4 * i + 3] / 255.0;
+    c.covered += rgba[4 * i + 3] >= 128 ? 1.0 : 0.0;
+  }
+  c.meanAlpha /= double(std::max<size_t>(n, 1));
+  c.covered /= double(std::max<size_t>(n, 1));
+  return c;
+}
+
+// A spread re-slice at one camera fades the new set in (docs/design.md "Layers: spread
+// re-slicing", the cross-fade): the coverage of every frame from the change until the re-slice has
+// ended, against the old set's (the frame before) and the new set's (settled after). `change`
+// alters the parameters: a light change keeps each leaf in its layer, a layout of the same layer
+// count moves leaves between layers.
+struct FadeResult {
+  std::string change;
+  Coverage before, after, lowest;  // lowest: the minimum over the frames of the re-slice, each figure alone
+  uint32_t fadeFrames = 0, frames = 0;
+  double stillMs = 0, fadeMs = 0;  // medians: the frames before the change, the fade's blend frames
+};
+Status measureCrossFade(Device& d, const VegetationModel& model, const CameraBenchOptions& o, const std::string& change,
+                        const std::function<void(CanopyParams&)>& alter, FadeResult* out) {
+  Side side(d);
+  // The fade does not depend on how fast the slices before it were drawn: a large budget keeps the
+  // run short at any face count.
+  CANOPY_TRY(side.init(model, o.width, o.height, ReslicePolicy::OnViewChange, std::max(o.budgetMs, 100.0f)));
+  const LayerView view = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, float(o.width) / float(o.height), 0);
+  std::vector<uint8_t> px;
+  double ms = 0;
+  std::vector<double> still, fade;
+  for (int i = 0; i < 8; ++i) {
+    CANOPY_TRY(side.frame(view, &ms, &px));
+    if (i >= 2) still.push_back(ms);
+  }
+  *out = FadeResult{};
+  out->change = change;
+  out->before = coverageOf(px);
+  out->lowest = out->before;
+  CanopyParams p = canopyParams(side.ctx);
+  alter(p);
+  CANOPY_TRY(setCanopyParams(side.ctx, p));
+  for (int i = 0; i < 100000; ++i) {
+    CANOPY_TRY(side.frame(view, &ms, &px));
+    const CanopyStats st = canopyStats(side.ctx);
+    const Coverage c = coverageOf(px);
+    out->lowest.meanAlpha = std::min(out->lowest.meanAlpha, c.meanAlpha);
+    out->lowest.covered = std::min(out->lowest.covered, c.covered);
+    out->frames++;
+    if (st.layers.spreadPhase == 3) out->fadeFrames++;
+    if (st.layers.spreadPhase == 3 && st.layers.crossFade > 0.0f && st.layers.crossFade < 1.0f) fade.push_back(ms);
+    if (st.layers.spreadPhase == 0) break;
+  }
+  for (int i = 0; i < 2; ++i) CANOPY_TRY(side.frame(view, &ms, &px));
+  out->after = coverageOf(px);
+  out->stillMs = quantile(still, 0.5);
+  out->fadeMs = quantile(fade, 0.5);
+  return Status();
+}
+
 struct PathResult {
   std::string name;
   std::vector<double> autoMs, everyMs;
@@ -104,6 +173,21 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
               "(coverage IoU, silhouette distance in pixels, colour difference in 8-bit levels over covered pixels);\n"
               "frame times are wall clock, submit to fence, ms.\n",
               o.width, o.height, o.scene.c_str(), o.frames, policy);
+  FILE* csv = nullptr;
+  if (!o.csvPath.empty()) {
+    csv = std::fopen(o.csvPath.c_str(), "w");
+    if (!csv) {
+      std::fprintf(stderr, "canopy-bench: cannot write %s\n", o.csvPath.c_str());
+      return 1;
+    }
+    std::fprintf(csv, "faces,path,frame,auto_ms,every_ms,reslices,iou,sil_mean_px,sil_p99_px,colour_mean,depth_iou\n");
+  }
+  struct CsvCloser {
+    FILE* f;
+    ~CsvCloser() {
+      if (f) std::fclose(f);
+    }
+  } closer{csv};
   for (uint64_t faces : o.faces) {
     SceneDesc sd;
     sd.faces = faces;
@@ -120,7 +204,9 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       for (int i = 0; i < o.frames + 2 && s.ok(); ++i) {
         double ms = 0;
         s = still.frame(view0, &ms, nullptr);
-        if (i >= 2) stillMs.push_back(ms);
+        if (i < 2) continue;
+        stillMs.push_back(ms);
+        if (csv) std::fprintf(csv, "%llu,still,%d,%.3f,%.3f,0,1,0,0,0,1\n", (unsigned long long)faces, i - 2, ms, ms);
       }
     }
     std::vector<PathResult> results;
@@ -146,6 +232,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       const uint32_t before = s.ok() ? uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) : 0;
       std::vector<uint8_t> a, b, ca, cb;
       double silSum = 0;
+      uint32_t lastRebuilds = before;
       for (int i = 0; i < o.frames && s.ok(); ++i) {
         const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
         double ma = 0, mb = 0;
@@ -154,6 +241,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
         if (!s.ok()) break;
         r.autoMs.push_back(ma);
         r.everyMs.push_back(mb);
+        const uint32_t rebuilds = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds);
         const WorldLockError e = compareFrames(a, b, o.width, o.height, clear);
         if (i == 0 || e.coverageIoU < r.worst.coverageIoU) r.worst.coverageIoU = e.coverageIoU;
         r.worst.silhouetteMeanPx = std::max(r.worst.silhouetteMeanPx, e.silhouetteMeanPx);
@@ -165,10 +253,27 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
         if (i == 0 || z.coverageIoU < r.worstDepth.coverageIoU) r.worstDepth.coverageIoU = z.coverageIoU;
         r.worstDepth.silhouetteMeanPx = std::max(r.worstDepth.silhouetteMeanPx, z.silhouetteMeanPx);
         r.worstDepth.silhouetteP99Px = std::max(r.worstDepth.silhouetteP99Px, z.silhouetteP99Px);
+        if (csv)
+          std::fprintf(csv, "%llu,%s,%d,%.3f,%.3f,%u,%.5f,%.4f,%.4f,%.3f,%.5f\n", (unsigned long long)faces, r.name.c_str(), i, ma,
+                       mb, rebuilds - lastRebuilds, e.coverageIoU, e.silhouetteMeanPx, e.silhouetteP99Px, e.colourMean,
+                       z.coverageIoU);
+        lastRebuilds = rebuilds;
       }
       if (s.ok()) r.reslices = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds) - before;
       r.silhouetteMeanAvg = silSum / std::max(1.0, double(r.autoMs.size()));
       results.push_back(r);
+    }
+    std::vector<FadeResult> fades;
+    if (o.crossFade && s.ok()) {
+      const std::pair<std::string, std::function<void(CanopyParams&)>> changes[] = {
+          {"light turned 60 deg", [](CanopyParams& p) { p.layers.lightDirection = Float3{-0.6f, 0.7f, 0.4f}; }},
+          {"layout 5(3-1-1) -> 5(1-1-3)", [](CanopyParams& p) { (void)parseLayerLayout("5(1-1-3)", &p.layers.layout); }},
+      };
+      for (const auto& [name, alter] : changes) {
+        FadeResult f;
+        if (s.ok()) s = measureCrossFade(d, model, o, name, alter, &f);
+        fades.push_back(f);
+      }
     }
     if (!s.ok()) {
       std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
@@ -187,6 +292,19 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
                   quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
                   em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
                   r.worst.silhouetteP99Px, r.worstDepth.coverageIoU, r.worstDepth.silhouetteMeanPx);
+    }
+    if (!fades.empty()) {
+      std::printf("\n  Cross-fade at one camera (spread re-slice, %u frames of fade): coverage of each frame of the re-slice\n"
+                  "  against the old and the new set (mean alpha; covered = alpha >= 1/2), the lowest frame over the smaller set\n",
+                  LayerSettings{}.crossFadeFrames);
+      std::printf("  %-30s %6s %5s %9s %9s %9s %9s %9s %9s %9s %9s %8s %8s\n", "change", "frames", "fade", "alpha old", "new",
+                  "lowest", "/smaller", "cov. old", "new", "lowest", "/smaller", "still ms", "fade ms");
+      for (const FadeResult& f : fades) {
+        const double sa = std::min(f.before.meanAlpha, f.after.meanAlpha), sc = std::min(f.before.covered, f.after.covered);
+        std::printf("  %-30s %6u %5u %9.5f %9.5f %9.5f %9.4f %9.5f %9.5f %9.5f %9.4f %8.2f %8.2f\n", f.change.c_str(), f.frames,
+                    f.fadeFrames, f.before.meanAlpha, f.after.meanAlpha, f.lowest.meanAlpha, f.lowest.meanAlpha / std::max(sa, 1e-12),
+                    f.before.covered, f.after.covered, f.lowest.covered, f.lowest.covered / std::max(sc, 1e-12), f.stillMs, f.fadeMs);
+      }
     }
   }
   return 0;

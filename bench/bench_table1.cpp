@@ -273,9 +273,9 @@ int runTable1Bench(Device& d, const Table1Options& o) {
   std::printf("\nTable 1 (paper: GTX 275, simulation on the CPU) at %ux%u, generated scene '%s'; whole frame =\n"
               "simulation step (N = 64, dt = 1/30 s) + dynamics + warp + composite, wall clock minus the host's clear;\n"
               "median / p95 / max of %d frames recorded without timestamp queries (per-pass figures come from as many\n"
-              "other frames with them). Orbit: the camera turns %.1f degrees per frame, re-slicing by the policy\n"
-              "(LayerSettings defaults: reprojected between re-slices, re-sliced at once when the estimated error passes\n"
-              "1 px); every-frame: the same orbit re-sliced every frame,\n"
+              "other frames with them). Orbit, the moving camera: it turns %.2f degrees per frame and the layers are\n"
+              "reprojected between re-slices chosen by their error (LayerSettings defaults: at once when the estimated\n"
+              "error passes 1 px); every-frame: the same orbit re-sliced every frame,\n"
               "the paper's measurement as we read it, the only rows its FPS is printed beside (at its 80K and 50M faces).\n"
               "Coverage: share of pixels the vegetation changes.\n\n",
               o.width, o.height, o.scene.c_str(), o.frames, o.orbitDegrees);

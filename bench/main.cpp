@@ -10,6 +10,7 @@
 //   canopy-bench impostors [--faces 10000000] [--scene field] [--rebuilds N] [--size WxH] [--images DIR]
 //   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
 //                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS] [--reslice-error PX]
+//                [--csv FILE] [--no-cross-fade]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -45,11 +46,13 @@ static int usage(const char* why) {
                "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"
                "                 (--faces default 80000, --frames default 60, --size default 1024x768;\n"
                "                 --degrees-per-frame 0.25, --radii-per-frame 0.005, --swing 5: tools/camera_paths.h;\n"
-               "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1)\n"
+               "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1;\n"
+               "                 --csv FILE: a row per frame; then the cross-fade's coverage at one camera, a light and a\n"
+               "                 layout change, unless --no-cross-fade)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
-               "  --orbit DEG    table1: camera turn per frame in the orbit rows, (0, 90] (default 1)\n"
+               "  --orbit DEG    table1: camera turn per frame in the orbit rows, (0, 90] (default 0.25)\n"
                "  --series       table1: scaling series (faces, layers 1..9, resolution); --csv-dir DIR writes CSVs\n"
                "  --series-faces table1: the face-count series (default 80000,1000000,10000000)\n"
                "  --json FILE    table1: where the JSON goes ('' for none)\n"
@@ -141,6 +144,8 @@ int main(int argc, char** argv) {
       if (!parseNumber(next(), -90, 90, &cam.degreesPerFrame)) return usage("--degrees-per-frame needs degrees in [-90, 90]");
     } else if (a == "--radii-per-frame") {
       if (!parseNumber(next(), 0, 10, &cam.radiiPerFrame)) return usage("--radii-per-frame needs radii in [0, 10]");
+    } else if (a == "--no-cross-fade") {
+      cam.crossFade = false;
     } else if (a == "--swing") {
       if (!parseNumber(next(), 0, 80, &cam.swingDegrees)) return usage("--swing needs degrees in [0, 80]");
     }
@@ -289,6 +294,7 @@ int main(int argc, char** argv) {
     cam.width = t1.width;
     cam.height = t1.height;
     if (budgetGiven) cam.budgetMs = budgetMs;
+    cam.csvPath = csvPath;
     rc = bench::runCameraBench(dev, cam);
   }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);

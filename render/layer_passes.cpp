@@ -117,9 +117,12 @@ bool sliceHas(const LayeredVegetation& lv, bool foliage) {
 
 // A cross-fade step before the last (shared/layers.h LayerFadePush): the visible layers' colours
 // (and the background's) with a weight this frame blended towards the next set inside
-// layerFootprint. Only colour: the composite reads depth where a layer is opaque enough, and the
-// old depth for a few frames is cheaper than a depth pass per layer (with gl_FragDepth, ~15 ms a
-// layer at 1024x768 on lavapipe).
+// layerFootprint. A layer's depth becomes the nearer of the two sets' at its first blend (one depth
+// pass per layer and fade, not per step): the composite tests each layer's depth against the
+// scene, so a leaf the new settings put in another layer, whose texels were empty in the old set,
+// would otherwise stay hidden until the last step while the old copy fades out (see-through
+// leaves; canopy-bench camera's cross-fade column). The background keeps its depth: rigid parts
+// are drawn the same by both sets at one camera.
 Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   Device& d = *lv.device;
   const VkRect2D rect = layerFootprint(lv);
@@ -148,9 +151,33 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
     d.cmdEndRendering(cmd);
     return s;
   };
+  auto mergeDepth = [&](uint32_t layer) -> Status {
+    VkRenderingAttachmentInfo z = attachment(lv.targets.depthLayerViews[layer], true, false);
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = rect;
+    ri.layerCount = 1;
+    ri.pDepthAttachment = &z;
+    d.cmdBeginRendering(cmd, &ri);
+    gpu::LayerFadePush push{};
+    push.layer = layer;
+    push.weight = 1.0f;
+    Status s = bindGraphics(d, cmd, lv.pipelines.fadeDepth,
+                            {bindImage(lv.targets.next.depth.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, lv.pipelines.nearestSampler)}, push);
+    if (s.ok()) {
+      setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+      d.vk.CmdSetScissor(cmd, 0, 1, &rect);
+      d.vk.CmdDraw(cmd, 3, 1, 0, 0);
+    }
+    d.cmdEndRendering(cmd);
+    return s;
+  };
   const std::vector<float>& w = lv.reslice.spread.fadeWeights;
+  const std::vector<uint8_t>& merge = lv.reslice.spread.fadeMergeDepth;
   const uint32_t n = lv.settings.layout.count();
-  for (uint32_t i = 0; i < n; ++i) CANOPY_TRY(step(lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
+  for (uint32_t i = 0; i < n; ++i) {
+    CANOPY_TRY(step(lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
+    if (i < merge.size() && merge[i]) CANOPY_TRY(mergeDepth(i));
+  }
   if (!lv.mesh.hasRigid) return Status();  // both backgrounds stay cleared
   return step(lv.pipelines.fadeBackground, lv.targets.backgroundColor.view, lv.targets.next.backgroundColor, 0, w[n]);
 }
@@ -268,6 +295,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
       return p->reslice.fadePending && !p->reslice.spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();
     });
     blend.read(nextColor, rg::Use::FragmentSampled).write(r.color, rg::Use::ColorAttachmentReadWrite);
+    blend.read(nextDepth, rg::Use::FragmentSampled).write(r.depth, rg::Use::DepthAttachmentWrite);
     blend.when([p] { return p->reslice.fadePending && !p->reslice.spread.fadeCopy; });
     if (rigid) blend.read(nextBgColor, rg::Use::FragmentSampled).write(r.backgroundColor, rg::Use::ColorAttachmentReadWrite);
     g.addPass("layers: cross-fade (last step)", [p](rg::PassContext& c) {

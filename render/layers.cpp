@@ -51,7 +51,14 @@ Status createFadePipelines(LayeredVegetation& lv) {
   p.fragmentShader = "layers_fade.frag";
   CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fade));
   p.fragmentShader = "layers_fade_bg.frag";
-  return createGraphicsPipeline(d, p, &lv.pipelines.fadeBackground);
+  CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fadeBackground));
+  GraphicsPipelineDesc z;
+  z.pushConstantSize = sizeof(gpu::LayerFadePush);
+  z.depthFormat = kLayerDepthFormat;
+  z.depthTest = z.depthWrite = true;  // LESS: the nearer of the visible and the new depth
+  z.vertexShader = "layers_fade.vert";
+  z.fragmentShader = "layers_fade_depth.frag";
+  return createGraphicsPipeline(d, z, &lv.pipelines.fadeDepth);
 }
 
 
@@ -217,7 +224,8 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   Device& d = *lv.device;
   destroyLayerTargets(lv);
   destroyImpostors(lv);
-  for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground})
+  for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground,
+                             &lv.pipelines.fadeDepth})
     destroyGraphicsPipeline(d, *p);
   for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce}) {
     destroyGraphicsPipeline(d, o->depth);

@@ -218,6 +218,7 @@ Status advanceSpread(LayeredVegetation& lv) {
       sp.fadeStep++;
       sp.fadeCopy = sp.fadeStep >= f;
       sp.fadeWeights.assign(n + 1, 0.0f);
+      sp.fadeMergeDepth.assign(n, 0);
       if (!sp.fadeCopy) {
         for (uint32_t i = 0; i <= n; ++i) {
           const bool alternate = blends >= 2;
@@ -226,6 +227,7 @@ Status advanceSpread(LayeredVegetation& lv) {
           // Image i blends at frames k with k + i even: its j-th blend is at k = 2j - (i odd).
           const uint32_t j = !alternate ? sp.fadeStep : (sp.fadeStep + i % 2) / 2;
           sp.fadeWeights[i] = 1.0f / float(h + 2 - std::min(j, h));
+          if (i < n && j == 1) sp.fadeMergeDepth[i] = 1;
         }
       }
       const float share = float(sp.fadeStep) / float(f);

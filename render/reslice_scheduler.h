@@ -35,6 +35,7 @@ struct SpreadRebuild {
   bool immediate = false;
   std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
                                        // background; 0: not blended this frame
+  std::vector<uint8_t> fadeMergeDepth; // per layer: its first blend, which takes the nearer depth
   std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
 };
 

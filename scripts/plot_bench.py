@@ -10,7 +10,14 @@ median (line) and p95 (shaded up to it) against face count, layer count and pixe
     /usr/bin/python3 scripts/plot_bench.py --pervertex CSV OUT_PNG [TITLE]
 
 draws canopy-bench pervertex's CSV (--csv): the 2D method (still and turning camera) and the
-per-vertex baseline against face count, and the baseline / 2D ratios."""
+per-vertex baseline against face count, and the baseline / 2D ratios.
+
+    /usr/bin/python3 scripts/plot_bench.py --camera CSV OUT_PNG [TITLE]
+
+draws canopy-bench camera's per-frame CSV (--csv): per face count and path, the frame time along the
+path with the layers reprojected and re-sliced by their error (re-slice frames marked) and re-sliced
+every frame, beside the still camera's median; below, the world-lock error of each frame against the
+every-frame reference (coverage IoU and mean silhouette distance)."""
 import csv
 import sys
 
@@ -63,7 +70,55 @@ def plot_pervertex(path, out, title):
     print("wrote", out)
 
 
+def plot_camera(path, out, title):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    faces = sorted({int(r["faces"]) for r in rows})
+    paths = [p for p in dict.fromkeys(r["path"] for r in rows) if p != "still"]
+    fig, axes = plt.subplots(2, len(faces), figsize=(5.6 * len(faces), 6.4), dpi=100, squeeze=False)
+    for col, n in enumerate(faces):
+        ax, ex = axes[0][col], axes[1][col]
+        still = sorted(float(r["auto_ms"]) for r in rows if int(r["faces"]) == n and r["path"] == "still")
+        if still:
+            ax.axhline(still[len(still) // 2], color="black", lw=1.0, label="still camera (median)")
+        iou_ax = ex.twinx()
+        for k, name in enumerate(paths):
+            pr = [r for r in rows if int(r["faces"]) == n and r["path"] == name]
+            if not pr:
+                continue
+            color = "C%d" % k
+            x = [int(r["frame"]) for r in pr]
+            ax.plot(x, [float(r["auto_ms"]) for r in pr], color=color, lw=1.2, label=name + ": reprojected, re-sliced by error")
+            ax.plot(x, [float(r["every_ms"]) for r in pr], color=color, lw=0.8, ls="--", label=name + ": re-sliced every frame")
+            rx = [int(r["frame"]) for r in pr if int(r["reslices"]) > 0]
+            ax.plot(rx, [float(r["auto_ms"]) for r in pr if int(r["reslices"]) > 0], "o", color=color, ms=3)
+            ex.plot(x, [float(r["sil_mean_px"]) for r in pr], color=color, lw=1.2, label=name + ": silhouette mean, px")
+            iou_ax.plot(x, [float(r["iou"]) for r in pr], color=color, lw=0.8, ls=":", label=name + ": coverage IoU")
+        ax.set_yscale("log")
+        ax.set_xlabel("frame along the path")
+        ax.set_ylabel("frame, ms (wall, log; dots: re-slices)")
+        ax.set_title("%s, %d faces: frame time" % (title, n), fontsize=9)
+        ax.grid(True, alpha=0.3, which="both")
+        ax.legend(fontsize=6)
+        ex.set_xlabel("frame along the path")
+        ex.set_ylabel("silhouette mean, px (solid)")
+        ex.set_ylim(bottom=0)
+        iou_ax.set_ylabel("coverage IoU (dotted)")
+        iou_ax.set_ylim(0.9, 1.0)
+        ex.set_title("%s, %d faces: world-lock error against re-slicing every frame" % (title, n), fontsize=9)
+        ex.grid(True, alpha=0.3)
+        h1, l1 = ex.get_legend_handles_labels()
+        h2, l2 = iou_ax.get_legend_handles_labels()
+        ex.legend(h1 + h2, l1 + l2, fontsize=6, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(out)
+    print("wrote", out)
+
+
 def main():
+    if len(sys.argv) >= 4 and sys.argv[1] == "--camera":
+        plot_camera(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "canopy-bench camera")
+        return
     if len(sys.argv) >= 4 and sys.argv[1] == "--pervertex":
         plot_pervertex(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "canopy-bench pervertex")
         return

@@ -37,6 +37,7 @@ struct Host {
   uint32_t w = 0, h = 0;
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
   Image color, depth;
+  glm::vec4 clear = kSky;  // with alpha 0 the target's alpha after Canopy's passes is its coverage
 
   Status create(Device& d, uint32_t width, uint32_t height, VkFormat format) {
     dev = &d;
@@ -66,7 +67,7 @@ struct Host {
     const auto d = g.importImage("host depth", descOf(depth), {}, depthW);
     g.addPass("host clear", [&](rg::PassContext& x) {
        VkClearColorValue cv{};
-       std::memcpy(cv.float32, &kSky, sizeof kSky);
+       for (int k = 0; k < 4; ++k) cv.float32[k] = clear[k];
        const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1}, dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
        vkCmdClearColorImage(x.cmd, x.image(c).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
        VkClearDepthStencilValue dv{1.0f, 0};
@@ -716,6 +717,78 @@ TEST_F(CanopyTest, SpreadReslicingKeepsAnimatingAsTheCpuReferenceDoes) {
   p.layers.crossFadeFrames = 500;
   s = setCanopyParams(ctx, p);
   EXPECT_NE(s.message().find("crossFadeFrames"), std::string::npos) << s.message();
+  host.destroy();
+  destroyCanopy(ctx);
+}
+
+// Issue 34: a cross-fade at one camera never lowers the coverage below the smaller set's. A layout
+// of the same layer count moves leaves between layers; each layer's depth takes the nearer of the
+// two sets' at its first blend, so the new copy of a moved leaf passes the composite's depth test
+// while the old copy fades out (without it, covered pixels fell to about half during the fade).
+// Bounds: covered (alpha >= 1/2) >= 99 % of the smaller set's (a partial edge texel blended half
+// and half may fall under 1/2), mean alpha >= 3/4 of the smaller set's (an opaque leaf in two
+// layers at shares s and 1 - s composes to 1 - s (1 - s) >= 3/4).
+TEST_F(CanopyTest, CrossFadeNeverLowersCoverageBelowTheSmallerSet) {
+  const uint32_t w = 128, h = 96;
+  const VegetationModel model = makeLeafCloud(600, 3, true);
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
+  ASSERT_TRUE(s.ok()) << s.message();
+  CanopyParams p = canopyParams(ctx);
+  p.simulation.wind.strength = 0.0f;
+  p.layers.rebuildBudgetMs = 0.5f;
+  p.layers.crossFadeFrames = 8;
+  ASSERT_TRUE(parseLayerLayout("5(3-1-1)", &p.layers.layout).ok());
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  host.clear = glm::vec4(0.0f);
+  ASSERT_TRUE(host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT).ok());
+  CanopyFrame f;
+  f.camera = toCamera(cameraFor(model, w, h, 20.0f));
+  struct Coverage {
+    double covered = 0, alpha = 0;
+  };
+  auto coverage = [&](Coverage* c) {
+    std::vector<glm::vec4> color;
+    std::vector<float> depth;
+    ASSERT_TRUE(host.read(&color, &depth).ok());
+    *c = Coverage{};
+    for (const glm::vec4& v : color) {
+      c->covered += v.a >= 0.5f ? 1.0 : 0.0;
+      c->alpha += v.a;
+    }
+  };
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(host.frame(ctx, f).ok());
+  Coverage before, after, lowest;
+  coverage(&before);
+  ASSERT_GT(before.covered, 300.0);
+  std::vector<glm::vec4> oldColor, newColor;
+  std::vector<float> z;
+  ASSERT_TRUE(host.read(&oldColor, &z).ok());
+  lowest = before;
+  ASSERT_TRUE(parseLayerLayout("5(1-1-3)", &p.layers.layout).ok());
+  ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+  int fadeFrames = 0;
+  for (int i = 0; i < 10000; ++i) {
+    ASSERT_TRUE(host.frame(ctx, f).ok());
+    const CanopyStats st = canopyStats(ctx);
+    Coverage c;
+    coverage(&c);
+    fadeFrames += st.layers.spreadPhase == 3 && st.layers.crossFade > 0.0f && st.layers.crossFade < 1.0f;
+    lowest.covered = std::min(lowest.covered, c.covered);
+    lowest.alpha = std::min(lowest.alpha, c.alpha);
+    if (st.layers.spreadPhase == 0) break;
+  }
+  EXPECT_EQ(fadeFrames, 7) << "crossFadeFrames - 1 blend frames, then the copy";
+  ASSERT_TRUE(host.frame(ctx, f).ok());
+  coverage(&after);
+  ASSERT_TRUE(host.read(&newColor, &z).ok());
+  float changed = 0;
+  for (size_t i = 0; i < oldColor.size(); ++i) changed = std::max(changed, maxDiff(oldColor[i], newColor[i]));
+  EXPECT_GT(changed, 0.05f) << "the new layout changes the picture (leaves moved between layers)";
+  const double smallerCovered = std::min(before.covered, after.covered), smallerAlpha = std::min(before.alpha, after.alpha);
+  EXPECT_GE(lowest.covered, 0.99 * smallerCovered) << "covered pixels: before " << before.covered << ", after " << after.covered;
+  EXPECT_GE(lowest.alpha, 0.75 * smallerAlpha) << "summed alpha: before " << before.alpha << ", after " << after.alpha;
   host.destroy();
   destroyCanopy(ctx);
 }

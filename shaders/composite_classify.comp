@@ -41,11 +41,9 @@ bool layerBounds(uint plane, vec2 lo, vec2 hi, out vec2 slo, out vec2 shi) {
   slo = vec2(1e30);
   shi = vec2(-1e30);
   uint b = 3u * plane;
-  // The plane's rows read once, not per corner (a CPU driver reloads them lane by lane in the loop).
-  vec4 r0 = view.homography[b], r1 = view.homography[b + 1u], r2 = view.homography[b + 2u];
   for (uint k = 0u; k < 4u; ++k) {
     vec2 p = vec2((k & 1u) != 0u ? hi.x : lo.x, (k & 2u) != 0u ? hi.y : lo.y);
-    vec3 h = compositeHomogeneous(r0, r1, r2, p);
+    vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
     if (h.z <= 0.0) return false;
     slo = min(slo, h.xy / h.z);
     shi = max(shi, h.xy / h.z);

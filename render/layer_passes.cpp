@@ -117,7 +117,8 @@ bool sliceHas(const LayeredVegetation& lv, bool foliage) {
 
 // A cross-fade step before the last (shared/layers.h LayerFadePush): the visible layers' colours
 // (and the background's) with a weight this frame blended towards the next set inside
-// layerFootprint. A layer's depth becomes the nearer of the two sets' at its first blend (one depth
+// layerFootprint — laid over the visible image in an image's first half of blends, mixed towards
+// the new one in its second (render/reslice_scheduler.cpp, the weights). A layer's depth becomes the nearer of the two sets' at its first blend (one depth
 // pass per layer and fade, not per step): the composite tests each layer's depth against the
 // scene, so a leaf the new settings put in another layer, whose texels were empty in the old set,
 // would otherwise stay hidden until the last step while the old copy fades out (see-through
@@ -145,7 +146,7 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
     if (s.ok()) {
       setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
       d.vk.CmdSetScissor(cmd, 0, 1, &rect);
-      d.vk.CmdSetBlendConstants(cmd, constants);
+      if (&pipe == &lv.pipelines.fade || &pipe == &lv.pipelines.fadeBackground) d.vk.CmdSetBlendConstants(cmd, constants);
       d.vk.CmdDraw(cmd, 3, 1, 0, 0);
     }
     d.cmdEndRendering(cmd);
@@ -173,13 +174,16 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   };
   const std::vector<float>& w = lv.reslice.spread.fadeWeights;
   const std::vector<uint8_t>& merge = lv.reslice.spread.fadeMergeDepth;
+  const std::vector<uint8_t>& over = lv.reslice.spread.fadeOver;
   const uint32_t n = lv.settings.layout.count();
+  auto laidOver = [&](uint32_t image) { return image < over.size() && over[image] != 0; };
   for (uint32_t i = 0; i < n; ++i) {
-    CANOPY_TRY(step(lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
+    CANOPY_TRY(step(laidOver(i) ? lv.pipelines.fadeOver : lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
     if (i < merge.size() && merge[i]) CANOPY_TRY(mergeDepth(i));
   }
   if (!lv.mesh.hasRigid) return Status();  // both backgrounds stay cleared
-  return step(lv.pipelines.fadeBackground, lv.targets.backgroundColor.view, lv.targets.next.backgroundColor, 0, w[n]);
+  return step(laidOver(n) ? lv.pipelines.fadeOverBackground : lv.pipelines.fadeBackground, lv.targets.backgroundColor.view,
+              lv.targets.next.backgroundColor, 0, w[n]);
 }
 
 // The last cross-fade step: the next set copied whole into the visible one, colour and depth.

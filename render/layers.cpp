@@ -52,6 +52,10 @@ Status createFadePipelines(LayeredVegetation& lv) {
   CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fade));
   p.fragmentShader = "layers_fade_bg.frag";
   CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fadeBackground));
+  p.blend = BlendMode::PremultipliedOver;  // the same shader output, new * w, laid over the visible
+  CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fadeOverBackground));
+  p.fragmentShader = "layers_fade.frag";
+  CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.fadeOver));
   GraphicsPipelineDesc z;
   z.pushConstantSize = sizeof(gpu::LayerFadePush);
   z.depthFormat = kLayerDepthFormat;
@@ -225,7 +229,7 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   destroyLayerTargets(lv);
   destroyImpostors(lv);
   for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground,
-                             &lv.pipelines.fadeDepth})
+                             &lv.pipelines.fadeDepth, &lv.pipelines.fadeOver, &lv.pipelines.fadeOverBackground})
     destroyGraphicsPipeline(d, *p);
   for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce}) {
     destroyGraphicsPipeline(d, o->depth);

@@ -77,6 +77,7 @@ struct LayerPipelines {
     GraphicsPipeline depth, shade;
   } layeredOnce, perLayerOnce, backgroundOnce;
   GraphicsPipeline fade, fadeBackground;  // spread re-slicing only
+  GraphicsPipeline fadeOver, fadeOverBackground;  // the cross-fade's first half: the new set laid over
   GraphicsPipeline fadeDepth;             // the cross-fade's depth merge (nearer of the two sets)
   VkSampler nearestSampler = VK_NULL_HANDLE;  // the cross-fade's reads (texel fetches)
   bool singlePass = false;

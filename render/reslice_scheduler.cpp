@@ -207,9 +207,12 @@ Status advanceSpread(LayeredVegetation& lv) {
         break;
       }
       // F frames: F - 1 blend frames, then a copy of the next set (depth included). Each frame blends
-      // every other image (layers and background alternate), which halves a blend frame's cost; an
-      // image blended H times before the copy takes weight 1 / (H + 2 - j) at its j-th blend, so its
-      // new share is j / (H + 1) and the copy ends it at 1.
+      // every other image (layers and background alternate), which halves a blend frame's cost. An
+      // image blended H times lays the new set over the old in its first I = ceil(H / 2) blends
+      // (weight 1 / (I + 1 - j) at its j-th: the new set's opaque texels are in whole after the I-th)
+      // and mixes towards the new set in the rest (1 / (H + 1 - j): the old set's own texels fade
+      // out). A leaf the new set draws in another layer is thus whole in one of the two layers in
+      // every frame: the coverage never dips (docs/design.md, the cross-fade).
       // Sets drawn from two cameras are not blended texel by texel (their texels hold different
       // points): the composite shows the visible set reprojected to the current camera, and the next
       // set replaces it in one copy (docs/design.md "Layers: reprojection", the refresh).
@@ -219,6 +222,7 @@ Status advanceSpread(LayeredVegetation& lv) {
       sp.fadeCopy = sp.fadeStep >= f;
       sp.fadeWeights.assign(n + 1, 0.0f);
       sp.fadeMergeDepth.assign(n, 0);
+      sp.fadeOver.assign(n + 1, 0);
       if (!sp.fadeCopy) {
         for (uint32_t i = 0; i <= n; ++i) {
           const bool alternate = blends >= 2;
@@ -226,7 +230,9 @@ Status advanceSpread(LayeredVegetation& lv) {
           const uint32_t h = !alternate ? blends : (i % 2 == 0 ? blends / 2 : (blends + 1) / 2);
           // Image i blends at frames k with k + i even: its j-th blend is at k = 2j - (i odd).
           const uint32_t j = !alternate ? sp.fadeStep : (sp.fadeStep + i % 2) / 2;
-          sp.fadeWeights[i] = 1.0f / float(h + 2 - std::min(j, h));
+          const uint32_t jj = std::min(j, h), in = (h + 1) / 2;
+          sp.fadeOver[i] = jj <= in;
+          sp.fadeWeights[i] = jj <= in ? 1.0f / float(in + 1 - jj) : 1.0f / float(h + 1 - jj);
           if (i < n && j == 1) sp.fadeMergeDepth[i] = 1;
         }
       }

@@ -36,6 +36,8 @@ struct SpreadRebuild {
   std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
                                        // background; 0: not blended this frame
   std::vector<uint8_t> fadeMergeDepth; // per layer: its first blend, which takes the nearer depth
+  std::vector<uint8_t> fadeOver;       // per image: this blend lays the new set over the old (the
+                                       // fade's first half), else mixes towards it (the second)
   std::vector<LayerInfo> fadeFrom;     // the visible placement when the fade started
 };
 

@@ -724,10 +724,10 @@ TEST_F(CanopyTest, SpreadReslicingKeepsAnimatingAsTheCpuReferenceDoes) {
 // Issue 34: a cross-fade at one camera never lowers the coverage below the smaller set's. A layout
 // of the same layer count moves leaves between layers; each layer's depth takes the nearer of the
 // two sets' at its first blend, so the new copy of a moved leaf passes the composite's depth test
-// while the old copy fades out (without it, covered pixels fell to about half during the fade).
-// Bounds: covered (alpha >= 1/2) >= 99 % of the smaller set's (a partial edge texel blended half
-// and half may fall under 1/2), mean alpha >= 3/4 of the smaller set's (an opaque leaf in two
-// layers at shares s and 1 - s composes to 1 - s (1 - s) >= 3/4).
+// (without it, covered pixels fell to 80 % here), and the new set is laid over the old before the
+// old set's own texels fade out, so the leaf is whole in one of its two layers in every frame (a
+// plain mix composed 1 - s (1 - s) there). Bounds: covered pixels (alpha >= 1/2) and summed alpha
+// each >= 99 % of the smaller set's (half-float rounding and partial edge texels).
 TEST_F(CanopyTest, CrossFadeNeverLowersCoverageBelowTheSmallerSet) {
   const uint32_t w = 128, h = 96;
   const VegetationModel model = makeLeafCloud(600, 3, true);
@@ -788,7 +788,7 @@ TEST_F(CanopyTest, CrossFadeNeverLowersCoverageBelowTheSmallerSet) {
   EXPECT_GT(changed, 0.05f) << "the new layout changes the picture (leaves moved between layers)";
   const double smallerCovered = std::min(before.covered, after.covered), smallerAlpha = std::min(before.alpha, after.alpha);
   EXPECT_GE(lowest.covered, 0.99 * smallerCovered) << "covered pixels: before " << before.covered << ", after " << after.covered;
-  EXPECT_GE(lowest.alpha, 0.75 * smallerAlpha) << "summed alpha: before " << before.alpha << ", after " << after.alpha;
+  EXPECT_GE(lowest.alpha, 0.99 * smallerAlpha) << "summed alpha: before " << before.alpha << ", after " << after.alpha;
   host.destroy();
   destroyCanopy(ctx);
 }

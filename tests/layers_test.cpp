@@ -669,14 +669,19 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
         EXPECT_NEAR(x.visible.layers[0].slab.depth, glm::mix(oldLayers[0].slab.depth, y.visible.layers[0].slab.depth, t), 1e-4f);
       }
       if (k == 2) {
-        // Image i has had floor((k + (i odd)) / 2) of its H + 1 steps (H = blends of its parity):
-        // colour = mix(old, new, j / (H + 1)) up to half-float rounding.
+        // Image i has had j = floor((k + (i odd)) / 2) of its H blends (H = blends of its parity):
+        // the first I = ceil(H / 2) lay the new set over the old with weight 1 / (I + 1 - b), the
+        // rest mix towards it with 1 / (H + 1 - b); up to half-float rounding.
         readAll(x, &mid);
         for (uint32_t l = 0; l < n; ++l) {
-          const uint32_t blends = kFade - 1, h = l % 2 == 0 ? blends / 2 : (blends + 1) / 2, j = (k + l % 2) / 2;
-          const float share = float(j) / float(h + 1);
-          std::vector<glm::vec4> expect(oldColor[l].size());
-          for (size_t p = 0; p < expect.size(); ++p) expect[p] = glm::mix(oldColor[l][p], newColor[l][p], share);
+          const uint32_t blends = kFade - 1, h = l % 2 == 0 ? blends / 2 : (blends + 1) / 2, j = (k + l % 2) / 2, in = (h + 1) / 2;
+          std::vector<glm::vec4> expect = oldColor[l];
+          for (uint32_t b = 1; b <= j; ++b)
+            for (size_t p = 0; p < expect.size(); ++p) {
+              const glm::vec4 nc = newColor[l][p];
+              expect[p] = b <= in ? nc / float(in + 1 - b) + expect[p] * (1.0f - nc.a / float(in + 1 - b))
+                                  : glm::mix(expect[p], nc, 1.0f / float(h + 1 - b));
+            }
           expectClose(mid[l], expect, 4e-3f, 0.0, what + "_fade_layer" + std::to_string(l));
         }
       }

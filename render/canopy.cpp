@@ -503,7 +503,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's
     // direction comes from the simulation plane, fixed as the 2D method fixes it.
     fixPlane(*c, standardView(*c, f.camera));
-    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, c->params, c->plane, f.camera, f.dt));
+    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, c->params, c->plane, f.camera, f.dt, f.cameraCut));
     c->cut = f.cameraCut;
     c->layersRebuilt = false;
     c->frames++;

@@ -154,7 +154,7 @@ void destroyPerVertex(PerVertexAnimation& pv) {
 }
 
 Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
-                        const SimulationPlane& plane, const CanopyCamera& camera, float dt) {
+                        const SimulationPlane& plane, const CanopyCamera& camera, float dt, bool cut) {
   if (!pv.device) return Status::error("per-vertex baseline: not created (CanopyDesc.allowPerVertex)");
   const double before = pv.time;
   pv.time += dt;
@@ -172,6 +172,9 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.current.targetSize = glm::vec2(float(pv.desc.width), float(pv.desc.height));
   pv.current.flags = (pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u) |
                      (pv.desc.motionFormat != VK_FORMAT_UNDEFINED ? BEND_FLAG_PREVIOUS : 0u);
+  const glm::mat4 viewProj = view.proj * view.view;
+  pv.current.previousViewProj = pv.frames > 0 && !cut ? pv.lastViewProj : viewProj;
+  pv.lastViewProj = viewProj;
   pv.current.branchCount = pv.branchCount;
   pv.current.tipCount = pv.branchCount + pv.leafCount;
   pv.frames++;

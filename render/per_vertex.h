@@ -33,6 +33,7 @@ struct PerVertexAnimation {
   gpu::BendFrame current{};
   double time = 0.0;   // the baseline's own clock, s (advanced by CanopyFrame.dt)
   uint64_t frames = 0;
+  glm::mat4 lastViewProj{1.0f};  // the camera of the frame before (motion vectors)
 };
 
 // Checks PerVertexParams' ranges; the message names the field and its range.
@@ -53,9 +54,10 @@ void destroyPerVertex(PerVertexAnimation& pv);
 // trunk: the vertical through the bounds' centre, from their bottom).
 gpu::BendFrame makeBendFrame(const PerVertexParams& params, const WindParams& wind, const SimulationPlane& plane,
                              const glm::vec3& boundsMin, const glm::vec3& boundsMax, float time, float previousTime);
-// Advances the clock by dt and fills this frame's constants (camera, light, bend frame).
+// Advances the clock by dt and fills this frame's constants (camera, light, bend frame); `cut`: the
+// camera jumped (CanopyFrame.cameraCut), so the motion vectors carry no camera motion this frame.
 Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
-                        const SimulationPlane& plane, const CanopyCamera& camera, float dt);
+                        const SimulationPlane& plane, const CanopyCamera& camera, float dt, bool cut);
 // "per-vertex: constants", "per-vertex: branch motion" (the motion table) and "per-vertex: draw"
 // (into the host's colour and depth, and motion).
 Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::RenderGraph& graph,

@@ -7,8 +7,8 @@
 #include "per_vertex_common.glsl"
 
 #ifdef PER_VERTEX_MOTION
-// Object motion in pixels, this frame's position minus last frame's under this frame's camera (the
-// 2D method's convention: warp displacement now minus before).
+// Screen-space motion in pixels: this frame's position under this frame's camera minus last frame's
+// position under last frame's camera (the bend's motion and the camera's; a TAA host needs both).
 layout(location = 4) out vec2 vMotion;
 #endif
 
@@ -38,7 +38,7 @@ void main() {
   vec3 n0 = n;
   vec3 before = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, 1u), bv, leaf, lr.position, rest,
                           bf.previousTime, n0);
-  vec4 c0 = f.viewProj * vec4(before, 1.0);
+  vec4 c0 = bf.previousViewProj * vec4(before, 1.0);
   vMotion = (gl_Position.xy / gl_Position.w - c0.xy / c0.w) * 0.5 * bf.targetSize;
 #endif
 }

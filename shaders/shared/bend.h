@@ -75,8 +75,11 @@ struct BendFrame {
   // many at the previous frame's.
   uint branchCount;
   uint tipCount;
+  // The previous frame's camera (projection x view; this frame's on the first frame and after a
+  // camera cut): motion vectors carry the camera's motion as well as the bend's (issue 34).
+  mat4 previousViewProj;
 };
-CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16)
+CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 64)
 
 // One rest vertex for the probe kernel (shaders/per_vertex_probe.comp; tests).
 #define BEND_NO_LEAF 0xffffffffu

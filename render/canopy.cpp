@@ -426,6 +426,10 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
         // motion vectors against a displacement from before the switch.
         requestReslice(c->layers, "animation mode", true);
         c->last = gpu::AnimFrame{};
+      } else {
+        // To the baseline: its last frame's camera and time are from before the switch, so its
+        // first frame carries no motion (as after a camera cut).
+        c->perVertex.frames = 0;
       }
     }
     if (p.customPlane) {

@@ -118,8 +118,9 @@ bool sliceHas(const LayeredVegetation& lv, bool foliage) {
 // A cross-fade step before the last (shared/layers.h LayerFadePush): the visible layers' colours
 // (and the background's) with a weight this frame blended towards the next set inside
 // layerFootprint — laid over the visible image in an image's first half of blends, mixed towards
-// the new one in its second (render/reslice_scheduler.cpp, the weights). A layer's depth becomes the nearer of the two sets' at its first blend (one depth
-// pass per layer and fade, not per step): the composite tests each layer's depth against the
+// the new one in its second (render/reslice_scheduler.cpp, the weights). A layer's depth becomes
+// the nearer of the two sets' at its first blend (one depth pass per layer and fade, not per
+// step): the composite tests each layer's depth against the
 // scene, so a leaf the new settings put in another layer, whose texels were empty in the old set,
 // would otherwise stay hidden until the last step while the old copy fades out (see-through
 // leaves; canopy-bench camera's cross-fade column). The background keeps its depth: rigid parts
@@ -128,7 +129,10 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   Device& d = *lv.device;
   const VkRect2D rect = layerFootprint(lv);
   if (rect.extent.width == 0 || rect.extent.height == 0) return Status();
-  auto step = [&](const GraphicsPipeline& pipe, VkImageView color, const Image& newColor, uint32_t layer, float w) -> Status {
+  // `over`: the premultiplied "over" pipeline (no blend constant), else the constant mix.
+  auto step = [&](bool over, const GraphicsPipeline& mixPipe, const GraphicsPipeline& overPipe, VkImageView color,
+                  const Image& newColor, uint32_t layer, float w) -> Status {
+    const GraphicsPipeline& pipe = over ? overPipe : mixPipe;
     if (w <= 0.0f) return Status();
     const float constants[4] = {0.0f, 0.0f, 0.0f, w};
     VkRenderingAttachmentInfo c = attachment(color, false, false);
@@ -146,7 +150,7 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
     if (s.ok()) {
       setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
       d.vk.CmdSetScissor(cmd, 0, 1, &rect);
-      if (&pipe == &lv.pipelines.fade || &pipe == &lv.pipelines.fadeBackground) d.vk.CmdSetBlendConstants(cmd, constants);
+      if (!over) d.vk.CmdSetBlendConstants(cmd, constants);
       d.vk.CmdDraw(cmd, 3, 1, 0, 0);
     }
     d.cmdEndRendering(cmd);
@@ -178,11 +182,11 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
   const uint32_t n = lv.settings.layout.count();
   auto laidOver = [&](uint32_t image) { return image < over.size() && over[image] != 0; };
   for (uint32_t i = 0; i < n; ++i) {
-    CANOPY_TRY(step(laidOver(i) ? lv.pipelines.fadeOver : lv.pipelines.fade, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
+    CANOPY_TRY(step(laidOver(i), lv.pipelines.fade, lv.pipelines.fadeOver, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
     if (i < merge.size() && merge[i]) CANOPY_TRY(mergeDepth(i));
   }
   if (!lv.mesh.hasRigid) return Status();  // both backgrounds stay cleared
-  return step(laidOver(n) ? lv.pipelines.fadeOverBackground : lv.pipelines.fadeBackground, lv.targets.backgroundColor.view,
+  return step(laidOver(n), lv.pipelines.fadeBackground, lv.pipelines.fadeOverBackground, lv.targets.backgroundColor.view,
               lv.targets.next.backgroundColor, 0, w[n]);
 }
 

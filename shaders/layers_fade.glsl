@@ -1,8 +1,9 @@
 // Cross-fade step of a spread re-slice (shared/layers.h LayerFadePush; docs/design.md "Layers:
-// spread re-slicing"). The pipeline blends source + destination * (1 - weight), so the colour
-// written is the new layer's premultiplied colour already weighted. Depth is not blended: the
-// visible depth stays the old set's until the last step, which copies the new set whole
-// (render/layers.cpp recordFadeCopy).
+// spread re-slicing"). The colour written is the new layer's premultiplied colour already
+// weighted; the pipeline lays it over the visible one (an image's first half of blends) or adds it
+// to destination * (1 - weight) (the second half). Depth is not blended: layers_fade_depth.frag
+// takes the nearer of the two sets' at a layer's first blend, and the last step copies the new set
+// whole (render/layer_passes.cpp recordFadeCopy).
 #include "shared/layers.h"
 
 #ifdef CANOPY_FADE_BACKGROUND

@@ -43,6 +43,7 @@ struct Table1Options {
   std::string csvDir;         // series CSV files (empty: none)
   std::string json = "bench_table1.json";
   uint64_t deviceMemoryBudget = CanopyDesc{}.deviceMemoryBudget;  // CanopyDesc.deviceMemoryBudget (0: none)
+  float guardBand = CanopyDesc{}.guardBand;  // CanopyDesc.guardBand of every row
 };
 int runTable1Bench(Device& dev, const Table1Options& options);
 
@@ -73,6 +74,7 @@ struct CameraBenchOptions {
   float errorPixels = LayerSettings{}.errorThresholdPixels;  // the policy side's LayerSettings.errorThresholdPixels
   std::string csvPath;    // per-frame rows (faces, path, frame, both frame times, re-slice, world-lock error); "" none
   bool crossFade = true;  // the cross-fade's coverage at one camera (a light change, a layout change)
+  float guardBand = CanopyDesc{}.guardBand;  // the policy side's CanopyDesc.guardBand (the every-frame side: 0)
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 

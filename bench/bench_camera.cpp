@@ -45,12 +45,13 @@ struct Side {
     destroyCanopy(ctx);
   }
   Status init(const VegetationModel& model, uint32_t width, uint32_t height, ReslicePolicy policy, float budgetMs,
-              float errorPixels = LayerSettings{}.errorThresholdPixels) {
+              float errorPixels = LayerSettings{}.errorThresholdPixels, float guardBand = 0.0f) {
     w = width;
     h = height;
     CanopyDesc desc;
     desc.width = w;
     desc.height = h;
+    desc.guardBand = guardBand;
     CANOPY_TRY(createCanopy(d, model, desc, &ctx));
     CanopyParams p = canopyParams(ctx);
     CANOPY_TRY(parseLayerLayout("5(3-1-1)", &p.layers.layout));
@@ -118,7 +119,7 @@ Status measureCrossFade(Device& d, const VegetationModel& model, const CameraBen
   Side side(d);
   // The fade does not depend on how fast the slices before it were drawn: a large budget keeps the
   // run short at any face count.
-  CANOPY_TRY(side.init(model, o.width, o.height, ReslicePolicy::OnViewChange, std::max(o.budgetMs, 100.0f)));
+  CANOPY_TRY(side.init(model, o.width, o.height, ReslicePolicy::OnViewChange, std::max(o.budgetMs, 100.0f), o.errorPixels, o.guardBand));
   const LayerView view = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, float(o.width) / float(o.height), 0);
   std::vector<uint8_t> px;
   double ms = 0;
@@ -165,9 +166,10 @@ struct PathResult {
 
 int runCameraBench(Device& d, const CameraBenchOptions& o) {
   const uint8_t* clear = kHostClearRgba8;
-  char policy[128] = "at once";
+  char policy[192] = "at once";
   if (o.budgetMs > 0) std::snprintf(policy, sizeof policy, "spread over frames, %.1f ms budget", double(o.budgetMs));
-  std::snprintf(policy + std::strlen(policy), sizeof policy - std::strlen(policy), ", error threshold %g px", double(o.errorPixels));
+  std::snprintf(policy + std::strlen(policy), sizeof policy - std::strlen(policy), ", error threshold %g px, guard band %g",
+                double(o.errorPixels), double(o.guardBand));
   std::printf("\nMoving camera at %ux%u, 5(3-1-1), generated scene '%s', wind off: each path's %d frames drawn with the\n"
               "re-slicing policy (auto: %s) and re-sliced every frame (the reference), compared frame by frame\n"
               "(coverage IoU, silhouette distance in pixels, colour difference in 8-bit levels over covered pixels);\n"
@@ -200,7 +202,12 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
     const LayerView view0 = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, aspect, 0);
     {
       Side still(d);
-      if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs);
+      if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
+      if (s.ok()) {
+        const LayerStats st = canopyStats(still.ctx).layers;
+        std::printf("%llu faces: layer images %ux%u, the output and a guard band of %u x %u px on each side\n",
+                    (unsigned long long)faces, st.layerWidth, st.layerHeight, st.guardX, st.guardY);
+      }
       for (int i = 0; i < o.frames + 2 && s.ok(); ++i) {
         double ms = 0;
         s = still.frame(view0, &ms, nullptr);
@@ -221,7 +228,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       path.amplitudeDegrees = o.swingDegrees;
       // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
       Side autoSide(d), every(d);
-      s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels);
+      s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
       if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
       const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);
       for (int k = 0; k < 2 && s.ok(); ++k) {

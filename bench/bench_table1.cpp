@@ -146,6 +146,7 @@ struct Bench {
     desc.height = h;
     desc.maxLayers = CANOPY_MAX_LAYERS;  // the layer series goes to 9
     desc.deviceMemoryBudget = o.deviceMemoryBudget;
+    desc.guardBand = o.guardBand;
     CANOPY_TRY(createCanopy(d, model, desc, &ctx));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     CANOPY_TRY(timer.init(d, 64));

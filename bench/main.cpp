@@ -53,6 +53,8 @@ static int usage(const char* why) {
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
                "  --orbit DEG    table1: camera turn per frame in the orbit rows, (0, 90] (default 0.25)\n"
+               "  --guard-band F table1, camera: CanopyDesc.guardBand, [0, 0.5] (default 0.1; camera: the policy side,\n"
+               "                 the every-frame side has none)\n"
                "  --series       table1: scaling series (faces, layers 1..9, resolution); --csv-dir DIR writes CSVs\n"
                "  --series-faces table1: the face-count series (default 80000,1000000,10000000)\n"
                "  --json FILE    table1: where the JSON goes ('' for none)\n"
@@ -198,6 +200,10 @@ int main(int argc, char** argv) {
         return usage("--size needs WxH, each in [16, 8192]");
       t1.width = w;
       t1.height = h;
+    } else if (a == "--guard-band") {
+      float g = 0.0f;
+      if (!parseNumber(next(), 0, 0.5, &g)) return usage("--guard-band needs a fraction in [0, 0.5]");
+      t1.guardBand = cam.guardBand = g;
     } else if (a == "--orbit") {
       const char* v = next();
       char* end = nullptr;

@@ -86,6 +86,7 @@ void printHelp() {
       "  --reslice MODE      auto (re-slice by the policy) or every-frame (the reference a moving camera's\n"
       "                      frames are measured against) (default auto)\n"
       "%s"
+      "%s"
       "  --compare-frames A B  the world-lock error of folder A's frame_NNNN.png against folder B's (coverage\n"
       "                      IoU, silhouette distance, colour; tools/world_lock.h), then exit\n"
       "%s"
@@ -127,6 +128,7 @@ void printHelp() {
       mirrored("--leaf-transmission T", "LayerSettings.leafTransmission", d.leafTransmission).c_str(), d.width, d.height,
       d.frames, d.warmupSeconds, d.fps, d.orbitDegrees,
       mirrored("--reslice-error PX", "LayerSettings.errorThresholdPixels", d.resliceErrorPixels).c_str(),
+      mirrored("--guard-band F", "CanopyDesc.guardBand", d.guardBand).c_str(),
       mirrored("--rebuild-budget MS", "LayerSettings.rebuildBudgetMs", d.rebuildBudgetMs).c_str(), d.deviceBudgetMiB,
       d.ringMiB, d.outDir.c_str());
   std::printf("Caches of a --gltf model (leaf roots, impostor views; docs/design.md \"Files\"):\n%s", cli::cacheHelp());
@@ -171,6 +173,7 @@ const NumberOption kNumberOptions[] = {
     {"--swing", 0, 80, &Options::swingDegrees, "a number"},
     {"--rebuild-budget", 0, 0, &Options::rebuildBudgetMs, "a number", "LayerSettings.rebuildBudgetMs"},
     {"--reslice-error", 0, 0, &Options::resliceErrorPixels, "a number", "LayerSettings.errorThresholdPixels"},
+    {"--guard-band", 0, 0, &Options::guardBand, "a number", "CanopyDesc.guardBand"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
 };
@@ -622,6 +625,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.cacheMaxBytes = uint64_t(o.cache.maxMiB) << 20;
   desc.split = o.split;
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
+  desc.guardBand = o.guardBand;
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
   desc.allowPerVertex = bothMethods(o);
   desc.impostors.enable = withImpostors(o);

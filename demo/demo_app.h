@@ -70,6 +70,7 @@ struct Options {
   std::string compareA, compareB;      // --compare-frames: two output folders measured against each other
   float resliceErrorPixels = 1.0f;     // LayerSettings.errorThresholdPixels: the reprojection error that re-slices
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
+  float guardBand = 0.1f;              // CanopyDesc.guardBand: the layers reach this fraction beyond each edge
   float deviceBudgetMiB = 1536.0f;     // CanopyDesc.deviceMemoryBudget (0: no limit)
   float ringMiB = 64.0f;               // CanopyDesc.meshStagingRingBytes
   std::string outDir = "demo_out";

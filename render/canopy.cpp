@@ -68,6 +68,14 @@ struct CanopyContext {
 
 namespace {
 
+// CanopyDesc.guardBand in pixels for a target side of `size`: a multiple of 16 (whole occupancy
+// tiles and default warp cells, so a still camera's layer pixel is its output pixel plus whole
+// cells), at most what keeps the layers within 16384 pixels.
+uint32_t guardPixels(float fraction, uint32_t size) {
+  const uint32_t g = 16u * uint32_t(std::lround(double(fraction) * size / 16.0));
+  return std::min(g, (16384u - std::min(size, 16384u)) / 32u * 16u);
+}
+
 Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi) {
   if (v < lo || v > hi)
     return Status::error(std::string(name) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
@@ -309,9 +317,12 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   c->params.dynamics.cellSize = std::max(c->params.dynamics.cellSize, desc.minCellSize);
   Status s = [&]() -> Status {
     CANOPY_TRY(validateParams(*c, c->params));
+    const uint32_t guardX = guardPixels(desc.guardBand, desc.width), guardY = guardPixels(desc.guardBand, desc.height);
     CompositorDesc cd;
     cd.width = desc.width;
     cd.height = desc.height;
+    cd.guardX = guardX;
+    cd.guardY = guardY;
     cd.colorFormat = desc.colorFormat;
     cd.depthFormat = desc.depthFormat;
     cd.motionFormat = desc.motionFormat;
@@ -320,8 +331,10 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     cd.minCellSize = desc.minCellSize;
     CANOPY_TRY(createCompositor(d, cd, &c->compositor));
     LayeredVegetationDesc ld;
-    ld.width = desc.width;
-    ld.height = desc.height;
+    ld.width = desc.width + 2 * guardX;
+    ld.height = desc.height + 2 * guardY;
+    ld.guardX = guardX;
+    ld.guardY = guardY;
     ld.colorFormat = desc.layerFormat;
     ld.split = desc.split;
     ld.roots = desc.roots;
@@ -357,7 +370,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       c->shared = std::make_shared<SharedSimulation>();
       CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim, &c->shared->pending));
     }
-    CANOPY_TRY(createLayerDynamics(d, desc.width, desc.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
+    CANOPY_TRY(createLayerDynamics(d, ld.width, ld.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     // The layers last: what the budget leaves after the compositor, simulation and dynamics decides
     // whether the mesh is resident or streamed (docs/design.md "Layers: mesh budget and staging ring").
     if (desc.deviceMemoryBudget) {
@@ -459,15 +472,18 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
     c->perVertex.desc.width = width;
     c->perVertex.desc.height = height;
     Status s = [&]() -> Status {
-      CANOPY_TRY(setLayerTargetSize(c->layers, width, height));
       CompositorDesc cd = before;
       cd.width = width;
       cd.height = height;
+      cd.guardX = guardPixels(c->desc.guardBand, width);
+      cd.guardY = guardPixels(c->desc.guardBand, height);
+      CANOPY_TRY(setLayerTargetSize(c->layers, compositorLayerWidth(cd), compositorLayerHeight(cd), cd.guardX, cd.guardY));
       CANOPY_TRY(createCompositor(d, cd, &c->compositor));
       // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
       // motion vectors against (beginCanopyFrame sees the grid change).
       c->last = gpu::AnimFrame{};
-      return createLayerDynamics(d, width, height, c->desc.minCellSize, c->desc.maxLayers, &c->dynamics);
+      return createLayerDynamics(d, compositorLayerWidth(cd), compositorLayerHeight(cd), c->desc.minCellSize, c->desc.maxLayers,
+                                 &c->dynamics);
     }();
     c->generation++;
     return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
@@ -537,8 +553,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.view = slice;
   fd.plane = c->plane;
   for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
-  fd.width = c->desc.width;
-  fd.height = c->desc.height;
+  fd.width = c->layers.desc.width;  // the layer images: the output and the guard band
+  fd.height = c->layers.desc.height;
   fd.simSize = sim.n;
   fd.ringSize = sim.ringSize;
   fd.time = float(sim.time);
@@ -553,14 +569,17 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.mesh.hasRigid, c->layers.reslice.occupancyDirty,
                               motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
   const LayerView& previous = motionValid ? c->lastView : view;
-  if (!sameCamera(slice, view) || !sameCamera(previous, view)) {
+  // The slice camera is the guard band's widening of the camera it was asked for: the same camera
+  // as this frame's when that widening gives it bit for bit (layer pixel = pixel + guard).
+  if (!sameCamera(slice, sliceCameraFor(c->layers, view)) || !sameCamera(previous, view)) {
     std::vector<float> depths;
     for (const LayerInfo& l : c->layers.visible.layers) depths.push_back(l.slab.depth);
     // The rigid background's plane: the vegetation's centre.
     const glm::vec3 centre = 0.5f * (c->layers.mesh.boundsMin + c->layers.mesh.boundsMax);
     const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
     const gpu::CompositeView cv =
-        compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height));
+        compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
+                      glm::dvec2(c->layers.desc.width, c->layers.desc.height));
     setCompositeReprojection(c->compositor, &cv);
   }
   c->lastView = view;
@@ -641,6 +660,10 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.peakDeviceBytes = c->device->allocator->peakLiveBytes;
   s.deviceBlockBytes = c->device->allocator->blockBytes;
   s.layers = c->layers.stats;
+  s.layers.layerWidth = c->layers.desc.width;
+  s.layers.layerHeight = c->layers.desc.height;
+  s.layers.guardX = c->layers.desc.guardX;
+  s.layers.guardY = c->layers.desc.guardY;
   s.simulation = c->shared->sim.stats;
   return s;
 }

@@ -145,6 +145,10 @@ Status validateCompositorDesc(Device& d, const CompositorDesc& desc) {
   if (desc.width < 1 || desc.height < 1 || desc.width > 16384 || desc.height > 16384)
     return Status::error("compositor: size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
                          " is outside 1..16384 per side");
+  if (desc.guardX % COMPOSITE_TILE != 0 || desc.guardY % COMPOSITE_TILE != 0 || compositorLayerWidth(desc) > 16384 ||
+      compositorLayerHeight(desc) > 16384)
+    return Status::error("compositor: guard band " + std::to_string(desc.guardX) + "x" + std::to_string(desc.guardY) +
+                         " px is not a multiple of " + std::to_string(COMPOSITE_TILE) + " or makes the layers wider than 16384");
   if (desc.minCellSize < 2 || desc.minCellSize > 256)
     return Status::error("compositor: minCellSize = " + std::to_string(desc.minCellSize) + " is outside 2..256");
   if (desc.maxLayers < 1 || desc.maxLayers > CANOPY_MAX_LAYERS)
@@ -203,8 +207,10 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
     cp.shader = "composite_occupancy.comp";
     CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
+    const uint32_t layerW = compositorLayerWidth(desc), layerH = compositorLayerHeight(desc);
     const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
-    CANOPY_TRY(createBuffer(d, tiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
+    const VkDeviceSize layerTiles = VkDeviceSize(tilesFor(layerW)) * tilesFor(layerH);
+    CANOPY_TRY(createBuffer(d, layerTiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
                             &out->occupancy, "composite: occupancy"));
     // Compute path: needs RGBA32F as a linearly filtered storage image (the displacement image).
     VkFormatProperties df{};
@@ -225,8 +231,8 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
       CANOPY_TRY(createGraphicsPipeline(d, rp, &out->resolve));
       ImageDesc id;
       id.format = VK_FORMAT_R32G32B32A32_SFLOAT;
-      id.width = gridCorners(desc.width, desc.minCellSize);
-      id.height = gridCorners(desc.height, desc.minCellSize);
+      id.width = gridCorners(layerW, desc.minCellSize);
+      id.height = gridCorners(layerH, desc.minCellSize);
       id.layers = desc.maxLayers;
       id.usage = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
       id.arrayView = true;
@@ -291,10 +297,11 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   if (anim.layerCount < 1 || anim.layerCount > c.desc.maxLayers)
     return Status::error("prepareComposite: " + std::to_string(anim.layerCount) + " layers, the compositor holds 1.." +
                          std::to_string(c.desc.maxLayers));
-  if (uint32_t(anim.width) != c.desc.width || uint32_t(anim.height) != c.desc.height)
+  const uint32_t layerW = compositorLayerWidth(c.desc), layerH = compositorLayerHeight(c.desc);
+  if (uint32_t(anim.width) != layerW || uint32_t(anim.height) != layerH)
     return Status::error("prepareComposite: the dynamics frame is " + std::to_string(uint32_t(anim.width)) + "x" +
-                         std::to_string(uint32_t(anim.height)) + ", the compositor " + std::to_string(c.desc.width) + "x" +
-                         std::to_string(c.desc.height));
+                         std::to_string(uint32_t(anim.height)) + ", the compositor's layers " + std::to_string(layerW) + "x" +
+                         std::to_string(layerH));
   gpu::CompositePush& p = c.push;
   p = gpu::CompositePush{};
   p.layerCount = anim.layerCount;
@@ -306,15 +313,21 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.depthAlpha = params.depthAlpha;
   p.tilesX = tilesFor(c.desc.width);
   p.tilesY = tilesFor(c.desc.height);
-  p.occupancyX1 = p.tilesX;
-  p.occupancyY1 = p.tilesY;
+  p.layerWidth = float(layerW);
+  p.layerHeight = float(layerH);
+  p.originX = float(c.desc.guardX);
+  p.originY = float(c.desc.guardY);
+  p.layerTilesX = tilesFor(layerW);
+  p.layerTilesY = tilesFor(layerH);
+  p.occupancyX1 = p.layerTilesX;
+  p.occupancyY1 = p.layerTilesY;
   if (foliageRect) {
     // One tile of margin: a tile counts the texels one pixel around it.
     const uint32_t x0 = uint32_t(std::max(foliageRect->offset.x, 0)), y0 = uint32_t(std::max(foliageRect->offset.y, 0));
-    p.occupancyX0 = std::min(x0 / COMPOSITE_TILE, p.tilesX) - std::min(x0 / COMPOSITE_TILE, 1u);
-    p.occupancyY0 = std::min(y0 / COMPOSITE_TILE, p.tilesY) - std::min(y0 / COMPOSITE_TILE, 1u);
-    p.occupancyX1 = std::min(tilesFor(x0 + foliageRect->extent.width) + 1, p.tilesX);
-    p.occupancyY1 = std::min(tilesFor(y0 + foliageRect->extent.height) + 1, p.tilesY);
+    p.occupancyX0 = std::min(x0 / COMPOSITE_TILE, p.layerTilesX) - std::min(x0 / COMPOSITE_TILE, 1u);
+    p.occupancyY0 = std::min(y0 / COMPOSITE_TILE, p.layerTilesY) - std::min(y0 / COMPOSITE_TILE, 1u);
+    p.occupancyX1 = std::min(tilesFor(x0 + foliageRect->extent.width) + 1, p.layerTilesX);
+    p.occupancyY1 = std::min(tilesFor(y0 + foliageRect->extent.height) + 1, p.layerTilesY);
   }
   p.debugView = uint32_t(params.debugView);
   p.debugScale = params.debugVelocityScale;
@@ -397,7 +410,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
     if (unite) p.flags |= COMPOSITE_OCCUPANCY_UNION;
     rg::Slots now = s;
     if (!unite) now[3] = s[0], now[4] = s[2];
-    return rg::dispatchSlots(x, cp->occupancyPipeline, now, p.tilesX * p.tilesY, p.layerCount + 1, 1, p);
+    return rg::dispatchSlots(x, cp->occupancyPipeline, now, p.layerTilesX * p.layerTilesY, p.layerCount + 1, 1, p);
   }).when([cp, hasNext] { return cp->occupancyPending || (cp->occupancyUnitePending && hasNext); });
   rg::addSlotPass(g, "composite: scene depth",
                   {rg::slot(t.depth, Use::ComputeSampled, c.depthSampler), rg::slot(scene, Use::ComputeStorageWrite)},

@@ -33,7 +33,11 @@ static_assert(uint32_t(CompositeDebugView::None) == COMPOSITE_DEBUG_NONE && uint
 Status validateCompositeParams(const CompositeParams& params);
 
 struct CompositorDesc {
-  uint32_t width = 0, height = 0;                  // = the layer images' size
+  uint32_t width = 0, height = 0;                  // the host's targets, pixels
+  // The guard band (docs/design.md "Layers: guard band"): the layer images are the output plus
+  // guardX / guardY pixels on each side (multiples of COMPOSITE_TILE); the warp grid and the
+  // occupancy are over the layer images.
+  uint32_t guardX = 0, guardY = 0;
   VkFormat colorFormat = VK_FORMAT_R8G8B8A8_UNORM; // host colour target
   VkFormat depthFormat = VK_FORMAT_D32_SFLOAT;     // host depth target (sampled usage required)
   VkFormat motionFormat = VK_FORMAT_UNDEFINED;     // UNDEFINED: no motion output
@@ -46,6 +50,9 @@ struct CompositorDesc {
 };
 // Checks formats against the device (blendable colour attachment, sampleable depth attachment).
 Status validateCompositorDesc(Device& device, const CompositorDesc& desc);
+// The layer images' size: the output plus the guard band on each side.
+inline uint32_t compositorLayerWidth(const CompositorDesc& d) { return d.width + 2 * d.guardX; }
+inline uint32_t compositorLayerHeight(const CompositorDesc& d) { return d.height + 2 * d.guardY; }
 
 struct Compositor {
   Device* device = nullptr;
@@ -61,7 +68,7 @@ struct Compositor {
   Image composed;  // the tile kernel's result per pixel, RGBA32UI (compositePackPixel, shared/composite.h)
   Buffer tileList;                // CompositeTileHeader + one uvec2 per screen tile
   VkSampler displacementSampler = VK_NULL_HANDLE;  // linear, clamp to edge
-  Buffer occupancy;   // (maxLayers + 1) x tilesY x tilesX uint: 1 where the tile (+1 px) holds foliage;
+  Buffer occupancy;   // (maxLayers + 1) x layer tiles uint: 1 where the tile (+1 px) holds foliage;
                       // slot layerCount: the rigid background
   Buffer sceneDepth;  // width x height float: the host's depth before the composite
   Buffer viewBuffer;    // gpu::CompositeView (reprojection), rewritten by the frames that reproject
@@ -80,7 +87,7 @@ void destroyCompositor(Compositor& compositor);
 // Fixes the next recorded composite: layer count and warp grid from the dynamics frame, the levers
 // from `params`, whether the layers were rebuilt (occupancy) and whether the previous displacement
 // is last frame's (motion vectors).
-// `foliageRect` (pixels; null: the whole target) bounds where the layers can hold foliage: the
+// `foliageRect` (layer pixels; null: the whole layer image) bounds where the layers can hold foliage: the
 // occupancy pass reads only those tiles.
 // `uniteNext`: OR the next layer set's occupancy (LayerResources.nextColor; a spread re-slice whose
 // last slice is drawn this frame) into the current one, so it holds for the whole cross-fade.
@@ -90,7 +97,7 @@ Status prepareComposite(Compositor& compositor, const CompositeParams& params, c
 
 // Shows the layers from another camera than the slice camera they were drawn with (docs/design.md
 // "Layers: reprojection"): `view` for the next recorded composite, or null (the current camera is
-// the slice camera: layer pixel = output pixel). Call after prepareComposite.
+// the slice camera: layer pixel = output pixel plus the guard band). Call after prepareComposite.
 void setCompositeReprojection(Compositor& compositor, const gpu::CompositeView* view);
 
 struct CompositeTargets {

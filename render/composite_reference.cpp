@@ -8,13 +8,14 @@ namespace {
 
 struct Texels {
   const CompositeReferenceInputs& in;
+  uint32_t w, h;  // the layer images
   glm::vec4 color(uint32_t layer, int x, int y) const {
-    if (x < 0 || y < 0 || x >= int(in.width) || y >= int(in.height)) return glm::vec4(0.0f);
-    return in.layerColor[(size_t(layer) * in.height + y) * in.width + x];
+    if (x < 0 || y < 0 || x >= int(w) || y >= int(h)) return glm::vec4(0.0f);
+    return in.layerColor[(size_t(layer) * h + y) * w + x];
   }
   float depth(uint32_t layer, int x, int y) const {
-    if (x < 0 || y < 0 || x >= int(in.width) || y >= int(in.height)) return 1.0f;
-    return in.layerDepth[(size_t(layer) * in.height + y) * in.width + x];
+    if (x < 0 || y < 0 || x >= int(w) || y >= int(h)) return 1.0f;
+    return in.layerDepth[(size_t(layer) * h + y) * w + x];
   }
 };
 
@@ -31,7 +32,9 @@ glm::vec3 planePoint(const gpu::CompositeView& v, uint32_t i, const glm::vec2& p
 
 void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceInputs& in, CompositeReferenceOutputs* out) {
   const uint32_t w = in.width, h = in.height, n = in.layers;
-  const Texels tex{in};
+  const uint32_t lw = in.layerWidth ? in.layerWidth : w, lh = in.layerHeight ? in.layerHeight : h;
+  const Texels tex{in, lw, lh};
+  const glm::vec2 origin(pc.originX, pc.originY), outSize{float(w), float(h)};
   const bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0;
   const uint32_t corners = pc.gridX * pc.gridY;
   out->color.assign(size_t(w) * h, glm::vec4(0.0f));
@@ -47,9 +50,9 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       glm::vec4 bg(0.0f);
       float bgZ = 1.0f;
       const bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0;
-      const glm::vec2 size{float(w), float(h)};
+      const glm::vec2 size{float(lw), float(lh)};
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
-        int bx = int(x), by = int(y);
+        int bx = int(x) + int(origin.x), by = int(y) + int(origin.y);
         bool inside = true;
         if (reproject) {
           const glm::vec3 hp = planePoint(in.view, COMPOSITE_VIEW_BACKGROUND, p);
@@ -59,7 +62,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           inside = hp.z > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < size.x && s.y < size.y;
         }
         if (inside) {
-          const size_t b = size_t(by) * w + size_t(bx);
+          const size_t b = size_t(by) * lw + size_t(bx);
           bg = in.backgroundColor[b];
           bgZ = bg.a > 0.0f ? in.backgroundDepth[b] : 1.0f;
           if (reproject && bg.a > 0.0f)
@@ -71,8 +74,8 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
         bgZ = 1.0f;
       }
       const float opaqueZ = std::min(sceneZ, bgZ);
-      gpu::GridSample g = gpu::gridSample(pc, p);
-      glm::vec2 s = p;
+      glm::vec2 s = p + origin;  // the layer pixel under p (the slice camera's)
+      gpu::GridSample g = gpu::gridSample(pc, s);
       glm::vec4 acc(0.0f);
       float frontZ = 1.0f;
       bool front = false;
@@ -121,8 +124,8 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           frontZ = z;
           if (pc.flags & COMPOSITE_MOTION_VALID) {
             const glm::vec2 dPrev = displacementAt(in.previous, i * corners, g);
-            motion = reproject ? gpu::compositeClipPixel(clip, size) -
-                                     gpu::compositeClipPixel(gpu::compositeClipOf(in.view.sliceToPrevious, s - d + dPrev, zSlice, size), size)
+            motion = reproject ? gpu::compositeClipPixel(clip, outSize) -
+                                     gpu::compositeClipPixel(gpu::compositeClipOf(in.view.sliceToPrevious, s - d + dPrev, zSlice, size), outSize)
                                : d - dPrev;
           }
         }

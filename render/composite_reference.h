@@ -12,13 +12,16 @@
 namespace canopy {
 
 struct CompositeReferenceInputs {
-  uint32_t width = 0, height = 0, layers = 0;
-  std::vector<glm::vec4> layerColor;     // layers x height x width, premultiplied
-  std::vector<float> layerDepth;         // layers x height x width
-  std::vector<glm::vec4> backgroundColor;  // height x width (empty: no background)
+  uint32_t width = 0, height = 0, layers = 0;  // the output's size
+  // The layer images' size (the output plus the guard band, push.originX / originY on each side;
+  // 0: the output's).
+  uint32_t layerWidth = 0, layerHeight = 0;
+  std::vector<glm::vec4> layerColor;     // layers x layerHeight x layerWidth, premultiplied
+  std::vector<float> layerDepth;         // layers x layerHeight x layerWidth
+  std::vector<glm::vec4> backgroundColor;  // layerHeight x layerWidth (empty: no background)
   std::vector<float> backgroundDepth;
   std::vector<glm::vec4> sceneColor;     // the host's colour before the composite
-  std::vector<float> sceneDepth;         // the host's depth before the composite
+  std::vector<float> sceneDepth;         // the host's depth before the composite (height x width)
   std::vector<glm::vec2> displacement;   // layers x gridY x gridX, pixels
   std::vector<glm::vec2> previous;       // same shape (motion vectors)
   gpu::CompositeView view{};             // read where push.flags has COMPOSITE_REPROJECT

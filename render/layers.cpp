@@ -154,6 +154,9 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
   if (desc.width < 1 || desc.width > 16384 || desc.height < 1 || desc.height > 16384)
     return Status::error("layers: size " + std::to_string(desc.width) + "x" + std::to_string(desc.height) +
                          " is outside 1..16384 per side");
+  if (2ull * desc.guardX >= desc.width || 2ull * desc.guardY >= desc.height)
+    return Status::error("layers: a guard band of " + std::to_string(desc.guardX) + "x" + std::to_string(desc.guardY) +
+                         " px leaves no output in " + std::to_string(desc.width) + "x" + std::to_string(desc.height));
   if (desc.colorFormat != VK_FORMAT_R16G16B16A16_SFLOAT && desc.colorFormat != VK_FORMAT_R8G8B8A8_UNORM)
     return Status::error("layers: colour format must be R16G16B16A16_SFLOAT or R8G8B8A8_UNORM");
   if (desc.writeIds && (!d.fragmentPrimitiveId || !d.independentBlend))
@@ -278,16 +281,25 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   return Status();
 }
 
-Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height) {
+Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height, uint32_t guardX, uint32_t guardY) {
   if (width < 1 || width > 16384 || height < 1 || height > 16384)
     return Status::error("layers: size " + std::to_string(width) + "x" + std::to_string(height) +
                          " is outside 1..16384 per side");
-  if (width == lv.desc.width && height == lv.desc.height) return Status();
+  if (2ull * guardX >= width || 2ull * guardY >= height)
+    return Status::error("layers: a guard band of " + std::to_string(guardX) + "x" + std::to_string(guardY) +
+                         " px leaves no output in " + std::to_string(width) + "x" + std::to_string(height));
+  if (width == lv.desc.width && height == lv.desc.height && guardX == lv.desc.guardX && guardY == lv.desc.guardY) return Status();
   destroyLayerTargets(lv);
   lv.desc.width = width;
   lv.desc.height = height;
+  lv.desc.guardX = guardX;
+  lv.desc.guardY = guardY;
   rescheduleAfterChange(lv, true, true, false);  // the placement is in pixels of the old size
   return createTargets(lv);
+}
+
+LayerView sliceCameraFor(const LayeredVegetation& lv, const LayerView& view) {
+  return guardedView(view, layerOutputSize(lv), layerGuard(lv));
 }
 
 }  // namespace canopy

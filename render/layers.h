@@ -37,7 +37,11 @@ struct Device;
 Status validateLayerSettings(const LayerSettings& settings);
 
 struct LayeredVegetationDesc {
-  uint32_t width = 1024, height = 768;   // layer resolution, 1..16384 each
+  uint32_t width = 1024, height = 768;   // layer resolution, 1..16384 each (the guard band included)
+  // The guard band (docs/design.md "Layers: guard band"): the layers show the output's view widened
+  // by guardX / guardY pixels on each side (output = width - 2 guardX by height - 2 guardY); the
+  // slice camera is guardedView(view) of the camera each update asks for.
+  uint32_t guardX = 0, guardY = 0;
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // or VK_FORMAT_R8G8B8A8_UNORM
   MaterialSplitOptions split;
   LeafRootOptions roots;
@@ -117,6 +121,14 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bo
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;
 // the mesh, leaf roots and settings are kept.
-Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height);
+Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height, uint32_t guardX = 0, uint32_t guardY = 0);
+
+// The output the layers are for (their size less the guard band) and the guard band, pixels.
+inline glm::uvec2 layerOutputSize(const LayeredVegetation& lv) {
+  return {lv.desc.width - 2 * lv.desc.guardX, lv.desc.height - 2 * lv.desc.guardY};
+}
+inline glm::uvec2 layerGuard(const LayeredVegetation& lv) { return {lv.desc.guardX, lv.desc.guardY}; }
+// The slice camera for the camera `view` (the guard band's widened projection).
+LayerView sliceCameraFor(const LayeredVegetation& lv, const LayerView& view);
 
 }  // namespace canopy

@@ -65,17 +65,30 @@ glm::dvec2 applyHomography(const glm::dmat3& h, const glm::dvec2& p) {
 
 bool sameCamera(const LayerView& a, const LayerView& b) { return a.view == b.view && a.proj == b.proj; }
 
+LayerView guardedView(const LayerView& view, glm::uvec2 outSize, glm::uvec2 guard) {
+  if (guard == glm::uvec2(0)) return view;
+  LayerView v = view;
+  // Row r of the projection scaled: clip x' = sx clip x, so NDC x' (layer) = NDC x (output) * out / layer.
+  const glm::vec2 scale = glm::vec2(outSize) / glm::vec2(outSize + 2u * guard);
+  for (int c = 0; c < 4; ++c) {
+    v.proj[c][0] *= scale.x;
+    v.proj[c][1] *= scale.y;
+  }
+  return v;
+}
+
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
-                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& size) {
+                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
+                                 const glm::dvec2& layerSize) {
   gpu::CompositeView v{};
   v.sliceToCurrent = glm::mat4(clipToClip(slice, current));
   v.sliceToPrevious = glm::mat4(clipToClip(slice, previous));
   for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) {
     const bool background = i == COMPOSITE_VIEW_BACKGROUND;
     if (!background && i >= layerDepths.size()) continue;  // no such layer: never read
-    glm::dmat3 h = layerHomography(slice, current, background ? backgroundDepth : layerDepths[i], size, size);
+    glm::dmat3 h = layerHomography(slice, current, background ? backgroundDepth : layerDepths[i], outSize, layerSize);
     // Scaled so that w is about 1 near the image (float precision), its sign kept.
-    const double w = std::abs((h * glm::dvec3(0.5 * size, 1.0)).z);
+    const double w = std::abs((h * glm::dvec3(0.5 * outSize, 1.0)).z);
     if (w > 0 && std::isfinite(w)) h /= w;
     for (int r = 0; r < 3; ++r) v.homography[3 * i + r] = glm::vec4(float(h[0][r]), float(h[1][r]), float(h[2][r]), 0.0f);
   }
@@ -84,7 +97,7 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
 
 ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
                                             const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size,
-                                            const PixelExtent* drawn) {
+                                            const glm::dvec2& outSize, const PixelExtent* drawn) {
   ReprojectionError e;
   const glm::dmat4 sliceVP = viewProj(slice), currentVP = viewProj(current), sliceInv = glm::inverse(sliceVP);
   // The vegetation's footprint in the slice camera's image (its bounding box's corners).
@@ -114,11 +127,11 @@ ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerV
     for (int gy = 0; gy < 3; ++gy)
       for (int gx = 0; gx < 3; ++gx) {
         const glm::dvec2 s = clo + (chi - clo) * glm::dvec2(0.5 * gx, 0.5 * gy);
-        const glm::dvec3 onPlane = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, slab.depth, size), size);
+        const glm::dvec3 onPlane = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, slab.depth, size), outSize);
         double sum = 0;
         for (int k = 0; k < kDepthSamples; ++k) {
           const double z = slab.zNear + (slab.zFar - slab.zNear) * (k + 0.5) / kDepthSamples;
-          const glm::dvec3 off = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, z, size), size);
+          const glm::dvec3 off = pixelOf(currentVP, pointAtDepth(slice, sliceInv, s, z, size), outSize);
           sum += onPlane.z > 0 && off.z > 0 ? glm::length(glm::dvec2(off) - glm::dvec2(onPlane)) : INFINITY;
         }
         e.parallaxPx = std::max(e.parallaxPx, sum / kDepthSamples);
@@ -126,11 +139,11 @@ ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerV
   // Content beyond the slice image: the current image's corners on the middle slab's plane, in
   // slice pixels, intersected with the footprint, against the slice image.
   const double mid = slabs.empty() ? 0.0 : 0.5 * (slabs.front().depth + slabs.back().depth);
-  const glm::dmat3 h = layerHomography(slice, current, mid, size, size);
+  const glm::dmat3 h = layerHomography(slice, current, mid, outSize, size);
   glm::dvec2 nlo(1e300), nhi(-1e300);
   bool wrapped = false;
   for (int k = 0; k < 4; ++k) {
-    const glm::dvec3 q = h * glm::dvec3((k & 1) ? size.x : 0.0, (k & 2) ? size.y : 0.0, 1.0);
+    const glm::dvec3 q = h * glm::dvec3((k & 1) ? outSize.x : 0.0, (k & 2) ? outSize.y : 0.0, 1.0);
     if (q.z <= 0) wrapped = true;
     nlo = glm::min(nlo, glm::dvec2(q) / q.z);
     nhi = glm::max(nhi, glm::dvec2(q) / q.z);
@@ -144,7 +157,7 @@ ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerV
   if (nlo.x < nhi.x && nlo.y < nhi.y)
     e.outsidePx = std::max({0.0, -nlo.x, -nlo.y, nhi.x - size.x, nhi.y - size.y});
   // Magnification: the homography's Jacobian at the image centre (layer texels per current pixel).
-  const glm::dvec2 c0 = 0.5 * size;
+  const glm::dvec2 c0 = 0.5 * outSize;
   const glm::dvec2 m0 = applyHomography(h, c0), mx = applyHomography(h, c0 + glm::dvec2(1, 0)), my = applyHomography(h, c0 + glm::dvec2(0, 1));
   const double det = std::abs((mx.x - m0.x) * (my.y - m0.y) - (mx.y - m0.y) * (my.x - m0.x));
   if (!wrapped && det > 0 && std::isfinite(det)) e.magnification = 1.0 / std::sqrt(det);

@@ -30,9 +30,11 @@ glm::dvec2 applyHomography(const glm::dmat3& h, const glm::dvec2& p);
 bool sameCamera(const LayerView& a, const LayerView& b);
 
 // The composite's view block: layer i's plane at slice-camera view depth `layerDepths[i]`, the
-// rigid background's at `backgroundDepth`; images of `size` pixels (layers = output).
+// rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
+// `layerSize` (the slice camera's, guard band included).
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
-                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& size);
+                                 const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
+                                 const glm::dvec2& layerSize);
 
 // The reprojection's estimated screen error (pixels of the current camera) of showing layers drawn
 // from `slice` from `current` (docs/design.md "Layers: reprojection", the policy):
@@ -40,6 +42,7 @@ struct ReprojectionError {
   double parallaxPx = 0;   // how far a point of a slab (uniform over its depth range) lands off its
                            // plane's mapping, on average; the largest over the image and the slabs
   double outsidePx = 0;    // how far the current view needs content beyond the slice camera's image
+                           // (the layer images, guard band included)
   double magnification = 1;  // current pixels per layer texel at the image centre (> 1: zoomed in, blurred)
   double turnDegrees = 0;  // the angle between the two eyes' directions to the vegetation's centre
                            // (view-dependent shading baked into the layers: the specular lobe)
@@ -58,10 +61,17 @@ constexpr double kMaxMagnification = 1.1;
 struct SlabRange {
   float zNear = 0, zFar = 0, depth = 0;  // slice-camera view depths
 };
-// `drawn`: the set's vertex extent (null: the bounding box's projection, which a rounded crown
-// overstates).
+// `slice` and `sliceSize`: the slice camera and its layer images (guard band included);
+// `current` and `outSize`: the camera shown and its output. `drawn`: the set's vertex extent in
+// slice pixels (null: the bounding box's projection, which a rounded crown overstates).
 ReprojectionError estimateReprojectionError(const LayerView& slice, const LayerView& current, const std::vector<SlabRange>& slabs,
-                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& size,
-                                            const PixelExtent* drawn = nullptr);
+                                            const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::dvec2& sliceSize,
+                                            const glm::dvec2& outSize, const PixelExtent* drawn = nullptr);
+
+// The slice camera for `view` with a guard band (docs/design.md "Layers: guard band"): the same
+// camera, its clip x and y scaled by out / (out + 2 guard), so the layer images of out + 2 guard
+// pixels show the output's view at the same scale, offset by the guard (layer pixel = output
+// pixel + guard). No guard: `view` itself, bit for bit.
+LayerView guardedView(const LayerView& view, glm::uvec2 outSize, glm::uvec2 guard);
 
 }  // namespace canopy

@@ -16,14 +16,17 @@ namespace canopy {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-// Why the layers drawn from `slice` no longer serve `view` (docs/design.md "Layers: reprojection",
-// the policy), or "" while the reprojection's estimated error stays within the settings.
+// Why the layers drawn from the slice camera `slice` no longer serve the camera `view` (docs/design.md
+// "Layers: reprojection", the policy), or "" while the reprojection's estimated error stays within
+// the settings. The layer images reach beyond the output by the guard band, so content beyond the
+// output is there until the view leaves the guard band.
 std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& slice, const LayerView& view) {
   const LayerSettings& s = lv.settings;
   std::vector<SlabRange> slabs;
   for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
   const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
   const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size,
+                                                        glm::dvec2(layerOutputSize(lv)),
                                                         lv.visible.extent.known ? &lv.visible.extent : nullptr);
   // The message is built only for a re-slice (this runs every frame the camera moves).
   auto over = [&](double v, const char* what) {
@@ -283,6 +286,8 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   std::string reason;
   const LayerSettings& s = lv.settings;
   bool forced = false;
+  // The layers are drawn from the slice camera: `view` widened by the guard band.
+  const LayerView slice = sliceCameraFor(lv, view);
   if (!lv.reslice.haveView) {
     reason = "first view";
   } else if (!lv.reslice.forcedReason.empty()) {
@@ -296,7 +301,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   } else {
     // Error-driven: the visible layers are shown reprojected until that shows (the newest set's
     // camera, which the visible set has once a spread re-slice ends).
-    if (!sameCamera(view, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view);
+    if (!sameCamera(slice, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view);
   }
   const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
@@ -310,12 +315,12 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     lv.reslice.settingsChanged = false;
     lv.reslice.forcedReason.clear();
     lv.reslice.forceImmediate = false;
-    lv.reslice.lastRebuildView = view;
+    lv.reslice.lastRebuildView = slice;
     lv.stats.rebuilds++;
     lv.stats.lastRebuildReason = reason;
     if (atOnce) {
       lv.reslice.spread = SpreadRebuild{};
-      CANOPY_TRY(placeForView(lv, view));
+      CANOPY_TRY(placeForView(lv, slice));
       lv.reslice.rebuildPending = true;
       lv.reslice.rate.lastWork = SliceRateControl::Work::Other;
       lv.stats.crossFade = 1.0f;
@@ -324,7 +329,7 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
       lv.reslice.spread.phase = SpreadPhase::Placing;
       lv.reslice.spread.immediate = wantAtOnce;
       lv.stats.maxSliceTriangles = 0;
-      beginPlacement(lv, view, lv.reslice.spread.job);
+      beginPlacement(lv, slice, lv.reslice.spread.job);
       lv.stats.crossFade = 0.0f;
     }
   }

@@ -73,7 +73,7 @@ struct ResliceScheduler {
   bool occupancyRecomputeNow = false;   // a streamed re-slice asked at once copied its set in this frame
   SpreadRebuild spread;
   SliceRateControl rate;
-  LayerView lastRebuildView;
+  LayerView lastRebuildView;  // the slice camera of the last re-slice (the guard band's widened view)
 };
 
 // Asks for a re-slice at the next updateLayerView, for `reason` (LayerStats.lastRebuildReason);

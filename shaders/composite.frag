@@ -43,7 +43,7 @@ vec2 displacementAt(uint base, GridSample g, bool previous) {
 // The tiled simulation field where the view ray through pixel p meets the simulation plane
 // (docs/design.md: the plane is tiled with the one simulated tile). w = 0 where the ray misses it.
 vec4 velocityOnPlane(vec2 p) {
-  vec2 ndc = p / vec2(pc.width, pc.height) * 2.0 - 1.0;
+  vec2 ndc = p / vec2(pc.layerWidth, pc.layerHeight) * 2.0 - 1.0;  // p: a layer pixel (the slice camera's)
   vec4 a = anim.invViewProj * vec4(ndc, 0.0, 1.0), b = anim.invViewProj * vec4(ndc, 1.0, 1.0);
   vec3 o = a.xyz / a.w, dir = b.xyz / b.w - o;
   vec3 normal = cross(anim.simRight.xyz, anim.simUp.xyz);
@@ -68,7 +68,7 @@ vec4 velocityOnPlane(vec2 p) {
 
 // The debug views draw layer 0's plane (the dynamics frame is the slice camera's).
 vec2 layerPixel0(vec2 p) {
-  if ((pc.flags & COMPOSITE_REPROJECT) == 0u) return p;
+  if ((pc.flags & COMPOSITE_REPROJECT) == 0u) return p + vec2(pc.originX, pc.originY);
   vec3 h = planePoint(0u, p);
   return h.xy / max(h.z, 1e-6);
 }
@@ -77,7 +77,8 @@ void main() {
   vec2 p = gl_FragCoord.xy;
   ivec2 ip = ivec2(p);
   uint pixel = uint(ip.y) * uint(pc.width) + uint(ip.x);
-  vec2 size = vec2(pc.width, pc.height);
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight), outSize = vec2(pc.width, pc.height);
+  vec2 origin = vec2(pc.originX, pc.originY);  // layer pixel = p + origin for the slice camera (guard band)
   float sceneRaw = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? sceneDepth[pixel] : compositeStandardDepth(pc.flags, 1.0);
   float sceneZ = (pc.flags & COMPOSITE_SCENE_DEPTH) != 0u ? compositeStandardDepth(pc.flags, sceneRaw) : 1.0;
   vec4 bg = vec4(0.0);
@@ -86,7 +87,7 @@ void main() {
   // The view's matrices read once, before the layer loop (as composite_tiles.comp; docs/performance.md).
   mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious;
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
-    ivec2 is = ip;
+    ivec2 is = ip + ivec2(origin);
     bool inside = true;
     if (reproject) {
       vec3 h = planePoint(COMPOSITE_VIEW_BACKGROUND, p);
@@ -103,14 +104,14 @@ void main() {
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
   float opaqueZ = min(sceneZ, bgZ);                    // what hides a layer sample
 
-  GridSample g = gridSample(pc, p);
+  vec2 s = p + origin;  // layer i's pixel under p (the slice camera's)
+  GridSample g = gridSample(pc, s);
   uint corners = pc.gridX * pc.gridY;
   bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0u;
   vec4 acc = vec4(0.0);
   float frontZ = 1.0;
   vec2 motion = vec2(0.0);
   bool front = false;
-  vec2 s = p;  // layer i's pixel under p (the slice camera's)
   for (uint i = 0u; i < pc.layerCount; ++i) {
     if (reproject) {
       vec3 h = planePoint(i, p);
@@ -123,7 +124,7 @@ void main() {
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {
       uvec2 tile = uvec2(clamp(q, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-      if (occupancy[(i * pc.tilesY + tile.y) * pc.tilesX + tile.x] == 0u) continue;
+      if (occupancy[(i * pc.layerTilesY + tile.y) * pc.layerTilesX + tile.x] == 0u) continue;
     }
     vec3 uvw = vec3(q / size, float(i));
     vec4 c = texture(layerColor, uvw);
@@ -160,8 +161,8 @@ void main() {
       // displacement then and the previous camera).
       if ((pc.flags & COMPOSITE_MOTION_VALID) != 0u) {
         vec2 dPrev = displacementAt(i * corners, g, true);
-        motion = reproject ? compositeClipPixel(clip, size) -
-                                 compositeClipPixel(compositeClipOf(toPrevious, s - d + dPrev, zSlice, size), size)
+        motion = reproject ? compositeClipPixel(clip, outSize) -
+                                 compositeClipPixel(compositeClipOf(toPrevious, s - d + dPrev, zSlice, size), outSize)
                            : d - dPrev;
       }
     }

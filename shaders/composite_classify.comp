@@ -30,7 +30,7 @@ bool reaches(uint slot, vec2 qlo, vec2 qhi, vec2 size) {
   if (t1.x - t0.x >= COMPOSITE_CLASSIFY_MAX_SPAN || t1.y - t0.y >= COMPOSITE_CLASSIFY_MAX_SPAN) return true;
   for (uint ty = t0.y; ty <= t1.y; ++ty)
     for (uint tx = t0.x; tx <= t1.x; ++tx)
-      if (occupancy[(slot * pc.tilesY + ty) * pc.tilesX + tx] != 0u) return true;
+      if (occupancy[(slot * pc.layerTilesY + ty) * pc.layerTilesX + tx] != 0u) return true;
   return false;
 }
 
@@ -56,22 +56,18 @@ void main() {
   uint id = gl_GlobalInvocationID.x;
   if (id >= tileCount) return;
   uvec2 tile = uvec2(id % pc.tilesX, id / pc.tilesX);
-  vec2 size = vec2(pc.width, pc.height);
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight), origin = vec2(pc.originX, pc.originY);
   // Pixel centres of the tile (clipped to the image).
   vec2 lo = vec2(tile * COMPOSITE_TILE) + 0.5;
-  vec2 hi = min(lo + float(COMPOSITE_TILE - 1u), size - 0.5);
+  vec2 hi = min(lo + float(COMPOSITE_TILE - 1u), vec2(pc.width, pc.height) - 0.5);
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   uint mask = 0u;
   uint position = compositeTilePosition(tile.x, tile.y);
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
-    bool reached;
-    if (!reproject) {
-      reached = occupancy[pc.layerCount * tileCount + id] != 0u;
-    } else {
-      // The background is read at the nearest texel of H p (the occupancy tiles are dilated by a pixel).
-      vec2 slo, shi;
-      reached = !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi) || reaches(pc.layerCount, slo, shi, size);
-    }
+    // The background is read at the nearest texel of H p, or p + origin (the occupancy tiles are
+    // dilated by a pixel).
+    vec2 slo = lo + origin, shi = hi + origin;
+    bool reached = (reproject && !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi)) || reaches(pc.layerCount, slo, shi, size);
     if (reached) position |= COMPOSITE_TILE_BACKGROUND;
   }
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
@@ -80,7 +76,7 @@ void main() {
     uint corners = pc.gridX * pc.gridY;
     for (uint i = 0u; i < pc.layerCount; ++i) {
       // The tile in layer i's pixels (the slice camera's), where its warp grid lies.
-      vec2 slo = lo, shi = hi;
+      vec2 slo = lo + origin, shi = hi + origin;
       if (reproject && !layerBounds(i, lo, hi, slo, shi)) {
         mask |= 1u << i;
         continue;

@@ -17,7 +17,7 @@ layout(binding = 4) uniform sampler2D nextBackgroundColor;
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 void main() {
-  uint tiles = pc.tilesX * pc.tilesY;
+  uint tiles = pc.layerTilesX * pc.layerTilesY;  // over the layer images
   uint id = gl_GlobalInvocationID.x;
   uint layer = gl_GlobalInvocationID.y;
   if (id >= tiles || layer > pc.layerCount) return;
@@ -29,7 +29,7 @@ void main() {
     return;
   }
   // Tiles outside the layers' footprint (CompositePush.occupancy*) hold nothing.
-  uvec2 tile = uvec2(id % pc.tilesX, id / pc.tilesX);
+  uvec2 tile = uvec2(id % pc.layerTilesX, id / pc.layerTilesX);
   if (tile.x < pc.occupancyX0 || tile.y < pc.occupancyY0 || tile.x >= pc.occupancyX1 || tile.y >= pc.occupancyY1) {
     if (!unite) occupancy[layer * tiles + id] = 0u;
     return;
@@ -39,7 +39,7 @@ void main() {
   // as transparent; a clamped read would land on an edge texel of this tile, read anyway). A
   // quarter of the texel reads of one fetch each, which is what this pass costs on CPU devices.
   ivec2 t0 = ivec2(tile) * int(COMPOSITE_TILE);
-  vec2 size = vec2(pc.width, pc.height);
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
   uint any = 0u;
   for (int y = -1; y <= int(COMPOSITE_TILE) && any == 0u; y += 2)
     for (int x = -1; x <= int(COMPOSITE_TILE); x += 2) {

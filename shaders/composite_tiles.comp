@@ -30,14 +30,15 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
   ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
   if (ip.x >= int(pc.width) || ip.y >= int(pc.height)) return;  // the tile's part outside the image
   vec2 p = vec2(ip) + 0.5;
-  vec2 size = vec2(pc.width, pc.height);
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight), outSize = vec2(pc.width, pc.height);
+  vec2 origin = vec2(pc.originX, pc.originY);  // layer pixel = p + origin for the slice camera (guard band)
   float sceneRaw = texelFetch(hostDepth, ip, 0).r;
   float sceneZ = compositeStandardDepth(pc.flags, sceneRaw);
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   if ((tileEntry.x & COMPOSITE_TILE_BACKGROUND) != 0u) {
-    ivec2 is = ip;
+    ivec2 is = ip + ivec2(origin);
     bool inside = true;
     if (reproject) {
       const uint b = 3u * COMPOSITE_VIEW_BACKGROUND;
@@ -55,8 +56,8 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
   float opaqueZ = min(sceneZ, bgZ);
 
-  vec2 uvGrid = gridTexcoord(pc, gridSample(pc, p));
-  vec2 s = p;  // layer i's pixel under p (the slice camera's)
+  vec2 s = p + origin;  // layer i's pixel under p (the slice camera's)
+  vec2 uvGrid = gridTexcoord(pc, gridSample(pc, s));
   bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0u;
   vec4 acc = vec4(0.0);
   float frontZ = 1.0;
@@ -104,8 +105,8 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
       // Where the texel is shown now minus where it was shown in the previous frame (its
       // displacement then, dd.zw, and the previous camera); zw = xy when that frame is not valid.
       if (reproject && (pc.flags & COMPOSITE_MOTION_VALID) != 0u)
-        motion = compositeClipPixel(clip, size) -
-                 compositeClipPixel(compositeClipOf(toPrevious, s - dd.xy + dd.zw, zSlice, size), size);
+        motion = compositeClipPixel(clip, outSize) -
+                 compositeClipPixel(compositeClipOf(toPrevious, s - dd.xy + dd.zw, zSlice, size), outSize);
       else
         motion = dd.xy - dd.zw;
     }

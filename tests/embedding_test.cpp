@@ -243,6 +243,8 @@ TEST_F(EmbeddingTest, HdrWithExposureAndSrgbTargetsMatchTheCpuReference) {
     in.width = host.w;
     in.height = host.h;
     in.layers = push.layerCount;
+    in.layerWidth = lv.desc.width;  // the guard band included
+    in.layerHeight = lv.desc.height;
     for (uint32_t l = 0; l < in.layers; ++l) {
       std::vector<glm::vec4> lc;
       std::vector<float> lz;

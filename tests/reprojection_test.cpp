@@ -6,6 +6,7 @@
 #include <random>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include "engine/camera.h"
@@ -127,7 +128,7 @@ TEST(Reprojection, TheEstimatedErrorIsTheStrafesParallaxAndCrossesTheThresholdWh
   const int expected = int(std::floor(threshold / (perUnit * step))) + 1;  // first frame beyond
   ASSERT_GT(expected, 3);
   for (int k = 1; k <= expected + 2; ++k) {
-    const ReprojectionError e = estimateReprojectionError(slice, strafed(k), slabs, kMin, kMax, kSize);
+    const ReprojectionError e = estimateReprojectionError(slice, strafed(k), slabs, kMin, kMax, kSize, kSize);
     EXPECT_NEAR(e.parallaxPx, perUnit * step * k, 1e-3 * perUnit * step * k) << "frame " << k;
     EXPECT_EQ(e.parallaxPx > threshold, k >= expected) << "frame " << k << ": " << e.parallaxPx << " px";
   }
@@ -138,15 +139,59 @@ TEST(Reprojection, APureRotationEstimatesNoErrorWhileTheVegetationStaysInTheImag
   const double zp = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
   const std::vector<SlabRange> slabs = {{float(zp - 1.0), float(zp - 0.2), float(zp - 0.6)}, {float(zp - 0.2), float(zp + 1.0), float(zp + 0.4)}};
   for (uint32_t frame : {1u, 4u, 8u}) {
-    const ReprojectionError e = estimateReprojectionError(slice, along(CameraMotion::Turn, frame), slabs, kMin, kMax, kSize);
+    const ReprojectionError e = estimateReprojectionError(slice, along(CameraMotion::Turn, frame), slabs, kMin, kMax, kSize, kSize);
     EXPECT_LT(e.parallaxPx, 1e-3) << "frame " << frame;
     EXPECT_LT(e.turnDegrees, 1e-3) << "the eye stays: the vegetation is seen from the same direction";
     EXPECT_LT(e.magnification, 1.02);
   }
   // A zoom keeps the eye too, but magnifies the layers' texels.
-  const ReprojectionError z = estimateReprojectionError(slice, along(CameraMotion::Zoom, 20, 1.0f), slabs, kMin, kMax, kSize);
+  const ReprojectionError z = estimateReprojectionError(slice, along(CameraMotion::Zoom, 20, 1.0f), slabs, kMin, kMax, kSize, kSize);
   EXPECT_LT(z.parallaxPx, 1e-3);
   EXPECT_NE(z.magnification, 1.0);
+}
+
+// The guard band (docs/design.md "Layers: guard band"): the slice camera widened by guardedView
+// shows every world point at its output pixel plus the guard, so a still camera reads the layers at
+// p + guard; content a turn brings in from beyond the output's edge is in the layer images until the
+// turn leaves the guard band, and the policy's "content beyond the layers" says so.
+TEST(Reprojection, TheGuardBandShowsTheOutputOffsetAndHoldsWhatATurnBringsIn) {
+  const glm::uvec2 out(kSize), guard(96, 80), layer = out + 2u * guard;
+  const LayerView v = along(CameraMotion::Orbit, 7);
+  const LayerView g = guardedView(v, out, guard);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 64; ++k) {
+    const glm::dvec3 x(u(rng), 1.0 + u(rng), u(rng));
+    const glm::dvec2 d = pixelOf(g, x, glm::dvec2(layer)) - (pixelOf(v, x) + glm::dvec2(guard));
+    EXPECT_LT(glm::length(d), 1e-3) << "point " << k;
+  }
+  EXPECT_TRUE(sameCamera(guardedView(v, out, glm::uvec2(0)), v)) << "no guard band: the camera itself";
+  // A camera turned 20 degrees away from the vegetation (cut by the output's edge), then turning back
+  // a degree a frame (content from beyond the edge comes into view): without a guard band the
+  // policy sees content beyond the layers from the first degree; with one, the same error less the
+  // band's width, so none for the first few degrees.
+  const LayerView base = along(CameraMotion::Still, 0);
+  auto turned = [&](float degrees) {
+    LayerView t = base;
+    t.view = glm::mat4(glm::rotate(glm::dmat4(1.0), glm::radians(double(degrees)), glm::dvec3(0, 1, 0))) * t.view;
+    return t;
+  };
+  const LayerView slice = turned(20.0f), sliceGuarded = guardedView(slice, out, guard);
+  const std::vector<SlabRange> slabs = {{4.0f, 5.0f, 4.5f}};
+  int inBand = 0, beyondBand = 0;
+  for (int k = 1; k <= 20; ++k) {
+    const LayerView current = turned(20.0f - float(k));
+    const ReprojectionError e0 = estimateReprojectionError(slice, current, slabs, kMin, kMax, kSize, kSize);
+    const ReprojectionError eg = estimateReprojectionError(sliceGuarded, current, slabs, kMin, kMax, glm::dvec2(layer), kSize);
+    EXPECT_LT(eg.parallaxPx, 1e-3);
+    EXPECT_NEAR(eg.magnification, e0.magnification, 1e-3);
+    EXPECT_NEAR(eg.outsidePx, std::max(0.0, e0.outsidePx - double(guard.x)), 1.0) << k << " degrees";
+    EXPECT_GT(e0.outsidePx, 1.0) << k << " degrees";
+    inBand += eg.outsidePx <= 1.0;
+    beyondBand += eg.outsidePx > 1.0;
+  }
+  EXPECT_GE(inBand, 3) << "a turn of a few degrees stays within a 96-pixel band";
+  EXPECT_GT(beyondBand, 0);
 }
 
 }  // namespace

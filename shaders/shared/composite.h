@@ -57,8 +57,8 @@ struct CompositePush {
   uint gridX;          // warp-grid corners per row (gridCorners(width, cellSize))
   uint gridY;
   uint flags;          // COMPOSITE_*
-  float cellSize;      // warp-grid cell, pixels
-  float width;         // output = layer size, pixels
+  float cellSize;      // warp-grid cell, layer pixels
+  float width;         // output size, pixels
   float height;
   float depthAlpha;    // a layer writes the depth output where its alpha >= this (0.5)
   uint tilesX;         // occupancy tiles per row: ceil(width / COMPOSITE_TILE)
@@ -75,8 +75,17 @@ struct CompositePush {
   uint occupancyY0;
   uint occupancyX1;
   uint occupancyY1;
+  // The layer images (docs/design.md "Layers: guard band"): the output plus a guard band on each
+  // side, so layer pixel = output pixel + origin for the slice camera itself; the warp grid and the
+  // occupancy tiles are over the layer images.
+  float layerWidth;
+  float layerHeight;
+  float originX;       // guard band width, pixels (a multiple of COMPOSITE_TILE)
+  float originY;
+  uint layerTilesX;    // occupancy tiles per row: ceil(layerWidth / COMPOSITE_TILE)
+  uint layerTilesY;
 };
-CANOPY_SIZE_CHECK(CompositePush, 80)
+CANOPY_SIZE_CHECK(CompositePush, 104)
 
 // Reprojection between re-slices (docs/design.md "Layers: reprojection"): the layers and the rigid
 // background were drawn from the slice camera; the composite shows them from the current camera.
@@ -99,7 +108,8 @@ CANOPY_INLINE vec3 compositeHomogeneous(vec4 r0, vec4 r1, vec4 r2, vec2 p) {
   vec3 ph = vec3(p.x, p.y, 1.0f);
   return vec3(dot(vec3(r0), ph), dot(vec3(r1), ph), dot(vec3(r2), ph));
 }
-// The point shown at layer pixel s with slice-camera depth z, in camera `toClip`'s clip space.
+// The point shown at layer pixel s (of `size`, the layer images) with slice-camera depth z, in
+// camera `toClip`'s clip space.
 CANOPY_INLINE vec4 compositeClipOf(mat4 toClip, vec2 s, float z, vec2 size) {
   return toClip * vec4(s.x / size.x * 2.0f - 1.0f, s.y / size.y * 2.0f - 1.0f, z, 1.0f);
 }
@@ -143,9 +153,9 @@ CANOPY_INLINE float compositeStandardDepth(uint flags, float hostZ) {
   return (flags & COMPOSITE_REVERSE_Z) != 0u ? 1.0f - hostZ : hostZ;
 }
 
-// Bilinear position of pixel point p (pixel centres at +0.5, y down) in the warp grid: the four
-// corner indices (row-major, gridX per row) and the weights. Corner (gx, gy) sits at pixel
-// (min(gx cell, width), min(gy cell, height)), as the dynamics pass places it.
+// Bilinear position of layer pixel point p (pixel centres at +0.5, y down) in the warp grid: the
+// four corner indices (row-major, gridX per row) and the weights. Corner (gx, gy) sits at layer
+// pixel (min(gx cell, layerWidth), min(gy cell, layerHeight)), as the dynamics pass places it.
 struct GridSample {
   uint i00;
   uint i10;
@@ -160,7 +170,7 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
   float cx = clamp(floor(p.x / c.cellSize), 0.0f, float(c.gridX - 2u));
   float cy = clamp(floor(p.y / c.cellSize), 0.0f, float(c.gridY - 2u));
   float x0 = cx * c.cellSize, y0 = cy * c.cellSize;
-  float x1 = min(x0 + c.cellSize, c.width), y1 = min(y0 + c.cellSize, c.height);
+  float x1 = min(x0 + c.cellSize, c.layerWidth), y1 = min(y0 + c.cellSize, c.layerHeight);
   s.t = vec2(clamp((p.x - x0) / max(x1 - x0, 1e-6f), 0.0f, 1.0f), clamp((p.y - y0) / max(y1 - y0, 1e-6f), 0.0f, 1.0f));
   uint gx = uint(cx), gy = uint(cy);
   s.cell = vec2(cx, cy);

@@ -406,6 +406,11 @@ enum class DepthConvention : uint32_t {
 // slice a frame (a re-slice asked at once then takes several frames; docs/design.md "Layers: mesh
 // budget and staging ring"). 0: no limit, the mesh is always resident. Planned for the layer count
 // and size at creation.
+// guardBand: the layer images extend beyond each edge of the targets by this fraction of their
+// width and height (rounded to a multiple of 16 pixels; docs/design.md "Layers: guard band"), so a
+// camera that turns or strafes between re-slices shows the layers' content from there instead of an
+// empty edge, and the error-driven policy does not re-slice while the view stays within them. It
+// costs layer memory and fill in proportion: 0.1 draws 1.2 x 1.2 = 1.44 times the pixels.
 // allowPerVertex: keeps the model's branch hierarchy (8 bytes a vertex, host and device) and the
 // per-vertex pipeline; the mesh must then be resident (createCanopy refuses a model whose mesh
 // would be streamed, naming the budget).
@@ -420,6 +425,7 @@ enum class DepthConvention : uint32_t {
   X(VkFormat, layerFormat, VK_FORMAT_R16G16B16A16_SFLOAT, None, 0, 0, "", "Canopy's layer images (or R8G8B8A8_UNORM)") \
   X(uint32_t, maxLayers, 8, Closed, 1, 32, "layers", "the most layers CanopyParams may ask for")                      \
   X(uint32_t, minCellSize, 4, Closed, 2, 256, "pixels", "the smallest warp-grid cell CanopyParams may ask for")       \
+  X(float, guardBand, 0.1f, Closed, 0, 0.5, "of width, height", "the layers reach this far beyond each edge of the targets (rounded to 16 px; 0: none)") \
   X(SimulationDesc, simulation, {}, Nested, 0, 0, "", "the simulation's grid and history")                             \
   X(CanopyContext*, shareSimulationWith, nullptr, None, 0, 0, "", "follow this context's simulation")                  \
   X(MaterialSplitOptions, split, {}, None, 0, 0, "", "rigid vs foliage materials")                                     \
@@ -529,6 +535,8 @@ struct LayerStats {
   uint32_t leafCount = 0;
   uint64_t foliageTriangles = 0, rigidTriangles = 0;
   bool singlePass = false;    // the draw mode in use
+  // The layer images' size, pixels: the targets' plus the guard band on each side (CanopyDesc.guardBand).
+  uint32_t layerWidth = 0, layerHeight = 0, guardX = 0, guardY = 0;
   uint64_t viewUpdates = 0;   // frames seen
   uint64_t rebuilds = 0;      // of which re-sliced the layers
   std::string lastRebuildReason;

@@ -14,6 +14,7 @@
 // Exit 0 when the check passes, 1 on a failure, 2 on bad arguments.
 #include <canopy/canopy.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -36,6 +37,10 @@ constexpr uint32_t kW = 320, kH = 240;
 constexpr uint32_t kMaxFramesInFlight = 3;
 constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
+// The usage the host creates its targets with, declared to Canopy with them (CanopyImage).
+constexpr VkImageUsageFlags kColorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+constexpr VkImageUsageFlags kDepthUsage =
+    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 
 #define HOST_CHECK(call)                                                                  \
   do {                                                                                    \
@@ -198,8 +203,8 @@ bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDev
     canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, *apiVersion, pd, &r);
     VkPhysicalDeviceProperties p;
     vkGetPhysicalDeviceProperties(pd, &p);
-    if (!s.ok() || !r.unsupported.empty()) {
-      std::fprintf(stderr, "canopy-example-host: skipping %s: %s\n", p.deviceName, s.ok() ? r.unsupported.c_str() : s.message().c_str());
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-example-host: skipping %s: %s\n", p.deviceName, s.message().c_str());
       continue;
     }
     if (!h.physical || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) {
@@ -222,12 +227,16 @@ bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDev
       break;
     }
   // The host's own feature chain; Canopy switches on what it needs in it.
-  canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, h.instance, h.physical, features);
+  // The device runs the lower of the instance's version and the physical device's.
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(h.physical, &props);
+  canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, h.instance, h.physical,
+                                                  std::min(*apiVersion, props.apiVersion), features);
   if (!s.ok()) {
     std::fprintf(stderr, "canopy-example-host: %s\n", s.message().c_str());
     return false;
   }
-  for (const std::string& e : req.extensions) extensions->push_back(strdup(e.c_str()));
+  for (const std::string& e : req.deviceExtensions) extensions->push_back(strdup(e.c_str()));
   static float priority = 1.0f;
   static VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueFamilyIndex = h.family;
@@ -501,10 +510,10 @@ bool recordFrame(Host& h, canopy::CanopyContext* ctx, Frame& f, uint64_t frameNu
     in.frame.camera = {toCanopy(h.view), toCanopy(h.proj)};
     in.frame.dt = v.dt;
     in.frame.frameNumber = frameNumber;
-    in.color = {h.color.image, h.color.view, {kColorStage, kColorAccess, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
-                {kColorStage, kColorAccess, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL}};
-    in.depth = {h.depth.image, h.depth.view, {kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
-                {kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL}};
+    const canopy::ResourceState colorState{kColorStage, kColorAccess, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+        depthState{kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+    in.color = canopy::canopyImage(h.color.image, h.color.view, kColorUsage, kColorFormat, colorState, colorState);
+    in.depth = canopy::canopyImage(h.depth.image, h.depth.view, kDepthUsage, kDepthFormat, depthState, depthState);
     canopy::Status s = canopy::recordCanopy(ctx, f.cmd, in);
     if (!s.ok()) {
       std::fprintf(stderr, "canopy-example-host: %s\n", s.message().c_str());
@@ -572,13 +581,10 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
   if (!createInstanceAndDevice(h, validate, &api, &dci, &exts, &f2)) return false;
   const bool ok = [&] {
     // The host's own objects.
-    if (!createTarget(h, kColorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                      VK_IMAGE_ASPECT_COLOR_BIT, &h.color))
+    if (!createTarget(h, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &h.color))
       return false;
     // Sampled: Canopy reads the host's depth to put the host's scene between its layers.
-    if (!createTarget(h, kDepthFormat,
-                      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-                      VK_IMAGE_ASPECT_DEPTH_BIT, &h.depth))
+    if (!createTarget(h, kDepthFormat, kDepthUsage, VK_IMAGE_ASPECT_DEPTH_BIT, &h.depth))
       return false;
     if (!createPipeline(h)) return false;
     VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};

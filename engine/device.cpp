@@ -89,53 +89,63 @@ std::vector<std::string> deviceExtensions(const VulkanFunctions& vk, VkPhysicalD
 
 bool contains(const std::vector<std::string>& v, const std::string& s) { return std::find(v.begin(), v.end(), s) != v.end(); }
 
-// The requirements of one physical device; `core13` when it and the instance run 1.3.
-void fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t instanceApi, DeviceRequirements* r,
-                      bool* core13Out) {
+std::string versionName(uint32_t v) { return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)); }
+
+// The requirements of one physical device (`props`, read with a 1.0 entry point) for an instance of
+// `instanceApi`; `core13` when both run 1.3. Returns what is missing, "" when the device can run
+// Canopy. Entry points beyond 1.0 are called only when both run 1.2.
+std::string fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, const VkPhysicalDeviceProperties& props,
+                             uint32_t instanceApi, DeviceRequirements* r, bool* core13Out) {
   *r = DeviceRequirements{};
-  VkPhysicalDeviceProperties props;
-  vk.GetPhysicalDeviceProperties(pd, &props);
   const bool core13 = props.apiVersion >= VK_API_VERSION_1_3 && instanceApi >= VK_API_VERSION_1_3;
   if (core13Out) *core13Out = core13;
-  r->extensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
+  r->optionalInstanceExtensions = {{VK_EXT_DEBUG_UTILS_EXTENSION_NAME, "names Canopy's Vulkan objects for debuggers and validation messages"}};
+  r->deviceExtensions = {VK_KHR_PUSH_DESCRIPTOR_EXTENSION_NAME};
   if (!core13) {
-    r->extensions.push_back(VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME);
-    r->extensions.push_back(VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME);
+    r->deviceExtensions.push_back(VK_KHR_SYNCHRONIZATION_2_EXTENSION_NAME);
+    r->deviceExtensions.push_back(VK_KHR_DYNAMIC_RENDERING_EXTENSION_NAME);
   }
-  r->optionalExtensions = {VK_EXT_DEBUG_UTILS_EXTENSION_NAME + std::string(" (instance; debug names)")};
   r->features = {"VkPhysicalDeviceVulkan12Features.scalarBlockLayout",
                  core13 ? "VkPhysicalDeviceVulkan13Features.synchronization2"
                         : "VkPhysicalDeviceSynchronization2Features.synchronization2",
                  core13 ? "VkPhysicalDeviceVulkan13Features.dynamicRendering"
-                        : "VkPhysicalDeviceDynamicRenderingFeatures.dynamicRendering",
-                 "VkPhysicalDeviceVulkan12Features.shaderOutputLayer or VkPhysicalDeviceFeatures.shaderClipDistance"};
-  r->optionalFeatures = {"VkPhysicalDeviceVulkan12Features.shaderOutputLayer (all layers in one draw)",
-                         "VkPhysicalDeviceFeatures.shaderClipDistance (one draw per layer; geometry slicing)",
-                         "VkPhysicalDeviceFeatures.geometryShader + independentBlend (layer id debug output)"};
-  std::string why;
-  if (props.apiVersion < VK_API_VERSION_1_2 || instanceApi < VK_API_VERSION_1_2) {
-    why = "Vulkan 1.2 is required (device " + std::to_string(VK_API_VERSION_MAJOR(props.apiVersion)) + "." +
-          std::to_string(VK_API_VERSION_MINOR(props.apiVersion)) + ", instance " +
-          std::to_string(VK_API_VERSION_MAJOR(instanceApi)) + "." + std::to_string(VK_API_VERSION_MINOR(instanceApi)) + ")";
-  } else {
+                        : "VkPhysicalDeviceDynamicRenderingFeatures.dynamicRendering"};
+  r->featuresAnyOf = {{"VkPhysicalDeviceVulkan12Features.shaderOutputLayer", "VkPhysicalDeviceFeatures.shaderClipDistance"}};
+  r->optionalFeatures = {{"VkPhysicalDeviceVulkan12Features.shaderOutputLayer", "draws all layers in one pass (gl_Layer from the vertex shader)"},
+                         {"VkPhysicalDeviceFeatures.shaderClipDistance", "one draw per layer, and geometry slicing (SliceMode::Geometry)"},
+                         {"VkPhysicalDeviceFeatures.geometryShader", "with independentBlend: the layer-id debug output"},
+                         {"VkPhysicalDeviceFeatures.independentBlend", "with geometryShader: the layer-id debug output"}};
+  r->featureStructs = core13 ? std::vector<std::string>{"VkPhysicalDeviceFeatures2", "VkPhysicalDeviceVulkan12Features",
+                                                        "VkPhysicalDeviceVulkan13Features"}
+                             : std::vector<std::string>{"VkPhysicalDeviceFeatures2", "VkPhysicalDeviceVulkan12Features",
+                                                        "VkPhysicalDeviceSynchronization2Features",
+                                                        "VkPhysicalDeviceDynamicRenderingFeatures"};
+  std::vector<std::string> why;
+  if (instanceApi < VK_API_VERSION_1_2)
+    why.push_back("the instance's API version is " + versionName(instanceApi) + " (VkApplicationInfo.apiVersion; Vulkan 1.2 is required)");
+  if (props.apiVersion < VK_API_VERSION_1_2)
+    why.push_back("the device supports Vulkan " + versionName(props.apiVersion) + " (1.2 is required)");
+  uint32_t n = 0;
+  vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(n);
+  vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+  bool queue = false;
+  for (auto& q : fams) queue |= (q.queueFlags & r->queueFlags) == r->queueFlags;
+  if (!queue) why.push_back("no queue family has graphics + compute");
+  if (why.empty()) {  // 1.1+ entry points are valid only now
     const std::vector<std::string> have = deviceExtensions(vk, pd);
-    for (const std::string& e : r->extensions)
-      if (why.empty() && !contains(have, e)) why = "extension " + e + " is not supported";
+    for (const std::string& e : r->deviceExtensions)
+      if (!contains(have, e)) why.push_back("device extension " + e + " is not supported");
     const FeatureView f = supported(vk, pd, core13 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2);
-    if (why.empty() && !f.scalarBlockLayout) why = "feature scalarBlockLayout is not supported";
-    if (why.empty() && !f.synchronization2) why = "feature synchronization2 is not supported";
-    if (why.empty() && !f.dynamicRendering) why = "feature dynamicRendering is not supported";
-    if (why.empty() && !f.shaderOutputLayer && !f.core.shaderClipDistance)
-      why = "neither shaderOutputLayer nor shaderClipDistance is supported (no way to draw into a layer)";
-    uint32_t n = 0;
-    vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
-    std::vector<VkQueueFamilyProperties> fams(n);
-    vk.GetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
-    bool queue = false;
-    for (auto& q : fams) queue |= (q.queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) == (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT);
-    if (why.empty() && !queue) why = "no queue family with graphics + compute";
+    if (!f.scalarBlockLayout) why.push_back("feature scalarBlockLayout is not supported");
+    if (!f.synchronization2) why.push_back("feature synchronization2 is not supported");
+    if (!f.dynamicRendering) why.push_back("feature dynamicRendering is not supported");
+    if (!f.shaderOutputLayer && !f.core.shaderClipDistance)
+      why.push_back("neither shaderOutputLayer nor shaderClipDistance is supported (no way to draw into a layer)");
   }
-  r->unsupported = why;
+  std::string all;
+  for (const std::string& w : why) all += (all.empty() ? "" : "; ") + w;
+  return all;
 }
 
 }  // namespace
@@ -143,26 +153,49 @@ void fillRequirements(const VulkanFunctions& vk, VkPhysicalDevice pd, uint32_t i
 Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, uint32_t instanceApiVersion,
                                VkPhysicalDevice pd, DeviceRequirements* out) {
   return guardApi("queryDeviceRequirements", [&]() -> Status {
-    if (!out || !pd) return Status::error("queryDeviceRequirements: physicalDevice and out are required");
+    if (!out || !pd || !instance) return Status::error("queryDeviceRequirements: instance, physicalDevice and out are required");
+    if (!gipa) return Status::error("queryDeviceRequirements: getInstanceProcAddr is required");
     VulkanFunctions vk;
     const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
-    if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
-    fillRequirements(vk, pd, instanceApiVersion, out, nullptr);
+    // A 1.0 instance may lack the 1.1 entry points: its version is the error, not a function.
+    if (!missing.empty() && instanceApiVersion >= VK_API_VERSION_1_2)
+      return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: " + missing + " is unavailable");
+    auto props10 = reinterpret_cast<PFN_vkGetPhysicalDeviceProperties>(gipa(instance, "vkGetPhysicalDeviceProperties"));
+    auto families10 = reinterpret_cast<PFN_vkGetPhysicalDeviceQueueFamilyProperties>(gipa(instance, "vkGetPhysicalDeviceQueueFamilyProperties"));
+    if (!props10 || !families10)
+      return Status::error(Result::UnsupportedDevice, "queryDeviceRequirements: vkGetPhysicalDeviceProperties is unavailable");
+    vk.GetPhysicalDeviceQueueFamilyProperties = families10;
+    VkPhysicalDeviceProperties props{};
+    props10(pd, &props);
+    const std::string why = fillRequirements(vk, pd, props, instanceApiVersion, out, nullptr);
+    if (!why.empty())
+      return Status::error(Result::UnsupportedDevice, std::string("queryDeviceRequirements: ") + props.deviceName +
+                                                          " cannot run Canopy: " + why);
     return Status();
   });
 }
 
-Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd,
+Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr gipa, VkInstance instance, VkPhysicalDevice pd, uint32_t deviceApiVersion,
                             VkPhysicalDeviceFeatures2* chain) {
   return guardApi("enableDeviceFeatures", [&]() -> Status {
     if (!chain || chain->sType != VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2)
-      return Status::error("enableDeviceFeatures: chain must start with a VkPhysicalDeviceFeatures2");
+      return Status::error(Result::InvalidArgument, "enableDeviceFeatures: chain must start with a VkPhysicalDeviceFeatures2");
+    if (deviceApiVersion < VK_API_VERSION_1_2)
+      return Status::error(Result::UnsupportedDevice, "enableDeviceFeatures: deviceApiVersion " + versionName(deviceApiVersion) +
+                                                          " is below Vulkan 1.2, which Canopy requires");
     VulkanFunctions vk;
     const std::string missing = loadInstanceFunctions(gipa, instance, &vk);
     if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "enableDeviceFeatures: " + missing + " is unavailable");
     VkPhysicalDeviceProperties props;
     vk.GetPhysicalDeviceProperties(pd, &props);
-    const FeatureView have = supported(vk, pd, props.apiVersion);
+    if (VK_API_VERSION_MAJOR(deviceApiVersion) > VK_API_VERSION_MAJOR(props.apiVersion) ||
+        (VK_API_VERSION_MAJOR(deviceApiVersion) == VK_API_VERSION_MAJOR(props.apiVersion) &&
+         VK_API_VERSION_MINOR(deviceApiVersion) > VK_API_VERSION_MINOR(props.apiVersion)))
+      return Status::error(Result::InvalidArgument, "enableDeviceFeatures: deviceApiVersion " + versionName(deviceApiVersion) +
+                                                        " is above the physical device's " + versionName(props.apiVersion) +
+                                                        " (pass the lower of the two)");
+    const bool is13 = deviceApiVersion >= VK_API_VERSION_1_3;
+    const FeatureView have = supported(vk, pd, is13 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2);
     VkPhysicalDeviceVulkan12Features* f12 = nullptr;
     VkPhysicalDeviceVulkan13Features* f13 = nullptr;
     VkPhysicalDeviceSynchronization2Features* fs2 = nullptr;
@@ -173,11 +206,23 @@ Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr gipa, VkInstance instance,
       if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES) fs2 = reinterpret_cast<VkPhysicalDeviceSynchronization2Features*>(s);
       if (s->sType == VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES) fdr = reinterpret_cast<VkPhysicalDeviceDynamicRenderingFeatures*>(s);
     }
-    if (!f12) return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain has no VkPhysicalDeviceVulkan12Features");
+    const std::string want = is13 ? "VkPhysicalDeviceVulkan12Features and VkPhysicalDeviceVulkan13Features"
+                                  : "VkPhysicalDeviceVulkan12Features, VkPhysicalDeviceSynchronization2Features and "
+                                    "VkPhysicalDeviceDynamicRenderingFeatures";
+    const std::string forVersion = " (a Vulkan " + versionName(deviceApiVersion) + " device's chain holds " + want + ")";
+    if (!f12) return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain has no VkPhysicalDeviceVulkan12Features" + forVersion);
+    if (!is13 && f13)
+      return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain holds VkPhysicalDeviceVulkan13Features, which a "
+                                                    "Vulkan 1.2 device refuses (VUID-VkDeviceCreateInfo-pNext-pNext)" + forVersion);
+    if (is13 && f13 && (fs2 || fdr))
+      return Status::error(Result::InvalidArgument, "enableDeviceFeatures: the chain holds VkPhysicalDeviceVulkan13Features and " +
+                                                        std::string(fs2 ? "VkPhysicalDeviceSynchronization2Features" : "VkPhysicalDeviceDynamicRenderingFeatures") +
+                                                        ", which Vulkan forbids together" + forVersion);
     if (!f13 && (!fs2 || !fdr))
-      return Status::error(Result::InvalidArgument,
-                           "enableDeviceFeatures: the chain needs VkPhysicalDeviceVulkan13Features, or "
-                           "VkPhysicalDeviceSynchronization2Features and VkPhysicalDeviceDynamicRenderingFeatures");
+      return Status::error(Result::InvalidArgument, std::string("enableDeviceFeatures: the chain has no ") +
+                                                        (is13 ? "VkPhysicalDeviceVulkan13Features"
+                                                              : !fs2 ? "VkPhysicalDeviceSynchronization2Features"
+                                                                     : "VkPhysicalDeviceDynamicRenderingFeatures") + forVersion);
     f12->scalarBlockLayout = VK_TRUE;
     f12->shaderOutputLayer = have.shaderOutputLayer ? VK_TRUE : f12->shaderOutputLayer;
     if (f13) {
@@ -204,21 +249,25 @@ Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out) {
     return Status::error("AdoptDeviceDesc.framesInFlight = " + std::to_string(desc.framesInFlight) + " is outside [1, 3]");
   if (desc.memoryAllocator && (!desc.memoryAllocator->allocate || !desc.memoryAllocator->free))
     return Status::error("AdoptDeviceDesc.memoryAllocator needs both allocate and free");
+  if (desc.instanceApiVersion < VK_API_VERSION_1_2)
+    return Status::error(Result::UnsupportedDevice, "AdoptDeviceDesc.instanceApiVersion is " + versionName(desc.instanceApiVersion) +
+                                                        " (VkApplicationInfo.apiVersion); Canopy requires Vulkan 1.2");
   VulkanFunctions probe;
   std::string missing = loadInstanceFunctions(desc.getInstanceProcAddr, desc.instance, &probe);
   if (!missing.empty()) return Status::error(Result::UnsupportedDevice, "adoptDevice: " + missing + " is unavailable");
   DeviceRequirements req;
   bool core13 = false;
-  fillRequirements(probe, desc.physicalDevice, desc.instanceApiVersion, &req, &core13);
-  if (!req.unsupported.empty())
-    return Status::error(Result::UnsupportedDevice, "adoptDevice: this physical device cannot run Canopy: " + req.unsupported);
+  VkPhysicalDeviceProperties props{};
+  probe.GetPhysicalDeviceProperties(desc.physicalDevice, &props);
+  const std::string why = fillRequirements(probe, desc.physicalDevice, props, desc.instanceApiVersion, &req, &core13);
+  if (!why.empty()) return Status::error(Result::UnsupportedDevice, "adoptDevice: this physical device cannot run Canopy: " + why);
 
   // What the host enabled, read from its create info.
   const VkDeviceCreateInfo& ci = *desc.deviceCreateInfo;
   std::vector<std::string> enabled;
   for (uint32_t i = 0; i < ci.enabledExtensionCount; ++i) enabled.push_back(ci.ppEnabledExtensionNames[i]);
   std::string absent;
-  for (const std::string& e : req.extensions)
+  for (const std::string& e : req.deviceExtensions)
     if (!contains(enabled, e)) absent += (absent.empty() ? "" : ", ") + ("extension " + e);
   const FeatureView on = readChain(ci.pNext, ci.pEnabledFeatures);
   if (!on.scalarBlockLayout) absent += std::string(absent.empty() ? "" : ", ") + "feature scalarBlockLayout";

@@ -82,8 +82,9 @@ struct Host {
     CANOPY_TRY(g.realize(*dev));
     CanopyFrameInputs in;
     in.frame = f;
-    in.color = {color.image, color.view, colorRW, src};
-    in.depth = {depth.image, depth.view, depthW, src};
+    in.color = canopyImage(color.image, color.view, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, colorFormat, colorRW, src);
+    in.depth = canopyImage(depth.image, depth.view, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                           VK_FORMAT_D32_SFLOAT, depthW, src);
     Status s = submitAndWait(*dev, [&](VkCommandBuffer cmd) -> Status {
       CANOPY_TRY(g.record(cmd));
       return recordCanopy(ctx, cmd, in);

@@ -1,5 +1,6 @@
 #include "tests/host_device.h"
 
+#include <algorithm>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -78,15 +79,20 @@ Status CanopyDeviceFeatures::fill(VkInstance instance, VkPhysicalDevice physical
     f12.pNext = &sync2;
     sync2.pNext = &dynamicRendering;
   }
-  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, instance, physical, &features));
+  // The device runs the lower of the instance's version and the physical device's.
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(physical, &props);
+  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, instance, physical, std::min(api, props.apiVersion), &features));
   extensions.clear();
-  for (const std::string& e : requirements.extensions) extensions.push_back(e.c_str());
+  for (const std::string& e : requirements.deviceExtensions) extensions.push_back(e.c_str());
   return Status();
 }
 
-Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
+Status createHostInstance(HostDevice* host, uint32_t apiVersion) { return createInstance(*host, apiVersion); }
+
+Status createHostDevice(uint32_t framesInFlight, HostDevice* out, uint32_t apiVersion) {
   HostDevice& h = *out;
-  const uint32_t api = hostApiVersion();
+  const uint32_t api = apiVersion ? apiVersion : hostApiVersion();
   CANOPY_TRY(createInstance(h, api));
 
   // The first physical device Canopy can run on, as an engine would pick among its candidates.
@@ -97,9 +103,9 @@ Status createHostDevice(uint32_t framesInFlight, HostDevice* out) {
   std::string why;
   for (VkPhysicalDevice pd : devices) {
     DeviceRequirements r;
-    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, api, pd, &r));
-    if (!r.unsupported.empty()) {
-      why += r.unsupported + "; ";
+    const Status s = queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, api, pd, &r);
+    if (!s.ok()) {
+      why += s.message() + "; ";
       continue;
     }
     h.physical = pd;

@@ -33,7 +33,7 @@ struct CanopyDeviceFeatures {
   VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
   VkPhysicalDeviceDynamicRenderingFeatures dynamicRendering{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
   DeviceRequirements requirements;
-  std::vector<const char*> extensions;  // into requirements.extensions
+  std::vector<const char*> extensions;  // into requirements.deviceExtensions
   CanopyDeviceFeatures() = default;
   CanopyDeviceFeatures(const CanopyDeviceFeatures&) = delete;
   CanopyDeviceFeatures& operator=(const CanopyDeviceFeatures&) = delete;
@@ -42,9 +42,11 @@ struct CanopyDeviceFeatures {
 // The instance version a test host asks for: 1.3 when the loader has it, else 1.2.
 uint32_t hostApiVersion();
 
-// Creates instance and device and adopts the device with `framesInFlight`. A missing validation
-// layer is an error, never a skip.
-Status createHostDevice(uint32_t framesInFlight, HostDevice* host);
+// Creates instance and device and adopts the device with `framesInFlight`; the instance at
+// `apiVersion` (0: hostApiVersion()). A missing validation layer is an error, never a skip.
+Status createHostDevice(uint32_t framesInFlight, HostDevice* host, uint32_t apiVersion = 0);
+// Only the instance (validation + synchronization validation, messages to host->sink) at `apiVersion`.
+Status createHostInstance(HostDevice* host, uint32_t apiVersion);
 // Releases Canopy's view, waits for the device, destroys device and instance.
 void destroyHostDevice(HostDevice& host);
 

@@ -436,9 +436,11 @@ TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
     if (s.ok()) s = g.realize(dev);
     CanopyFrameInputs in;
     in.frame = makeCanopyFrame(view, 0.1f, ++number);
-    in.color = {color.image, color.view, colorRW, src};
-    in.motion = {motion.image, motion.view, colorRW, src};
-    in.depth = {depth.image, depth.view, depthW, depthW};
+    const VkImageUsageFlags colorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    in.color = canopyImage(color.image, color.view, colorUsage, VK_FORMAT_R16G16B16A16_SFLOAT, colorRW, src);
+    in.motion = canopyImage(motion.image, motion.view, colorUsage, VK_FORMAT_R16G16_SFLOAT, colorRW, src);
+    in.depth = canopyImage(depth.image, depth.view, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                           VK_FORMAT_D32_SFLOAT, depthW, depthW);
     if (s.ok()) s = submitAndWait(dev, [&](VkCommandBuffer cmd) -> Status {
       CANOPY_TRY(g.record(cmd));
       return recordCanopy(ctx, cmd, in);

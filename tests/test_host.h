@@ -5,6 +5,7 @@
 // parameter-fuzz tests.
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <vector>
 
 #include <glm/gtc/packing.hpp>
@@ -34,6 +35,12 @@ struct Host {
   bool first = true;  // the targets hold nothing yet (UNDEFINED)
   // Canopy as one pass of the host's graph (<canopy/canopy_graph.h>) instead of recordCanopy.
   bool passGroup = false;
+  // Changes what the host declares of its images (CanopyImage) before Canopy sees them (tests of
+  // the contract's checks); null: declared as create() made them.
+  std::function<void(CanopyFrameInputs&)> declare;
+  // The host's own passes on its targets before Canopy's (after the clear) and after them, in
+  // graphs of their own (their barriers from the graph); null: none.
+  std::function<void(rg::RenderGraph&, rg::ResourceId color, rg::ResourceId depth)> passesBefore, passesAfter;
 
   Status create(Device& d, uint32_t inFlight) {
     dev = &d;
@@ -117,8 +124,12 @@ struct Host {
         in.frame.camera.proj = toFloat4x4(mirror * view.proj);
       }
       const bool last = i + 1 == contexts.size();
-      in.color = {color.image, color.view, i ? colorRW : dst, last ? src : colorRW};
-      in.depth = {depth.image, depthOnly, i ? depthW : dst, last ? src : depthW};
+      // Declared as create() made them (CanopyImage: Canopy checks the declaration).
+      in.color = canopyImage(color.image, color.view, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, colorFormat,
+                             i ? colorRW : dst, last ? src : colorRW);
+      in.depth = canopyImage(depth.image, depthOnly, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                             depthFormat, i ? depthW : dst, last ? src : depthW);
+      if (declare) declare(in);
     }
     const auto c = g.importImage("host colour", descOf(color), before, passGroup ? src : dst);
     const auto d = g.importImage("host depth", descOf(depth), before, passGroup ? src : dst);
@@ -134,6 +145,7 @@ struct Host {
      })
         .write(c, rg::Use::TransferDst)
         .write(d, rg::Use::TransferDst);
+    if (passesBefore) passesBefore(g, c, d);
     for (size_t i = 0; passGroup && i < contexts.size(); ++i) {
       // Each context one pass of the host's graph, declared with the uses Canopy reports.
       std::vector<CanopyTargetUse> uses;
@@ -163,6 +175,17 @@ struct Host {
       CANOPY_TRY(after.bindImage(da, depth));
       CANOPY_TRY(after.compile());
       CANOPY_TRY(after.realize(*dev));  // no transients
+      CANOPY_TRY(after.record(cmd));
+    }
+    if (passesAfter) {
+      rg::RenderGraph after;
+      const auto ca = after.importImage("host colour", descOf(color), src, src);
+      const auto da = after.importImage("host depth", descOf(depth), src, src);
+      passesAfter(after, ca, da);
+      CANOPY_TRY(after.bindImage(ca, color));
+      CANOPY_TRY(after.bindImage(da, depth));
+      CANOPY_TRY(after.compile());
+      CANOPY_TRY(after.realize(*dev));
       CANOPY_TRY(after.record(cmd));
     }
     CANOPY_VK(vkEndCommandBuffer(cmd));

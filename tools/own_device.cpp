@@ -141,9 +141,9 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
       continue;
     }
     DeviceRequirements req;
-    CANOPY_TRY(queryDeviceRequirements(vkGetInstanceProcAddr, d.instance, app.apiVersion, pd, &req));
-    if (!req.unsupported.empty()) {
-      rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": " + req.unsupported;
+    const Status rs = queryDeviceRequirements(vkGetInstanceProcAddr, d.instance, app.apiVersion, pd, &req);
+    if (!rs.ok()) {
+      rejected += std::string(rejected.empty() ? "" : "; ") + rs.message();
       continue;
     }
     if (typeScore(p.deviceType) > bestScore) {
@@ -165,7 +165,7 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   f12.pNext = core13 ? static_cast<void*>(&f13) : static_cast<void*>(&sync2);
   VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES, &f12};
   VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f11};
-  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, d.instance, physical, &f2));
+  CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, d.instance, physical, core13 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2, &f2));
   if (desc.disableShaderOutputLayer) {
     f12.shaderOutputLayer = VK_FALSE;
     if (!f2.features.shaderClipDistance)

@@ -31,14 +31,13 @@ int main() {
   canopy::DeviceRequirements req;
   canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, instance, app.apiVersion, pd, &req);
   if (!s.ok()) return fail("queryDeviceRequirements", s);
-  if (!req.unsupported.empty()) return std::fprintf(stderr, "consumer: %s\n", req.unsupported.c_str()), 1;
 
   float priority = 1.0f;
   VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
   qci.queueCount = 1;
   qci.pQueuePriorities = &priority;  // family 0: graphics + compute on lavapipe and desktop GPUs
   std::vector<const char*> exts;
-  for (const std::string& e : req.extensions) exts.push_back(e.c_str());
+  for (const std::string& e : req.deviceExtensions) exts.push_back(e.c_str());
   auto makeDevice = [&](VkPhysicalDeviceFeatures2* features, VkDeviceCreateInfo* dci, VkDevice* out) {
     *dci = VkDeviceCreateInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, features};
     dci->queueCreateInfoCount = 1;
@@ -81,7 +80,7 @@ int main() {
   VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dyn};
   VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &sync2};
   VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-  s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, instance, pd, &f2);
+  s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, instance, pd, VK_API_VERSION_1_2, &f2);
   if (!s.ok()) return fail("enableDeviceFeatures", s);
   VkDeviceCreateInfo dci;
   VkDevice device = VK_NULL_HANDLE;

@@ -504,13 +504,35 @@ struct CanopyFrame {
   bool cameraCut = false;
 };
 
-// One of the host's images, how it arrives and how to leave it (ResourceState: canopy_core.h).
+// One of the host's images, how it arrives and how to leave it (ResourceState: canopy_core.h), and
+// how it was created: Vulkan cannot be asked for an image's usage, so the host declares it and
+// Canopy checks it the first time it sees the image, with an error naming the image, what is
+// missing and the fix (docs/embedding.md, "Host images").
 struct CanopyImage {
   VkImage image = VK_NULL_HANDLE;
   VkImageView view = VK_NULL_HANDLE;  // 2D view; for depth, the depth aspect only
   ResourceState current;              // last stage/access/layout the host used it with
   ResourceState final;                // the state Canopy must leave it in
+  // VkImageCreateInfo.usage, required: colour and motion need COLOR_ATTACHMENT; depth needs
+  // DEPTH_STENCIL_ATTACHMENT and SAMPLED (Canopy reads the host's depth).
+  VkImageUsageFlags usage = 0;
+  VkFormat format = VK_FORMAT_UNDEFINED;            // required: the CanopyDesc format of this target
+  VkSampleCountFlagBits samples = VK_SAMPLE_COUNT_1_BIT;  // single-sampled only
+  VkImageAspectFlags viewAspects = 0;  // the view's aspects; 0: as Canopy expects (colour; depth only)
 };
+// The description of an image the host created with `usage` and `format`, used as `current` ->
+// `final` (single-sampled, the view's aspects as Canopy expects).
+inline CanopyImage canopyImage(VkImage image, VkImageView view, VkImageUsageFlags usage, VkFormat format,
+                               const ResourceState& current, const ResourceState& final) {
+  CanopyImage i;
+  i.image = image;
+  i.view = view;
+  i.current = current;
+  i.final = final;
+  i.usage = usage;
+  i.format = format;
+  return i;
+}
 struct CanopyFrameInputs {
   CanopyFrame frame;
   CanopyImage color, depth;

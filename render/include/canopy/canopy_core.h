@@ -96,27 +96,47 @@ struct ResourceState {
 
 struct Device;  // Canopy's view of one host VkDevice (opaque)
 
-// What Canopy needs of a device, and what it uses when present.
-struct DeviceRequirements {
-  uint32_t minApiVersion = VK_API_VERSION_1_2;
-  std::vector<std::string> extensions;          // required (on 1.2 also synchronization2, dynamic rendering)
-  std::vector<std::string> optionalExtensions;  // used when enabled
-  std::vector<std::string> features;            // required, as "VkPhysicalDeviceVulkan12Features.scalarBlockLayout"
-  std::vector<std::string> optionalFeatures;    // used when enabled (single-pass layers, clip-distance fallback)
-  std::string unsupported;  // why this physical device cannot run Canopy; empty when it can
+// Something Canopy uses when the host enabled it: its exact name and what it is used for.
+struct OptionalRequirement {
+  std::string name;    // exact: "VK_EXT_debug_utils", "VkPhysicalDeviceVulkan12Features.shaderOutputLayer"
+  std::string reason;  // one line: what Canopy does with it
 };
-// Reads the physical device through the host's loader. Works before any VkDevice exists.
-// `instanceApiVersion` is VkApplicationInfo.apiVersion of the host's instance: on 1.3 (instance and
-// device) synchronization2 and dynamic rendering are core, below it they are extensions.
+// What Canopy needs of the instance, the device and its queue, and what it uses when present
+// (docs/embedding.md). Names are exact, to pass to Vulkan as they are; features are
+// "Struct.member" of the structures enableDeviceFeatures() fills.
+struct DeviceRequirements {
+  uint32_t minApiVersion = VK_API_VERSION_1_2;               // of the instance and of the device
+  std::vector<std::string> instanceExtensions;               // required instance extensions (none)
+  std::vector<OptionalRequirement> optionalInstanceExtensions;  // VK_EXT_debug_utils (debug names)
+  std::vector<std::string> deviceExtensions;                 // required: VK_KHR_push_descriptor; below
+                                                             // 1.3 also synchronization2 and dynamic rendering
+  std::vector<OptionalRequirement> optionalDeviceExtensions;
+  std::vector<std::string> features;                         // required
+  std::vector<std::vector<std::string>> featuresAnyOf;       // at least one of each group
+  std::vector<OptionalRequirement> optionalFeatures;
+  VkQueueFlags queueFlags = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;  // one family with all of these
+  // The feature structures enableDeviceFeatures() needs in the chain for this API version (and none
+  // of a later version: a 1.2 device refuses VkPhysicalDeviceVulkan13Features).
+  std::vector<std::string> featureStructs;
+};
+// Fills `out` for this instance and physical device through the host's loader (works before any
+// VkDevice exists), and returns Result::UnsupportedDevice naming everything missing (the API
+// version of either, an extension, a feature, a graphics + compute queue family) when they
+// cannot run Canopy; `out` is filled either way. `instanceApiVersion` is VkApplicationInfo.apiVersion
+// of the host's instance: on 1.3 (instance and device) synchronization2 and dynamic rendering are
+// core, below it they are extensions.
 Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
                                uint32_t instanceApiVersion, VkPhysicalDevice physicalDevice, DeviceRequirements* out);
-// Sets Canopy's required features, and the optional ones the device supports, in the host's
-// feature chain (head VkPhysicalDeviceFeatures2 with VkPhysicalDeviceVulkan11Features,
-// VkPhysicalDeviceVulkan12Features and either VkPhysicalDeviceVulkan13Features or
-// VkPhysicalDeviceSynchronization2Features + VkPhysicalDeviceDynamicRenderingFeatures in pNext).
-// A struct missing from the chain is an error naming it; nothing is allocated.
+// Switches Canopy's required features, and the optional ones the device supports, on in the host's
+// feature chain for a device of `deviceApiVersion` (the version the device will run: the lower of
+// VkApplicationInfo.apiVersion and the physical device's). The chain (head VkPhysicalDeviceFeatures2)
+// must hold, for 1.3 and later: VkPhysicalDeviceVulkan12Features and VkPhysicalDeviceVulkan13Features;
+// for 1.2: VkPhysicalDeviceVulkan12Features, VkPhysicalDeviceSynchronization2Features and
+// VkPhysicalDeviceDynamicRenderingFeatures, and no VkPhysicalDeviceVulkan13Features
+// (DeviceRequirements.featureStructs lists them). A missing or misplaced structure, or a version
+// below 1.2 or above the physical device's, is an error naming it; nothing is allocated.
 Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
-                            VkPhysicalDevice physicalDevice, VkPhysicalDeviceFeatures2* chain);
+                            VkPhysicalDevice physicalDevice, uint32_t deviceApiVersion, VkPhysicalDeviceFeatures2* chain);
 
 // A range of device memory handed out by a host allocator (e.g. VMA's vmaAllocateMemory).
 struct DeviceMemoryRange {
@@ -144,9 +164,10 @@ struct AdoptDeviceDesc {
   uint32_t instanceApiVersion = VK_API_VERSION_1_2;  // VkApplicationInfo.apiVersion of the instance
   VkPhysicalDevice physicalDevice = VK_NULL_HANDLE;
   VkDevice device = VK_NULL_HANDLE;
-  // What the device was created with (extensions and the pNext feature chain or pEnabledFeatures);
-  // read during adoptDevice() only. Adoption is refused, naming what is missing, when a required
-  // extension or feature is not enabled.
+  // What the device was created with (extensions and the pNext feature chain or pEnabledFeatures).
+  // Copied during adoptDevice(): Canopy keeps no pointer into it, so it may live on the caller's
+  // stack. Adoption is refused, naming what is missing, when a required extension or feature is
+  // not enabled.
   const VkDeviceCreateInfo* deviceCreateInfo = nullptr;
   VkQueue queue = VK_NULL_HANDLE;  // graphics + compute, the queue the host submits Canopy's work to
   uint32_t queueFamily = 0;

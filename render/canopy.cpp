@@ -209,7 +209,9 @@ void retire(CanopyContext& c, bool compositor, bool dynamics) {
   });
 }
 
-Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGraph** out) {
+// The host's images against the context, before anything is recorded (a refused frame records
+// nothing: docs/embedding.md "Errors").
+Status checkFrameInputs(const CanopyContext& c, const CanopyFrameInputs& in) {
   const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   if (!in.color.image || !in.color.view || !in.depth.image || !in.depth.view)
     return Status::error("recordCanopy: the colour and depth images and views are required");
@@ -225,6 +227,12 @@ Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGra
   if (motion)
     CANOPY_TRY(checkHostImage("motion", in.motion, c.desc.motionFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
                               "Canopy writes the vegetation's motion as a colour attachment"));
+  return Status();
+}
+
+Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGraph** out) {
+  const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
+  CANOPY_TRY(checkFrameInputs(c, in));
   // Graphs of replaced resources, and the least recently used beyond the cache size, may still be
   // executing: they are released frames later.
   std::vector<RecordGraph> keep, drop;
@@ -663,6 +671,12 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
   return guardApi("recordCanopy", [&]() -> Status {
     if (!c) return Status::error("recordCanopy: null context");
     if (!cmd) return Status::error("recordCanopy: null command buffer");
+    // Images not seen before are checked before anything is recorded or stepped.
+    bool known = false;
+    for (const RecordGraph& g : c->graphs)
+      known = known || (g.generation == c->generation && sameImage(g.inputs.color, in.color) &&
+                        sameImage(g.inputs.depth, in.depth) && sameImage(g.inputs.motion, in.motion));
+    if (!known) CANOPY_TRY(checkFrameInputs(*c, in));
     CANOPY_TRY(beginCanopyFrame(c, in.frame));
     // Uploads and clears prepared since the last frame, before anything reads them.
     CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));

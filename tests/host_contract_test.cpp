@@ -159,6 +159,7 @@ TEST_F(HostContractTest, HostImagesAreCheckedAgainstWhatTheyWereDeclaredWith) {
     EXPECT_FALSE(refusal.ok());
     EXPECT_EQ(refusal.code(), Result::InvalidArgument);
     EXPECT_NE(refusal.message().find(k.expect), std::string::npos) << refusal.message();
+    EXPECT_EQ(canopyStats(ctx).frames, 0u) << "a refused frame steps and records nothing";
     if (std::string(k.name) == "depth without SAMPLED")
       EXPECT_NE(refusal.message().find("lacks VK_IMAGE_USAGE_SAMPLED_BIT"), std::string::npos) << refusal.message();
     ASSERT_TRUE(host.finish().ok());

@@ -108,6 +108,9 @@ Status validateParams(const CanopyContext& c, const CanopyParams& p) {
   if (p.customPlane) CANOPY_TRY(validatePlane(p.plane));
   if (p.animation == AnimationMode::PerVertex && !c.desc.allowPerVertex)
     return Status::error("CanopyParams.animation = PerVertex needs CanopyDesc.allowPerVertex at creation");
+  if (p.animation == AnimationMode::PerVertex && !c.layers.instances.identity)
+    return Status::error("CanopyParams.animation = PerVertex draws the model at its origin: not with instances or a transform "
+                         "(CanopyDesc.instances, setCanopyInstances)");
   return Status();
 }
 
@@ -404,6 +407,10 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
     ld.impostors = desc.impostors;
+    for (const CanopyInstance& i : desc.instances) {
+      ld.instances.push_back(toGlm(i.transform));
+      ld.tints.push_back(toGlm(i.tint));
+    }
     if (desc.allowPerVertex) {
       CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
       ld.keepBend = true;
@@ -444,6 +451,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     ld.stagingRingBytes = desc.meshStagingRingBytes;
     // The layers' parts keep their own uploads (flushLayerWork); the baseline's go to the context's list.
     CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
       CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->pending));
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
@@ -518,6 +526,21 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
 
 const CanopyParams& canopyParams(const CanopyContext* c) { return c->params; }
 
+Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& instances) {
+  return guardApi("setCanopyInstances", [&]() -> Status {
+    if (!c) return Status::error("setCanopyInstances: null context");
+    std::vector<glm::mat4> models;
+    std::vector<glm::vec3> tints;
+    for (const CanopyInstance& i : instances) {
+      models.push_back(toGlm(i.transform));
+      tints.push_back(toGlm(i.tint));
+    }
+    if (c->params.animation == AnimationMode::PerVertex && !(models.size() == 1 && models[0] == glm::mat4(1.0f)))
+      return Status::error("setCanopyInstances: the per-vertex baseline (CanopyParams.animation) draws the model at its origin");
+    return setLayerInstances(c->layers, models, tints).context("setCanopyInstances");
+  });
+}
+
 Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
   return guardApi("resizeCanopy", [&]() -> Status {
     if (!c) return Status::error("resizeCanopy: null context");
@@ -554,7 +577,7 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
 // visible at the vegetation's centre depth.
 static void fixPlane(CanopyContext& c, const LayerView& view) {
   if (c.planeFixed) return;
-  const LayerMesh& lv = c.layers.mesh;
+  const LayerInstances& lv = c.layers.instances;  // the world bounds of every copy
   const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
   const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
   const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
@@ -635,7 +658,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     std::vector<float> depths;
     for (const LayerInfo& l : c->layers.visible.layers) depths.push_back(l.slab.depth);
     // The rigid background's plane: the vegetation's centre.
-    const glm::vec3 centre = 0.5f * (c->layers.mesh.boundsMin + c->layers.mesh.boundsMax);
+    const glm::vec3 centre = 0.5f * (c->layers.instances.boundsMin + c->layers.instances.boundsMax);
     const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
     const gpu::CompositeView cv =
         compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
@@ -730,6 +753,7 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.layers.layerHeight = c->layers.desc.height;
   s.layers.guardX = c->layers.desc.guardX;
   s.layers.guardY = c->layers.desc.guardY;
+  s.layers.instances = uint32_t(c->layers.instances.models.size());
   s.simulation = c->shared->sim.stats;
   return s;
 }

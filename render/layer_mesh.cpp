@@ -327,17 +327,21 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     const Binding base = bindImage(tex.view, ro, lv.mesh.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, lv.mesh.sampler),
                   trans = bindImage(textureOf(mat.transmissionImage).view, ro, lv.mesh.sampler),
                   transColor = bindImage(textureOf(mat.transmissionColorImage).view, ro, lv.mesh.sampler);
+    const Binding instances = bindBuffer(lv.instances.buffer.buffer);
     if (perVertex)
       CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                              {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
+                              {frame, roots, base, normal, trans, transColor, instances, bindBuffer(perVertex->bendFrame),
                                bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
                                bindBuffer(perVertex->tips)},
                               push));
     else
-      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
+      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor, instances}, push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
-    // id output (re-sliced at once) never draws parts.
-    d.vk.CmdDrawIndexed(cmd, count * 3, 1, uint32_t(indexAt), int32_t(vertexAt), 0);
+    // id output (re-sliced at once) never draws parts. One instanced draw per run of visible copies
+    // (gl_InstanceIndex, firstInstance included, indexes the instance table).
+    static const std::vector<InstanceRun> firstCopy = {{0, 1}};
+    for (const InstanceRun& r : o.runs ? *o.runs : firstCopy)
+      d.vk.CmdDrawIndexed(cmd, count * 3, r.count, uint32_t(indexAt), int32_t(vertexAt), r.first);
     return Status();
   };
   if (parts) {

@@ -13,6 +13,7 @@
 #include "engine/transfer.h"
 #include "engine/status.h"
 #include "render/material_split.h"
+#include "render/layer_instances.h"
 #include "render/mesh_chunks.h"
 #include "render/model.h"
 
@@ -73,6 +74,9 @@ struct MeshDrawOptions {
   // (opaque and alpha-masked materials at full weight), the others (blended materials, parts
   // fading towards their impostors), or every draw.
   enum class Subset : uint8_t { All, DepthPrepassed, Rest } subset = Subset::All;
+  // The copies drawn (instanced draws, one per chunk and run; render/layer_instances.h); null: the
+  // first copy only (the impostor bake, the per-vertex baseline).
+  const std::vector<InstanceRun>* runs = nullptr;
 };
 
 // Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh

@@ -46,14 +46,17 @@ struct DrawTargets {
   VkImageView color, depth, ids;  // array views
   const std::vector<VkImageView>*colorLayers, *depthLayers, *idsLayers;
   VkImageView backgroundColor, backgroundDepth;
+  const std::vector<InstanceRun>* runs;  // the copies that set's camera sees
 };
 DrawTargets visibleTargets(const LayeredVegetation& lv) {
   return {lv.targets.color.view, lv.targets.depth.view, lv.targets.ids.view, &lv.targets.colorLayerViews, &lv.targets.depthLayerViews, &lv.targets.idsLayerViews,
-          lv.targets.backgroundColor.view, lv.targets.backgroundDepth.view};
+          lv.targets.backgroundColor.view, lv.targets.backgroundDepth.view, &lv.visible.runs};
 }
 DrawTargets nextTargets(const LayeredVegetation& lv) {
   return {lv.targets.next.color.view, lv.targets.next.depth.view, VK_NULL_HANDLE, &lv.targets.next.colorLayerViews, &lv.targets.next.depthLayerViews,
-          nullptr, lv.targets.next.backgroundColor.view, lv.targets.next.backgroundDepth.view};
+          nullptr, lv.targets.next.backgroundColor.view, lv.targets.next.backgroundDepth.view,
+          // A re-slice that ended in this frame (its last slice, then the copy) made its copies the visible ones.
+          lv.reslice.spread.phase != SpreadPhase::Idle ? &lv.reslice.spread.job.runs : &lv.visible.runs};
 }
 
 // A layer or background draw, shaded once where the path has the pipelines and the settings ask
@@ -85,6 +88,7 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     const bool cut = lv.visible.cut.active && !parts;
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
+    o.runs = t.runs;
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
       if (cut) CANOPY_TRY(recordImpostors(lv, cmd, false, i));
       const std::vector<ChunkPart>* drawn = cut ? &lv.visible.cutParts : parts;
@@ -102,8 +106,10 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTa
                         const std::vector<ChunkPart>* parts) {
   const VkRenderingAttachmentInfo color = attachment(t.backgroundColor, false, clear);
   const VkRenderingAttachmentInfo depth = attachment(t.backgroundDepth, true, clear);
+  MeshDrawOptions o;
+  o.runs = t.runs;
   return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
-    return drawShaded(lv, cmd, lv.pipelines.background, lv.pipelines.backgroundOnce, false, LAYER_PASS_BACKGROUND, 0, parts, {});
+    return drawShaded(lv, cmd, lv.pipelines.background, lv.pipelines.backgroundOnce, false, LAYER_PASS_BACKGROUND, 0, parts, o);
   });
 }
 

@@ -24,19 +24,32 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   job.zMin = INFINITY;
   job.zMax = -INFINITY;
   job.bottom = -INFINITY;
-  job.leafDepth.resize(lv.mesh.leafCount);
+  // The copies this camera sees (docs/design.md "Instances"); per copy, the frame's rows composed
+  // with its transform, so the stages below read model-space vertices.
+  job.runs = visibleInstanceRuns(lv.instances, lv.mesh.boundsMin, lv.mesh.boundsMax, f.viewProj);
+  for (const InstanceRun& r : job.runs)
+    for (uint32_t i = r.first; i < r.first + r.count; ++i) {
+      const glm::mat4 m = lv.instances.models[i], vp = f.viewProj * m;
+      job.depthRows.push_back(glm::vec4(f.depthRow) * m);
+      job.rowsX.push_back(glm::vec4(vp[0][0], vp[1][0], vp[2][0], vp[3][0]));
+      job.rowsY.push_back(glm::vec4(vp[0][1], vp[1][1], vp[2][1], vp[3][1]));
+      job.rowsW.push_back(glm::vec4(vp[0][3], vp[1][3], vp[2][3], vp[3][3]));
+    }
+  job.leafDepth.resize(size_t(lv.mesh.leafCount) * job.depthRows.size());
 }
 
 // Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
 // layer, per-layer top and the root line over the vertices, triangles per layer) until it is done
 // or `deadline` (null: none) has passed; the clock is read every kBatch items.
 Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
-  constexpr size_t kBatch = 1 << 14;
+  // Items per clock reading, each item visited once per visible copy.
+  const size_t copies = job.depthRows.size(), kBatch = std::max<size_t>((size_t(1) << 14) / std::max<size_t>(copies, 1), 1);
   const auto t0 = PlacementClock::now();
   const LayerSettings& s = lv.settings;
   gpu::LayerFrame& f = job.frame;
   const bool geometric = s.slice == SliceMode::Geometry;
-  auto depthOf = [&](const glm::vec3& p) { return glm::dot(f.depthRow, glm::vec4(p, 1.0f)); };
+  // View depth of model-space point p in copy k.
+  auto depthOf = [&](size_t k, const glm::vec3& p) { return glm::dot(job.depthRows[k], glm::vec4(p, 1.0f)); };
   // Per vertex the placement reads the compact host mesh (decoded as the vertex shader decodes it),
   // chunk by chunk: foliage chunks come first, each chunk's vertices and indices contiguous.
   const CompactMesh& hm = lv.mesh.hostMesh;
@@ -55,9 +68,6 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
     const uint32_t l = chunkLeaf(v);
     return l == LAYER_CHUNK_NO_LEAF ? kNoLeaf : hm.roots[c.firstRoot + l].leaf;
   };
-  const glm::vec4 rowX(f.viewProj[0][0], f.viewProj[1][0], f.viewProj[2][0], f.viewProj[3][0]);
-  const glm::vec4 rowY(f.viewProj[0][1], f.viewProj[1][1], f.viewProj[2][1], f.viewProj[3][1]);
-  const glm::vec4 rowW(f.viewProj[0][3], f.viewProj[1][3], f.viewProj[2][3], f.viewProj[3][3]);
   const float h = float(lv.desc.height), wPx = float(lv.desc.width);
   *done = false;
   while (!*done) {
@@ -68,14 +78,15 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
         size_t roots = 0;
         for (end = job.next; end < nChunks && roots < kBatch; ++end) {
           const MeshChunk& c = lv.mesh.chunks[end];
-          for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i) {
-            const float z = depthOf(hm.roots[i].position);
-            job.leafDepth[hm.roots[i].leaf] = z;
-            if (!geometric) {
-              job.zMin = std::min(job.zMin, z);
-              job.zMax = std::max(job.zMax, z);
+          for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i)
+            for (size_t k = 0; k < copies; ++k) {
+              const float z = depthOf(k, hm.roots[i].position);
+              job.leafDepth[k * nLeaves + hm.roots[i].leaf] = z;
+              if (!geometric) {
+                job.zMin = std::min(job.zMin, z);
+                job.zMax = std::max(job.zMax, z);
+              }
             }
-          }
           roots += c.rootCount + 1;
         }
         if (end == nChunks) job.stage = geometric ? 1 : 2, end = 0;
@@ -85,9 +96,12 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
         end = std::min(job.next + kBatch, nVertices);
         for (size_t v = job.next; v < end; ++v)
           if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
-            const float z = depthOf(decodePosition(chunkOf(v, false), hm.vertices[v]));
-            job.zMin = std::min(job.zMin, z);
-            job.zMax = std::max(job.zMax, z);
+            const glm::vec3 p = decodePosition(chunkOf(v, false), hm.vertices[v]);
+            for (size_t k = 0; k < copies; ++k) {
+              const float z = depthOf(k, p);
+              job.zMin = std::min(job.zMin, z);
+              job.zMax = std::max(job.zMax, z);
+            }
           }
         if (end == nVertices) job.stage = 2, end = 0;
         break;
@@ -102,37 +116,39 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
           job.layers[i].slab = slabs[i];
           job.layers[i].top = INFINITY;
         }
-        job.leafLayer.resize(nLeaves);
+        job.leafLayer.resize(nLeaves * copies);
         job.stage = 3;
         break;
       }
-      case 3:
-        end = std::min(job.next + kBatch, nLeaves);
+      case 3:  // every copy's leaves: (copy, leaf) items
+        end = std::min(job.next + kBatch * std::max<size_t>(copies, 1), nLeaves * copies);
         for (size_t i = job.next; i < end; ++i) {
           job.leafLayer[i] = uint8_t(gpu::layerOfDepth(f, job.leafDepth[i]));
           job.layers[job.leafLayer[i]].leaves++;
         }
-        if (end == nLeaves) job.stage = 4, end = 0;
+        if (end == nLeaves * copies) job.stage = 4, end = 0;
         break;
       case 4:  // the screen-space root line and per-layer tops (eq. 7)
         end = std::min(job.next + kBatch, nVertices);
         for (size_t v = job.next; v < end; ++v) {
           const MeshChunk& c = chunkOf(v, false);
           const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
-          const float w = glm::dot(rowW, p);
-          if (w <= 1e-6f) {
-            job.behind = true;
-            continue;
-          }
-          const float y = (glm::dot(rowY, p) / w * 0.5f + 0.5f) * h;
-          job.bottom = std::max(job.bottom, y);
-          const glm::vec2 px((glm::dot(rowX, p) / w * 0.5f + 0.5f) * wPx, y);
-          job.pixelLo = glm::min(job.pixelLo, px);
-          job.pixelHi = glm::max(job.pixelHi, px);
           const uint32_t leaf = leafOf(c, hm.vertices[v]);
-          if (leaf == kNoLeaf) continue;
-          const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(f.depthRow, p)) : job.leafLayer[leaf];
-          job.layers[layer].top = std::min(job.layers[layer].top, y);
+          for (size_t k = 0; k < copies; ++k) {
+            const float w = glm::dot(job.rowsW[k], p);
+            if (w <= 1e-6f) {
+              job.behind = true;
+              continue;
+            }
+            const float y = (glm::dot(job.rowsY[k], p) / w * 0.5f + 0.5f) * h;
+            job.bottom = std::max(job.bottom, y);
+            const glm::vec2 px((glm::dot(job.rowsX[k], p) / w * 0.5f + 0.5f) * wPx, y);
+            job.pixelLo = glm::min(job.pixelLo, px);
+            job.pixelHi = glm::max(job.pixelHi, px);
+            if (leaf == kNoLeaf) continue;
+            const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(job.depthRows[k], p)) : job.leafLayer[k * nLeaves + leaf];
+            job.layers[layer].top = std::min(job.layers[layer].top, y);
+          }
         }
         if (end == nVertices) job.stage = 5, end = 0;
         break;
@@ -141,8 +157,10 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
         for (size_t k = job.next; k < end; k += 3) {
           const MeshChunk& c = chunkOf(k, true);
           const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
-          const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(decodePosition(c, v))) : job.leafLayer[leafOf(c, v)];
-          job.layers[layer].triangles++;
+          for (size_t j = 0; j < copies; ++j) {
+            const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(j, decodePosition(c, v))) : job.leafLayer[j * nLeaves + leafOf(c, v)];
+            job.layers[layer].triangles++;
+          }
         }
         if (end == foliageIndices) job.stage = 6, end = 0;
         break;
@@ -207,6 +225,8 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   bool done = false;
   CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
   lv.visible.view = job.view;
+  lv.visible.runs = job.runs;
+  lv.stats.lastVisibleInstances = uint32_t(job.depthRows.size());
   lv.visible.extent = job.behind ? PixelExtent{} : PixelExtent{job.pixelLo, job.pixelHi, true};
   lv.visible.frame = job.frame;
   lv.visible.layers = std::move(job.layers);
@@ -243,8 +263,8 @@ VkRect2D layerFootprint(const LayeredVegetation& lv) {
     views.push_back(&lv.reslice.spread.job.frame.viewProj);
   for (const glm::mat4* vp : views)
     for (int c = 0; c < 8; ++c) {
-      const glm::vec3 p((c & 1) ? lv.mesh.boundsMax.x : lv.mesh.boundsMin.x, (c & 2) ? lv.mesh.boundsMax.y : lv.mesh.boundsMin.y,
-                        (c & 4) ? lv.mesh.boundsMax.z : lv.mesh.boundsMin.z);
+      const glm::vec3 &bmin = lv.instances.boundsMin, &bmax = lv.instances.boundsMax;  // world: every copy
+      const glm::vec3 p((c & 1) ? bmax.x : bmin.x, (c & 2) ? bmax.y : bmin.y, (c & 4) ? bmax.z : bmin.z);
       const glm::vec4 q = *vp * glm::vec4(p, 1.0f);
       if (!(q.w > 1e-6f)) return all;  // a corner behind the camera (or no view yet)
       const glm::vec2 px((q.x / q.w * 0.5f + 0.5f) * w, (q.y / q.w * 0.5f + 0.5f) * h);

@@ -14,6 +14,7 @@
 #include "engine/status.h"
 #include "render/impostors.h"
 #include "render/layer_layout.h"
+#include "render/layer_instances.h"
 #include "render/layer_mesh.h"
 #include "render/reprojection.h"
 #include "shared/layers.h"
@@ -36,6 +37,10 @@ struct LayerInfo {
 // bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
 struct PlacementJob {
   LayerView view;  // the camera the placement (and the set it draws) is for
+  std::vector<InstanceRun> runs;  // the instances that camera sees (render/layer_instances.h)
+  // Per visible copy (in runs' order): the frame's view-depth row and clip rows x, y, w composed with
+  // its transform (they take model-space points).
+  std::vector<glm::vec4> depthRows, rowsX, rowsY, rowsW;
   glm::vec2 pixelLo{INFINITY}, pixelHi{-INFINITY};  // the vertices' projected extent, pixels (unclipped)
   bool behind = false;                               // a vertex is behind the camera (no extent)
   gpu::LayerFrame frame{};
@@ -57,6 +62,7 @@ struct VisibleLayers {
   // reprojection"); the composite maps the current camera's pixels into its pixels.
   LayerView view;
   PixelExtent extent;  // where the vegetation's vertices project in that camera (unclipped; reprojection policy)
+  std::vector<InstanceRun> runs;  // the instances drawn into the visible set
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   Buffer frameBuffer;

@@ -189,7 +189,12 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
       CANOPY_TRY(createTargets(lv));
     }
     CANOPY_TRY(placeLayerMesh(lv, std::move(mesh), liveAtStart));
+    CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, desc.instances.empty() ? std::vector<glm::mat4>{glm::mat4(1.0f)} : desc.instances,
+                            desc.tints, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
     CANOPY_TRY(createPipelines(lv));
+    if (lv.impostors.enabled && !lv.instances.identity)
+      return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
+                                                    "not yet with instances or a transform (CanopyDesc.instances)");
     if (lv.impostors.enabled) {
       if (lv.mesh.streamed)
         return Status::error("impostors (CanopyDesc.impostors.enable) bake from the resident mesh and cut it into draw "
@@ -239,6 +244,7 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
     destroyGraphicsPipeline(d, o->shade);
   }
   destroyLayerMesh(lv);
+  destroyInstances(d, lv.instances);
   if (lv.pipelines.nearestSampler) d.vk.DestroySampler(d.device, lv.pipelines.nearestSampler, d.allocationCallbacks);
   destroyBuffer(d, lv.visible.frameBuffer);
   lv = LayeredVegetation{};
@@ -296,6 +302,25 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
   lv.desc.guardY = guardY;
   rescheduleAfterChange(lv, true, true, false);  // the placement is in pixels of the old size
   return createTargets(lv);
+}
+
+Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints) {
+  LayerInstances next;
+  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, models, tints, lv.mesh.boundsMin, lv.mesh.boundsMax, &next));
+  if (lv.impostors.enabled && !next.identity) {
+    destroyInstances(*lv.device, next);
+    return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
+                                                  "not yet with instances or a transform");
+  }
+  // The old table is read by frames in flight: released after them.
+  if (lv.instances.buffer.buffer) {
+    auto old = std::make_shared<Buffer>(lv.instances.buffer);
+    Device* d = lv.device;
+    deferRelease(*d, [d, old] { destroyBuffer(*d, *old); });
+  }
+  lv.instances = std::move(next);
+  requestReslice(lv, "instances changed", true);
+  return Status();
 }
 
 LayerView sliceCameraFor(const LayeredVegetation& lv, const LayerView& view) {

@@ -22,6 +22,7 @@
 #include "engine/render_graph.h"
 #include "engine/status.h"
 #include "render/impostors.h"
+#include "render/layer_instances.h"
 #include "render/layer_mesh.h"
 #include "render/layer_passes.h"
 #include "render/layer_placement.h"
@@ -67,6 +68,10 @@ struct LayeredVegetationDesc {
   bool keepBend = false;
   // The foliage's box hierarchy and its baked views (render/impostors.h; needs a resident mesh).
   ImpostorDesc impostors;
+  // The placed copies (docs/design.md "Instances"): model -> world transforms and tints; empty:
+  // one copy at the model's origin.
+  std::vector<glm::mat4> instances;
+  std::vector<glm::vec3> tints;
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
@@ -92,6 +97,7 @@ struct LayeredVegetation {
   LayeredVegetationDesc desc;
   LayerSettings settings;     // the settings in force (setLayerSettings)
   LayerMesh mesh;
+  LayerInstances instances;   // the copies drawn, their world bounds
   LayerTargets targets;
   LayerPipelines pipelines;
   VisibleLayers visible;
@@ -117,6 +123,9 @@ Status flushLayerWork(LayeredVegetation& lv, VkCommandBuffer cmd);
 // holding them must be rebuilt), anything else only marks the layers for a rebuild.
 // *targetsRecreated (optional) tells whether the layer images were recreated.
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bool* targetsRecreated = nullptr);
+
+// Replaces the placed copies (transforms and tints; empty tints: none) and re-slices at once.
+Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints);
 
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;

@@ -97,6 +97,8 @@ Status checkValue(const std::string& path, const T& v, ParamCheck c, double lo, 
   } else if constexpr (std::is_same_v<T, Float4>) {
     for (size_t i = 0; i < v.size(); ++i) CANOPY_TRY(checkValue(path + "[" + std::to_string(i) + "]", v[i], c, lo, hi, unit));
     return Status();
+  } else if constexpr (std::is_same_v<T, std::vector<CanopyInstance>>) {
+    return Status();  // each transform is checked where it is used (render/layer_instances.cpp)
   } else if constexpr (IsVector<T>::value) {
     if (double(v.size()) > hi)
       return Status::error(path + ": " + std::to_string(v.size()) + " given, at most " + formatParamNumber(hi));

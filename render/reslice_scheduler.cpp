@@ -25,7 +25,7 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
   std::vector<SlabRange> slabs;
   for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
   const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
-  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.mesh.boundsMin, lv.mesh.boundsMax, size,
+  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.instances.boundsMin, lv.instances.boundsMax, size,
                                                         glm::dvec2(layerOutputSize(lv)),
                                                         lv.visible.extent.known ? &lv.visible.extent : nullptr);
   // The message is built only for a re-slice (this runs every frame the camera moves).
@@ -148,7 +148,9 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
 // The frame of the last step (the copy of the next set): its placement becomes the visible one.
 void finishSpread(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.reslice.spread;
+  lv.stats.lastVisibleInstances = uint32_t(sp.job.depthRows.size());
   lv.visible.view = sp.job.view;
+  lv.visible.runs = sp.job.runs;
   lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
   lv.visible.frame = sp.job.frame;
   lv.visible.layers = std::move(sp.job.layers);
@@ -181,6 +183,7 @@ Status advanceSpread(LayeredVegetation& lv) {
         if (lv.visible.layers.size() != sp.job.layers.size()) {
           lv.visible.layers = sp.job.layers;
           lv.visible.view = sp.job.view;
+          lv.visible.runs = sp.job.runs;
           lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
           lv.visible.frame = sp.job.frame;
         }

@@ -13,7 +13,7 @@ void main() {
   float keepNear = 1.0, keepFar = 1.0;
   if (pc.passKind == LAYER_PASS_ONE_LAYER) {
     if (f.sliceMode == LAYER_SLICE_GEOMETRY) {
-      float d = viewDepth(vertexPosition());
+      float d = viewDepth(worldPosition());
       if (pc.targetLayer > 0u) keepNear = d - f.boundaries[pc.targetLayer];
       if (pc.targetLayer + 1u < f.layerCount) keepFar = f.boundaries[pc.targetLayer + 1u] - d;
     } else {

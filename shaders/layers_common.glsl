@@ -1,5 +1,5 @@
-// Bindings shared by the layer and background shaders (render/layers.cpp declares the same six
-// push-descriptor bindings for every pipeline: createPipelines).
+// Bindings shared by the layer and background shaders (render/layer_mesh.cpp drawMaterials binds the
+// same seven push-descriptor bindings for every pipeline).
 #include "shared/layers.h"
 
 layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
@@ -13,6 +13,9 @@ layout(binding = 2) uniform sampler2D baseColorTex;
 layout(binding = 3) uniform sampler2D normalTex;
 layout(binding = 4) uniform sampler2D transmissionTex;
 layout(binding = 5) uniform sampler2D transmissionColorTex;
+// The vegetation's placed copies (CanopyInstance): the draws are instanced, gl_InstanceIndex
+// (firstInstance included) indexes this table.
+layout(binding = 6, scalar) readonly buffer InstanceBuf { LayerInstance instances[]; };
 layout(push_constant, scalar) uniform Push { LayerDrawPush pc; };
 
 #ifdef CANOPY_VERTEX
@@ -30,10 +33,14 @@ layout(location = 0) out vec3 vNormal;
 layout(location = 1) out vec2 vUv;
 layout(location = 2) flat out uint vLeaf;
 layout(location = 3) out vec3 vWorld;
+layout(location = 5) flat out vec3 vTint;
 
 float viewDepth(vec3 p) { return dot(f.depthRow, vec4(p, 1.0)); }
 
+// The vertex in the model's coordinates, and placed by this draw instance's transform.
 vec3 vertexPosition() { return pc.chunkOrigin.xyz + vec3(inPositionLeaf.xyz) * pc.chunkScale.xyz; }
+vec3 placed(vec3 p) { return (instances[gl_InstanceIndex].model * vec4(p, 1.0)).xyz; }
+vec3 worldPosition() { return placed(vertexPosition()); }
 bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
 
 // The layer of this vertex's triangle. Every vertex of a leaf reads the same root (a leaf split
@@ -41,14 +48,16 @@ bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
 // is cut (the near/far test is made on the root only).
 uint triangleLayer() {
   vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && hasLeaf()) ? leafRoot[inPositionLeaf.w].position : vertexPosition();
-  return layerOfDepth(f, viewDepth(root));
+  return layerOfDepth(f, viewDepth(placed(root)));
 }
 
 void emitVertex() {
-  vWorld = vertexPosition();
+  LayerInstance inst = instances[gl_InstanceIndex];
+  vWorld = (inst.model * vec4(vertexPosition(), 1.0)).xyz;
   gl_Position = f.viewProj * vec4(vWorld, 1.0);
-  vNormal = layerDecodeNormal(inNormalOct);
+  vNormal = mat3(inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz) * layerDecodeNormal(inNormalOct);
   vUv = inUv;
   vLeaf = hasLeaf() ? leafRoot[inPositionLeaf.w].leaf : LAYER_NO_LEAF;
+  vTint = inst.tint.rgb;
 }
 #endif

@@ -10,6 +10,7 @@ layout(location = 0) in vec3 vNormal;
 layout(location = 1) in vec2 vUv;
 layout(location = 2) flat in uint vLeaf;
 layout(location = 3) in vec3 vWorld;
+layout(location = 5) flat in vec3 vTint;  // unused: declared so the vertex stage's output is consumed
 
 void main() {
   if (pc.alphaMode == LAYER_ALPHA_MASK && pc.baseColor.a * texture(baseColorTex, vUv).a < pc.alphaCutoff) discard;

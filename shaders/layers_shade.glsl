@@ -7,6 +7,7 @@ layout(location = 0) in vec3 vNormal;
 layout(location = 1) in vec2 vUv;
 layout(location = 2) flat in uint vLeaf;
 layout(location = 3) in vec3 vWorld;
+layout(location = 5) flat in vec3 vTint;  // the instance's tint (CanopyInstance.tint)
 layout(location = 0) out vec4 outColor;
 
 // Normal mapping without tangents, as the glTF sample viewer does for meshes that have none: dp/du
@@ -28,7 +29,7 @@ vec3 perturbNormal(vec3 n, vec3 p, vec2 uv, vec3 m, float scale) {
 
 // False when the fragment is discarded by its material's alpha.
 bool shade() {
-  vec4 base = pc.baseColor * texture(baseColorTex, vUv);
+  vec4 base = pc.baseColor * texture(baseColorTex, vUv) * vec4(vTint, 1.0);
   float alpha = 1.0;
   if (pc.alphaMode == LAYER_ALPHA_MASK) {
     if (base.a < pc.alphaCutoff) return false;

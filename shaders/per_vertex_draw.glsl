@@ -2,7 +2,7 @@
 // the whole mesh drawn every frame into the host's targets, each vertex bent through its branch
 // hierarchy (shared/bend.h), shaded by the layers' fragment shader.
 #define CANOPY_VERTEX
-#define PER_VERTEX_BINDING_BASE 6
+#define PER_VERTEX_BINDING_BASE 7
 #include "layers_common.glsl"
 #include "per_vertex_common.glsl"
 
@@ -33,6 +33,7 @@ void main() {
   vNormal = n;
   vUv = inUv;
   vLeaf = leaf ? lr.leaf : LAYER_NO_LEAF;
+  vTint = vec3(1.0);  // the baseline draws the model at its origin, untinted (one instance)
   gl_Position = f.viewProj * vec4(vWorld, 1.0);
 #ifdef PER_VERTEX_MOTION
   vec3 n0 = n;

@@ -113,6 +113,19 @@ struct LayerLeafRoot {
 };
 CANOPY_SIZE_CHECK(LayerLeafRoot, 16)
 
+// One placed copy of the model (CanopyInstance; docs/embedding.md "Where the plant stands"): the
+// layer draws are instanced, gl_InstanceIndex indexing this table. World position = model * p,
+// world normal = normalMatrix * n (the inverse transpose of model's linear part, so a non-uniform
+// scale or a mirror keeps normals perpendicular and the leaf's front side where it was).
+struct LayerInstance {
+  mat4 model;          // model -> world
+  vec4 normalColumn0;  // xyz: columns of the normal matrix; w unused
+  vec4 normalColumn1;
+  vec4 normalColumn2;
+  vec4 tint;           // rgb multiplies the base colour (linear); a unused
+};
+CANOPY_SIZE_CHECK(LayerInstance, 128)
+
 // Octahedral unit-vector decoding (Meyer et al. 2010): LayerVertex.normal unpacked to [-1, 1]^2 ->
 // unit normal; render/mesh_chunks.cpp encodes, the layer vertex shaders and the tests decode.
 CANOPY_INLINE vec3 layerDecodeNormal(vec2 e) {

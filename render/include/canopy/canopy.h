@@ -103,6 +103,12 @@ void modelBounds(const Model* model, Float3* min, Float3* max);
 
 // Rigid vs foliage: explicit material names ("#N" for materials[N]) win over the default rule
 // (names with bark/trunk/branch/... are rigid, leaf/grass/... and MASK/BLEND are foliage).
+// One placed copy of the model (CanopyDesc.instances, setCanopyInstances; docs/embedding.md).
+struct CanopyInstance {
+  Float4x4 transform;    // model -> world: any invertible affine matrix (rotation, non-uniform scale, a mirror)
+  Float3 tint{1, 1, 1};  // multiplies the copy's base colour (linear), each channel in [0, 16]
+};
+
 struct MaterialSplitOptions {
   std::vector<std::string> rigid;
   std::vector<std::string> foliage;
@@ -406,6 +412,11 @@ enum class DepthConvention : uint32_t {
 // slice a frame (a re-slice asked at once then takes several frames; docs/design.md "Layers: mesh
 // budget and staging ring"). 0: no limit, the mesh is always resident. Planned for the layer count
 // and size at creation.
+// instances: the copies of the model the context draws as one vegetation (one set of layers, one
+// simulation; the mesh and its leaf roots stored once, the draws instanced): each a model -> world
+// transform and a tint. Empty: one copy at the model's origin. Copies outside a re-slice's view are
+// not drawn. Impostors and the per-vertex baseline draw the model at its origin only (refused with
+// other instances). docs/design.md "Instances".
 // guardBand: the layer images extend beyond each edge of the targets by this fraction of their
 // width and height (rounded to a multiple of 16 pixels; docs/design.md "Layers: guard band"), so a
 // camera that turns or strafes between re-slices shows the layers' content from there instead of an
@@ -425,6 +436,7 @@ enum class DepthConvention : uint32_t {
   X(VkFormat, layerFormat, VK_FORMAT_R16G16B16A16_SFLOAT, None, 0, 0, "", "Canopy's layer images (or R8G8B8A8_UNORM)") \
   X(uint32_t, maxLayers, 8, Closed, 1, 32, "layers", "the most layers CanopyParams may ask for")                      \
   X(uint32_t, minCellSize, 4, Closed, 2, 256, "pixels", "the smallest warp-grid cell CanopyParams may ask for")       \
+  X(std::vector<CanopyInstance>, instances, {}, None, 0, 0, "", "copies of the model placed in the world; empty: one at its origin") \
   X(float, guardBand, 0.1f, Closed, 0, 0.5, "of width, height", "the layers reach this far beyond each edge of the targets (rounded to 16 px; 0: none)") \
   X(SimulationDesc, simulation, {}, Nested, 0, 0, "", "the simulation's grid and history")                             \
   X(CanopyContext*, shareSimulationWith, nullptr, None, 0, 0, "", "follow this context's simulation")                  \
@@ -492,6 +504,11 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 // warp grid); mesh, leaf roots, simulation and parameters are kept. Waits for nothing: the old
 // objects are freed once no frame in flight uses them. Width and height in [1, 16384].
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
+
+// Replaces the placed copies (CanopyDesc.instances; at least one): the next recorded frame re-slices
+// at once. A transform that is not a finite invertible affine matrix, or a tint outside [0, 16], is
+// refused naming the instance. Waits for nothing.
+Status setCanopyInstances(CanopyContext* context, const std::vector<CanopyInstance>& instances);
 
 // What changes every frame.
 struct CanopyFrame {
@@ -590,6 +607,8 @@ struct LayerStats {
   uint32_t lastImpostors = 0;        // boxes drawn as impostors by the last re-slice
   uint32_t lastFadingBoxes = 0;      // of which inside the transition band
   uint64_t lastDrawnTriangles = 0;   // foliage triangles the last re-slice drew
+  // Instances (CanopyDesc.instances): how many, and how many the last placement found in view.
+  uint32_t instances = 0, lastVisibleInstances = 0;
 };
 struct SimulationStats {
   uint64_t steps = 0;

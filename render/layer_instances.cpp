@@ -1,0 +1,107 @@
+#include "render/layer_instances.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "engine/device.h"
+#include <memory>
+
+namespace canopy {
+namespace {
+
+void corners(const glm::mat4& m, const glm::vec3& lo, const glm::vec3& hi, glm::vec4 out[8]) {
+  for (int k = 0; k < 8; ++k)
+    out[k] = m * glm::vec4((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z, 1.0f);
+}
+
+}  // namespace
+
+Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
+                    const glm::vec3& meshMin, const glm::vec3& meshMax, LayerInstances* out) {
+  if (models.empty()) return Status::error(Result::InvalidArgument, "instances: at least one instance is needed");
+  if (!tints.empty() && tints.size() != models.size())
+    return Status::error(Result::InvalidArgument, "instances: " + std::to_string(tints.size()) + " tints for " +
+                                                      std::to_string(models.size()) + " instances");
+  LayerInstances next;
+  next.models = models;
+  next.table.resize(models.size());
+  next.boundsMin = glm::vec3(INFINITY);
+  next.boundsMax = glm::vec3(-INFINITY);
+  for (size_t i = 0; i < models.size(); ++i) {
+    const glm::mat4& m = models[i];
+    bool finite = true;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) finite = finite && std::isfinite(m[c][r]);
+    const float det = glm::determinant(glm::mat3(m));
+    if (!finite || !(std::abs(det) > 1e-12f) || m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
+      return Status::error(Result::InvalidArgument,
+                           "CanopyInstance #" + std::to_string(i) + ".transform: not a finite, invertible affine matrix (determinant of "
+                           "its linear part " + std::to_string(det) + ", bottom row must be 0 0 0 1)");
+    const glm::vec3 tint = tints.empty() ? glm::vec3(1.0f) : tints[i];
+    if (!std::isfinite(tint.x) || !std::isfinite(tint.y) || !std::isfinite(tint.z) || glm::min(tint.x, glm::min(tint.y, tint.z)) < 0.0f ||
+        glm::max(tint.x, glm::max(tint.y, tint.z)) > 16.0f)
+      return Status::error(Result::InvalidArgument, "CanopyInstance #" + std::to_string(i) + ".tint is outside [0, 16] per channel");
+    const glm::mat3 normal = glm::transpose(glm::inverse(glm::mat3(m)));
+    gpu::LayerInstance& t = next.table[i];
+    t.model = m;
+    t.normalColumn0 = glm::vec4(normal[0], 0.0f);
+    t.normalColumn1 = glm::vec4(normal[1], 0.0f);
+    t.normalColumn2 = glm::vec4(normal[2], 0.0f);
+    t.tint = glm::vec4(tint, 1.0f);
+    glm::vec4 c[8];
+    corners(m, meshMin, meshMax, c);
+    for (const glm::vec4& p : c) {
+      next.boundsMin = glm::min(next.boundsMin, glm::vec3(p));
+      next.boundsMax = glm::max(next.boundsMax, glm::vec3(p));
+    }
+  }
+  next.identity = models.size() == 1 && models[0] == glm::mat4(1.0f) && next.table[0].tint == glm::vec4(1.0f);
+  const VkDeviceSize bytes = VkDeviceSize(next.table.size()) * sizeof(gpu::LayerInstance);
+  CANOPY_TRY(createBuffer(d, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
+                          &next.buffer, "layers: instances"));
+  // A new buffer each time: frames in flight keep reading the old one, released after them.
+  if (void* direct = hostCoherentPointer(d, next.buffer.allocation)) {
+    std::memcpy(direct, next.table.data(), bytes);
+  } else {
+    Status s = uploadBuffer(d, uploads, next.buffer, next.table.data(), bytes, rg::stateOf(rg::Use::VertexStorageRead));
+    if (!s.ok()) {
+      destroyBuffer(d, next.buffer);
+      return s;
+    }
+  }
+  *out = std::move(next);
+  return Status();
+}
+
+void destroyInstances(Device& d, LayerInstances& instances) {
+  destroyBuffer(d, instances.buffer);
+  instances = LayerInstances{};
+}
+
+std::vector<InstanceRun> visibleInstanceRuns(const LayerInstances& in, const glm::vec3& meshMin, const glm::vec3& meshMax,
+                                             const glm::mat4& viewProj) {
+  std::vector<InstanceRun> runs;
+  for (uint32_t i = 0; i < in.models.size(); ++i) {
+    glm::vec4 c[8];
+    corners(viewProj * in.models[i], meshMin, meshMax, c);
+    // Outside when every corner is beyond one of the planes -w <= x, y <= w, 0 <= z <= w.
+    bool outside = false;
+    for (int plane = 0; plane < 6 && !outside; ++plane) {
+      bool all = true;
+      for (const glm::vec4& p : c) {
+        const float v = plane == 0 ? p.x + p.w : plane == 1 ? p.w - p.x : plane == 2 ? p.y + p.w : plane == 3 ? p.w - p.y
+                        : plane == 4 ? p.z : p.w - p.z;
+        all = all && v < 0.0f;
+      }
+      outside = all;
+    }
+    if (outside) continue;
+    if (!runs.empty() && runs.back().first + runs.back().count == i) runs.back().count++;
+    else runs.push_back({i, 1});
+  }
+  return runs;
+}
+
+}  // namespace canopy

@@ -68,10 +68,8 @@ CanopyInstance instanceOf(const glm::mat4& t, const glm::vec3& tint = glm::vec3(
 class InstancesTest : public GpuTest {
  protected:
   uint64_t frameNumber = 0;  // never decreases on the device
-  // `frames` frames of a context on `model` (with `instances`) seen by `view`, read back.
-  void render(const VegetationModel& model, const std::vector<CanopyInstance>& instances, const LayerView& view, int frames,
-              std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr) {
-    Host host;
+  // A 160x120 host and a context on `model` with `instances` (wind 1) for it.
+  void make(Host& host, const VegetationModel& model, const std::vector<CanopyInstance>& instances, CanopyContext** ctx) {
     host.w = 160;
     host.h = 120;
     ASSERT_TRUE(host.create(dev, 1).ok());
@@ -81,9 +79,16 @@ class InstancesTest : public GpuTest {
     d.colorFormat = host.colorFormat;
     d.instances = instances;
     d.params.simulation.wind.strength = 1.0f;
-    CanopyContext* ctx = nullptr;
-    const Status made = createCanopy(dev, model, d, &ctx);
+    const Status made = createCanopy(dev, model, d, ctx);
     ASSERT_TRUE(made.ok()) << made.message();
+  }
+  // `frames` frames of a context on `model` (with `instances`) seen by `view`, read back.
+  void render(const VegetationModel& model, const std::vector<CanopyInstance>& instances, const LayerView& view, int frames,
+              std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr) {
+    Host host;
+    CanopyContext* ctx = nullptr;
+    make(host, model, instances, &ctx);
+    ASSERT_NE(ctx, nullptr);
     for (int i = 0; i < frames; ++i) {
       const Status s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
       ASSERT_TRUE(s.ok()) << s.message();
@@ -176,16 +181,9 @@ TEST_F(InstancesTest, InstancesSetLaterReSliceAndCopiesOutOfViewAreCulled) {
   std::vector<float> zCreated, zChanged;
   render(plant, {instanceOf(t), instanceOf(behind)}, view, 6, &created, &zCreated);
   Host host;
-  host.w = 160;
-  host.h = 120;
-  ASSERT_TRUE(host.create(dev, 1).ok());
-  CanopyDesc d;
-  d.width = host.w;
-  d.height = host.h;
-  d.colorFormat = host.colorFormat;
-  d.params.simulation.wind.strength = 1.0f;
   CanopyContext* ctx = nullptr;
-  ASSERT_TRUE(createCanopy(dev, plant, d, &ctx).ok());
+  make(host, plant, {}, &ctx);
+  ASSERT_NE(ctx, nullptr);
   ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
   const uint64_t rebuilds = canopyStats(ctx).layers.rebuilds;
   const Status s = setCanopyInstances(ctx, {instanceOf(t), instanceOf(behind)});

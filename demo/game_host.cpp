@@ -1,0 +1,846 @@
+// canopy-game-host: a game-like host embedding Canopy through <canopy/canopy.h> alone, the way a
+// small engine would (docs/embedding.md): its own instance, device and GLFW window with a
+// swapchain, three frames in flight, a D32S8 (else D24S8) depth whose stencil it uses itself (one
+// box is outlined through the stencil after Canopy's passes), a ground and boxes, N copies of a
+// real glTF plant standing on the ground (CanopyDesc.instances, one vegetation), and a first-person
+// camera that walks and looks around along a scripted path.
+//
+// Every frame checks itself when its slot comes round again: the host's depth before and after
+// Canopy's passes (read back) — no pixel farther after them (Canopy never hides the host's
+// geometry behind the vegetation) and the vegetation in front somewhere — and the stencil byte for
+// byte unchanged; with --validate, validation and synchronization validation must stay silent.
+//
+//   canopy-game-host [--frames N] [--plants N] [--gltf FILE] [--out DIR] [--write-every K] [--validate]
+// Exit 0 when every check passes, 1 on a failure, 2 on bad arguments, 77 without a display.
+#include <canopy/canopy.h>
+
+#define GLFW_INCLUDE_VULKAN
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "host_box.frag.h"  // the example host's box shaders (SPIR-V words, built by glslangValidator)
+#include "host_box.vert.h"
+
+namespace {
+
+constexpr uint32_t kW = 320, kH = 240, kFrames = 3;
+constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkImageUsageFlags kColorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+constexpr VkImageUsageFlags kDepthUsage =
+    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+constexpr uint8_t kOutlined = 1;  // the stencil value of the outlined box
+
+#define CHECK(call)                                                                         \
+  do {                                                                                      \
+    VkResult r_ = (call);                                                                   \
+    if (r_ != VK_SUCCESS) {                                                                 \
+      std::fprintf(stderr, "canopy-game-host: %s failed: VkResult %d\n", #call, int(r_)); \
+      return false;                                                                         \
+    }                                                                                       \
+  } while (0)
+
+struct BoxPush {
+  glm::mat4 mvp;
+  glm::vec4 color;
+};
+
+struct Image {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE, depthOnly = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+};
+
+struct Readback {
+  VkBuffer buffer = VK_NULL_HANDLE;
+  VkDeviceMemory memory = VK_NULL_HANDLE;
+  uint8_t* mapped = nullptr;
+};
+
+struct Slot {
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  VkSemaphore acquired = VK_NULL_HANDLE;
+  // Depth and stencil before and after Canopy's passes, and the colour: [zBefore|zAfter|sBefore|sAfter|rgba].
+  Readback readback;
+  bool pending = false, write = false;
+  uint64_t frame = 0;
+};
+
+struct Game {
+  GLFWwindow* window = nullptr;
+  VkInstance instance = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+  VkSurfaceKHR surface = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  VkQueue queue = VK_NULL_HANDLE;
+  uint32_t family = 0;
+  VkPhysicalDeviceMemoryProperties memory{};
+  VkSwapchainKHR swapchain = VK_NULL_HANDLE;
+  VkFormat swapFormat = VK_FORMAT_UNDEFINED;
+  std::vector<VkImage> swapImages;
+  std::vector<VkSemaphore> presentReady;  // per swapchain image
+  VkFormat depthFormat = VK_FORMAT_UNDEFINED;
+  Image color, depth;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  Slot slots[kFrames];
+  VkPipelineLayout layout = VK_NULL_HANDLE;
+  VkPipeline scene = VK_NULL_HANDLE, outline = VK_NULL_HANDLE;
+  canopy::Device* adopted = nullptr;
+  canopy::CanopyContext* ctx = nullptr;
+  int validationMessages = 0;
+  // The self-check's totals.
+  uint64_t fartherPixels = 0, stencilChanged = 0, checkedFrames = 0, framesWithVegetationInFront = 0;
+  std::string outDir;
+};
+
+VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+                                            const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+  static_cast<Game*>(user)->validationMessages++;
+  std::fprintf(stderr, "validation: %s: %s\n", data->pMessageIdName ? data->pMessageIdName : "", data->pMessage);
+  return VK_FALSE;
+}
+
+int32_t memoryType(const Game& g, uint32_t bits, VkMemoryPropertyFlags need) {
+  for (uint32_t i = 0; i < g.memory.memoryTypeCount; ++i)
+    if ((bits & (1u << i)) && (g.memory.memoryTypes[i].propertyFlags & need) == need) return int32_t(i);
+  return -1;
+}
+
+bool createInstanceAndDevice(Game& g, bool validate) {
+  uint32_t loader = VK_API_VERSION_1_0;
+  vkEnumerateInstanceVersion(&loader);
+  const uint32_t api = loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = "canopy-game-host";
+  app.apiVersion = api;
+  uint32_t n = 0;
+  const char** glfwExts = glfwGetRequiredInstanceExtensions(&n);
+  std::vector<const char*> exts(glfwExts, glfwExts + n);
+  std::vector<const char*> layers;
+  const VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+  VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+  features.enabledValidationFeatureCount = 1;
+  features.pEnabledValidationFeatures = &sync;
+  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  if (validate) {
+    layers.push_back("VK_LAYER_KHRONOS_validation");
+    exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    ici.pNext = &features;
+  }
+  ici.pApplicationInfo = &app;
+  ici.enabledLayerCount = uint32_t(layers.size());
+  ici.ppEnabledLayerNames = layers.data();
+  ici.enabledExtensionCount = uint32_t(exts.size());
+  ici.ppEnabledExtensionNames = exts.data();
+  CHECK(vkCreateInstance(&ici, nullptr, &g.instance));
+  if (validate) {
+    VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+    mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+    mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+    mci.pfnUserCallback = onValidation;
+    mci.pUserData = &g;
+    auto create = (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(g.instance, "vkCreateDebugUtilsMessengerEXT");
+    CHECK(create(g.instance, &mci, nullptr, &g.messenger));
+  }
+  CHECK(glfwCreateWindowSurface(g.instance, g.window, nullptr, &g.surface));
+  // The first device Canopy can run on that presents to the window (queryDeviceRequirements says why not).
+  vkEnumeratePhysicalDevices(g.instance, &n, nullptr);
+  std::vector<VkPhysicalDevice> pds(n);
+  vkEnumeratePhysicalDevices(g.instance, &n, pds.data());
+  canopy::DeviceRequirements req;
+  for (VkPhysicalDevice pd : pds) {
+    canopy::DeviceRequirements r;
+    const canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, g.instance, api, pd, &r);
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-game-host: skipping a device: %s\n", s.message().c_str());
+      continue;
+    }
+    uint32_t qn = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, nullptr);
+    std::vector<VkQueueFamilyProperties> fams(qn);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, fams.data());
+    for (uint32_t i = 0; i < qn && !g.physical; ++i) {
+      VkBool32 present = VK_FALSE;
+      vkGetPhysicalDeviceSurfaceSupportKHR(pd, i, g.surface, &present);
+      if (present && (fams[i].queueFlags & r.queueFlags) == r.queueFlags) {
+        g.physical = pd;
+        g.family = i;
+        req = r;
+      }
+    }
+  }
+  if (!g.physical) {
+    std::fprintf(stderr, "canopy-game-host: no device runs Canopy and presents to the window\n");
+    return false;
+  }
+  VkPhysicalDeviceProperties props;
+  vkGetPhysicalDeviceProperties(g.physical, &props);
+  vkGetPhysicalDeviceMemoryProperties(g.physical, &g.memory);
+  // Depth with a stencil the host uses: D32S8, else D24S8, as a sampled depth attachment.
+  for (VkFormat f : {VK_FORMAT_D32_SFLOAT_S8_UINT, VK_FORMAT_D24_UNORM_S8_UINT}) {
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(g.physical, f, &fp);
+    const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT |
+                                      VK_FORMAT_FEATURE_TRANSFER_SRC_BIT;
+    if (!g.depthFormat && (fp.optimalTilingFeatures & need) == need) g.depthFormat = f;
+  }
+  if (!g.depthFormat) {
+    std::fprintf(stderr, "canopy-game-host: no sampled depth-stencil format\n");
+    return false;
+  }
+  // The chain for the device's version (DeviceRequirements::featureStructs), Canopy's features on.
+  const uint32_t deviceApi = std::min(api, props.apiVersion);
+  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  VkPhysicalDeviceDynamicRenderingFeatures dyn{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dyn};
+  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+  f12.pNext = deviceApi >= VK_API_VERSION_1_3 ? static_cast<void*>(&f13) : static_cast<void*>(&sync2);
+  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
+  const canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, g.instance, g.physical, deviceApi, &f2);
+  if (!s.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
+    return false;
+  }
+  std::vector<const char*> deviceExts = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
+  for (const std::string& e : req.deviceExtensions) deviceExts.push_back(e.c_str());
+  const float priority = 1.0f;
+  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+  qci.queueFamilyIndex = g.family;
+  qci.queueCount = 1;
+  qci.pQueuePriorities = &priority;
+  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
+  dci.queueCreateInfoCount = 1;
+  dci.pQueueCreateInfos = &qci;
+  dci.enabledExtensionCount = uint32_t(deviceExts.size());
+  dci.ppEnabledExtensionNames = deviceExts.data();
+  CHECK(vkCreateDevice(g.physical, &dci, nullptr, &g.device));
+  vkGetDeviceQueue(g.device, g.family, 0, &g.queue);
+  canopy::AdoptDeviceDesc ad;
+  ad.getInstanceProcAddr = vkGetInstanceProcAddr;
+  ad.instance = g.instance;
+  ad.instanceApiVersion = api;
+  ad.physicalDevice = g.physical;
+  ad.device = g.device;
+  ad.deviceCreateInfo = &dci;  // copied during the call
+  ad.queue = g.queue;
+  ad.queueFamily = g.family;
+  ad.framesInFlight = kFrames;
+  const canopy::Status a = canopy::adoptDevice(ad, &g.adopted);
+  if (!a.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", a.message().c_str());
+    return false;
+  }
+  std::printf("canopy-game-host: %s, Vulkan %u.%u, depth format %d, %u frames in flight\n", props.deviceName,
+              VK_API_VERSION_MAJOR(deviceApi), VK_API_VERSION_MINOR(deviceApi), int(g.depthFormat), kFrames);
+  return true;
+}
+
+bool createSwapchain(Game& g) {
+  uint32_t n = 0;
+  vkGetPhysicalDeviceSurfaceFormatsKHR(g.physical, g.surface, &n, nullptr);
+  std::vector<VkSurfaceFormatKHR> formats(n);
+  vkGetPhysicalDeviceSurfaceFormatsKHR(g.physical, g.surface, &n, formats.data());
+  VkSurfaceFormatKHR chosen = formats.at(0);
+  for (const VkSurfaceFormatKHR& f : formats)
+    if (f.format == VK_FORMAT_B8G8R8A8_UNORM || f.format == VK_FORMAT_R8G8B8A8_UNORM) chosen = f;
+  VkSurfaceCapabilitiesKHR caps;
+  CHECK(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(g.physical, g.surface, &caps));
+  VkSwapchainCreateInfoKHR sci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
+  sci.surface = g.surface;
+  sci.minImageCount = std::max(caps.minImageCount, kFrames);
+  if (caps.maxImageCount) sci.minImageCount = std::min(sci.minImageCount, caps.maxImageCount);
+  sci.imageFormat = chosen.format;
+  sci.imageColorSpace = chosen.colorSpace;
+  sci.imageExtent = caps.currentExtent.width != UINT32_MAX ? caps.currentExtent : VkExtent2D{kW, kH};
+  sci.imageArrayLayers = 1;
+  sci.imageUsage = VK_IMAGE_USAGE_TRANSFER_DST_BIT;  // the host's frame is blitted in
+  sci.preTransform = caps.currentTransform;
+  sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
+  sci.presentMode = VK_PRESENT_MODE_FIFO_KHR;
+  sci.clipped = VK_TRUE;
+  CHECK(vkCreateSwapchainKHR(g.device, &sci, nullptr, &g.swapchain));
+  g.swapFormat = chosen.format;
+  vkGetSwapchainImagesKHR(g.device, g.swapchain, &n, nullptr);
+  g.swapImages.resize(n);
+  vkGetSwapchainImagesKHR(g.device, g.swapchain, &n, g.swapImages.data());
+  g.presentReady.resize(n);
+  for (VkSemaphore& s : g.presentReady) {
+    VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    CHECK(vkCreateSemaphore(g.device, &si, nullptr, &s));
+  }
+  std::printf("swapchain %ux%u, %u images\n", sci.imageExtent.width, sci.imageExtent.height, n);
+  return true;
+}
+
+bool createImage(Game& g, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, Image* t) {
+  VkImageCreateInfo ci{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
+  ci.imageType = VK_IMAGE_TYPE_2D;
+  ci.format = format;
+  ci.extent = {kW, kH, 1};
+  ci.mipLevels = ci.arrayLayers = 1;
+  ci.samples = VK_SAMPLE_COUNT_1_BIT;
+  ci.tiling = VK_IMAGE_TILING_OPTIMAL;
+  ci.usage = usage;
+  CHECK(vkCreateImage(g.device, &ci, nullptr, &t->image));
+  VkMemoryRequirements req;
+  vkGetImageMemoryRequirements(g.device, t->image, &req);
+  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+  ai.allocationSize = req.size;
+  ai.memoryTypeIndex = uint32_t(std::max(memoryType(g, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT), 0));
+  CHECK(vkAllocateMemory(g.device, &ai, nullptr, &t->memory));
+  CHECK(vkBindImageMemory(g.device, t->image, t->memory, 0));
+  VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+  vi.image = t->image;
+  vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
+  vi.format = format;
+  vi.subresourceRange = {aspect, 0, 1, 0, 1};
+  CHECK(vkCreateImageView(g.device, &vi, nullptr, &t->view));
+  if (aspect & VK_IMAGE_ASPECT_STENCIL_BIT) {  // Canopy's view: the depth aspect only
+    vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_DEPTH_BIT;
+    CHECK(vkCreateImageView(g.device, &vi, nullptr, &t->depthOnly));
+  }
+  return true;
+}
+
+// The scene pipeline (depth LESS, the stencil written from a dynamic reference) and the outline
+// pipeline (no depth test, drawn where the stencil is not the outlined box's).
+bool createPipelines(Game& g) {
+  VkShaderModule modules[2];
+  const uint32_t* code[2] = {host_box_vert, host_box_frag};
+  const size_t size[2] = {sizeof(host_box_vert), sizeof(host_box_frag)};
+  for (int i = 0; i < 2; ++i) {
+    VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    mi.codeSize = size[i];
+    mi.pCode = code[i];
+    CHECK(vkCreateShaderModule(g.device, &mi, nullptr, &modules[i]));
+  }
+  VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(BoxPush)};
+  VkPipelineLayoutCreateInfo li{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  li.pushConstantRangeCount = 1;
+  li.pPushConstantRanges = &range;
+  CHECK(vkCreatePipelineLayout(g.device, &li, nullptr, &g.layout));
+  VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
+                                               {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
+  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
+  stages[0].module = modules[0];
+  stages[0].pName = "main";
+  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
+  stages[1].module = modules[1];
+  stages[1].pName = "main";
+  VkPipelineVertexInputStateCreateInfo vin{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
+  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
+  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
+  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
+  vp.viewportCount = vp.scissorCount = 1;
+  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
+  rs.polygonMode = VK_POLYGON_MODE_FILL;
+  rs.cullMode = VK_CULL_MODE_NONE;
+  rs.lineWidth = 1.0f;
+  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
+  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  VkPipelineColorBlendAttachmentState blend{};
+  blend.colorWriteMask = 0xf;
+  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
+  cb.attachmentCount = 1;
+  cb.pAttachments = &blend;
+  const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_STENCIL_REFERENCE};
+  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
+  dy.dynamicStateCount = 3;
+  dy.pDynamicStates = dyn;
+  VkPipelineRenderingCreateInfo rci{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
+  rci.colorAttachmentCount = 1;
+  rci.pColorAttachmentFormats = &kColorFormat;
+  rci.depthAttachmentFormat = rci.stencilAttachmentFormat = g.depthFormat;
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  VkGraphicsPipelineCreateInfo pci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rci};
+  pci.stageCount = 2;
+  pci.pStages = stages;
+  pci.pVertexInputState = &vin;
+  pci.pInputAssemblyState = &ia;
+  pci.pViewportState = &vp;
+  pci.pRasterizationState = &rs;
+  pci.pMultisampleState = &ms;
+  pci.pDepthStencilState = &ds;
+  pci.pColorBlendState = &cb;
+  pci.pDynamicState = &dy;
+  pci.layout = g.layout;
+  ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
+  ds.depthCompareOp = VK_COMPARE_OP_LESS;
+  ds.stencilTestEnable = VK_TRUE;
+  ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0xff, 0xff, 0};
+  ds.back = ds.front;
+  VkResult r = vkCreateGraphicsPipelines(g.device, VK_NULL_HANDLE, 1, &pci, nullptr, &g.scene);
+  ds.depthTestEnable = ds.depthWriteEnable = VK_FALSE;
+  ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_NOT_EQUAL, 0xff, 0, 0};
+  ds.back = ds.front;
+  if (r == VK_SUCCESS) r = vkCreateGraphicsPipelines(g.device, VK_NULL_HANDLE, 1, &pci, nullptr, &g.outline);
+  for (VkShaderModule m : modules) vkDestroyShaderModule(g.device, m, nullptr);
+  CHECK(r);
+  return true;
+}
+
+bool createFrames(Game& g) {
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = g.family;
+  CHECK(vkCreateCommandPool(g.device, &pci, nullptr, &g.pool));
+  const VkDeviceSize bytes = VkDeviceSize(kW) * kH * (4 + 4 + 1 + 1 + 4);
+  for (Slot& s : g.slots) {
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = g.pool;
+    ai.commandBufferCount = 1;
+    CHECK(vkAllocateCommandBuffers(g.device, &ai, &s.cmd));
+    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    CHECK(vkCreateFence(g.device, &fci, nullptr, &s.fence));
+    VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    CHECK(vkCreateSemaphore(g.device, &si, nullptr, &s.acquired));
+    VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bci.size = bytes;
+    bci.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    CHECK(vkCreateBuffer(g.device, &bci, nullptr, &s.readback.buffer));
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(g.device, s.readback.buffer, &req);
+    VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
+    mai.allocationSize = req.size;
+    const int32_t type = memoryType(g, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    if (type < 0) return false;
+    mai.memoryTypeIndex = uint32_t(type);
+    CHECK(vkAllocateMemory(g.device, &mai, nullptr, &s.readback.memory));
+    CHECK(vkBindBufferMemory(g.device, s.readback.buffer, s.readback.memory, 0));
+    CHECK(vkMapMemory(g.device, s.readback.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&s.readback.mapped)));
+  }
+  return true;
+}
+
+void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from, VkImageLayout to,
+             VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
+  b.srcStageMask = srcStage;
+  b.srcAccessMask = srcAccess;
+  b.dstStageMask = dstStage;
+  b.dstAccessMask = dstAccess;
+  b.oldLayout = from;
+  b.newLayout = to;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.image = image;
+  b.subresourceRange = {aspect, 0, 1, 0, 1};
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.imageMemoryBarrierCount = 1;
+  di.pImageMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &di);
+}
+
+const VkPipelineStageFlags2 kColorStage = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
+const VkAccessFlags2 kColorAccess = VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
+const VkPipelineStageFlags2 kDepthStage = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
+const VkAccessFlags2 kDepthAccess = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
+const VkPipelineStageFlags2 kCopy = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
+
+// Depth and stencil of the host's target into the slot's readback at byte `at` (depth) and `sAt`.
+void copyDepthStencil(Game& g, VkCommandBuffer cmd, Slot& s, VkDeviceSize at, VkDeviceSize sAt) {
+  VkBufferImageCopy c{};
+  c.imageExtent = {kW, kH, 1};
+  c.bufferOffset = at;
+  c.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+  vkCmdCopyImageToBuffer(cmd, g.depth.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &c);
+  c.bufferOffset = sAt;
+  c.imageSubresource = {VK_IMAGE_ASPECT_STENCIL_BIT, 0, 0, 1};
+  vkCmdCopyImageToBuffer(cmd, g.depth.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &c);
+}
+
+void drawBoxes(Game& g, VkCommandBuffer cmd, VkPipeline pipeline, bool clear, const std::vector<std::pair<BoxPush, uint32_t>>& boxes) {
+  VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}, z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  c.imageView = g.color.view;
+  c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  c.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+  c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  c.clearValue.color = {{0.55f, 0.7f, 0.9f, 1.0f}};
+  z.imageView = g.depth.view;
+  z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  z.loadOp = c.loadOp;
+  z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;  // Canopy reads the host's depth: stored
+  z.clearValue.depthStencil = {1.0f, 0};
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {kW, kH}};
+  ri.layerCount = 1;
+  ri.colorAttachmentCount = 1;
+  ri.pColorAttachments = &c;
+  ri.pDepthAttachment = &z;
+  ri.pStencilAttachment = &z;
+  vkCmdBeginRendering(cmd, &ri);
+  const VkViewport v{0, 0, float(kW), float(kH), 0, 1};
+  const VkRect2D sc{{0, 0}, {kW, kH}};
+  vkCmdSetViewport(cmd, 0, 1, &v);
+  vkCmdSetScissor(cmd, 0, 1, &sc);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  for (const auto& [b, stencil] : boxes) {
+    vkCmdSetStencilReference(cmd, VK_STENCIL_FACE_FRONT_AND_BACK, stencil);
+    vkCmdPushConstants(cmd, g.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof b, &b);
+    vkCmdDraw(cmd, 36, 1, 0, 0);
+  }
+  vkCmdEndRendering(cmd);
+}
+
+canopy::Float4x4 toCanopy(const glm::mat4& m) {
+  canopy::Float4x4 r;
+  std::memcpy(r.m, glm::value_ptr(m), sizeof r.m);
+  return r;
+}
+
+struct Scene {
+  glm::vec3 plantMin{0}, plantMax{0};
+  float spacing = 1, half = 1;  // the grid's cell and half its extent
+  glm::vec2 corridor{0.0f};      // x and z of the middle lanes between the rows and columns
+  std::vector<glm::mat4> boxes;  // model matrices (unit cube of side 1); [0] is outlined
+};
+
+// The walking camera: along the corridor between two rows, at eye height, looking around.
+glm::mat4 walkView(const Scene& s, uint32_t frame, uint32_t frames) {
+  const float t = frames > 1 ? float(frame) / float(frames - 1) : 0.0f;
+  const float height = s.plantMax.y - s.plantMin.y;
+  const glm::vec3 eye(s.corridor.x, 0.45f * height, s.half + 0.5f * s.spacing - t * 1.6f * s.half);
+  const float yaw = glm::radians(25.0f * std::sin(t * 6.2831853f));
+  const glm::vec3 dir(std::sin(yaw), -0.08f, -std::cos(yaw));
+  return glm::lookAt(eye, eye + dir, glm::vec3(0, 1, 0));
+}
+
+// Checks the slot's last frame (its readback is complete once its fence was waited for).
+void checkSlot(Game& g, Slot& s) {
+  const size_t n = size_t(kW) * kH;
+  const float* before = reinterpret_cast<const float*>(s.readback.mapped);
+  const float* after = before + n;
+  const uint8_t* sBefore = s.readback.mapped + 8 * n;
+  const uint8_t* sAfter = sBefore + n;
+  const uint8_t* rgba = sAfter + n;
+  auto depthOf = [&](const float* z, size_t i) {
+    if (g.depthFormat != VK_FORMAT_D24_UNORM_S8_UINT) return z[i];
+    uint32_t raw;
+    std::memcpy(&raw, &z[i], 4);
+    return float(raw & 0xffffff) / float(0xffffff);
+  };
+  uint64_t farther = 0, nearer = 0, stencil = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const float a = depthOf(before, i), b = depthOf(after, i);
+    farther += b > a + 1e-6f;
+    nearer += b < a - 1e-6f;
+    stencil += sBefore[i] != sAfter[i];
+  }
+  g.fartherPixels += farther;
+  g.stencilChanged += stencil;
+  g.checkedFrames++;
+  g.framesWithVegetationInFront += nearer > n / 100;
+  if (farther || stencil)
+    std::fprintf(stderr, "canopy-game-host: frame %llu: %llu pixels farther after Canopy, %llu stencil bytes changed\n",
+                 (unsigned long long)s.frame, (unsigned long long)farther, (unsigned long long)stencil);
+  if (s.write && !g.outDir.empty()) {
+    char name[64];
+    std::snprintf(name, sizeof name, "/frame_%04llu.ppm", (unsigned long long)s.frame);
+    std::ofstream o(g.outDir + name, std::ios::binary);
+    o << "P6\n" << kW << " " << kH << "\n255\n";
+    for (size_t i = 0; i < n; ++i) o.write(reinterpret_cast<const char*>(rgba + 4 * i), 3);
+  }
+}
+
+bool wait(Game& g, Slot& s) {
+  if (!s.pending) return true;
+  CHECK(vkWaitForFences(g.device, 1, &s.fence, VK_TRUE, UINT64_MAX));
+  CHECK(vkResetFences(g.device, 1, &s.fence));
+  s.pending = false;
+  checkSlot(g, s);
+  return true;
+}
+
+bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t frames, bool write) {
+  Slot& s = g.slots[number % kFrames];
+  if (!wait(g, s)) return false;
+  uint32_t image = 0;
+  CHECK(vkAcquireNextImageKHR(g.device, g.swapchain, UINT64_MAX, s.acquired, VK_NULL_HANDLE, &image));
+  s.frame = number;
+  s.write = write;
+  const glm::mat4 view = walkView(sc, index, frames);
+  const glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(60.0f), float(kW) / float(kH), 0.05f, 200.0f) *
+                         glm::mat4(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1);  // Vulkan clip: y down
+  const glm::mat4 vp = proj * view;
+  VkCommandBuffer cmd = s.cmd;
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  CHECK(vkBeginCommandBuffer(cmd, &bi));
+  const VkImageAspectFlags ds = VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT;
+  // The previous frame's last uses (copies and the blit) before this frame overwrites the targets.
+  barrier(cmd, g.color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, kCopy,
+          VK_ACCESS_2_TRANSFER_READ_BIT, kColorStage, kColorAccess);
+  barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, kCopy,
+          VK_ACCESS_2_TRANSFER_READ_BIT, kDepthStage, kDepthAccess);
+  // The host's opaque scene: ground and boxes, the outlined box writing its stencil value.
+  std::vector<std::pair<BoxPush, uint32_t>> boxes;
+  const float w = sc.half * 2.0f + sc.spacing;
+  boxes.push_back({{vp * glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, -0.05f, 0)), glm::vec3(w, 0.1f, w)),
+                    glm::vec4(0.35f, 0.45f, 0.25f, 1)}, 0u});
+  for (size_t i = 0; i < sc.boxes.size(); ++i)
+    boxes.push_back({{vp * sc.boxes[i], i == 0 ? glm::vec4(0.8f, 0.3f, 0.25f, 1) : glm::vec4(0.6f, 0.6f, 0.65f, 1)},
+                     i == 0 ? uint32_t(kOutlined) : 0u});
+  drawBoxes(g, cmd, g.scene, true, boxes);
+  // Depth and stencil before Canopy (the self-check).
+  barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
+          kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
+  const VkDeviceSize n = VkDeviceSize(kW) * kH;
+  copyDepthStencil(g, cmd, s, 0, 8 * n);
+  // Canopy, outside any render pass; the host's images as they arrive and as it wants them back.
+  canopy::CanopyFrameInputs in;
+  in.frame.camera = {toCanopy(view), toCanopy(proj)};
+  in.frame.dt = 1.0f / 30.0f;
+  in.frame.frameNumber = number;
+  const canopy::ResourceState colorState{kColorStage, kColorAccess, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL},
+      depthArrives{kCopy, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL},
+      depthLeaves{kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+  in.color = canopy::canopyImage(g.color.image, g.color.view, kColorUsage, kColorFormat, colorState, colorState);
+  in.depth = canopy::canopyImage(g.depth.image, g.depth.depthOnly, kDepthUsage, g.depthFormat, depthArrives, depthLeaves);
+  const canopy::Status st = canopy::recordCanopy(g.ctx, cmd, in);
+  if (!st.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", st.message().c_str());
+    return false;
+  }
+  // The outline of box 0, where the stencil is not its own: the stencil survived Canopy's passes.
+  const glm::mat4 grown = sc.boxes[0] * glm::scale(glm::mat4(1.0f), glm::vec3(1.12f));
+  drawBoxes(g, cmd, g.outline, false, {{{vp * grown, glm::vec4(1.0f, 0.85f, 0.1f, 1)}, uint32_t(kOutlined)}});
+  // Depth, stencil and colour after, then the colour into the swapchain image.
+  barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
+          kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
+  copyDepthStencil(g, cmd, s, 4 * n, 9 * n);
+  barrier(cmd, g.color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+          kColorStage, kColorAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferImageCopy c{};
+  c.bufferOffset = 10 * n;
+  c.imageExtent = {kW, kH, 1};
+  c.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  vkCmdCopyImageToBuffer(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &c);
+  const VkImage swap = g.swapImages[image];
+  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, kCopy,
+          VK_ACCESS_2_NONE, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  VkImageBlit blit{};
+  blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  blit.srcOffsets[1] = {int32_t(kW), int32_t(kH), 1};
+  blit.dstOffsets[1] = {int32_t(kW), int32_t(kH), 1};
+  vkCmdBlitImage(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, swap, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
+                 VK_FILTER_NEAREST);
+  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, kCopy,
+          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE);
+  // The readback for the host (after the fence).
+  VkMemoryBarrier2 hostRead{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  hostRead.srcStageMask = kCopy;
+  hostRead.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+  hostRead.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+  hostRead.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.memoryBarrierCount = 1;
+  di.pMemoryBarriers = &hostRead;
+  vkCmdPipelineBarrier2(cmd, &di);
+  CHECK(vkEndCommandBuffer(cmd));
+  const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_TRANSFER_BIT;
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.waitSemaphoreCount = 1;
+  si.pWaitSemaphores = &s.acquired;
+  si.pWaitDstStageMask = &waitStage;
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd;
+  si.signalSemaphoreCount = 1;
+  si.pSignalSemaphores = &g.presentReady[image];
+  CHECK(vkQueueSubmit(g.queue, 1, &si, s.fence));
+  s.pending = true;
+  VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+  pi.waitSemaphoreCount = 1;
+  pi.pWaitSemaphores = &g.presentReady[image];
+  pi.swapchainCount = 1;
+  pi.pSwapchains = &g.swapchain;
+  pi.pImageIndices = &image;
+  const VkResult pr = vkQueuePresentKHR(g.queue, &pi);
+  if (pr != VK_SUCCESS && pr != VK_SUBOPTIMAL_KHR) CHECK(pr);
+  return true;
+}
+
+// N copies of the plant on a square grid, each turned and scaled its own way, standing on the
+// ground (y = 0); a few boxes among them.
+bool makeScene(const canopy::Model* model, uint32_t plants, canopy::CanopyDesc* desc, Scene* s) {
+  canopy::Float3 lo, hi;
+  canopy::modelBounds(model, &lo, &hi);
+  s->plantMin = glm::vec3(lo.x, lo.y, lo.z);
+  s->plantMax = glm::vec3(hi.x, hi.y, hi.z);
+  const glm::vec3 size = s->plantMax - s->plantMin;
+  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(plants))));
+  s->spacing = 1.3f * std::max(size.x, size.z);
+  s->half = 0.5f * float(side - 1) * s->spacing;
+  s->corridor = glm::vec2(-s->half + (float(side / 2) - 0.5f) * s->spacing);
+  uint32_t seed = 7;
+  auto rnd = [&] {
+    seed = seed * 1664525u + 1013904223u;
+    return float(seed >> 8) / float(1u << 24);
+  };
+  const glm::vec3 foot(0.5f * (s->plantMin.x + s->plantMax.x), s->plantMin.y, 0.5f * (s->plantMin.z + s->plantMax.z));
+  for (uint32_t i = 0; i < plants; ++i) {
+    const glm::vec3 at(float(i % side) * s->spacing - s->half, 0.0f, float(i / side) * s->spacing - s->half);
+    const glm::mat4 t = glm::translate(glm::mat4(1.0f), at) * glm::rotate(glm::mat4(1.0f), rnd() * 6.2831853f, glm::vec3(0, 1, 0)) *
+                        glm::scale(glm::mat4(1.0f), glm::vec3(0.8f + 0.4f * rnd())) * glm::translate(glm::mat4(1.0f), -foot);
+    canopy::CanopyInstance inst;
+    inst.transform = toCanopy(t);
+    inst.tint = {0.85f + 0.3f * rnd(), 0.85f + 0.3f * rnd(), 0.85f + 0.2f * rnd()};
+    desc->instances.push_back(inst);
+  }
+  // Boxes where the lanes cross, off the walk (the first outlined through the stencil).
+  const float b = 0.3f * size.y;
+  const int dx[6] = {1, -1, 2, 1, -1, 2}, dz[6] = {-1, -1, -1, 1, 1, 1};
+  for (int k = 0; k < 6; ++k) {
+    const glm::vec3 at(s->corridor.x + float(dx[k]) * s->spacing, 0.5f * b, s->corridor.y + float(dz[k]) * s->spacing);
+    s->boxes.push_back(glm::scale(glm::translate(glm::mat4(1.0f), at), glm::vec3(b)));
+  }
+  return true;
+}
+
+void shutdown(Game& g) {
+  if (g.device) vkDeviceWaitIdle(g.device);
+  for (Slot& s : g.slots)
+    if (s.pending) checkSlot(g, s), s.pending = false;
+  canopy::destroyCanopy(g.ctx);
+  canopy::releaseDevice(g.adopted);
+  if (g.device) {
+    for (Slot& s : g.slots) {
+      vkDestroyFence(g.device, s.fence, nullptr);
+      vkDestroySemaphore(g.device, s.acquired, nullptr);
+      vkDestroyBuffer(g.device, s.readback.buffer, nullptr);
+      vkFreeMemory(g.device, s.readback.memory, nullptr);
+    }
+    for (VkSemaphore s : g.presentReady) vkDestroySemaphore(g.device, s, nullptr);
+    vkDestroyCommandPool(g.device, g.pool, nullptr);
+    vkDestroyPipeline(g.device, g.scene, nullptr);
+    vkDestroyPipeline(g.device, g.outline, nullptr);
+    vkDestroyPipelineLayout(g.device, g.layout, nullptr);
+    for (Image* t : {&g.color, &g.depth}) {
+      vkDestroyImageView(g.device, t->view, nullptr);
+      vkDestroyImageView(g.device, t->depthOnly, nullptr);
+      vkDestroyImage(g.device, t->image, nullptr);
+      vkFreeMemory(g.device, t->memory, nullptr);
+    }
+    vkDestroySwapchainKHR(g.device, g.swapchain, nullptr);
+    vkDestroyDevice(g.device, nullptr);
+  }
+  if (g.surface) vkDestroySurfaceKHR(g.instance, g.surface, nullptr);
+  if (g.messenger) {
+    auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(g.instance, "vkDestroyDebugUtilsMessengerEXT");
+    destroy(g.instance, g.messenger, nullptr);
+  }
+  if (g.instance) vkDestroyInstance(g.instance, nullptr);
+  if (g.window) glfwDestroyWindow(g.window);
+  glfwTerminate();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  uint32_t frames = 48, plants = 64, writeEvery = 1;
+  bool validate = false;
+  std::string gltf = CANOPY_DEFAULT_PLANT;
+  Game g;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto number = [&](uint32_t lo, uint32_t hi, uint32_t* out) {
+      if (i + 1 >= argc) return false;
+      char* end = nullptr;
+      const long v = std::strtol(argv[++i], &end, 10);
+      if (!end || *end || v < long(lo) || v > long(hi)) return false;
+      *out = uint32_t(v);
+      return true;
+    };
+    if (a == "--help" || a == "-h") {
+      std::printf("usage: canopy-game-host [--frames N (1..10000, default 48)] [--plants N (1..4096, default 64)] [--gltf FILE]\n"
+                  "                        [--out DIR] [--write-every K (default 1)] [--validate]\n");
+      return 0;
+    } else if (a == "--frames") {
+      if (!number(1, 10000, &frames)) return std::fprintf(stderr, "canopy-game-host: --frames needs an integer in [1, 10000]\n"), 2;
+    } else if (a == "--plants") {
+      if (!number(1, 4096, &plants)) return std::fprintf(stderr, "canopy-game-host: --plants needs an integer in [1, 4096]\n"), 2;
+    } else if (a == "--write-every") {
+      if (!number(1, 10000, &writeEvery)) return std::fprintf(stderr, "canopy-game-host: --write-every needs an integer in [1, 10000]\n"), 2;
+    } else if (a == "--gltf" && i + 1 < argc) {
+      gltf = argv[++i];
+    } else if (a == "--out" && i + 1 < argc) {
+      g.outDir = argv[++i];
+    } else if (a == "--validate") {
+      validate = true;
+    } else {
+      std::fprintf(stderr, "canopy-game-host: unknown or incomplete argument '%s'\n", a.c_str());
+      return 2;
+    }
+  }
+  if (!std::filesystem::exists(gltf)) {
+    std::printf("canopy-game-host: %s is absent (../shared/assets not present): skipped\n", gltf.c_str());
+    return 77;
+  }
+  if (!g.outDir.empty()) std::filesystem::create_directories(g.outDir);
+  if (!glfwInit() || !glfwVulkanSupported()) {
+    std::printf("canopy-game-host: no display with Vulkan (run under xvfb-run): skipped\n");
+    return 77;
+  }
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+  glfwWindowHint(GLFW_RESIZABLE, GLFW_FALSE);
+  g.window = glfwCreateWindow(int(kW), int(kH), "canopy-game-host", nullptr, nullptr);
+  canopy::Model* model = nullptr;
+  Scene scene;
+  bool ok = g.window && createInstanceAndDevice(g, validate) && createSwapchain(g) &&
+            createImage(g, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) &&
+            createImage(g, g.depthFormat, kDepthUsage, VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) &&
+            createPipelines(g) && createFrames(g);
+  if (ok) {
+    const canopy::Status s = canopy::loadModel(gltf, {}, &model);
+    if (!s.ok()) std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
+    ok = s.ok();
+  }
+  canopy::CanopyDesc desc;
+  desc.width = kW;
+  desc.height = kH;
+  desc.colorFormat = kColorFormat;
+  desc.depthFormat = g.depthFormat;
+  desc.params.simulation.wind.strength = 1.5f;
+  if (ok) ok = makeScene(model, plants, &desc, &scene);
+  if (ok) {
+    const canopy::Status s = canopy::createCanopy(g.adopted, model, desc, &g.ctx);
+    if (!s.ok()) std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
+    ok = s.ok();
+  }
+  canopy::destroyModel(model);
+  for (uint32_t f = 0; ok && f < frames && !glfwWindowShouldClose(g.window); ++f) {
+    glfwPollEvents();
+    ok = frame(g, scene, f + 1, f, frames, f % writeEvery == 0 || f + 1 == frames);
+  }
+  canopy::CanopyStats st{};
+  if (g.ctx) st = canopy::canopyStats(g.ctx);
+  shutdown(g);
+  std::printf("%u copies of %s (%u visible at the last re-slice), %llu re-slices in %u frames\n", st.layers.instances,
+              std::filesystem::path(gltf).filename().c_str(), st.layers.lastVisibleInstances,
+              (unsigned long long)st.layers.rebuilds, frames);
+  std::printf("self-check: %llu frames checked, %llu with vegetation in front of the host's scene, %llu pixels farther after "
+              "Canopy, %llu stencil bytes changed, %d validation messages: %s\n",
+              (unsigned long long)g.checkedFrames, (unsigned long long)g.framesWithVegetationInFront,
+              (unsigned long long)g.fartherPixels, (unsigned long long)g.stencilChanged, g.validationMessages,
+              ok && g.fartherPixels == 0 && g.stencilChanged == 0 && g.validationMessages == 0 && g.framesWithVegetationInFront > 0 &&
+                      g.checkedFrames == frames
+                  ? "PASS"
+                  : "FAIL");
+  return ok && g.fartherPixels == 0 && g.stencilChanged == 0 && g.validationMessages == 0 && g.framesWithVegetationInFront > 0 &&
+                 g.checkedFrames == frames
+             ? 0
+             : 1;
+}

@@ -28,8 +28,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "host_box.frag.h"  // the host's own shaders (SPIR-V words, built by glslangValidator)
-#include "host_box.vert.h"
+#include "host_vk.h"  // the host's own Vulkan helpers and box shaders (SPIR-V words, built by glslangValidator)
 
 namespace {
 
@@ -51,10 +50,8 @@ constexpr VkImageUsageFlags kDepthUsage =
     }                                                                                     \
   } while (0)
 
-struct BoxPush {
-  glm::mat4 mvp;
-  glm::vec4 color;
-};
+using host::BoxPush;
+using host::barrier;
 
 // ---- The host's own memory allocator (what VMA would be in a real engine) ----------------------
 
@@ -64,19 +61,10 @@ struct HostMemory {
   uint64_t live = 0, total = 0;  // allocations made for Canopy (its DeviceMemoryAllocator)
 };
 
-int32_t findType(const HostMemory& m, uint32_t bits, VkMemoryPropertyFlags need, VkMemoryPropertyFlags want) {
-  for (int pass = 0; pass < 2; ++pass)
-    for (uint32_t i = 0; i < m.props.memoryTypeCount; ++i) {
-      const VkMemoryPropertyFlags f = m.props.memoryTypes[i].propertyFlags;
-      if ((bits & (1u << i)) && (f & need) == need && (pass == 1 || (f & want) == want)) return int32_t(i);
-    }
-  return -1;
-}
-
 VkResult hostAllocate(void* user, const VkMemoryRequirements& req, VkMemoryPropertyFlags required,
                       VkMemoryPropertyFlags preferred, canopy::DeviceMemoryRange* out) {
   auto& m = *static_cast<HostMemory*>(user);
-  const int32_t type = findType(m, req.memoryTypeBits, required, preferred);
+  const int32_t type = host::memoryType(m.props, req.memoryTypeBits, required, preferred);
   if (type < 0) return VK_ERROR_OUT_OF_DEVICE_MEMORY;
   VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   ai.allocationSize = req.size;
@@ -106,11 +94,6 @@ void hostFree(void* user, const canopy::DeviceMemoryRange& range) {
 
 // ---- The host's renderer -----------------------------------------------------------------------
 
-struct Target {
-  VkImage image = VK_NULL_HANDLE;
-  VkImageView view = VK_NULL_HANDLE;
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-};
 
 struct Frame {
   VkCommandBuffer cmd = VK_NULL_HANDLE;
@@ -130,7 +113,7 @@ struct Host {
   uint32_t family = 0;
   std::string deviceName;
   HostMemory memory;
-  Target color, depth;
+  host::Image color, depth;
   VkCommandPool pool = VK_NULL_HANDLE;
   Frame frames[kMaxFramesInFlight];
   uint32_t framesInFlight = 2;  // frames recorded ahead of the GPU (--frames-in-flight)
@@ -254,98 +237,18 @@ bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDev
   return true;
 }
 
-bool createTarget(Host& h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, Target* t) {
-  VkImageCreateInfo ci{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-  ci.imageType = VK_IMAGE_TYPE_2D;
-  ci.format = format;
-  ci.extent = {kW, kH, 1};
-  ci.mipLevels = ci.arrayLayers = 1;
-  ci.samples = VK_SAMPLE_COUNT_1_BIT;
-  ci.tiling = VK_IMAGE_TILING_OPTIMAL;
-  ci.usage = usage;
-  HOST_CHECK(vkCreateImage(h.device, &ci, nullptr, &t->image));
-  VkMemoryRequirements req;
-  vkGetImageMemoryRequirements(h.device, t->image, &req);
-  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  ai.allocationSize = req.size;
-  ai.memoryTypeIndex = uint32_t(findType(h.memory, req.memoryTypeBits, 0, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT));
-  HOST_CHECK(vkAllocateMemory(h.device, &ai, nullptr, &t->memory));
-  HOST_CHECK(vkBindImageMemory(h.device, t->image, t->memory, 0));
-  VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  vi.image = t->image;
-  vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  vi.format = format;
-  vi.subresourceRange = {aspect, 0, 1, 0, 1};
-  HOST_CHECK(vkCreateImageView(h.device, &vi, nullptr, &t->view));
+bool createTarget(Host& h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, host::Image* t) {
+  HOST_CHECK(host::createImage(h.device, h.memory.props, kW, kH, format, usage, aspect, t));
   return true;
 }
 
 bool createPipeline(Host& h) {
-  VkShaderModule modules[2];
-  const uint32_t* code[2] = {host_box_vert, host_box_frag};
-  const size_t size[2] = {sizeof(host_box_vert), sizeof(host_box_frag)};
-  for (int i = 0; i < 2; ++i) {
-    VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    mi.codeSize = size[i];
-    mi.pCode = code[i];
-    HOST_CHECK(vkCreateShaderModule(h.device, &mi, nullptr, &modules[i]));
-  }
-  VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(BoxPush)};
-  VkPipelineLayoutCreateInfo li{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  li.pushConstantRangeCount = 1;
-  li.pPushConstantRanges = &range;
-  HOST_CHECK(vkCreatePipelineLayout(h.device, &li, nullptr, &h.layout));
-  VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
-                                               {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
-  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-  stages[0].module = modules[0];
-  stages[0].pName = "main";
-  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-  stages[1].module = modules[1];
-  stages[1].pName = "main";
-  VkPipelineVertexInputStateCreateInfo vin{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
-  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-  vp.viewportCount = vp.scissorCount = 1;
-  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-  rs.polygonMode = VK_POLYGON_MODE_FILL;
-  rs.cullMode = VK_CULL_MODE_NONE;
-  rs.lineWidth = 1.0f;
-  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
+  HOST_CHECK(host::createBoxLayout(h.device, &h.layout));
   // Reverse-Z: near = 1, cleared to 0, nearer fragments have greater depth.
   VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
   ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
   ds.depthCompareOp = VK_COMPARE_OP_GREATER;
-  VkPipelineColorBlendAttachmentState blend{};
-  blend.colorWriteMask = 0xf;
-  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = 1;
-  cb.pAttachments = &blend;
-  VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
-  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-  dy.dynamicStateCount = 2;
-  dy.pDynamicStates = dyn;
-  VkPipelineRenderingCreateInfo rci{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rci.colorAttachmentCount = 1;
-  rci.pColorAttachmentFormats = &kColorFormat;
-  rci.depthAttachmentFormat = kDepthFormat;
-  VkGraphicsPipelineCreateInfo pci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rci};
-  pci.stageCount = 2;
-  pci.pStages = stages;
-  pci.pVertexInputState = &vin;
-  pci.pInputAssemblyState = &ia;
-  pci.pViewportState = &vp;
-  pci.pRasterizationState = &rs;
-  pci.pMultisampleState = &ms;
-  pci.pDepthStencilState = &ds;
-  pci.pColorBlendState = &cb;
-  pci.pDynamicState = &dy;
-  pci.layout = h.layout;
-  const VkResult r = vkCreateGraphicsPipelines(h.device, VK_NULL_HANDLE, 1, &pci, nullptr, &h.boxes);
-  for (VkShaderModule m : modules) vkDestroyShaderModule(h.device, m, nullptr);
-  HOST_CHECK(r);
+  HOST_CHECK(host::createBoxPipeline(h.device, h.layout, kColorFormat, kDepthFormat, VK_FORMAT_UNDEFINED, ds, false, &h.boxes));
   return true;
 }
 
@@ -376,24 +279,6 @@ const VkPipelineStageFlags2 kColorStage = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_O
 const VkAccessFlags2 kColorAccess = VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
 const VkPipelineStageFlags2 kDepthStage = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
 const VkAccessFlags2 kDepthAccess = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-
-void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from, VkImageLayout to,
-             VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
-  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
-  b.srcStageMask = srcStage;
-  b.srcAccessMask = srcAccess;
-  b.dstStageMask = dstStage;
-  b.dstAccessMask = dstAccess;
-  b.oldLayout = from;
-  b.newLayout = to;
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image;
-  b.subresourceRange = {aspect, 0, 1, 0, 1};
-  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  di.imageMemoryBarrierCount = 1;
-  di.pImageMemoryBarriers = &b;
-  vkCmdPipelineBarrier2(cmd, &di);
-}
 
 void drawBoxes(Host& h, VkCommandBuffer cmd, bool clear, const std::vector<BoxPush>& boxes) {
   VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}, z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
@@ -725,12 +610,11 @@ void shutdown(Host& h, canopy::Device* adopted, canopy::CanopyContext* ctx) {
   if (h.pool) vkDestroyCommandPool(h.device, h.pool, nullptr);
   if (h.boxes) vkDestroyPipeline(h.device, h.boxes, nullptr);
   if (h.layout) vkDestroyPipelineLayout(h.device, h.layout, nullptr);
-  for (Target* t : {&h.color, &h.depth}) {
-    if (t->view) vkDestroyImageView(h.device, t->view, nullptr);
-    if (t->image) vkDestroyImage(h.device, t->image, nullptr);
-    if (t->memory) vkFreeMemory(h.device, t->memory, nullptr);
+  if (h.device) {
+    host::destroyImage(h.device, h.color);
+    host::destroyImage(h.device, h.depth);
+    vkDestroyDevice(h.device, nullptr);
   }
-  if (h.device) vkDestroyDevice(h.device, nullptr);
   if (h.messenger) {
     auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(h.instance, "vkDestroyDebugUtilsMessengerEXT");
     destroy(h.instance, h.messenger, nullptr);

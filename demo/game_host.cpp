@@ -31,8 +31,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "host_box.frag.h"  // the example host's box shaders (SPIR-V words, built by glslangValidator)
-#include "host_box.vert.h"
+#include "host_vk.h"  // the example hosts' Vulkan helpers and box shaders
 
 namespace {
 
@@ -52,16 +51,8 @@ constexpr uint8_t kOutlined = 1;  // the stencil value of the outlined box
     }                                                                                       \
   } while (0)
 
-struct BoxPush {
-  glm::mat4 mvp;
-  glm::vec4 color;
-};
-
-struct Image {
-  VkImage image = VK_NULL_HANDLE;
-  VkImageView view = VK_NULL_HANDLE, depthOnly = VK_NULL_HANDLE;
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-};
+using host::BoxPush;
+using host::barrier;
 
 struct Readback {
   VkBuffer buffer = VK_NULL_HANDLE;
@@ -94,7 +85,7 @@ struct Game {
   std::vector<VkImage> swapImages;
   std::vector<VkSemaphore> presentReady;  // per swapchain image
   VkFormat depthFormat = VK_FORMAT_UNDEFINED;
-  Image color, depth;
+  host::Image color, depth;
   VkCommandPool pool = VK_NULL_HANDLE;
   Slot slots[kFrames];
   VkPipelineLayout layout = VK_NULL_HANDLE;
@@ -112,12 +103,6 @@ VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsE
   static_cast<Game*>(user)->validationMessages++;
   std::fprintf(stderr, "validation: %s: %s\n", data->pMessageIdName ? data->pMessageIdName : "", data->pMessage);
   return VK_FALSE;
-}
-
-int32_t memoryType(const Game& g, uint32_t bits, VkMemoryPropertyFlags need) {
-  for (uint32_t i = 0; i < g.memory.memoryTypeCount; ++i)
-    if ((bits & (1u << i)) && (g.memory.memoryTypes[i].propertyFlags & need) == need) return int32_t(i);
-  return -1;
 }
 
 bool createInstanceAndDevice(Game& g, bool validate) {
@@ -287,110 +272,21 @@ bool createSwapchain(Game& g) {
   return true;
 }
 
-bool createImage(Game& g, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, Image* t) {
-  VkImageCreateInfo ci{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
-  ci.imageType = VK_IMAGE_TYPE_2D;
-  ci.format = format;
-  ci.extent = {kW, kH, 1};
-  ci.mipLevels = ci.arrayLayers = 1;
-  ci.samples = VK_SAMPLE_COUNT_1_BIT;
-  ci.tiling = VK_IMAGE_TILING_OPTIMAL;
-  ci.usage = usage;
-  CHECK(vkCreateImage(g.device, &ci, nullptr, &t->image));
-  VkMemoryRequirements req;
-  vkGetImageMemoryRequirements(g.device, t->image, &req);
-  VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  ai.allocationSize = req.size;
-  ai.memoryTypeIndex = uint32_t(std::max(memoryType(g, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT), 0));
-  CHECK(vkAllocateMemory(g.device, &ai, nullptr, &t->memory));
-  CHECK(vkBindImageMemory(g.device, t->image, t->memory, 0));
-  VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  vi.image = t->image;
-  vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  vi.format = format;
-  vi.subresourceRange = {aspect, 0, 1, 0, 1};
-  CHECK(vkCreateImageView(g.device, &vi, nullptr, &t->view));
-  if (aspect & VK_IMAGE_ASPECT_STENCIL_BIT) {  // Canopy's view: the depth aspect only
-    vi.subresourceRange.aspectMask = VK_IMAGE_ASPECT_DEPTH_BIT;
-    CHECK(vkCreateImageView(g.device, &vi, nullptr, &t->depthOnly));
-  }
-  return true;
-}
-
 // The scene pipeline (depth LESS, the stencil written from a dynamic reference) and the outline
 // pipeline (no depth test, drawn where the stencil is not the outlined box's).
 bool createPipelines(Game& g) {
-  VkShaderModule modules[2];
-  const uint32_t* code[2] = {host_box_vert, host_box_frag};
-  const size_t size[2] = {sizeof(host_box_vert), sizeof(host_box_frag)};
-  for (int i = 0; i < 2; ++i) {
-    VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-    mi.codeSize = size[i];
-    mi.pCode = code[i];
-    CHECK(vkCreateShaderModule(g.device, &mi, nullptr, &modules[i]));
-  }
-  VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(BoxPush)};
-  VkPipelineLayoutCreateInfo li{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  li.pushConstantRangeCount = 1;
-  li.pPushConstantRanges = &range;
-  CHECK(vkCreatePipelineLayout(g.device, &li, nullptr, &g.layout));
-  VkPipelineShaderStageCreateInfo stages[2] = {{VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO},
-                                               {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO}};
-  stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
-  stages[0].module = modules[0];
-  stages[0].pName = "main";
-  stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
-  stages[1].module = modules[1];
-  stages[1].pName = "main";
-  VkPipelineVertexInputStateCreateInfo vin{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-  VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};
-  ia.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
-  VkPipelineViewportStateCreateInfo vp{VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO};
-  vp.viewportCount = vp.scissorCount = 1;
-  VkPipelineRasterizationStateCreateInfo rs{VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO};
-  rs.polygonMode = VK_POLYGON_MODE_FILL;
-  rs.cullMode = VK_CULL_MODE_NONE;
-  rs.lineWidth = 1.0f;
-  VkPipelineMultisampleStateCreateInfo ms{VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO};
-  ms.rasterizationSamples = VK_SAMPLE_COUNT_1_BIT;
-  VkPipelineColorBlendAttachmentState blend{};
-  blend.colorWriteMask = 0xf;
-  VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = 1;
-  cb.pAttachments = &blend;
-  const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_STENCIL_REFERENCE};
-  VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
-  dy.dynamicStateCount = 3;
-  dy.pDynamicStates = dyn;
-  VkPipelineRenderingCreateInfo rci{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rci.colorAttachmentCount = 1;
-  rci.pColorAttachmentFormats = &kColorFormat;
-  rci.depthAttachmentFormat = rci.stencilAttachmentFormat = g.depthFormat;
+  CHECK(host::createBoxLayout(g.device, &g.layout));
   VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-  VkGraphicsPipelineCreateInfo pci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rci};
-  pci.stageCount = 2;
-  pci.pStages = stages;
-  pci.pVertexInputState = &vin;
-  pci.pInputAssemblyState = &ia;
-  pci.pViewportState = &vp;
-  pci.pRasterizationState = &rs;
-  pci.pMultisampleState = &ms;
-  pci.pDepthStencilState = &ds;
-  pci.pColorBlendState = &cb;
-  pci.pDynamicState = &dy;
-  pci.layout = g.layout;
   ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
   ds.depthCompareOp = VK_COMPARE_OP_LESS;
   ds.stencilTestEnable = VK_TRUE;
   ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0xff, 0xff, 0};
   ds.back = ds.front;
-  VkResult r = vkCreateGraphicsPipelines(g.device, VK_NULL_HANDLE, 1, &pci, nullptr, &g.scene);
+  CHECK(host::createBoxPipeline(g.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.scene));
   ds.depthTestEnable = ds.depthWriteEnable = VK_FALSE;
   ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_NOT_EQUAL, 0xff, 0, 0};
   ds.back = ds.front;
-  if (r == VK_SUCCESS) r = vkCreateGraphicsPipelines(g.device, VK_NULL_HANDLE, 1, &pci, nullptr, &g.outline);
-  for (VkShaderModule m : modules) vkDestroyShaderModule(g.device, m, nullptr);
-  CHECK(r);
+  CHECK(host::createBoxPipeline(g.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.outline));
   return true;
 }
 
@@ -417,7 +313,7 @@ bool createFrames(Game& g) {
     vkGetBufferMemoryRequirements(g.device, s.readback.buffer, &req);
     VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     mai.allocationSize = req.size;
-    const int32_t type = memoryType(g, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    const int32_t type = host::memoryType(g.memory, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
     if (type < 0) return false;
     mai.memoryTypeIndex = uint32_t(type);
     CHECK(vkAllocateMemory(g.device, &mai, nullptr, &s.readback.memory));
@@ -425,24 +321,6 @@ bool createFrames(Game& g) {
     CHECK(vkMapMemory(g.device, s.readback.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&s.readback.mapped)));
   }
   return true;
-}
-
-void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from, VkImageLayout to,
-             VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess, VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
-  VkImageMemoryBarrier2 b{VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2};
-  b.srcStageMask = srcStage;
-  b.srcAccessMask = srcAccess;
-  b.dstStageMask = dstStage;
-  b.dstAccessMask = dstAccess;
-  b.oldLayout = from;
-  b.newLayout = to;
-  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-  b.image = image;
-  b.subresourceRange = {aspect, 0, 1, 0, 1};
-  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  di.imageMemoryBarrierCount = 1;
-  di.pImageMemoryBarriers = &b;
-  vkCmdPipelineBarrier2(cmd, &di);
 }
 
 const VkPipelineStageFlags2 kColorStage = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
@@ -728,12 +606,8 @@ void shutdown(Game& g) {
     vkDestroyPipeline(g.device, g.scene, nullptr);
     vkDestroyPipeline(g.device, g.outline, nullptr);
     vkDestroyPipelineLayout(g.device, g.layout, nullptr);
-    for (Image* t : {&g.color, &g.depth}) {
-      vkDestroyImageView(g.device, t->view, nullptr);
-      vkDestroyImageView(g.device, t->depthOnly, nullptr);
-      vkDestroyImage(g.device, t->image, nullptr);
-      vkFreeMemory(g.device, t->memory, nullptr);
-    }
+    host::destroyImage(g.device, g.color);
+    host::destroyImage(g.device, g.depth);
     vkDestroySwapchainKHR(g.device, g.swapchain, nullptr);
     vkDestroyDevice(g.device, nullptr);
   }
@@ -800,8 +674,9 @@ int main(int argc, char** argv) {
   canopy::Model* model = nullptr;
   Scene scene;
   bool ok = g.window && createInstanceAndDevice(g, validate) && createSwapchain(g) &&
-            createImage(g, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) &&
-            createImage(g, g.depthFormat, kDepthUsage, VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) &&
+            host::createImage(g.device, g.memory, kW, kH, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) == VK_SUCCESS &&
+            host::createImage(g.device, g.memory, kW, kH, g.depthFormat, kDepthUsage,
+                              VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) == VK_SUCCESS &&
             createPipelines(g) && createFrames(g);
   if (ok) {
     const canopy::Status s = canopy::loadModel(gltf, {}, &model);

@@ -108,9 +108,6 @@ Status validateParams(const CanopyContext& c, const CanopyParams& p) {
   if (p.customPlane) CANOPY_TRY(validatePlane(p.plane));
   if (p.animation == AnimationMode::PerVertex && !c.desc.allowPerVertex)
     return Status::error("CanopyParams.animation = PerVertex needs CanopyDesc.allowPerVertex at creation");
-  if (p.animation == AnimationMode::PerVertex && !c.layers.instances.identity)
-    return Status::error("CanopyParams.animation = PerVertex draws the model at its origin: not with instances or a transform "
-                         "(CanopyDesc.instances, setCanopyInstances)");
   return Status();
 }
 
@@ -410,6 +407,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     for (const CanopyInstance& i : desc.instances) {
       ld.instances.push_back(toGlm(i.transform));
       ld.tints.push_back(toGlm(i.tint));
+      ld.windPhases.push_back(i.windPhase);
     }
     if (desc.allowPerVertex) {
       CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
@@ -531,13 +529,19 @@ Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& i
     if (!c) return Status::error("setCanopyInstances: null context");
     std::vector<glm::mat4> models;
     std::vector<glm::vec3> tints;
+    std::vector<float> phases;
     for (const CanopyInstance& i : instances) {
       models.push_back(toGlm(i.transform));
       tints.push_back(toGlm(i.tint));
+      phases.push_back(i.windPhase);
     }
-    if (c->params.animation == AnimationMode::PerVertex && !(models.size() == 1 && models[0] == glm::mat4(1.0f)))
-      return Status::error("setCanopyInstances: the per-vertex baseline (CanopyParams.animation) draws the model at its origin");
-    return setLayerInstances(c->layers, models, tints).context("setCanopyInstances");
+    CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases).context("setCanopyInstances"));
+    // The per-vertex baseline's motion table holds one block per copy: sized again, graphs rebuilt.
+    if (c->desc.allowPerVertex) {
+      CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(models.size())).context("setCanopyInstances"));
+      c->generation++;
+    }
+    return Status();
   });
 }
 

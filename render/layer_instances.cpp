@@ -19,10 +19,13 @@ void corners(const glm::mat4& m, const glm::vec3& lo, const glm::vec3& hi, glm::
 }  // namespace
 
 Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                    const glm::vec3& meshMin, const glm::vec3& meshMax, LayerInstances* out) {
+                    const std::vector<float>& windPhases, const glm::vec3& meshMin, const glm::vec3& meshMax, LayerInstances* out) {
   if (models.empty()) return Status::error(Result::InvalidArgument, "instances: at least one instance is needed");
   if (!tints.empty() && tints.size() != models.size())
     return Status::error(Result::InvalidArgument, "instances: " + std::to_string(tints.size()) + " tints for " +
+                                                      std::to_string(models.size()) + " instances");
+  if (!windPhases.empty() && windPhases.size() != models.size())
+    return Status::error(Result::InvalidArgument, "instances: " + std::to_string(windPhases.size()) + " wind phases for " +
                                                       std::to_string(models.size()) + " instances");
   LayerInstances next;
   next.models = models;
@@ -43,13 +46,17 @@ Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat
     if (!std::isfinite(tint.x) || !std::isfinite(tint.y) || !std::isfinite(tint.z) || glm::min(tint.x, glm::min(tint.y, tint.z)) < 0.0f ||
         glm::max(tint.x, glm::max(tint.y, tint.z)) > 16.0f)
       return Status::error(Result::InvalidArgument, "CanopyInstance #" + std::to_string(i) + ".tint is outside [0, 16] per channel");
+    const float phase = windPhases.empty() ? 0.0f : windPhases[i];
+    if (!std::isfinite(phase) || std::abs(phase) > 3600.0f)
+      return Status::error(Result::InvalidArgument, "CanopyInstance #" + std::to_string(i) + ".windPhase = " + std::to_string(phase) +
+                                                        " s is outside [-3600, 3600]");
     const glm::mat3 normal = glm::transpose(glm::inverse(glm::mat3(m)));
     gpu::LayerInstance& t = next.table[i];
     t.model = m;
     t.normalColumn0 = glm::vec4(normal[0], 0.0f);
     t.normalColumn1 = glm::vec4(normal[1], 0.0f);
     t.normalColumn2 = glm::vec4(normal[2], 0.0f);
-    t.tint = glm::vec4(tint, 1.0f);
+    t.tint = glm::vec4(tint, phase);
     glm::vec4 c[8];
     corners(m, meshMin, meshMax, c);
     for (const glm::vec4& p : c) {
@@ -57,7 +64,7 @@ Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat
       next.boundsMax = glm::max(next.boundsMax, glm::vec3(p));
     }
   }
-  next.identity = models.size() == 1 && models[0] == glm::mat4(1.0f) && next.table[0].tint == glm::vec4(1.0f);
+  next.identity = models.size() == 1 && models[0] == glm::mat4(1.0f) && glm::vec3(next.table[0].tint) == glm::vec3(1.0f);
   const VkDeviceSize bytes = VkDeviceSize(next.table.size()) * sizeof(gpu::LayerInstance);
   CANOPY_TRY(createBuffer(d, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
                           &next.buffer, "layers: instances"));

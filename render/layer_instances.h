@@ -27,12 +27,12 @@ struct LayerInstances {
   bool identity = true;                       // one instance, the identity transform, no tint
 };
 
-// The table and world bounds for `models` (and `tints`, empty: none) of a mesh bounded by
+// The table and world bounds for `models` (and `tints` and `windPhases`, each empty: none) of a mesh bounded by
 // [meshMin, meshMax], into `out` (which holds no buffer: the caller releases an old one after the
 // frames in flight); refuses a non-finite or singular transform, naming the instance.
 Status setInstances(Device& device, PreparedList* uploads, const std::vector<glm::mat4>& models,
-                    const std::vector<glm::vec3>& tints, const glm::vec3& meshMin, const glm::vec3& meshMax,
-                    LayerInstances* out);
+                    const std::vector<glm::vec3>& tints, const std::vector<float>& windPhases, const glm::vec3& meshMin,
+                    const glm::vec3& meshMax, LayerInstances* out);
 void destroyInstances(Device& device, LayerInstances& instances);
 
 // The instances whose transformed mesh bounds meet the frustum of `viewProj` (clip space, Vulkan

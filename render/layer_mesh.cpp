@@ -386,11 +386,12 @@ void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count,
 
 
 Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
-                     const PerVertexBindings& bindings) {
+                     const PerVertexBindings& bindings, const std::vector<InstanceRun>& runs) {
   // The host's targets, whose viewport beginHostRendering set (the layers' images are larger by
   // the guard band).
   MeshDrawOptions options;
   options.keepViewport = true;
+  options.runs = &runs;
   CANOPY_TRY(drawMaterials(lv, cmd, pipe, true, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options));
   return lv.mesh.hasRigid ? drawMaterials(lv, cmd, pipe, false, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options) : Status();
 }

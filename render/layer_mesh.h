@@ -105,10 +105,10 @@ struct PerVertexBindings {
   VkBuffer bendVertices = VK_NULL_HANDLE;  // gpu::BendVertex per compact-mesh vertex (BendVertexBuf)
   VkBuffer tips = VK_NULL_HANDLE;          // the motion table (TipBuf)
 };
-// Draws every chunk of the (resident) mesh, foliage then rigid, with `pipe` inside the caller's
-// rendering: the per-vertex baseline's frame.
+// Draws every chunk of the (resident) mesh, foliage then rigid, for the placed copies in `runs`,
+// with `pipe` inside the caller's rendering: the per-vertex baseline's frame.
 Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
-                     const PerVertexBindings& bindings);
+                     const PerVertexBindings& bindings, const std::vector<InstanceRun>& runs);
 
 // The mesh draw with chunk parts (the layer passes' slices and cut, the impostor bake); a
 // GPU-order foliage triangle run cut at chunk borders into parts.

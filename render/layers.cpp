@@ -190,7 +190,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     }
     CANOPY_TRY(placeLayerMesh(lv, std::move(mesh), liveAtStart));
     CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, desc.instances.empty() ? std::vector<glm::mat4>{glm::mat4(1.0f)} : desc.instances,
-                            desc.tints, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
+                            desc.tints, desc.windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
     CANOPY_TRY(createPipelines(lv));
     if (lv.impostors.enabled && !lv.instances.identity)
       return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
@@ -304,9 +304,10 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
   return createTargets(lv);
 }
 
-Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints) {
+Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
+                         const std::vector<float>& windPhases) {
   LayerInstances next;
-  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, models, tints, lv.mesh.boundsMin, lv.mesh.boundsMax, &next));
+  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, models, tints, windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &next));
   if (lv.impostors.enabled && !next.identity) {
     destroyInstances(*lv.device, next);
     return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "

@@ -72,6 +72,7 @@ struct LayeredVegetationDesc {
   // one copy at the model's origin.
   std::vector<glm::mat4> instances;
   std::vector<glm::vec3> tints;
+  std::vector<float> windPhases;  // s, the per-vertex baseline's; empty: none
   LayerSettings settings;
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
@@ -125,7 +126,8 @@ Status flushLayerWork(LayeredVegetation& lv, VkCommandBuffer cmd);
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bool* targetsRecreated = nullptr);
 
 // Replaces the placed copies (transforms and tints; empty tints: none) and re-slices at once.
-Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints);
+Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
+                         const std::vector<float>& windPhases = {});
 
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;

@@ -128,9 +128,8 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   pv.branchCount = uint32_t(branches.size());
   pv.leafCount = lv.mesh.leafCount;
   CANOPY_TRY(createComputePipeline(d, {"per_vertex_tips.comp", 0}, &pv.tipsPipeline));
-  const VkDeviceSize tipBytes = (uint64_t(pv.branchCount) + pv.leafCount) * sizeof(glm::vec3) * (motion ? 2 : 1);
-  CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(tipBytes, 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                          MemoryUsage::DeviceLocal, &pv.tips, "per-vertex: motion table"));
+  pv.copies = 0;
+  CANOPY_TRY(resizePerVertexCopies(pv, uint32_t(lv.instances.models.size())));
   const VkDeviceSize branchBytes = std::max<VkDeviceSize>(branches.size() * sizeof(gpu::BendBranch), sizeof(gpu::BendBranch));
   CANOPY_TRY(createBuffer(d, branchBytes, usage, MemoryUsage::DeviceLocal, &pv.branches, "per-vertex: branches"));
   std::vector<gpu::BendBranch> table = branches;
@@ -141,6 +140,24 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
     const uint32_t zero[4] = {};
     CANOPY_TRY(uploadBuffer(d, deferred, pv.dummy, zero, sizeof zero, rg::stateOf(rg::Use::VertexStorageRead)));
   }
+  return Status();
+}
+
+Status resizePerVertexCopies(PerVertexAnimation& pv, uint32_t copies) {
+  if (copies == pv.copies && pv.tips.buffer) return Status();
+  Device& d = *pv.device;
+  const bool motion = pv.desc.motionFormat != VK_FORMAT_UNDEFINED;
+  const VkDeviceSize tipBytes = (uint64_t(pv.branchCount) + pv.leafCount) * sizeof(glm::vec3) * (motion ? 2 : 1) * copies;
+  Buffer next;
+  CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(tipBytes, 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal, &next,
+                          "per-vertex: motion table"));
+  if (pv.tips.buffer) {
+    auto old = std::make_shared<Buffer>(pv.tips);
+    Device* dev = &d;
+    deferRelease(d, [dev, old] { destroyBuffer(*dev, *old); });
+  }
+  pv.tips = next;
+  pv.copies = copies;
   return Status();
 }
 
@@ -177,6 +194,9 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.lastViewProj = viewProj;
   pv.current.branchCount = pv.branchCount;
   pv.current.tipCount = pv.branchCount + pv.leafCount;
+  pv.current.copyCount = pv.copies;
+  // The copies in view (drawn every frame: culled every frame).
+  pv.runs = visibleInstanceRuns(lv.instances, lv.mesh.boundsMin, lv.mesh.boundsMax, viewProj);
   pv.frames++;
   return Status();
 }
@@ -200,9 +220,10 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   // The branch table is uploaded at creation and never written again: bound outside the graph.
   rg::addSlotPass(g, "per-vertex: branch motion",
                   {rg::slot(bendFrame, rg::Use::ComputeStorageRead), rg::outsideGraph(bindBuffer(pv.branches.buffer)),
-                   rg::slot(tips, rg::Use::ComputeStorageWrite)},
+                   rg::slot(tips, rg::Use::ComputeStorageWrite), rg::outsideGraph(bindBuffer(lv.instances.buffer.buffer))},
                   [p](rg::PassContext& c, const rg::Slots& s) {
-                    const uint32_t n = std::min<uint32_t>(p->current.tipCount, 64u * 4096u);  // the shader strides over the rest
+                    // The shader strides over the rest.
+                    const uint32_t n = uint32_t(std::min<uint64_t>(uint64_t(p->current.tipCount) * p->copies, 64u * 4096u));
                     if (n == 0) return Status();
                     return rg::dispatchSlots(c, p->tipsPipeline, s, n, 1, 1, nullptr, 0);
                   });
@@ -216,7 +237,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
     b.branches = p->branches.buffer;
     b.bendVertices = p->hierarchy ? l->mesh.bendVertices.buffer : p->dummy.buffer;
     b.tips = p->tips.buffer;
-    Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b);
+    Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b, p->runs);
     x.device->cmdEndRendering(x.cmd);
     return s;
   });

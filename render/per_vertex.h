@@ -26,8 +26,10 @@ struct PerVertexAnimation {
   GraphicsPipeline pipeline;
   ComputePipeline tipsPipeline;              // shaders/per_vertex_tips.comp: the motion table
   Buffer frame, bendFrame, branches, dummy;  // dummy: BendVertexBuf when the model has no hierarchy
-  Buffer tips;                               // the motion table: a vec3 per branch and leaf (twice with motion)
+  Buffer tips;                               // the motion table: per copy, a vec3 per branch and leaf (twice with motion)
   uint32_t branchCount = 0, leafCount = 0;
+  uint32_t copies = 1;                       // the placed copies the motion table holds (CanopyDesc.instances)
+  std::vector<InstanceRun> runs;             // the copies this frame's camera sees
   bool hierarchy = false;
   gpu::LayerFrame layerFrame{};
   gpu::BendFrame current{};
@@ -49,6 +51,9 @@ Status validateBendHierarchy(const std::vector<gpu::BendVertex>& bend, const std
 Status createPerVertex(Device& device, const LayeredVegetation& lv, const std::vector<gpu::BendBranch>& branches,
                        const PerVertexDesc& desc, PerVertexAnimation* out, PreparedList* deferred = nullptr);
 void destroyPerVertex(PerVertexAnimation& pv);
+// Sizes the motion table for `copies` placed copies (the old one released after the frames in
+// flight; a graph holding it must be rebuilt).
+Status resizePerVertexCopies(PerVertexAnimation& pv, uint32_t copies);
 
 // The bend frame for the wind and parameters at time t (the model's bounds give the fallback
 // trunk: the vertical through the bounds' centre, from their bottom).

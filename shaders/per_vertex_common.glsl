@@ -1,4 +1,4 @@
-// The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the six layer
+// The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the seven layer
 // bindings of layers_common.glsl): the bend frame, the branch table, the per-vertex branch index
 // and w, and the motion table of tip bends (shared/bend.h); the walk from a vertex's branch up to
 // its trunk and the gathering of its tips.
@@ -25,10 +25,11 @@ BendChain fetchChain(uint branch) {
   return c;
 }
 
-// The tips of a vertex's leaf and chain from the motion table; `set` 0: this frame's, 1: the
-// previous frame's (BEND_FLAG_PREVIOUS).
-BendTips fetchTips(BendFrame f, BendChain c, bool hasLeaf, uint leaf, uint set) {
-  uint base = set * f.tipCount;
+// The tips of a vertex's leaf and chain from copy `copy`'s motion table; `set` 0: this frame's, 1:
+// the previous frame's (BEND_FLAG_PREVIOUS).
+BendTips fetchTips(BendFrame f, BendChain c, bool hasLeaf, uint leaf, uint copy, uint set) {
+  uint sets = (f.flags & BEND_FLAG_PREVIOUS) != 0u ? 2u : 1u;
+  uint base = (copy * sets + set) * f.tipCount;
   BendTips t;
   t.leaf = hasLeaf ? tipTable[base + f.branchCount + leaf] : vec3(0.0);
   for (uint i = 0u; i < BEND_LEVELS; ++i) t.level[i] = i < c.count ? tipTable[base + c.id[i]] : vec3(0.0);

@@ -13,7 +13,10 @@ layout(location = 4) out vec2 vMotion;
 #endif
 
 void main() {
-  BendFrame bf = bendIn;
+  // This copy's frame (its model-space wind, its phase) and placement (CanopyInstance).
+  LayerInstance inst = instances[gl_InstanceIndex];
+  BendFrame bf = bendFrameForCopy(bendIn, inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz, inst.tint.w);
+  uint copy = uint(gl_InstanceIndex);
   vec3 rest = vertexPosition();
   BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
   if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) {
@@ -29,17 +32,19 @@ void main() {
     lr.leaf = leafRoot[inPositionLeaf.w].leaf;
   }
   vec3 n = layerDecodeNormal(inNormalOct);
-  vWorld = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, 0u), bv, leaf, lr.position, rest, bf.time, n);
-  vNormal = n;
+  mat3 normalMatrix = mat3(inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz);
+  vWorld = (inst.model * vec4(bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, copy, 0u), bv, leaf, lr.position, rest,
+                                        bf.time, n), 1.0)).xyz;
+  vNormal = normalMatrix * n;
   vUv = inUv;
   vLeaf = leaf ? lr.leaf : LAYER_NO_LEAF;
-  vTint = vec3(1.0);  // the baseline draws the model at its origin, untinted (one instance)
+  vTint = inst.tint.rgb;
   gl_Position = f.viewProj * vec4(vWorld, 1.0);
 #ifdef PER_VERTEX_MOTION
   vec3 n0 = n;
-  vec3 before = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, 1u), bv, leaf, lr.position, rest,
+  vec3 before = bendApply(bf, chain, fetchTips(bf, chain, leaf, lr.leaf, copy, 1u), bv, leaf, lr.position, rest,
                           bf.previousTime, n0);
-  vec4 c0 = bf.previousViewProj * vec4(before, 1.0);
+  vec4 c0 = bf.previousViewProj * (inst.model * vec4(before, 1.0));
   vMotion = (gl_Position.xy / gl_Position.w - c0.xy / c0.w) * 0.5 * bf.targetSize;
 #endif
 }

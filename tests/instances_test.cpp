@@ -68,8 +68,10 @@ CanopyInstance instanceOf(const glm::mat4& t, const glm::vec3& tint = glm::vec3(
 class InstancesTest : public GpuTest {
  protected:
   uint64_t frameNumber = 0;  // never decreases on the device
-  // A 160x120 host and a context on `model` with `instances` (wind 1) for it.
-  void make(Host& host, const VegetationModel& model, const std::vector<CanopyInstance>& instances, CanopyContext** ctx) {
+  // A 160x120 host and a context on `model` with `instances` (wind 1) for it; `perVertex`: the
+  // per-vertex baseline draws it.
+  void make(Host& host, const VegetationModel& model, const std::vector<CanopyInstance>& instances, CanopyContext** ctx,
+            bool perVertex = false, float wind = 1.0f) {
     host.w = 160;
     host.h = 120;
     ASSERT_TRUE(host.create(dev, 1).ok());
@@ -78,16 +80,19 @@ class InstancesTest : public GpuTest {
     d.height = host.h;
     d.colorFormat = host.colorFormat;
     d.instances = instances;
-    d.params.simulation.wind.strength = 1.0f;
+    d.params.simulation.wind.strength = wind;
+    d.allowPerVertex = perVertex;
+    if (perVertex) d.params.animation = AnimationMode::PerVertex;
     const Status made = createCanopy(dev, model, d, ctx);
     ASSERT_TRUE(made.ok()) << made.message();
   }
   // `frames` frames of a context on `model` (with `instances`) seen by `view`, read back.
   void render(const VegetationModel& model, const std::vector<CanopyInstance>& instances, const LayerView& view, int frames,
-              std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr) {
+              std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr, bool perVertex = false,
+              float wind = 1.0f) {
     Host host;
     CanopyContext* ctx = nullptr;
-    make(host, model, instances, &ctx);
+    make(host, model, instances, &ctx, perVertex, wind);
     ASSERT_NE(ctx, nullptr);
     for (int i = 0; i < frames; ++i) {
       const Status s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
@@ -204,6 +209,39 @@ TEST_F(InstancesTest, InstancesSetLaterReSliceAndCopiesOutOfViewAreCulled) {
   EXPECT_FALSE(setCanopyInstances(ctx, {}).ok()) << "at least one";
   destroyCanopy(ctx);
   host.destroy();
+}
+
+// The per-vertex baseline draws the copies too: a transformed copy (wind off) as the transform
+// baked in, and a copy's wind phase as the same sway that many seconds later.
+TEST_F(InstancesTest, ThePerVertexBaselineDrawsTransformedCopiesWithTheirWindPhase) {
+  const VegetationModel plant = makeLeafCloud(3000, 5, true);
+  const glm::mat4 t = glm::translate(glm::mat4(1.0f), glm::vec3(-1.0f, 0.2f, 0.5f)) *
+                      glm::rotate(glm::mat4(1.0f), glm::radians(-50.0f), glm::vec3(0, 1, 0)) *
+                      glm::scale(glm::mat4(1.0f), glm::vec3(0.9f, 1.2f, -1.0f));
+  const VegetationModel bakedPlant = baked(plant, t);
+  const LayerView view = orbitView(bakedPlant.boundsMin, bakedPlant.boundsMax, 20.0f, 10.0f, 40.0f, 160.0f / 120.0f, 1.05f);
+  std::vector<glm::vec4> placed, reference;
+  std::vector<float> zPlaced, zReference;
+  render(plant, {instanceOf(t)}, view, 3, &placed, &zPlaced, nullptr, true, 0.0f);
+  render(bakedPlant, {}, view, 3, &reference, &zReference, nullptr, true, 0.0f);
+  size_t vegetation = 0;
+  for (float z : zReference) vegetation += z < 1.0f;
+  EXPECT_GT(vegetation, zReference.size() / 20);
+  EXPECT_LE(differing(placed, reference, 3.0f / 255.0f), 0.005) << "a transformed copy, wind off";
+  // A phase of 0.5 s after 10 frames of 1/30 s against no phase after 25 frames: the same sway.
+  CanopyInstance phased = instanceOf(glm::mat4(1.0f));
+  phased.windPhase = 0.5f;
+  const LayerView near = orbitView(plant.boundsMin, plant.boundsMax, 20.0f, 10.0f, 40.0f, 160.0f / 120.0f, 1.05f);
+  std::vector<glm::vec4> early, late, still;
+  std::vector<float> zEarly, zLate, zStill;
+  render(plant, {phased}, near, 10, &early, &zEarly, nullptr, true, 3.0f);
+  render(plant, {instanceOf(glm::mat4(1.0f))}, near, 25, &late, &zLate, nullptr, true, 3.0f);
+  render(plant, {instanceOf(glm::mat4(1.0f))}, near, 10, &still, &zStill, nullptr, true, 3.0f);
+  const double samePhase = differing(early, late, 3.0f / 255.0f), otherPhase = differing(early, still, 3.0f / 255.0f);
+  std::printf("wind phase 0.5 s at t = 1/3 s against no phase at t = 5/6 s: %.3f %% of pixels off; against t = 1/3 s: %.3f %%\n",
+              100.0 * samePhase, 100.0 * otherPhase);
+  EXPECT_LE(samePhase, 0.005) << "the phase is a time shift of the sway";
+  EXPECT_GT(otherPhase, 0.02) << "and it changes the sway";
 }
 
 }  // namespace

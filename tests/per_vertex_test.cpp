@@ -95,13 +95,20 @@ class PerVertexTest : public GpuTest {
     gpu::BendFrame f = given;
     f.branchCount = uint32_t(m.branches.size());
     f.tipCount = f.branchCount + leaves;
+    f.copyCount = 1;  // one copy at the model's origin
+    gpu::LayerInstance origin{};
+    origin.model = glm::mat4(1.0f);
+    origin.normalColumn0 = glm::vec4(1, 0, 0, 0);
+    origin.normalColumn1 = glm::vec4(0, 1, 0, 0);
+    origin.normalColumn2 = glm::vec4(0, 0, 1, 0);
+    origin.tint = glm::vec4(1, 1, 1, 0);
     ComputePipeline pipe, tipsPipe;
     Status s = createComputePipeline(dev, {"per_vertex_probe.comp", sizeof(uint32_t), {}, false, &canopy_test::findEmbeddedShader}, &pipe);
     if (s.ok()) s = createComputePipeline(dev, {"per_vertex_tips.comp", 0}, &tipsPipe);
     EXPECT_TRUE(s.ok()) << s.message();
     const VkBufferUsageFlags usage =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
-    Buffer frame, branches, bend, input, output, tips;
+    Buffer frame, branches, bend, input, output, tips, copies;
     const rg::State read = rg::stateOf(rg::Use::ComputeStorageRead), write = rg::stateOf(rg::Use::ComputeStorageWrite);
     std::vector<gpu::BendBranch> table = m.branches;
     if (table.empty()) table.push_back(gpu::BendBranch{});
@@ -117,6 +124,7 @@ class PerVertexTest : public GpuTest {
     make(input, in.data(), in.size() * sizeof(gpu::BendProbeVertex), "probe input");
     make(output, nullptr, in.size() * sizeof(glm::vec4), "probe output");
     make(tips, nullptr, std::max<size_t>(f.tipCount, 1) * sizeof(glm::vec3), "probe motion table");
+    make(copies, &origin, sizeof origin, "probe copies");
     std::vector<glm::vec4> out(in.size());
     if (s.ok()) {
       rg::RenderGraph g;
@@ -125,7 +133,8 @@ class PerVertexTest : public GpuTest {
       const uint32_t count = uint32_t(in.size());
       g.addPass("motion table", [&](rg::PassContext& c) {
          return dispatch(dev, c.cmd, tipsPipe, f.tipCount, 1, 1,
-                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(c.buffer(table))}, nullptr, 0);
+                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(c.buffer(table)), bindBuffer(copies.buffer)},
+                         nullptr, 0);
        }).write(table, rg::Use::ComputeStorageWrite);
       g.addPass("probe", [&](rg::PassContext& c) {
          return dispatch(dev, c.cmd, pipe, count, 1, 1,
@@ -143,7 +152,7 @@ class PerVertexTest : public GpuTest {
       if (s.ok()) s = readbackBuffer(dev, output, out.data(), out.size() * sizeof(glm::vec4), write);
     }
     EXPECT_TRUE(s.ok()) << s.message();
-    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips}) destroyBuffer(dev, *b);
+    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips, &copies}) destroyBuffer(dev, *b);
     destroyComputePipeline(dev, pipe);
     destroyComputePipeline(dev, tipsPipe);
     std::vector<glm::vec3> p;

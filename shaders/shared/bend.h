@@ -75,11 +75,29 @@ struct BendFrame {
   // many at the previous frame's.
   uint branchCount;
   uint tipCount;
+  // Placed copies (CanopyInstance): each has its own motion table, copy c's at entries
+  // [c * sets * tipCount, (c + 1) * sets * tipCount), sets 2 with BEND_FLAG_PREVIOUS else 1.
+  uint copyCount;
   // The previous frame's camera (projection x view; this frame's on the first frame and after a
   // camera cut): motion vectors carry the camera's motion as well as the bend's (issue 34).
   mat4 previousViewProj;
 };
-CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 64)
+CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 4 + 64)
+
+// The bend frame as one placed copy sees it (CanopyInstance; docs/design.md "Instances"): the wind
+// and its lateral direction taken into the copy's model space by the inverse of its linear part
+// (the transpose of its normal matrix, whose columns are n0, n1, n2), and its time shifted by the
+// copy's wind phase (s), so copies of one plant do not sway in lockstep.
+CANOPY_INLINE BendFrame bendFrameForCopy(BendFrame f, vec3 n0, vec3 n1, vec3 n2, float phase) {
+  vec3 w = vec3(dot(n0, vec3(f.wind)), dot(n1, vec3(f.wind)), dot(n2, vec3(f.wind)));
+  vec3 l = vec3(dot(n0, vec3(f.lateral)), dot(n1, vec3(f.lateral)), dot(n2, vec3(f.lateral)));
+  float wl = sqrt(dot(w, w)), ll = sqrt(dot(l, l));
+  if (wl > 0.0f) f.wind = vec4(w / wl, f.wind.w);
+  if (ll > 0.0f) f.lateral = vec4(l / ll, f.lateral.w);
+  f.time = f.time + phase;
+  f.previousTime = f.previousTime + phase;
+  return f;
+}
 
 // One rest vertex for the probe kernel (shaders/per_vertex_probe.comp; tests).
 #define BEND_NO_LEAF 0xffffffffu

@@ -122,7 +122,7 @@ struct LayerInstance {
   vec4 normalColumn0;  // xyz: columns of the normal matrix; w unused
   vec4 normalColumn1;
   vec4 normalColumn2;
-  vec4 tint;           // rgb multiplies the base colour (linear); a unused
+  vec4 tint;           // rgb multiplies the base colour (linear); a: the wind phase, s (the per-vertex baseline)
 };
 CANOPY_SIZE_CHECK(LayerInstance, 128)
 

@@ -24,6 +24,6 @@ void main() {
   vec3 n = v.normal;
   bool leaf = v.leaf != BEND_NO_LEAF;
   BendChain chain = fetchChain(bv.branch);
-  probeOut[i] = vec4(bendApply(bf, chain, fetchTips(bf, chain, leaf, v.leaf, 0u), bv, leaf, v.leafRoot, v.position,
+  probeOut[i] = vec4(bendApply(bf, chain, fetchTips(bf, chain, leaf, v.leaf, 0u, 0u), bv, leaf, v.leafRoot, v.position,
                                bf.time, n), 0.0);
 }

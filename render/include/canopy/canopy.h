@@ -107,6 +107,10 @@ void modelBounds(const Model* model, Float3* min, Float3* max);
 struct CanopyInstance {
   Float4x4 transform;    // model -> world: any invertible affine matrix (rotation, non-uniform scale, a mirror)
   Float3 tint{1, 1, 1};  // multiplies the copy's base colour (linear), each channel in [0, 16]
+  // s, [-3600, 3600]: the per-vertex baseline sways this copy as at its time + windPhase, so a hedge
+  // of copies does not sway in lockstep. The 2D method's copies sway with the simulated field at
+  // their place, which already differs between them (docs/design.md "Instances").
+  float windPhase = 0.0f;
 };
 
 struct MaterialSplitOptions {
@@ -414,9 +418,9 @@ enum class DepthConvention : uint32_t {
 // and size at creation.
 // instances: the copies of the model the context draws as one vegetation (one set of layers, one
 // simulation; the mesh and its leaf roots stored once, the draws instanced): each a model -> world
-// transform and a tint. Empty: one copy at the model's origin. Copies outside a re-slice's view are
-// not drawn. Impostors and the per-vertex baseline draw the model at its origin only (refused with
-// other instances). docs/design.md "Instances".
+// transform, a tint and a wind phase. Empty: one copy at the model's origin. Copies outside the view
+// are not drawn. Impostors draw the model at its origin only (refused with other instances).
+// docs/design.md "Instances".
 // guardBand: the layer images extend beyond each edge of the targets by this fraction of their
 // width and height (rounded to a multiple of 16 pixels; docs/design.md "Layers: guard band"), so a
 // camera that turns or strafes between re-slices shows the layers' content from there instead of an

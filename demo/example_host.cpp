@@ -123,57 +123,9 @@ struct Host {
   int validationMessages = 0;
 };
 
-VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
-                                            const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-  static_cast<Host*>(user)->validationMessages++;
-  std::fprintf(stderr, "validation: %s: %s\n", data->pMessageIdName ? data->pMessageIdName : "", data->pMessage);
-  return VK_FALSE;
-}
-
-bool hasLayer(const char* name) {
-  uint32_t n = 0;
-  vkEnumerateInstanceLayerProperties(&n, nullptr);
-  std::vector<VkLayerProperties> layers(n);
-  vkEnumerateInstanceLayerProperties(&n, layers.data());
-  for (auto& l : layers)
-    if (std::strcmp(l.layerName, name) == 0) return true;
-  return false;
-}
-
 bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDeviceCreateInfo* usedInfo,
                              std::vector<const char*>* extensions, VkPhysicalDeviceFeatures2* features) {
-  uint32_t loader = VK_API_VERSION_1_0;
-  vkEnumerateInstanceVersion(&loader);
-  *apiVersion = loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
-  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.pApplicationName = "canopy-example-host";
-  app.apiVersion = *apiVersion;
-  const char* layer = "VK_LAYER_KHRONOS_validation";
-  const char* debugExt = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
-  if (validate && !hasLayer(layer)) {
-    std::fprintf(stderr, "canopy-example-host: %s is not installed (apt-get install vulkan-validationlayers)\n", layer);
-    return false;
-  }
-  VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
-  VkValidationFeaturesEXT vf{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
-  vf.enabledValidationFeatureCount = 1;
-  vf.pEnabledValidationFeatures = &sync;
-  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, validate ? &vf : nullptr};
-  ici.pApplicationInfo = &app;
-  ici.enabledLayerCount = validate ? 1 : 0;
-  ici.ppEnabledLayerNames = &layer;
-  ici.enabledExtensionCount = validate ? 1 : 0;
-  ici.ppEnabledExtensionNames = &debugExt;
-  HOST_CHECK(vkCreateInstance(&ici, nullptr, &h.instance));
-  if (validate) {
-    VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
-    mci.pfnUserCallback = onValidation;
-    mci.pUserData = &h;
-    auto create = (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(h.instance, "vkCreateDebugUtilsMessengerEXT");
-    HOST_CHECK(create(h.instance, &mci, nullptr, &h.messenger));
-  }
+  HOST_CHECK(host::createInstance("canopy-example-host", {}, validate, &h.validationMessages, apiVersion, &h.instance, &h.messenger));
 
   // The host's device choice, among the devices Canopy can run on (it says why it cannot).
   uint32_t n = 0;
@@ -615,11 +567,7 @@ void shutdown(Host& h, canopy::Device* adopted, canopy::CanopyContext* ctx) {
     host::destroyImage(h.device, h.depth);
     vkDestroyDevice(h.device, nullptr);
   }
-  if (h.messenger) {
-    auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(h.instance, "vkDestroyDebugUtilsMessengerEXT");
-    destroy(h.instance, h.messenger, nullptr);
-  }
-  if (h.instance) vkDestroyInstance(h.instance, nullptr);
+  host::destroyInstance(h.instance, h.messenger);
 }
 
 }  // namespace

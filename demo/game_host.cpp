@@ -98,50 +98,11 @@ struct Game {
   std::string outDir;
 };
 
-VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
-                                            const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
-  static_cast<Game*>(user)->validationMessages++;
-  std::fprintf(stderr, "validation: %s: %s\n", data->pMessageIdName ? data->pMessageIdName : "", data->pMessage);
-  return VK_FALSE;
-}
-
 bool createInstanceAndDevice(Game& g, bool validate) {
-  uint32_t loader = VK_API_VERSION_1_0;
-  vkEnumerateInstanceVersion(&loader);
-  const uint32_t api = loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
-  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.pApplicationName = "canopy-game-host";
-  app.apiVersion = api;
-  uint32_t n = 0;
+  uint32_t n = 0, api = 0;
   const char** glfwExts = glfwGetRequiredInstanceExtensions(&n);
-  std::vector<const char*> exts(glfwExts, glfwExts + n);
-  std::vector<const char*> layers;
-  const VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
-  VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
-  features.enabledValidationFeatureCount = 1;
-  features.pEnabledValidationFeatures = &sync;
-  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
-  if (validate) {
-    layers.push_back("VK_LAYER_KHRONOS_validation");
-    exts.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
-    ici.pNext = &features;
-  }
-  ici.pApplicationInfo = &app;
-  ici.enabledLayerCount = uint32_t(layers.size());
-  ici.ppEnabledLayerNames = layers.data();
-  ici.enabledExtensionCount = uint32_t(exts.size());
-  ici.ppEnabledExtensionNames = exts.data();
-  CHECK(vkCreateInstance(&ici, nullptr, &g.instance));
-  if (validate) {
-    VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
-    mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
-    mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
-                      VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
-    mci.pfnUserCallback = onValidation;
-    mci.pUserData = &g;
-    auto create = (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(g.instance, "vkCreateDebugUtilsMessengerEXT");
-    CHECK(create(g.instance, &mci, nullptr, &g.messenger));
-  }
+  CHECK(host::createInstance("canopy-game-host", std::vector<const char*>(glfwExts, glfwExts + n), validate, &g.validationMessages, &api,
+                             &g.instance, &g.messenger));
   CHECK(glfwCreateWindowSurface(g.instance, g.window, nullptr, &g.surface));
   // The first device Canopy can run on that presents to the window (queryDeviceRequirements says why not).
   vkEnumeratePhysicalDevices(g.instance, &n, nullptr);
@@ -612,11 +573,7 @@ void shutdown(Game& g) {
     vkDestroyDevice(g.device, nullptr);
   }
   if (g.surface) vkDestroySurfaceKHR(g.instance, g.surface, nullptr);
-  if (g.messenger) {
-    auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(g.instance, "vkDestroyDebugUtilsMessengerEXT");
-    destroy(g.instance, g.messenger, nullptr);
-  }
-  if (g.instance) vkDestroyInstance(g.instance, nullptr);
+  host::destroyInstance(g.instance, g.messenger);
   if (g.window) glfwDestroyWindow(g.window);
   glfwTerminate();
 }

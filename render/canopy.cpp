@@ -230,9 +230,9 @@ Status checkFrameInputs(const CanopyContext& c, const CanopyFrameInputs& in) {
   return Status();
 }
 
+// `in` passed checkFrameInputs (recordCanopy checks images it has no graph for).
 Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGraph** out) {
   const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
-  CANOPY_TRY(checkFrameInputs(c, in));
   // Graphs of replaced resources, and the least recently used beyond the cache size, may still be
   // executing: they are released frames later.
   std::vector<RecordGraph> keep, drop;
@@ -698,22 +698,19 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
   return guardApi("recordCanopy", [&]() -> Status {
     if (!c) return Status::error("recordCanopy: null context");
     if (!cmd) return Status::error("recordCanopy: null command buffer");
-    // Images not seen before are checked before anything is recorded or stepped.
-    bool known = false;
-    for (const RecordGraph& g : c->graphs)
-      known = known || (g.generation == c->generation && sameImage(g.inputs.color, in.color) &&
-                        sameImage(g.inputs.depth, in.depth) && sameImage(g.inputs.motion, in.motion));
-    if (!known) CANOPY_TRY(checkFrameInputs(*c, in));
-    CANOPY_TRY(beginCanopyFrame(c, in.frame));
-    // Uploads and clears prepared since the last frame, before anything reads them.
-    CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
-    CANOPY_TRY(flushLayerWork(c->layers, cmd));
-    CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
+    // The graph compiled for these images; images not seen before are checked before anything is
+    // recorded or stepped (beginCanopyFrame changes no graph).
     RecordGraph* graph = nullptr;
     for (RecordGraph& g : c->graphs)
       if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&
           sameImage(g.inputs.motion, in.motion))
         graph = &g;
+    if (!graph) CANOPY_TRY(checkFrameInputs(*c, in));
+    CANOPY_TRY(beginCanopyFrame(c, in.frame));
+    // Uploads and clears prepared since the last frame, before anything reads them.
+    CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
+    CANOPY_TRY(flushLayerWork(c->layers, cmd));
+    CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
     if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
     graph->lastUse = ++c->graphUses;
     return graph->graph->record(cmd);

@@ -72,7 +72,10 @@ Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat
   if (void* direct = hostCoherentPointer(d, next.buffer.allocation)) {
     std::memcpy(direct, next.table.data(), bytes);
   } else {
-    Status s = uploadBuffer(d, uploads, next.buffer, next.table.data(), bytes, rg::stateOf(rg::Use::VertexStorageRead));
+    // Read by the layer and per-vertex vertex shaders and the per-vertex motion kernel.
+    const rg::State readers{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+    Status s = uploadBuffer(d, uploads, next.buffer, next.table.data(), bytes, readers);
     if (!s.ok()) {
       destroyBuffer(d, next.buffer);
       return s;

@@ -1,9 +1,12 @@
 #pragma once
 // The example hosts' own small Vulkan helpers (demo/example_host.cpp, demo/game_host.cpp): what an
-// engine has in its renderer already — a memory-type search, a 2D image with its memory and view,
-// an image barrier, the box pipeline from host_box.vert/frag. Nothing of Canopy's: the hosts embed
+// engine has in its renderer already — its instance with validation, a memory-type search, a 2D
+// image with its memory and view, an image barrier, the box pipeline from host_box.vert/frag. Nothing of Canopy's: the hosts embed
 // Canopy through <canopy/canopy.h> only.
 #include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <vector>
 #include <vulkan/vulkan.h>
 
 #include <glm/glm.hpp>
@@ -12,6 +15,69 @@
 #include "host_box.vert.h"
 
 namespace host {
+
+// Counts (and prints) every validation message into the int the messenger was created with.
+inline VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* counter) {
+  ++*static_cast<int*>(counter);
+  std::fprintf(stderr, "validation: %s: %s\n", data->pMessageIdName ? data->pMessageIdName : "", data->pMessage);
+  return VK_FALSE;
+}
+
+// The host's instance at the newest version Canopy knows the loader has (1.3, else 1.2; *apiVersion),
+// with `extensions`; with `validate`, the validation layer and synchronization validation on and
+// every message counted into *messages (a messenger in *messenger). A missing layer is an error.
+inline VkResult createInstance(const char* name, std::vector<const char*> extensions, bool validate, int* messages,
+                               uint32_t* apiVersion, VkInstance* instance, VkDebugUtilsMessengerEXT* messenger) {
+  uint32_t loader = VK_API_VERSION_1_0;
+  vkEnumerateInstanceVersion(&loader);
+  *apiVersion = loader >= VK_API_VERSION_1_3 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
+  const char* layer = "VK_LAYER_KHRONOS_validation";
+  if (validate) {
+    uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> layers(n);
+    vkEnumerateInstanceLayerProperties(&n, layers.data());
+    bool found = false;
+    for (const VkLayerProperties& l : layers) found = found || std::strcmp(l.layerName, layer) == 0;
+    if (!found) {
+      std::fprintf(stderr, "%s: %s is not installed (apt-get install vulkan-validationlayers)\n", name, layer);
+      return VK_ERROR_LAYER_NOT_PRESENT;
+    }
+    extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+  }
+  VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+  app.pApplicationName = name;
+  app.apiVersion = *apiVersion;
+  const VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+  VkValidationFeaturesEXT vf{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+  vf.enabledValidationFeatureCount = 1;
+  vf.pEnabledValidationFeatures = &sync;
+  VkInstanceCreateInfo ici{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, validate ? &vf : nullptr};
+  ici.pApplicationInfo = &app;
+  ici.enabledLayerCount = validate ? 1 : 0;
+  ici.ppEnabledLayerNames = &layer;
+  ici.enabledExtensionCount = uint32_t(extensions.size());
+  ici.ppEnabledExtensionNames = extensions.data();
+  VkResult r = vkCreateInstance(&ici, nullptr, instance);
+  if (r != VK_SUCCESS || !validate) return r;
+  VkDebugUtilsMessengerCreateInfoEXT mci{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+  mci.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+  mci.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT;
+  mci.pfnUserCallback = onValidation;
+  mci.pUserData = messages;
+  auto create = (PFN_vkCreateDebugUtilsMessengerEXT)vkGetInstanceProcAddr(*instance, "vkCreateDebugUtilsMessengerEXT");
+  return create ? create(*instance, &mci, nullptr, messenger) : VK_ERROR_EXTENSION_NOT_PRESENT;
+}
+
+inline void destroyInstance(VkInstance instance, VkDebugUtilsMessengerEXT messenger) {
+  if (!instance) return;
+  if (messenger) {
+    auto destroy = (PFN_vkDestroyDebugUtilsMessengerEXT)vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT");
+    if (destroy) destroy(instance, messenger, nullptr);
+  }
+  vkDestroyInstance(instance, nullptr);
+}
 
 // host_box.vert's push constants: a unit cube placed by mvp, shaded in `color`.
 struct BoxPush {

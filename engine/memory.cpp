@@ -169,6 +169,14 @@ Status createBuffer(Device& d, VkDeviceSize size, VkBufferUsageFlags usage, Memo
   return Status();
 }
 
+void destroyBufferLater(Device& d, Buffer& b) {
+  if (!b.buffer) return;
+  auto held = std::make_shared<Buffer>(b);
+  Device* dev = &d;
+  deferRelease(d, [dev, held] { destroyBuffer(*dev, *held); });
+  b = Buffer{};
+}
+
 void destroyBuffer(Device& d, Buffer& b) {
   if (b.buffer) d.vk.DestroyBuffer(d.device, b.buffer, d.allocationCallbacks);
   release(d, b.allocation);

@@ -78,6 +78,8 @@ void destroyAllocator(Device& device, Allocator& allocator);
 Status createBuffer(Device& device, VkDeviceSize size, VkBufferUsageFlags usage, MemoryUsage memory, Buffer* out,
                     const char* debugName = nullptr);
 void destroyBuffer(Device& device, Buffer& buffer);
+// Destroys `buffer` once no frame in flight can read it (engine/device.h deferRelease) and empties it.
+void destroyBufferLater(Device& device, Buffer& buffer);
 
 Status createImage(Device& device, const ImageDesc& desc, Image* out, const char* debugName = nullptr);
 void destroyImage(Device& device, Image& image);

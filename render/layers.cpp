@@ -313,12 +313,7 @@ Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& mo
     return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
                                                   "not yet with instances or a transform");
   }
-  // The old table is read by frames in flight: released after them.
-  if (lv.instances.buffer.buffer) {
-    auto old = std::make_shared<Buffer>(lv.instances.buffer);
-    Device* d = lv.device;
-    deferRelease(*d, [d, old] { destroyBuffer(*d, *old); });
-  }
+  destroyBufferLater(*lv.device, lv.instances.buffer);  // frames in flight read the old table
   lv.instances = std::move(next);
   requestReslice(lv, "instances changed", true);
   return Status();

@@ -151,11 +151,7 @@ Status resizePerVertexCopies(PerVertexAnimation& pv, uint32_t copies) {
   Buffer next;
   CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(tipBytes, 16), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal, &next,
                           "per-vertex: motion table"));
-  if (pv.tips.buffer) {
-    auto old = std::make_shared<Buffer>(pv.tips);
-    Device* dev = &d;
-    deferRelease(d, [dev, old] { destroyBuffer(*dev, *old); });
-  }
+  destroyBufferLater(d, pv.tips);  // frames in flight read the old table
   pv.tips = next;
   pv.copies = copies;
   return Status();

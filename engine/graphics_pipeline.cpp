@@ -49,12 +49,15 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
     stages[1].module = fs;
     stages[1].pName = "main";
 
-    VkVertexInputBindingDescription vb{0, desc.vertexStride, VK_VERTEX_INPUT_RATE_VERTEX};
+    std::vector<VkVertexInputBindingDescription> vb;
+    if (desc.vertexStride) vb.push_back({0, desc.vertexStride, VK_VERTEX_INPUT_RATE_VERTEX});
+    if (desc.instanceStride) vb.push_back({1, desc.instanceStride, VK_VERTEX_INPUT_RATE_INSTANCE});
     std::vector<VkVertexInputAttributeDescription> va;
     for (const VertexAttribute& a : desc.attributes) va.push_back({a.location, 0, a.format, a.offset});
+    for (const VertexAttribute& a : desc.instanceAttributes) va.push_back({a.location, 1, a.format, a.offset});
     VkPipelineVertexInputStateCreateInfo vi{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
-    vi.vertexBindingDescriptionCount = desc.vertexStride ? 1 : 0;
-    vi.pVertexBindingDescriptions = &vb;
+    vi.vertexBindingDescriptionCount = uint32_t(vb.size());
+    vi.pVertexBindingDescriptions = vb.data();
     vi.vertexAttributeDescriptionCount = uint32_t(va.size());
     vi.pVertexAttributeDescriptions = va.data();
     VkPipelineInputAssemblyStateCreateInfo ia{VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO};

@@ -16,7 +16,7 @@ struct Device;
 struct VertexAttribute {
   uint32_t location = 0;
   VkFormat format = VK_FORMAT_UNDEFINED;
-  uint32_t offset = 0;  // bytes into the (single, interleaved) vertex stream
+  uint32_t offset = 0;  // bytes into its (interleaved) stream
 };
 
 // ConstantMix: result = source + destination * (1 - blend-constant alpha), the constant set per
@@ -31,6 +31,11 @@ struct GraphicsPipelineDesc {
   uint32_t pushConstantSize = 0;
   uint32_t vertexStride = 0;
   std::vector<VertexAttribute> attributes;
+  // A second stream, binding 1, advanced per draw instance (VK_VERTEX_INPUT_RATE_INSTANCE); 0: none.
+  // Per-instance data goes here rather than in a storage buffer indexed by gl_InstanceIndex, which
+  // lavapipe gathers lane by lane (docs/performance.md "Instances as a vertex stream").
+  uint32_t instanceStride = 0;
+  std::vector<VertexAttribute> instanceAttributes;
   std::vector<VkFormat> colorFormats;    // one per colour attachment
   VkFormat depthFormat = VK_FORMAT_UNDEFINED;
   BlendMode blend = BlendMode::None;

@@ -66,15 +66,16 @@ Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat
   }
   next.identity = models.size() == 1 && models[0] == glm::mat4(1.0f) && glm::vec3(next.table[0].tint) == glm::vec3(1.0f);
   const VkDeviceSize bytes = VkDeviceSize(next.table.size()) * sizeof(gpu::LayerInstance);
-  CANOPY_TRY(createBuffer(d, bytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
+  CANOPY_TRY(createBuffer(d, bytes, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          MemoryUsage::DeviceLocal,
                           &next.buffer, "layers: instances"));
   // A new buffer each time: frames in flight keep reading the old one, released after them.
   if (void* direct = hostCoherentPointer(d, next.buffer.allocation)) {
     std::memcpy(direct, next.table.data(), bytes);
   } else {
-    // Read by the layer and per-vertex vertex shaders and the per-vertex motion kernel.
-    const rg::State readers{VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
+    // Read as the layer and per-vertex draws' instance stream and by the per-vertex motion kernel.
+    const rg::State readers{VK_PIPELINE_STAGE_2_VERTEX_ATTRIBUTE_INPUT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                            VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
     Status s = uploadBuffer(d, uploads, next.buffer, next.table.data(), bytes, readers);
     if (!s.ok()) {
       destroyBuffer(d, next.buffer);

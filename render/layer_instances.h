@@ -21,7 +21,7 @@ struct InstanceRun {
 
 struct LayerInstances {
   std::vector<glm::mat4> models;              // model -> world, per instance
-  std::vector<gpu::LayerInstance> table;      // what the shaders read (binding 6 of layers_common.glsl)
+  std::vector<gpu::LayerInstance> table;      // what the shaders read (the draws' instance stream; the per-vertex motion kernel's binding 3)
   Buffer buffer;                              // the table on the device
   glm::vec3 boundsMin{0}, boundsMax{0};       // world bounds of every copy of the mesh's bounds
   bool identity = true;                       // one instance, the identity transform, no tint

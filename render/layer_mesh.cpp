@@ -16,6 +16,9 @@ namespace canopy {
 static_assert(offsetof(gpu::LayerVertex, positionXY) == 0 && offsetof(gpu::LayerVertex, normal) == 8 &&
                   offsetof(gpu::LayerVertex, uv) == 12,
               "LayerVertex offsets differ from the attributes the pipelines declare");
+static_assert(offsetof(gpu::LayerInstance, model) == 0 && offsetof(gpu::LayerInstance, normalColumn0) == 64 &&
+                  offsetof(gpu::LayerInstance, tint) == 112,
+              "LayerInstance offsets differ from the instance attributes the pipelines declare");
 
 GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthFormat) {
   GraphicsPipelineDesc p;
@@ -24,6 +27,10 @@ GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthF
   p.attributes = {{0, VK_FORMAT_R16G16B16A16_UINT, 0},  // quantised position, chunk-local leaf
                   {1, VK_FORMAT_R16G16_SNORM, 8},        // octahedral normal
                   {2, VK_FORMAT_R16G16_SFLOAT, 12}};     // texcoord 0
+  // The instance table (gpu::LayerInstance) as the per-instance stream: the model matrix's columns,
+  // the normal matrix's, the tint (shaders/layers_common.glsl LAYER_INSTANCE_LOCATION).
+  p.instanceStride = sizeof(gpu::LayerInstance);
+  for (uint32_t i = 0; i < 8; ++i) p.instanceAttributes.push_back({LAYER_INSTANCE_LOCATION + i, VK_FORMAT_R32G32B32A32_SFLOAT, 16 * i});
   p.colorFormats = {colorFormat};
   p.depthFormat = depthFormat;
   p.blend = BlendMode::PremultipliedOver;
@@ -277,10 +284,11 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                      uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
                      const PerVertexBindings* perVertex, const MeshDrawOptions* options) {
   const Device& d = *lv.device;
-  const VkDeviceSize zero = 0;
   const MeshDrawOptions plain;
   const MeshDrawOptions& o = options ? *options : plain;
-  d.vk.CmdBindVertexBuffers(cmd, 0, 1, &lv.mesh.vertices.buffer, &zero);
+  const VkBuffer streams[2] = {lv.mesh.vertices.buffer, lv.instances.buffer.buffer};
+  const VkDeviceSize offsets[2] = {0, 0};
+  d.vk.CmdBindVertexBuffers(cmd, 0, 2, streams, offsets);
   d.vk.CmdBindIndexBuffer(cmd, lv.mesh.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
   if (!o.keepViewport) setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
@@ -327,15 +335,14 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     const Binding base = bindImage(tex.view, ro, lv.mesh.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, lv.mesh.sampler),
                   trans = bindImage(textureOf(mat.transmissionImage).view, ro, lv.mesh.sampler),
                   transColor = bindImage(textureOf(mat.transmissionColorImage).view, ro, lv.mesh.sampler);
-    const Binding instances = bindBuffer(lv.instances.buffer.buffer);
     if (perVertex)
       CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                              {frame, roots, base, normal, trans, transColor, instances, bindBuffer(perVertex->bendFrame),
+                              {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
                                bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
                                bindBuffer(perVertex->tips)},
                               push));
     else
-      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor, instances}, push));
+      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts. One instanced draw per run of visible copies
     // (gl_InstanceIndex, firstInstance included, indexes the instance table).

@@ -1,5 +1,5 @@
 // Bindings shared by the layer and background shaders (render/layer_mesh.cpp drawMaterials binds the
-// same seven push-descriptor bindings for every pipeline).
+// same six push-descriptor bindings for every pipeline, and the vertex and instance streams).
 #include "shared/layers.h"
 
 layout(binding = 0, scalar) readonly buffer FrameBuf { LayerFrame f; };
@@ -13,9 +13,6 @@ layout(binding = 2) uniform sampler2D baseColorTex;
 layout(binding = 3) uniform sampler2D normalTex;
 layout(binding = 4) uniform sampler2D transmissionTex;
 layout(binding = 5) uniform sampler2D transmissionColorTex;
-// The vegetation's placed copies (CanopyInstance): the draws are instanced, gl_InstanceIndex
-// (firstInstance included) indexes this table.
-layout(binding = 6, scalar) readonly buffer InstanceBuf { LayerInstance instances[]; };
 layout(push_constant, scalar) uniform Push { LayerDrawPush pc; };
 
 #ifdef CANOPY_VERTEX
@@ -29,6 +26,14 @@ out gl_PerVertex {
 layout(location = 0) in uvec4 inPositionLeaf;
 layout(location = 1) in vec2 inNormalOct;
 layout(location = 2) in vec2 inUv;
+// The vegetation's placed copies (CanopyInstance): the draws are instanced and the instance table is
+// their per-instance stream (gpu::LayerInstance's eight vec4 in order), not a storage buffer indexed
+// by gl_InstanceIndex (docs/performance.md "Instances as a vertex stream").
+layout(location = LAYER_INSTANCE_LOCATION) in mat4 inInstanceModel;
+layout(location = LAYER_INSTANCE_LOCATION + 4) in vec4 inInstanceNormal0;
+layout(location = LAYER_INSTANCE_LOCATION + 5) in vec4 inInstanceNormal1;
+layout(location = LAYER_INSTANCE_LOCATION + 6) in vec4 inInstanceNormal2;
+layout(location = LAYER_INSTANCE_LOCATION + 7) in vec4 inInstanceTint;
 layout(location = 0) out vec3 vNormal;
 layout(location = 1) out vec2 vUv;
 layout(location = 2) flat out uint vLeaf;
@@ -39,7 +44,10 @@ float viewDepth(vec3 p) { return dot(f.depthRow, vec4(p, 1.0)); }
 
 // The vertex in the model's coordinates, and placed by this draw instance's transform.
 vec3 vertexPosition() { return pc.chunkOrigin.xyz + vec3(inPositionLeaf.xyz) * pc.chunkScale.xyz; }
-vec3 placed(vec3 p) { return (instances[gl_InstanceIndex].model * vec4(p, 1.0)).xyz; }
+LayerInstance thisInstance() {
+  return LayerInstance(inInstanceModel, inInstanceNormal0, inInstanceNormal1, inInstanceNormal2, inInstanceTint);
+}
+vec3 placed(vec3 p) { return (inInstanceModel * vec4(p, 1.0)).xyz; }
 vec3 worldPosition() { return placed(vertexPosition()); }
 bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
 
@@ -52,7 +60,7 @@ uint triangleLayer() {
 }
 
 void emitVertex() {
-  LayerInstance inst = instances[gl_InstanceIndex];
+  LayerInstance inst = thisInstance();
   vWorld = (inst.model * vec4(vertexPosition(), 1.0)).xyz;
   gl_Position = f.viewProj * vec4(vWorld, 1.0);
   vNormal = mat3(inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz) * layerDecodeNormal(inNormalOct);

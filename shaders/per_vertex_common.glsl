@@ -1,4 +1,4 @@
-// The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the seven layer
+// The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the six layer
 // bindings of layers_common.glsl): the bend frame, the branch table, the per-vertex branch index
 // and w, and the motion table of tip bends (shared/bend.h); the walk from a vertex's branch up to
 // its trunk and the gathering of its tips.

@@ -2,7 +2,7 @@
 // the whole mesh drawn every frame into the host's targets, each vertex bent through its branch
 // hierarchy (shared/bend.h), shaded by the layers' fragment shader.
 #define CANOPY_VERTEX
-#define PER_VERTEX_BINDING_BASE 7
+#define PER_VERTEX_BINDING_BASE 6
 #include "layers_common.glsl"
 #include "per_vertex_common.glsl"
 
@@ -14,7 +14,7 @@ layout(location = 4) out vec2 vMotion;
 
 void main() {
   // This copy's frame (its model-space wind, its phase) and placement (CanopyInstance).
-  LayerInstance inst = instances[gl_InstanceIndex];
+  LayerInstance inst = thisInstance();
   BendFrame bf = bendFrameForCopy(bendIn, inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz, inst.tint.w);
   uint copy = uint(gl_InstanceIndex);
   vec3 rest = vertexPosition();

@@ -125,6 +125,9 @@ struct LayerInstance {
   vec4 tint;           // rgb multiplies the base colour (linear); a: the wind phase, s (the per-vertex baseline)
 };
 CANOPY_SIZE_CHECK(LayerInstance, 128)
+// The first of the eight vertex input locations (one per vec4 of LayerInstance, in order) of the
+// draws' per-instance stream (render/layer_mesh.cpp layerMeshPipelineDesc).
+#define LAYER_INSTANCE_LOCATION 8
 
 // Octahedral unit-vector decoding (Meyer et al. 2010): LayerVertex.normal unpacked to [-1, 1]^2 ->
 // unit normal; render/mesh_chunks.cpp encodes, the layer vertex shaders and the tests decode.

@@ -11,6 +11,18 @@ namespace {
 const rg::State kComputeRead = rg::stateOf(rg::Use::ComputeStorageRead);
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// A deterministic uniform number in [-1, 1] for layer i under `seed` (an integer hash: the same
+// seed gives the same V_D per layer on every machine and every frame).
+float layerJitter(uint32_t seed, uint32_t i) {
+  uint32_t h = seed * 0x9E3779B9u ^ (i + 1u) * 0x85EBCA6Bu;
+  h ^= h >> 16;
+  h *= 0x7FEB352Du;
+  h ^= h >> 15;
+  h *= 0x846CA68Bu;
+  h ^= h >> 16;
+  return float(h >> 8) / float(1u << 23) - 1.0f;
+}
 }  // namespace
 
 SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth) {
@@ -52,10 +64,18 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.simOrigin = glm::vec4(origin, tileSize);
   f.simRight = glm::vec4(right, 0.0f);
   f.simUp = glm::vec4(up, 0.0f);
-  f.lambda = glm::vec4(toGlm(p.lambda), p.dt);
+  // Eq. 6: lambda in pixels per domain unit (from cells by the warp grid's cell), Delta t the
+  // simulation's nominal step unless the parameter overrides it.
+  const float lambdaScale = p.lambdaUnits == LambdaUnits::Cells ? float(p.cellSize) : 1.0f;
+  const float dt = p.dt > 0.0f ? p.dt : d.nominalDt;
+  if (!(dt > 0.0f && std::isfinite(dt)))
+    return Status::error("dynamics: DynamicsParams.dt = 0 asks for the simulation's nominal step, and none was given");
+  f.lambda = glm::vec4(toGlm(p.lambda) * lambdaScale, dt);
   f.time = d.time;
   f.vd = p.vd;
-  f.propagation = p.propagationSpeed;
+  // Eq. 5's s: the wave's propagation speed (the paper's meaning) unless the host gives one.
+  f.propagation = p.propagationSpeed > 0.0f ? p.propagationSpeed : d.waveSpeed;
+  f.offsetMode = p.approximateOffset == Eq5Offset::Direction ? ANIM_OFFSET_DIRECTION : ANIM_OFFSET_VELOCITY;
   f.rigidity = p.rigidity;
   f.everyPartMoves = p.everyPartMoves ? 1u : 0u;
   f.delayMode = p.delay == DelayMode::Exact ? ANIM_DELAY_EXACT : ANIM_DELAY_APPROXIMATE;
@@ -73,10 +93,13 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
                          std::to_string(d.ringSize) + " slots");
   f.newestSlot = d.newestSlot;
   const float last = d.layers.back().distance;
+  // Eq. 4's L_i in the simulation's domain units: one domain unit is one tile of the plane.
+  const float distanceScale = p.delayUnits == DelayDistanceUnits::Domain ? 1.0f / tileSize : 1.0f;
   for (uint32_t i = 0; i < n; ++i) {
     gpu::AnimLayer& l = f.layers[i];
     l.depth = d.layers[i].depth;
-    l.distance = d.layers[i].distance;
+    l.distance = d.layers[i].distance * distanceScale;
+    l.vd = p.vd + p.vdJitter * layerJitter(p.vdSeed, i);
     // docs/design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer.
     const float ratio = (n > 1 && last > 0) ? d.layers[i].distance / last : 0.0f;
     l.attenuation = 1.0f - p.depthAttenuation * ratio * ratio;

@@ -41,6 +41,8 @@ struct DynamicsFrameDesc {
   uint32_t width = 0, height = 0;     // image, pixels
   uint32_t simSize = 0, ringSize = 0; // N and H of the simulation
   float time = 0;                     // time of the newest simulation field, s
+  float waveSpeed = 0.0f;             // the oscillator's c (eq. 5's s unless DynamicsParams.propagationSpeed), domain units/s
+  float nominalDt = 1.0f / 30.0f;     // the simulation's nominal step (eq. 6's Delta t unless DynamicsParams.dt), s
   uint32_t newestSlot = ANIM_RING_UNORDERED;  // ring slot of the newest field, when written in step order
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.

@@ -53,9 +53,9 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
       const glm::vec3 v0 = gpu::simToView(f, vs);
       glm::vec3 vi = v0;
       if (layer > 0) {
-        const float gamma = gpu::layerDelay(f, f.layers[layer].distance, v0.z);
+        const float gamma = gpu::layerDelay(f.maxDelay, f.layers[layer], v0.z);
         vi = f.delayMode == ANIM_DELAY_EXACT ? gpu::simToView(f, history(a, f.time - gamma))
-                                             : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, a + gamma * f.propagation * vs));
+                                             : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, gpu::approximateLookup(f, a, gamma, vs)));
       }
       out[size_t(layer) * corners + id] = gpu::displacementPixels(f, f.layers[layer], pixel.y, vi);
     }

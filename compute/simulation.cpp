@@ -245,6 +245,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, 
   Simulation& s = *out;
   s.device = &d;
   s.n = desc.gridSize;
+  s.nominalDt = desc.nominalDt;
   s.ringSize = desc.historySize ? desc.historySize
                                 : uint32_t(std::ceil(desc.historySeconds / desc.nominalDt)) + 2;
   s.ringSize = std::max<uint32_t>(s.ringSize, 2);

@@ -57,6 +57,7 @@ struct Simulation {
   bool laneProjectNext = false, laneDiffuseNext = false, laneOscillatorNext = false;  // the next recorded step uses them (prepareSimulationStep)
   gpu::SimFrame next{};  // the block the next recorded step uploads (prepareSimulationStep)
   double time = 0.0;     // simulation clock, s
+  float nominalDt = 1.0f / 30.0f;  // SimulationDesc.nominalDt: eq. 6's Delta t (DynamicsParams.dt 0)
   SimulationStats stats;
   bool paused = false;   // the graph's step passes record nothing (a host frame with dt = 0)
   rg::RenderGraph graph;  // standalone graph (runSimulationSteps)

@@ -536,6 +536,9 @@ Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& i
       phases.push_back(i.windPhase);
     }
     CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases).context("setCanopyInstances"));
+    // The default simulation plane stands at the vegetation's depth and its tile spans the view
+    // there (eq. 4's domain units): taken again from the next frame for the copies' new bounds.
+    if (!c->params.customPlane) c->planeFixed = false;
     // The per-vertex baseline's motion table holds one block per copy: sized again, graphs rebuilt.
     if (c->desc.allowPerVertex) {
       CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(models.size())).context("setCanopyInstances"));
@@ -645,6 +648,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.simSize = sim.n;
   fd.ringSize = sim.ringSize;
   fd.time = float(sim.time);
+  fd.nominalDt = sim.nominalDt;
+  fd.waveSpeed = c->params.simulation.wave.speed;
   // The simulation writes slot step % H: the exact delay can binary-search the ring (anim_displace.comp).
   // Before the first step every slot reads time 0, which is in order from any slot.
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;

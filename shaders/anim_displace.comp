@@ -110,12 +110,12 @@ void main() {
   vec3 v0 = simToView(f, vs);
   vec3 vi = v0;
   if (layer > 0u) {
-    float gamma = layerDelay(f, f.layers[layer].distance, v0.z);
+    float gamma = layerDelay(f.maxDelay, f.layers[layer], v0.z);
     if (f.delayMode == ANIM_DELAY_EXACT) {
       vi = simToView(f, sampleHistory(a, f.time - gamma));
     } else {
-      // Simulation coordinates are domain units = tile units, so B moves gamma s V_s tiles.
-      vi = simToView(f, sampleTiled(false, 0u, a + gamma * f.propagation * vs));
+      // Simulation coordinates are domain units = tile units (eq. 5: shared/anim.h).
+      vi = simToView(f, sampleTiled(false, 0u, approximateLookup(f, a, gamma, vs)));
     }
   }
   uint at = layer * corners + id;

@@ -18,6 +18,7 @@
 #include "engine/transfer.h"
 #include "render/canopy.h"
 #include "render/composite_reference.h"
+#include "render/gltf_loader.h"
 #include "tools/leaf_cloud.h"
 #include "tools/scene_generator.h"
 #include "tools/world_lock.h"
@@ -504,6 +505,104 @@ TEST_P(GoldenTest, MatchesTheCheckedInImage) {
     ADD_FAILURE() << sc.name << ": mean abs error " << mean << "/255 (limit 1.0), " << badShare * 100
                   << "% of pixels off by > 16/255 (limit 0.5%); wrote " << dir << "/" << sc.name
                   << "_actual.png and _diff.png (x8)";
+  }
+}
+
+// Issue 36: the same plant authored in metres, centimetres and inches (its vertices and the camera
+// scaled; the simulation plane follows the camera) sways the same: eq. 4's L_i is taken in the
+// simulation's domain units. Frames compared by the golden images' metric, and no layer's delay
+// reaches maxDelay. With the old world units the centimetre plant's delays pass maxDelay and its
+// frames differ: the comparison can fail.
+struct ScaleRun {
+  std::vector<uint8_t> frame;
+  float maxDelay = 0;  // the largest |L_i / V_D| over the layers, s (V_0z = 0)
+};
+
+ScaleRun renderScaled(Device& dev, VegetationModel model, float scale, DelayDistanceUnits units) {
+  ScaleRun r;
+  const uint32_t w = 192, h = 144;
+  for (glm::vec3& p : model.positions) p *= scale;
+  model.boundsMin *= scale;
+  model.boundsMax *= scale;
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB), &ctx);
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (!s.ok()) return r;
+  CanopyParams p = canopyParams(ctx);
+  p.dynamics.delayUnits = units;
+  p.simulation.wind.strength = 1.5f;
+  EXPECT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  EXPECT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
+  CanopyFrame f;
+  f.camera = toCamera(cameraFor(model, w, h, 20.0f));
+  for (int i = 0; i < 30 && s.ok(); ++i) s = host.frame(ctx, f);
+  EXPECT_TRUE(s.ok()) << s.message();
+  const gpu::AnimFrame& a = canopyDynamics(ctx).current;
+  for (uint32_t i = 0; i < a.layerCount; ++i) r.maxDelay = std::max(r.maxDelay, std::abs(a.layers[i].distance / a.layers[i].vd));
+  r.frame.resize(size_t(w) * h * 4);
+  EXPECT_TRUE(readbackImage(dev, host.color, 0, 4, r.frame.data(), rg::stateOf(rg::Use::TransferSrc)).ok());
+  host.destroy();
+  destroyCanopy(ctx);
+  return r;
+}
+
+// The golden metric: mean absolute error per channel (/255) and the share of pixels off by > 16.
+std::pair<double, double> imageError(const std::vector<uint8_t>& a, const std::vector<uint8_t>& b) {
+  double sum = 0;
+  size_t bad = 0;
+  const size_t px = a.size() / 4;
+  for (size_t i = 0; i < px; ++i) {
+    int worst = 0;
+    for (int c = 0; c < 3; ++c) {
+      const int e = std::abs(int(a[i * 4 + c]) - int(b[i * 4 + c]));
+      sum += e;
+      worst = std::max(worst, e);
+    }
+    bad += worst > 16;
+  }
+  return {sum / (3.0 * double(px)), double(bad) / double(px)};
+}
+
+TEST_F(CanopyTest, ThePlantInMetresCentimetresAndInchesSwaysTheSame) {
+  struct Model {
+    const char* name;
+    VegetationModel m;
+  };
+  std::vector<Model> models;
+  models.push_back({"leaf cloud", makeLeafCloud(6000, 21, true)});
+  const std::string plant = std::string(CANOPY_SHARED_ASSETS) + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
+  if (std::filesystem::exists(plant)) {
+    VegetationModel m;
+    ASSERT_TRUE(loadGltf(plant, {}, &m).ok());
+    models.push_back({"DiffuseTransmissionPlant", std::move(m)});
+  } else {
+    std::printf("shared assets folder absent (%s): the glTF plant is skipped, the leaf cloud is tested\n", CANOPY_SHARED_ASSETS);
+  }
+  const float maxDelay = DynamicsParams{}.maxDelay;
+  for (const Model& mod : models) {
+    SCOPED_TRACE(mod.name);
+    const ScaleRun metres = renderScaled(dev, mod.m, 1.0f, DelayDistanceUnits::Domain);
+    EXPECT_LT(metres.maxDelay, maxDelay);
+    for (float scale : {100.0f, 39.3701f}) {
+      const ScaleRun other = renderScaled(dev, mod.m, scale, DelayDistanceUnits::Domain);
+      const auto [mean, bad] = imageError(metres.frame, other.frame);
+      std::printf("%s x%g: largest delay %.3f s (metres %.3f s), mean abs error %.3f/255, %.3f %% of pixels off by > 16/255\n",
+                  mod.name, scale, other.maxDelay, metres.maxDelay, mean, 100.0 * bad);
+      EXPECT_LT(other.maxDelay, maxDelay);
+      EXPECT_NEAR(other.maxDelay, metres.maxDelay, 1e-3f * metres.maxDelay);
+      EXPECT_LE(mean, 1.0);
+      EXPECT_LE(bad, 0.005);
+    }
+    // The old units: the centimetre plant's delays are a hundred times longer.
+    const ScaleRun world = renderScaled(dev, mod.m, 1.0f, DelayDistanceUnits::World);
+    const ScaleRun worldCm = renderScaled(dev, mod.m, 100.0f, DelayDistanceUnits::World);
+    const auto [mean, bad] = imageError(world.frame, worldCm.frame);
+    std::printf("%s in world units: largest delay %.3f s in metres, %.3f s in centimetres (clamped at %.0f s); "
+                "mean abs error %.3f/255, %.3f %% of pixels off by > 16/255\n",
+                mod.name, world.maxDelay, worldCm.maxDelay, maxDelay, mean, 100.0 * bad);
+    EXPECT_GE(worldCm.maxDelay, maxDelay * 0.999f);
+    EXPECT_TRUE(mean > 1.0 || bad > 0.005) << "world units: the scaled plant should sway differently";
   }
 }
 

@@ -90,6 +90,9 @@ DynamicsParams identityParams(DelayMode mode, float vd) {
   p.depthAttenuation = 0.0f;
   p.dt = 1.0f;
   p.cellSize = kCell;
+  // The paper's formulas in the units these tests state them in: L_i in world units, lambda in pixels.
+  p.delayUnits = DelayDistanceUnits::World;
+  p.lambdaUnits = LambdaUnits::Pixels;
   return p;
 }
 
@@ -166,8 +169,11 @@ TEST(DynamicsParamsCheck, RefusesOutOfRangeValues) {
   p.cellSize = 1;
   EXPECT_NE(validateDynamicsParams(p).message().find("cellSize"), std::string::npos);
   p = {};
-  p.dt = 0;
+  p.dt = -0.01f;  // 0 is the simulation's nominal step
   EXPECT_FALSE(validateDynamicsParams(p).ok());
+  p = {};
+  p.vdJitter = -1.0f;
+  EXPECT_NE(validateDynamicsParams(p).message().find("vdJitter"), std::string::npos);
   DynamicsFrameDesc d = frameDesc(8, 1, 0, {0});
   d.plane.up = {0, 0.5f, 0};
   gpu::AnimFrame f;
@@ -205,8 +211,8 @@ TEST_F(DynamicsTest, ExactDelaySamplesTheHistoryAtTMinusGamma) {
   for (const glm::vec2& v : e) ASSERT_NEAR(v.x, c(1.6f), 1e-4f);
 }
 
-// A travelling pattern V = (0.5 + 0.2 sin(2 pi a_x), 0): approximate mode returns V at
-// B = A + gamma s V(A), and at A - |gamma| s V(A) when gamma < 0.
+// A pattern V = (0.5 + 0.2 sin(2 pi a_x), 0) with eq. 5's old offset: approximate mode returns V
+// at B = A + gamma s V(A), and at A - |gamma| s V(A) when gamma < 0.
 TEST_F(DynamicsTest, ApproximateDelayLooksUpB) {
   const uint32_t n = 64;
   std::vector<glm::vec2> tiled(size_t(n) * n), ring = tiled;
@@ -217,6 +223,7 @@ TEST_F(DynamicsTest, ApproximateDelayLooksUpB) {
   for (float vd : {2.0f, -2.0f}) {
     DynamicsParams p = identityParams(DelayMode::Approximate, vd);
     p.propagationSpeed = 0.5f;
+    p.approximateOffset = Eq5Offset::Velocity;  // before 0.7: B = A + gamma s V
     gpu::AnimFrame f;
     ASSERT_TRUE(makeAnimFrame(p, frameDesc(n, 1, 1.0f, {0, 0.4f}), &f).ok());
     const std::vector<glm::vec2> d = run(f, tiled, ring, times);
@@ -263,6 +270,7 @@ TEST_F(DynamicsTest, DisplacementMatchesTheCpuReference) {
     DynamicsParams p;
     p.delay = mode;
     p.vd = 1.5f;
+    p.vdJitter = 0.4f;  // each layer's own V_D (eq. 4, "a small random number")
     p.lambda = {30, 20, 10};
     p.rigidity = 2.0f;
     p.depthAttenuation = 0.4f;
@@ -313,4 +321,96 @@ TEST_F(DynamicsTest, LastLayerIsAttenuatedByOneMinusM) {
     EXPECT_NEAR(d[2 * corners + k].x, 0.6f * 3.0f, 1e-5f);
     EXPECT_NEAR(d[2 * corners + k].y, 0.6f * -2.0f, 1e-5f);
   }
+}
+
+// Eq. 4's L_i in domain units (world distance over the plane's tile), eq. 6's lambda in warp-grid
+// cells and its Delta t the simulation's nominal step; the old units stay reachable; V_D per layer
+// is the constant plus a seeded number in [-vdJitter, vdJitter], the same on every call.
+TEST(DynamicsUnits, DelaysInDomainUnitsLambdaInCellsDtTheNominalStep) {
+  DynamicsFrameDesc d = frameDesc(8, 1, 0.0f, {0, 0.5f, 2.0f});
+  d.nominalDt = 0.02f;
+  const float tile = d.plane.tileSize;
+  ASSERT_GT(tile, 1.0f);
+  DynamicsParams p;
+  p.cellSize = kCell;
+  gpu::AnimFrame f;
+  ASSERT_TRUE(makeAnimFrame(p, d, &f).ok());
+  EXPECT_FLOAT_EQ(f.layers[2].distance, 2.0f / tile);
+  EXPECT_FLOAT_EQ(f.lambda.x, p.lambda.x * float(kCell));
+  EXPECT_FLOAT_EQ(f.lambda.z, p.lambda.z * float(kCell));
+  EXPECT_FLOAT_EQ(f.lambda.w, 0.02f);  // dt = 0: the simulation's nominal step
+  for (uint32_t i = 0; i < 3; ++i) EXPECT_EQ(f.layers[i].vd, p.vd);
+  // The same plant and camera scaled by 100: the same delays (the plane's tile scales with them).
+  DynamicsFrameDesc big = d;
+  big.view.view[3] *= glm::vec4(100.0f, 100.0f, 100.0f, 1.0f);
+  big.plane = simulationPlaneFromView(big.view, 1000.0f);
+  for (auto& l : big.layers) l.depth *= 100.0f, l.distance *= 100.0f;
+  gpu::AnimFrame g;
+  ASSERT_TRUE(makeAnimFrame(p, big, &g).ok());
+  for (uint32_t i = 0; i < 3; ++i) EXPECT_NEAR(g.layers[i].distance, f.layers[i].distance, 1e-6f);
+  // The old units, and dt given.
+  p.delayUnits = DelayDistanceUnits::World;
+  p.lambdaUnits = LambdaUnits::Pixels;
+  p.dt = 1.0f / 30.0f;
+  ASSERT_TRUE(makeAnimFrame(p, big, &g).ok());
+  EXPECT_FLOAT_EQ(g.layers[2].distance, 200.0f);
+  EXPECT_FLOAT_EQ(g.lambda.x, p.lambda.x);
+  EXPECT_FLOAT_EQ(g.lambda.w, 1.0f / 30.0f);
+  // V_D per layer: seeded, inside the band, not all equal, the same again; another seed differs.
+  p.vdJitter = 0.5f;
+  ASSERT_TRUE(makeAnimFrame(p, d, &f).ok());
+  ASSERT_TRUE(makeAnimFrame(p, d, &g).ok());
+  bool differ = false;
+  for (uint32_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(f.layers[i].vd, g.layers[i].vd);
+    EXPECT_LE(std::abs(f.layers[i].vd - p.vd), 0.5f);
+    differ = differ || f.layers[i].vd != f.layers[0].vd;
+  }
+  EXPECT_TRUE(differ);
+  p.vdSeed = 2;
+  ASSERT_TRUE(makeAnimFrame(p, d, &g).ok());
+  EXPECT_NE(g.layers[1].vd, f.layers[1].vd);
+}
+
+// Eq. 5 as the paper means it: on a steady wave travelling along V at speed s, the field at
+// B = A + gamma s V/|V| now is the field at A gamma earlier, so the approximate delay equals the
+// exact one up to sampling. s comes from the oscillator's c (DynamicsFrameDesc.waveSpeed) when
+// DynamicsParams.propagationSpeed is 0. Bound: 1e-3 domain units/s, 0.5 % of the wave's amplitude
+// (bilinear sampling of the sine on 64 cells errs by < 2.4e-4, the ring's linear time interpolation
+// at 0.05 s by < 2.2e-4).
+TEST_F(DynamicsTest, ApproximateAndExactDelayAgreeOnATravellingWave) {
+  const uint32_t n = 64, H = 21;
+  const float c = 0.3f, slot = 0.05f, now = 2.0f;
+  auto wave = [&](float ax, float t) { return 0.5f + 0.2f * std::sin(6.2831853f * (ax - c * t)); };
+  std::vector<glm::vec2> ring(size_t(H) * n * n), tiled(size_t(n) * n);
+  std::vector<float> times(H);
+  for (uint32_t k = 0; k < H; ++k) {
+    times[k] = now - slot * float(k);
+    for (uint32_t j = 0; j < n; ++j)
+      for (uint32_t i = 0; i < n; ++i) ring[size_t(k) * n * n + j * n + i] = glm::vec2(wave((float(i) + 0.5f) / float(n), times[k]), 0.0f);
+  }
+  std::copy(ring.begin(), ring.begin() + size_t(n) * n, tiled.begin());
+  std::vector<glm::vec2> out[2];
+  for (int m = 0; m < 2; ++m) {
+    DynamicsParams p = identityParams(m == 0 ? DelayMode::Exact : DelayMode::Approximate, 2.0f);
+    p.propagationSpeed = 0.0f;  // s = c
+    DynamicsFrameDesc d = frameDesc(n, H, now, {0, 0.4f, 0.9f});  // gamma = 0.2 s, 0.45 s
+    d.waveSpeed = c;
+    gpu::AnimFrame f;
+    ASSERT_TRUE(makeAnimFrame(p, d, &f).ok());
+    EXPECT_FLOAT_EQ(f.propagation, c);
+    out[m] = run(f, tiled, ring, times);
+    const std::vector<glm::vec2> cpu = referenceDisplacement(f, tiled, ring, times);
+    for (size_t i = 0; i < cpu.size(); ++i) ASSERT_NEAR(glm::length(out[m][i] - cpu[i]), 0.0f, 1e-4f) << i;
+  }
+  double worst = 0, moved = 0;
+  const size_t corners = out[0].size() / 3;
+  for (size_t i = corners; i < out[0].size(); ++i) {
+    worst = std::max<double>(worst, glm::length(out[0][i] - out[1][i]));
+    moved = std::max<double>(moved, glm::length(out[0][i] - out[0][i % corners]));
+  }
+  std::printf("travelling wave c = %.2f domain units/s, gamma 0.2 and 0.45 s: exact vs approximate delay differ by at most %.2e "
+              "domain units/s (the delayed layers differ from layer 0 by up to %.3f)\n", c, worst, moved);
+  EXPECT_LE(worst, 1e-3);
+  EXPECT_GT(moved, 0.1) << "the delays must matter on this wave";
 }

@@ -630,3 +630,109 @@ TEST_F(Sim, HeldOrOtherSchemePassesRecordNoBarrier) {
   ASSERT_TRUE(s.ok()) << s.message();
   EXPECT_NE(fields().vs, before.vs) << "a step that runs changes the field";
 }
+
+// Issue 36: how long a motor's push takes to reach the far side of a plant's projection (a framed
+// plant spans ~0.7 domain units: the plane's tile is the view's width at the plant). A motor
+// switched on at t = 0 (no wind), the wave's |V| sampled at the motor and at distances D along x
+// (CPU reference, the GPU's scheme), arrival = the first time |V| there reaches 10 % of its largest
+// value over 3 s. The incompressible wind carries the push across at once (its pressure), and the
+// oscillator follows it locally; the default c = 0.5 and the old 0.05 alike.
+TEST(SimCrossing, AMotorsPushCrossesThePlantInUnderASecond) {
+  const uint32_t n = 64;
+  const float dt = 1.0f / 30.0f;
+  for (float c : {0.05f, WaveParams{}.speed}) {
+    SimulationParams p;
+    p.wind.sides = 0;
+    p.wave.speed = c;
+    p.motors.push_back({0.2f, 0.5f, 0.05f, 1.0f});
+    ref::SimState s = ref::makeState(n, 4);
+    const float ds[] = {0.0f, 0.25f, 0.5f, 0.7f};
+    std::vector<std::vector<float>> mag(4);
+    double t = 0;
+    for (int k = 0; k < 90; ++k) {
+      gpu::SimFrame f;
+      ASSERT_TRUE(makeSimFrame(p, n, float(t), dt, uint32_t(k % 4), 4, &f).ok());
+      ref::step(f, s);
+      t += dt;
+      for (int i = 0; i < 4; ++i) {
+        const uint32_t x = uint32_t((0.2f + ds[i]) * n), y = n / 2;
+        mag[i].push_back(std::hypot(s.wave[2 * (y * n + x)], s.wave[2 * (y * n + x) + 1]));
+      }
+    }
+    std::printf("wave speed c = %.2f domain units/s: a motor's push arrives", c);
+    for (int i = 0; i < 4; ++i) {
+      const float peak = *std::max_element(mag[i].begin(), mag[i].end());
+      size_t k = 0;
+      while (k < mag[i].size() && mag[i][k] < 0.1f * peak) ++k;
+      const double arrival = double(k + 1) * dt;
+      std::printf("%s at D = %.2f after %.2f s", i ? "," : "", ds[i], arrival);
+      EXPECT_GT(peak, 0.05f);
+      EXPECT_LE(arrival, 1.0) << "D = " << ds[i];
+    }
+    std::printf("\n");
+  }
+}
+
+// Eq. 5's s is "the wave propagation speed": the speed at which the field's patterns travel. On
+// the default wind (0.5 domain units/s through the left side), 5 s in, how well the field now at
+// B = A + gamma s V/|V| stands for the field at A gamma = 0.2 s earlier (mean |difference| over
+// the cells 8 or more from the border) for a scan of s: the best s is the wind's speed, which the
+// default c (and so eq. 5's s = c) is; the old c = 0.05 errs ~6x as much.
+TEST(SimCrossing, Eq5sSpeedIsHowFastTheFieldTravels) {
+  const uint32_t n = 64;
+  const float dt = 1.0f / 30.0f, gamma = 0.2f;
+  const int lag = 6;
+  SimulationParams p;
+  ref::SimState s = ref::makeState(n, 4);
+  std::vector<std::vector<float>> snaps;
+  double t = 0;
+  for (int k = 0; k < 150; ++k) {
+    gpu::SimFrame f;
+    ASSERT_TRUE(makeSimFrame(p, n, float(t), dt, uint32_t(k % 4), 4, &f).ok());
+    ref::step(f, s);
+    t += dt;
+    snaps.push_back(std::vector<float>(s.wave.begin(), s.wave.begin() + 2 * n * n));
+  }
+  auto at = [&](const std::vector<float>& v, float x, float y) {
+    const float fx = x * n - 0.5f, fy = y * n - 0.5f;
+    const int i = std::clamp(int(std::floor(fx)), 0, int(n) - 2), j = std::clamp(int(std::floor(fy)), 0, int(n) - 2);
+    const float a = std::clamp(fx - float(i), 0.f, 1.f), b = std::clamp(fy - float(j), 0.f, 1.f);
+    glm::vec2 r(0);
+    for (int q = 0; q < 4; ++q) {
+      const int ii = i + (q & 1), jj = j + (q >> 1);
+      const float w = ((q & 1) ? a : 1 - a) * ((q >> 1) ? b : 1 - b);
+      r += w * glm::vec2(v[2 * (jj * n + ii)], v[2 * (jj * n + ii) + 1]);
+    }
+    return r;
+  };
+  const std::vector<float>& now = snaps.back();
+  const std::vector<float>& then = snaps[snaps.size() - 1 - lag];
+  auto error = [&](float sp) {
+    double err = 0;
+    int cnt = 0;
+    for (uint32_t j = 8; j < n - 8; ++j)
+      for (uint32_t i = 8; i < n - 8; ++i) {
+        const float x = (float(i) + 0.5f) / float(n), y = (float(j) + 0.5f) / float(n);
+        const glm::vec2 v = at(now, x, y);
+        const float l = glm::length(v);
+        const glm::vec2 b = l > 1e-9f ? glm::vec2(x, y) + (gamma * sp / l) * v : glm::vec2(x, y);
+        err += glm::length(at(now, b.x, b.y) - at(then, x, y));
+        ++cnt;
+      }
+    return err / cnt;
+  };
+  float best = 0;
+  double bestErr = 1e30;
+  std::printf("eq. 5 against eq. 3 on the default wind, gamma = 0.2 s, mean |difference| by s:");
+  for (float sp = 0.0f; sp <= 1.2001f; sp += 0.1f) {
+    const double e = error(sp);
+    std::printf(" %.1f: %.4f", sp, e);
+    if (e < bestErr) bestErr = e, best = sp;
+  }
+  const float c = WaveParams{}.speed;
+  std::printf("\n  best s = %.1f; s = c = %.2f (the default): %.4f; s = 0.05 (the old c): %.4f; s = 0 (no offset): %.4f\n", best, c,
+              error(c), error(0.05f), error(0.0f));
+  EXPECT_NEAR(best, p.wind.strength, 0.15f);
+  EXPECT_NEAR(c, best, 0.15f);
+  EXPECT_LT(error(c), 0.5 * error(0.05f));
+}

@@ -9,6 +9,8 @@
 
 #define ANIM_DELAY_EXACT 0u        // sample the history ring at t - gamma_i (eq. 3)
 #define ANIM_DELAY_APPROXIMATE 1u  // one lookup at B = A + gamma_i s V (eq. 5)
+#define ANIM_OFFSET_DIRECTION 0u    // eq. 5: B = A + gamma s V/|V| (the paper's distance travelled)
+#define ANIM_OFFSET_VELOCITY 1u     // B = A + gamma s V (before 0.7)
 #define ANIM_GROUP_SIZE 64u
 // AnimFrame.newestSlot when the ring's slots are not known to be in step order: search them all.
 #define ANIM_RING_UNORDERED 0xffffffffu
@@ -17,11 +19,11 @@ CANOPY_NAMESPACE_BEGIN
 
 struct AnimLayer {
   float depth;        // representative view depth, world units
-  float distance;     // L_i: depth - depth of layer 0
+  float distance;     // L_i: depth - depth of layer 0, domain units (or world: DynamicsParams.delayUnits)
   float attenuation;  // A_i = 1 - m (L_i / L_{n-1})^2 (docs/design.md's reading of eq. 6)
   float rootLineY;    // pixel row of the root line (y down)
   float height;       // h of eq. 7, pixels
-  float pad0;
+  float vd;           // V_D of eq. 4 for this layer, domain units/s (DynamicsParams.vd and vdJitter)
   float pad1;
   float pad2;
 };
@@ -36,8 +38,8 @@ struct AnimFrame {
   vec4 simUp;         // xyz: its y axis (unit, world)
   vec4 lambda;        // xyz: lambda_x, lambda_y, lambda_z, pixels per domain unit; w: dt of eq. 6, s
   float time;         // time of the newest simulation field, s
-  float vd;           // V_D of eq. 4, domain units/s
-  float propagation;  // s of eq. 5, dimensionless (B moves gamma s |V| domain units)
+  float vd;           // DynamicsParams.vd (each layer's V_D: AnimLayer.vd), domain units/s
+  float propagation;  // s of eq. 5 (ANIM_OFFSET_DIRECTION: domain units/s; B moves gamma s domain units)
   float rigidity;     // r of eq. 7, [0, 10]
   uint everyPartMoves;  // 1: R = 1 (eq. 7)
   uint delayMode;     // ANIM_DELAY_*
@@ -54,9 +56,13 @@ struct AnimFrame {
   // so going back k slots goes back k steps and the times never increase): the exact delay then
   // finds its two slots by binary search. ANIM_RING_UNORDERED: by a search of every slot.
   uint newestSlot;
+  uint offsetMode;    // ANIM_OFFSET_*: eq. 5's offset along V's direction or V itself
+  float pad0;
+  float pad1;
+  float pad2;
   AnimLayer layers[CANOPY_MAX_LAYERS];
 };
-CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 5 + 4 * 16 + 32 * CANOPY_MAX_LAYERS)
+CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 5 + 4 * 20 + 32 * CANOPY_MAX_LAYERS)
 
 // Eq. 1-2 in general: simulation-plane velocity -> world -> view.
 CANOPY_INLINE vec3 simToView(AnimFrame f, vec2 vs) {
@@ -64,11 +70,21 @@ CANOPY_INLINE vec3 simToView(AnimFrame f, vec2 vs) {
   return vec3(f.viewRotation * vec4(w, 0.0f));
 }
 
-// Eq. 4: gamma_i = L_i / (-V_0z + V_D), bounded by maxDelay when the denominator vanishes.
-CANOPY_INLINE float layerDelay(AnimFrame f, float distance, float v0z) {
-  float denom = -v0z + f.vd;
-  float g = distance / (abs(denom) > 1e-6f ? denom : (denom < 0.0f ? -1e-6f : 1e-6f));
-  return clamp(g, -f.maxDelay, f.maxDelay);
+// Eq. 4: gamma_i = L_i / (-V_0z + V_D), bounded by maxDelay when the denominator vanishes. L_i
+// and V_D are the layer's (both in domain units by default, so gamma does not depend on the model's
+// scale), maxDelay the frame's.
+CANOPY_INLINE float layerDelay(float maxDelay, AnimLayer layer, float v0z) {
+  float denom = -v0z + layer.vd;
+  float g = layer.distance / (abs(denom) > 1e-6f ? denom : (denom < 0.0f ? -1e-6f : 1e-6f));
+  return clamp(g, -maxDelay, maxDelay);
+}
+
+// Eq. 5: B = A + gamma s V/|V| (a steady wave travelling along V at speed s makes the field at B now
+// what it was at A gamma earlier), or A + gamma s V (ANIM_OFFSET_VELOCITY). A still field stays at A.
+CANOPY_INLINE vec2 approximateLookup(AnimFrame f, vec2 a, float gamma, vec2 vs) {
+  if (f.offsetMode == ANIM_OFFSET_VELOCITY) return a + gamma * f.propagation * vs;
+  float speed = length(vs);
+  return speed > 1e-12f ? a + (gamma * f.propagation / speed) * vs : a;
 }
 
 // The helpers below take the layer's record (f.layers[i]) rather than indexing the frame's array:

@@ -175,7 +175,7 @@ CANOPY_PARAM_STRUCT(FluidParams, CANOPY_FLUID_PARAMS)
 // The oscillator V'' = c^2 lap V - k (V - g V_wind) - zeta V' (docs/design.md).
 #define CANOPY_WAVE_PARAMS(X)                                                                                           \
   X(float, stiffness, 40.0f, Closed, 0, 1e6, "1/s^2", "k: pull towards the driven rest state")                         \
-  X(float, speed, 0.05f, Closed, 0, 100, "domain units/s", "c: wave propagation speed")                                \
+  X(float, speed, 0.5f, Closed, 0, 100, "domain units/s", "c: wave propagation speed (eq. 5's s; before 0.7: 0.05)")    \
   X(float, damping, 2.0f, Closed, 0, 1000, "1/s", "zeta")                                                              \
   X(float, gain, 1.0f, Closed, -100, 100, "", "g: how strongly the wind drives the wave")                              \
   X(uint32_t, maxSubsteps, 64, Closed, 1, 4096, "", "stable substeps per step; a longer step is clamped (stats.clampedSeconds)")
@@ -297,17 +297,36 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 CANOPY_PARAM_STRUCT(LayerSettings, CANOPY_LAYER_SETTINGS)
 
 enum class DelayMode { Exact, Approximate };  // paper eq. 3-4, or eq. 5
+// Units of L_i in eq. 4 (docs/design.md "Departures from the papers"): the simulation's domain units
+// (the world distance over SimulationPlane.tileSize, so a plant authored in centimetres sways as the
+// same plant in metres), or world units as before 0.7 (delays then grow with the model's scale).
+enum class DelayDistanceUnits { Domain, World };
+// Units of lambda in eq. 6: warp-grid cells per domain unit (the paper: "set with respect to the grid
+// cell's size"; scaled by cellSize into pixels), or pixels per domain unit as before 0.7.
+enum class LambdaUnits { Cells, Pixels };
+// Eq. 5's offset: gamma s V/|V| (the paper: "the distance the movement travels during gamma", V
+// taken as the direction and s the wave's propagation speed), or gamma s V as before 0.7.
+enum class Eq5Offset { Direction, Velocity };
+// Eq. 6's Delta t is the simulation's nominal step (SimulationDesc.nominalDt, the paper's "simulation
+// time step") unless dt > 0 overrides it; never the frame's measured time, so the sway does not
+// depend on the frame rate. V_D of eq. 4: vd, plus per layer a seeded uniform number in
+// [-vdJitter, vdJitter] (the paper: "a small random number"; 0: the constant).
 #define CANOPY_DYNAMICS_PARAMS(X)                                                                                       \
   X(DelayMode, delay, DelayMode::Exact, Enum, 0, 1, "Exact | Approximate", "eq. 3-4, or eq. 5")                         \
-  X(float, vd, 2.0f, Closed, -1000, 1000, "domain units/s", "V_D of eq. 4")                                             \
-  X(float, propagationSpeed, 1.0f, Closed, 0, 1000, "", "s of eq. 5")                                                  \
-  X(Float3, lambda, (Float3{300.0f, 300.0f, 150.0f}), Closed, 0, 1e6, "pixels per domain unit", "lambda_x,y,z of eq. 6") \
+  X(float, vd, 1.0f, Closed, -1000, 1000, "domain units/s", "V_D of eq. 4 (before 0.7: 2, with L_i in world units)")                                             \
+  X(float, propagationSpeed, 0.0f, Closed, 0, 1000, "domain units/s", "s of eq. 5; 0: the wave oscillator's speed c (WaveParams.speed)") \
+  X(Float3, lambda, (Float3{18.75f, 18.75f, 9.375f}), Closed, 0, 1e6, "cells (lambdaUnits) per domain unit", "lambda_x,y,z of eq. 6") \
   X(float, rigidity, 1.0f, Closed, 0, 10, "", "r of eq. 7")                                                            \
   X(bool, everyPartMoves, false, None, 0, 0, "", "eq. 7: R = 1 everywhere")                                            \
   X(float, depthAttenuation, 0.3f, Closed, 0, 1, "", "m of eq. 6")                                                     \
-  X(float, dt, 1.0f / 30.0f, AboveMin, 0, 10, "s", "Delta t of eq. 6")                                                 \
+  X(float, dt, 0.0f, Closed, 0, 10, "s", "Delta t of eq. 6; 0: the simulation's nominal step (SimulationDesc.nominalDt)") \
   X(uint32_t, cellSize, 16, Closed, 2, 256, "pixels", "warp-grid cell (at least CanopyDesc.minCellSize)")             \
-  X(float, maxDelay, 10.0f, AboveMin, 0, 3600, "s", "|gamma| bound for a vanishing eq. 4 denominator")
+  X(float, maxDelay, 10.0f, AboveMin, 0, 3600, "s", "|gamma| bound for a vanishing eq. 4 denominator")                 \
+  X(DelayDistanceUnits, delayUnits, DelayDistanceUnits::Domain, Enum, 0, 1, "Domain | World", "units of L_i in eq. 4 (World: before 0.7)") \
+  X(LambdaUnits, lambdaUnits, LambdaUnits::Cells, Enum, 0, 1, "Cells | Pixels", "units of lambda (Pixels: before 0.7)")  \
+  X(float, vdJitter, 0.0f, Closed, 0, 1000, "domain units/s", "per-layer random part of V_D, uniform in [-vdJitter, vdJitter]") \
+  X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
+  X(Eq5Offset, approximateOffset, Eq5Offset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)")
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
@@ -510,8 +529,9 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
 
 // Replaces the placed copies (CanopyDesc.instances; at least one): the next recorded frame re-slices
-// at once. A transform that is not a finite invertible affine matrix, or a tint outside [0, 16], is
-// refused naming the instance. Waits for nothing.
+// at once, and the default simulation plane (no CanopyParams.customPlane) is taken again from its
+// camera for the copies' bounds. A transform that is not a finite invertible affine matrix, or a
+// tint outside [0, 16], is refused naming the instance. Waits for nothing.
 Status setCanopyInstances(CanopyContext* context, const std::vector<CanopyInstance>& instances);
 
 // What changes every frame.

@@ -11,7 +11,7 @@
 // The version this header declares. createCanopy() refuses a library of another major version, or
 // an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
 #define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 6
+#define CANOPY_VERSION_MINOR 7
 #define CANOPY_VERSION_PATCH 0
 #define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
 #define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)

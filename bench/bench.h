@@ -1,5 +1,6 @@
 #pragma once
 #include <chrono>
+#include <functional>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -77,6 +78,21 @@ struct CameraBenchOptions {
   float guardBand = CanopyDesc{}.guardBand;  // the policy side's CanopyDesc.guardBand (the every-frame side: 0)
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
+
+// The layer-count study (issue 36): each layout's animated frames against the same wind drawn with
+// `reference` layers, on a generated scene and optionally a glTF file (bench/bench_layer_count.cpp).
+struct LayerCountOptions {
+  std::string scene = "shrub";
+  uint64_t faces = 80000;
+  std::string gltf;  // "" none
+  std::vector<std::string> layouts = {"1", "2", "3", "5", "7", "9", "3(1-1-1)", "5(3-1-1)"};
+  std::string reference = "16";
+  int frames = 90, skip = 15;  // frames drawn; the first `skip` (the wind rising from rest) not compared
+  uint32_t width = 512, height = 384;
+  float strength = 1.5f;  // SimulationParams.wind.strength, domain units/s
+  std::string csvPath;    // a row per model and layout; "" none
+};
+int runLayerCountBench(Device& dev, const LayerCountOptions& options);
 
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int rebuilds,
                      uint32_t width, uint32_t height, const std::string& imageDir);

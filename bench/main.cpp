@@ -8,6 +8,7 @@
 //                [--spread-max-faces N] [--device-budget MIB]
 //   canopy-bench pervertex [--faces 80000,1000000,10000000] [--scene shrub] [--frames N] [--size WxH] [--csv FILE]
 //   canopy-bench impostors [--faces 10000000] [--scene field] [--rebuilds N] [--size WxH] [--images DIR]
+//   canopy-bench layercount [--faces 80000] [--scene shrub] [--gltf FILE] [--frames N] [--size WxH] [--csv FILE]
 //   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
 //                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS] [--reslice-error PX]
 //                [--csv FILE] [--no-cross-fade]
@@ -49,6 +50,9 @@ static int usage(const char* why) {
                "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1;\n"
                "                 --csv FILE: a row per frame; then the cross-fade's coverage at one camera, a light and a\n"
                "                 layout change, unless --no-cross-fade)\n"
+               "  layercount     the layer-count study: 1, 2, 3, 5, 7, 9 layers, 3(1-1-1), 5(3-1-1) against 16 layers, animated\n"
+               "                 frames frame by frame at a still camera (--faces default 80000, --scene shrub, --gltf FILE\n"
+               "                 too, --frames default 90, --size default 512x384, --csv FILE)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -79,6 +83,8 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 0;  // 0: the section's default
   bool detail = false;
+  bool runLayerCount = false, sizeGiven = false;
+  bench::LayerCountOptions layerCount;
   bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false, runTable1 = false;
   bench::Table1Options t1;
   bool facesGiven = false;
@@ -128,6 +134,12 @@ int main(int argc, char** argv) {
     else if (a == "pervertex") runPerVertex = true;
     else if (a == "impostors") runImpostors = true;
     else if (a == "camera") runCamera = true;
+    else if (a == "layercount") runLayerCount = true;
+    else if (a == "--gltf") {
+      const char* v = next();
+      if (!v) return usage("--gltf needs a file");
+      layerCount.gltf = v;
+    }
     else if (a == "--paths") {
       const char* v = next();
       if (!v) return usage("--paths needs a list: orbit,dolly,strafe,turn,zoom,walk");
@@ -200,6 +212,7 @@ int main(int argc, char** argv) {
         return usage("--size needs WxH, each in [16, 8192]");
       t1.width = w;
       t1.height = h;
+      sizeGiven = true;
     } else if (a == "--guard-band") {
       float g = 0.0f;
       if (!parseNumber(next(), 0, 0.5, &g)) return usage("--guard-band needs a fraction in [0, 0.5]");
@@ -270,7 +283,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
-  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera)
+  if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
+      !runLayerCount)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -302,6 +316,14 @@ int main(int argc, char** argv) {
     if (budgetGiven) cam.budgetMs = budgetMs;
     cam.csvPath = csvPath;
     rc = bench::runCameraBench(dev, cam);
+  }
+  if (rc == 0 && runLayerCount) {
+    if (facesGiven) layerCount.faces = faces.front();
+    if (!scene.empty()) layerCount.scene = scene;
+    if (frames) layerCount.frames = std::max<int>(frames, layerCount.skip + 1);
+    if (sizeGiven) layerCount.width = t1.width, layerCount.height = t1.height;
+    layerCount.csvPath = csvPath;
+    rc = bench::runLayerCountBench(dev, layerCount);
   }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);

@@ -17,7 +17,13 @@ per-vertex baseline against face count, and the baseline / 2D ratios.
 draws canopy-bench camera's per-frame CSV (--csv): per face count and path, the frame time along the
 path with the layers reprojected and re-sliced by their error (re-slice frames marked) and re-sliced
 every frame, beside the still camera's median; below, the world-lock error of each frame against the
-every-frame reference (coverage IoU and mean silhouette distance)."""
+every-frame reference (coverage IoU and mean silhouette distance).
+
+    /usr/bin/python3 scripts/plot_bench.py --layercount CSV OUT_PNG [TITLE]
+
+draws canopy-bench layercount's CSV (--csv): per model, the equal-layer layouts' colour difference
+against the 16-layer reference relative to the wind's own motion, and their coverage IoU, against the
+layer count; the paper's 3(1-1-1) and 5(3-1-1) as points."""
 import csv
 import sys
 
@@ -117,7 +123,39 @@ def plot_camera(path, out, title):
     print("wrote", out)
 
 
+def plot_layercount(path, out, title):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    models = sorted({r["model"] for r in rows}, key=lambda m: [r["model"] for r in rows].index(m))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    for i, m in enumerate(models):
+        color = "C%d" % i
+        eq = [r for r in rows if r["model"] == m and "(" not in r["layout"]]
+        x = [int(r["layers"]) for r in eq]
+        a1.plot(x, [float(r["relative"]) for r in eq], "o-", color=color, label=m)
+        a2.plot(x, [float(r["iou_mean"]) for r in eq], "o-", color=color, label=m)
+        for r in rows:
+            if r["model"] == m and "(" in r["layout"]:
+                a1.plot(int(r["layers"]), float(r["relative"]), "s", color=color, mfc="none")
+                a1.annotate(r["layout"], (int(r["layers"]), float(r["relative"])), fontsize=7, color=color,
+                            xytext=(4, 4), textcoords="offset points")
+    a1.set_xlabel("layers (equal spacing; squares: the paper's layouts)")
+    a1.set_ylabel("colour difference / the wind's motion")
+    a1.set_ylim(bottom=0)
+    a2.set_xlabel("layers")
+    a2.set_ylabel("coverage IoU (mean over frames)")
+    for a in (a1, a2):
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    fig.suptitle(title + ": against 16 layers, the same wind", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+
+
 def main():
+    if len(sys.argv) >= 4 and sys.argv[1] == "--layercount":
+        plot_layercount(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "canopy-bench layercount")
+        return
     if len(sys.argv) >= 4 and sys.argv[1] == "--camera":
         plot_camera(sys.argv[2], sys.argv[3], sys.argv[4] if len(sys.argv) > 4 else "canopy-bench camera")
         return

@@ -44,7 +44,7 @@ Status validateDynamicsParams(const DynamicsParams& p) { return checkParams(p, "
 
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize) { return (pixels + cellSize - 1) / cellSize + 1; }
 
-Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::AnimFrame* out) {
+Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::AnimFrame* out, std::vector<glm::vec4>* plantRects) {
   // `p` was checked when it was given (validateDynamicsParams; setCanopyParams), not every frame.
   const uint32_t n = uint32_t(d.layers.size());
   if (n < 1 || n > CANOPY_MAX_LAYERS)
@@ -106,6 +106,18 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     l.rootLineY = d.layers[i].rootLineY;
     l.height = std::max(d.layers[i].height, 1.0f);
   }
+  // Per-plant roots: the layers' plant rects in one table after the frame block.
+  if (plantRects) {
+    plantRects->clear();
+    size_t total = 0;
+    for (const DynamicsLayer& dl : d.layers) total += dl.plants.size();
+    if (p.roots == RootMode::PerPlant && total <= ANIM_MAX_PLANT_RECTS)
+      for (uint32_t i = 0; i < n; ++i) {
+        f.layers[i].firstPlant = uint32_t(plantRects->size());
+        f.layers[i].plantCount = uint32_t(d.layers[i].plants.size());
+        plantRects->insert(plantRects->end(), d.layers[i].plants.begin(), d.layers[i].plants.end());
+      }
+  }
   *out = f;
   return Status();
 }
@@ -122,7 +134,10 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
     ComputePipelineDesc pd;
     pd.shader = "anim_displace.comp";
     CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
-    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+    static_assert(sizeof(gpu::AnimFrame) % 4 == 0 && sizeof(gpu::AnimFrame) + ANIM_MAX_PLANT_RECTS * 16 <= 65536,
+                  "the frame block and its plant table are written with vkCmdUpdateBuffer");
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));
     CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(glm::vec2),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT, MemoryUsage::DeviceLocal,
@@ -154,6 +169,9 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   LayerDynamics* p = &x;
   g.addPass("dynamics: frame", [p](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
+     if (!p->plantRects.empty())
+       c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, sizeof(gpu::AnimFrame), p->plantRects.size() * sizeof(glm::vec4),
+                                    p->plantRects.data());
      return Status();
    }).write(frame, rg::Use::TransferDst);
   using rg::Use;

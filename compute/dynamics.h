@@ -32,6 +32,7 @@ struct DynamicsLayer {
   float distance = 0;   // L_i
   float rootLineY = 0;  // pixels, y down
   float height = 1;     // pixels
+  std::vector<glm::vec4> plants;  // per-plant roots: rects (x lo, x hi, top, root row), LayerInfo::plants
 };
 
 struct DynamicsFrameDesc {
@@ -47,7 +48,10 @@ struct DynamicsFrameDesc {
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize);
-Status makeAnimFrame(const DynamicsParams& params, const DynamicsFrameDesc& desc, gpu::AnimFrame* out);
+// `plantRects` (null: none) receives the frame block's plant table when DynamicsParams.roots is
+// PerPlant and the layers have plant rects (at most ANIM_MAX_PLANT_RECTS; more: the layers' roots).
+Status makeAnimFrame(const DynamicsParams& params, const DynamicsFrameDesc& desc, gpu::AnimFrame* out,
+                     std::vector<glm::vec4>* plantRects = nullptr);
 
 struct LayerDynamics {
   Device* device = nullptr;
@@ -56,6 +60,7 @@ struct LayerDynamics {
   Buffer displacement;  // layers x gridY x gridX vec2, pixels (y down)
   Buffer previous;      // the displacement of the frame before (motion vectors)
   gpu::AnimFrame current{};
+  std::vector<glm::vec4> plantRects;  // uploaded after `current` (per-plant roots)
   uint32_t maxCorners = 0, maxLayers = 0;
 };
 // Sized for images up to width x height at cells down to minCellSize, up to maxLayers layers.

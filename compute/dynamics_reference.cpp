@@ -27,7 +27,8 @@ glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, u
 }
 
 std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std::vector<glm::vec2>& tiled,
-                                             const std::vector<glm::vec2>& ring, const std::vector<float>& times) {
+                                             const std::vector<glm::vec2>& ring, const std::vector<float>& times,
+                                             const std::vector<glm::vec4>& plantRects) {
   const uint32_t corners = f.gridX * f.gridY, nn = f.n * f.n;
   std::vector<glm::vec2> out(size_t(corners) * f.layerCount);
   // History bounds: the newest and oldest slot by time.
@@ -57,7 +58,17 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
         vi = f.delayMode == ANIM_DELAY_EXACT ? gpu::simToView(f, history(a, f.time - gamma))
                                              : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, gpu::approximateLookup(f, a, gamma, vs)));
       }
-      out[size_t(layer) * corners + id] = gpu::displacementPixels(f, f.layers[layer], pixel.y, vi);
+      gpu::AnimLayer rooted = f.layers[layer];
+      float bestD = 3.0e38f, bestA = 3.0e38f;
+      for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && j < plantRects.size(); ++j) {
+        const glm::vec4 r = plantRects[j];
+        if (gpu::plantRectBetter(r, pixel, bestD, bestA)) {
+          bestD = gpu::plantRectDistance2(r, pixel);
+          bestA = (r.y - r.x) * (r.w - r.z);
+          rooted = gpu::withPlantRoot(f.layers[layer], r);
+        }
+      }
+      out[size_t(layer) * corners + id] = gpu::displacementPixels(f, rooted, pixel.y, vi);
     }
   return out;
 }

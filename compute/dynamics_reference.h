@@ -9,9 +9,11 @@
 
 namespace canopy {
 
-// tiled: n*n vec2; ring: H*n*n vec2; ringTimes: H. Returns layers x gridY x gridX displacements.
+// tiled: n*n vec2; ring: H*n*n vec2; ringTimes: H; plantRects: the frame block's plant table
+// (per-plant roots). Returns layers x gridY x gridX displacements.
 std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std::vector<glm::vec2>& tiled,
-                                             const std::vector<glm::vec2>& ring, const std::vector<float>& ringTimes);
+                                             const std::vector<glm::vec2>& ring, const std::vector<float>& ringTimes,
+                                             const std::vector<glm::vec4>& plantRects = {});
 
 // The simulation-plane coordinate (tile units) of warp-grid corner (gx, gy) of a layer.
 glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy);

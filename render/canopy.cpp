@@ -642,7 +642,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   DynamicsFrameDesc fd;
   fd.view = slice;
   fd.plane = c->plane;
-  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height});
+  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants});
   fd.width = c->layers.desc.width;  // the layer images: the output and the guard band
   fd.height = c->layers.desc.height;
   fd.simSize = sim.n;
@@ -653,7 +653,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   // The simulation writes slot step % H: the exact delay can binary-search the ring (anim_displace.comp).
   // Before the first step every slot reads time 0, which is in order from any slot.
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
-  CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current));
+  CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
   const gpu::AnimFrame& a = c->dynamics.current;
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
                            a.layerCount == c->last.layerCount;

@@ -568,8 +568,13 @@ Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world
 Status walkNodes(Load& L, const std::vector<int>& roots) {
   const tinygltf::Model& m = L.m;
   std::vector<uint8_t> visiting(m.nodes.size(), 0);
-  std::vector<std::pair<int, glm::mat4>> pending;
-  auto visit = [&](int ni, const glm::mat4& parent) -> Status {
+  struct Pending {
+    int node;
+    glm::mat4 parent;
+    uint32_t plant;  // the ordinal of the scene root it hangs from (VegetationModel::trianglePlant)
+  };
+  std::vector<Pending> pending;
+  auto visit = [&](int ni, const glm::mat4& parent, uint32_t plant) -> Status {
     const std::string what = "nodes[" + std::to_string(ni) + "]";
     if (ni < 0 || size_t(ni) >= m.nodes.size()) return Status::error(what + " does not exist");
     if (visiting[size_t(ni)]) return Status::error(what + " appears twice in the scene's hierarchy (cycle or shared child)");
@@ -584,16 +589,19 @@ Status walkNodes(Load& L, const std::vector<int>& roots) {
       const glm::mat3 normalMatrix = glm::inverseTranspose(glm::mat3(world));
       for (size_t pi = 0; pi < m.meshes[size_t(node.mesh)].primitives.size(); ++pi)
         CANOPY_TRY(appendPrimitive(L, node.mesh, pi, world, normalMatrix));
+      L.out->trianglePlant.resize(L.out->triangleMaterial.size(), plant);
     }
-    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) pending.push_back({*c, world});
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) pending.push_back({*c, world, plant});
     return Status();
   };
-  for (auto r = roots.rbegin(); r != roots.rend(); ++r) pending.push_back({*r, glm::mat4(1.0f)});
+  for (size_t r = roots.size(); r-- > 0;) pending.push_back({roots[r], glm::mat4(1.0f), uint32_t(r)});
   while (!pending.empty()) {
-    const auto [ni, parentWorld] = pending.back();
+    const Pending p = pending.back();
     pending.pop_back();
-    CANOPY_TRY(visit(ni, parentWorld));
+    CANOPY_TRY(visit(p.node, p.parent, p.plant));
   }
+  // Each scene root a plant, unless their bounds overlap on the ground (parts of one plant).
+  L.out->mergeOverlappingPlants = true;
   return Status();
 }
 

@@ -256,6 +256,8 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
   std::vector<uint32_t>().swap(roots.rootOfVertex);
   lv.stats.rootCacheHit = cached;
   lv.stats.leafCount = roots.leafCount();
+  CANOPY_TRY(findPlants(m, roots, &lv.mesh.plants));
+  lv.stats.plants = lv.mesh.plants.count();
   lv.stats.preprocessMs = msSince(t0);
   lv.mesh.materials = m.materials;
   lv.mesh.boundsMin = m.boundsMin;

@@ -16,6 +16,7 @@
 #include "render/layer_instances.h"
 #include "render/mesh_chunks.h"
 #include "render/model.h"
+#include "render/plants.h"
 
 namespace canopy {
 struct Device;
@@ -37,6 +38,7 @@ struct LayerMesh {
   MaterialSplit split;
   std::vector<ModelMaterial> materials;
   glm::vec3 boundsMin{0}, boundsMax{0};
+  Plants plants;  // each leaf's plant and each plant's bounds (eq. 7 per plant)
   // The compact mesh in host memory (its chunks: `chunks`): the placement reads its decoded
   // positions and leaves (so the CPU places what the GPU draws, and no per-vertex copy of the
   // model is kept), and a streamed mesh's re-slices copy from it into the ring.

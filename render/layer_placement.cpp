@@ -38,6 +38,41 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   job.leafDepth.resize(size_t(lv.mesh.leafCount) * job.depthRows.size());
 }
 
+namespace {
+// Per-plant roots: each (visible copy, plant)'s bounding box projected (its x range and its lowest
+// row: eq. 7's "bottom of the bounding box", per plant) and, per layer it has leaves in, its rect.
+// A plant with a box corner behind the camera has no rect (its layers' corners take the nearest
+// other plant's root).
+void placePlants(PlacementJob& job, const Plants& plants, float h, float w) {
+  const uint32_t layers = job.frame.layerCount, n = plants.count();
+  for (size_t k = 0; k < job.rowsW.size(); ++k)
+    for (uint32_t p = 0; p < n; ++p) {
+      float xlo = INFINITY, xhi = -INFINITY, bottom = -INFINITY;
+      bool behind = false;
+      for (int c = 0; c < 8; ++c) {
+        const glm::vec4 q((c & 1) ? plants.boundsMax[p].x : plants.boundsMin[p].x, (c & 2) ? plants.boundsMax[p].y : plants.boundsMin[p].y,
+                          (c & 4) ? plants.boundsMax[p].z : plants.boundsMin[p].z, 1.0f);
+        const float cw = glm::dot(job.rowsW[k], q);
+        if (cw <= 1e-6f) {
+          behind = true;
+          break;
+        }
+        const float x = (glm::dot(job.rowsX[k], q) / cw * 0.5f + 0.5f) * w, y = (glm::dot(job.rowsY[k], q) / cw * 0.5f + 0.5f) * h;
+        xlo = std::min(xlo, x);
+        xhi = std::max(xhi, x);
+        bottom = std::max(bottom, y);
+      }
+      if (behind) continue;
+      for (uint32_t i = 0; i < layers; ++i) {
+        const float top = job.plantTop[(k * n + p) * layers + i];
+        if (!std::isfinite(top)) continue;
+        job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
+        job.layers[i].plantKeys.push_back(uint32_t(k * n + p));
+      }
+    }
+}
+}  // namespace
+
 // Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
 // layer, per-layer top and the root line over the vertices, triangles per layer) until it is done
 // or `deadline` (null: none) has passed; the clock is read every kBatch items.
@@ -54,6 +89,9 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
   // chunk by chunk: foliage chunks come first, each chunk's vertices and indices contiguous.
   const CompactMesh& hm = lv.mesh.hostMesh;
   const size_t nLeaves = lv.mesh.leafCount, nVertices = hm.vertices.size(), nChunks = lv.mesh.chunks.size();
+  const Plants& plants = lv.mesh.plants;
+  const size_t nPlants = plants.count();
+  const bool perPlant = nPlants * copies > 1 && plants.leafPlant.size() == nLeaves;
   size_t foliageIndices = 0;
   for (const MeshChunk& c : lv.mesh.chunks)
     if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
@@ -117,6 +155,7 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
           job.layers[i].top = INFINITY;
         }
         job.leafLayer.resize(nLeaves * copies);
+        if (perPlant) job.plantTop.assign(copies * nPlants * f.layerCount, INFINITY);
         job.stage = 3;
         break;
       }
@@ -148,6 +187,10 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
             if (leaf == kNoLeaf) continue;
             const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(job.depthRows[k], p)) : job.leafLayer[k * nLeaves + leaf];
             job.layers[layer].top = std::min(job.layers[layer].top, y);
+            if (perPlant) {
+              float& top = job.plantTop[(k * nPlants + plants.leafPlant[leaf]) * f.layerCount + layer];
+              top = std::min(top, y);
+            }
           }
         }
         if (end == nVertices) job.stage = 5, end = 0;
@@ -172,6 +215,8 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
           if (!std::isfinite(li.top)) li.top = bottom;
           li.height = std::max(bottom - li.top, 1.0f);
         }
+        if (perPlant) placePlants(job, plants, h, wPx);
+        job.plantTop = {};
         job.leafDepth = {};
         job.leafLayer = {};
         *done = true;

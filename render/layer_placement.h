@@ -31,6 +31,12 @@ struct LayerInfo {
   float height = 1;           // rootLineY - top, at least 1 pixel (h of eq. 7)
   uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
   uint64_t triangles = 0;
+  // Per-plant roots (docs/design.md "Per-plant roots"), when the vegetation is more than one plant
+  // (plants x visible copies > 1): per plant with leaves in this layer, its projected bounding box's
+  // x range, its leaves' top here and its box's bottom (x lo, x hi, top, root row; pixels, y down),
+  // and the plant's key (visible copy x plants + plant).
+  std::vector<glm::vec4> plants;
+  std::vector<uint32_t> plantKeys;
 };
 
 // The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
@@ -47,6 +53,7 @@ struct PlacementJob {
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
   std::vector<uint8_t> leafLayer;
+  std::vector<float> plantTop;  // (copy x plants + plant) x layers: the leaves' highest row, per-plant roots
   float zMin = 0, zMax = 0, bottom = 0;
   uint32_t stage = 0;
   size_t next = 0;       // the stage's next item (chunk, leaf, or vertex / index of the host mesh)

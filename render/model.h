@@ -41,6 +41,8 @@ struct ModelImage {
   bool linear = false;        // data, not colour (normal maps): uploaded UNORM, not sRGB
 };
 
+inline constexpr uint32_t kNoPlant = 0xffffffffu;
+
 struct VegetationModel {
   std::string path;
   std::vector<glm::vec3> positions;  // world space (node transforms applied)
@@ -61,6 +63,12 @@ struct VegetationModel {
   // triangles; others 0xffffffff). Empty: none (a k-d split of the leaf roots stands in).
   std::vector<uint32_t> boxParent;
   std::vector<uint32_t> triangleBox;
+  // Optional plant of each triangle (eq. 7 per plant, docs/design.md "Per-plant roots"): plants
+  // numbered from 0, kNoPlant for parts of none (the ground). Empty: the whole model is one plant.
+  // mergeOverlappingPlants: plants whose bounds overlap on the ground plane (x, z) are one plant (a
+  // glTF file's root nodes, which may be the parts of one plant rather than plants of a field).
+  std::vector<uint32_t> trianglePlant;
+  bool mergeOverlappingPlants = false;
   std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
   size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -8,7 +8,10 @@
 #include "shared/anim.h"
 
 layout(local_size_x = ANIM_GROUP_SIZE) in;
-layout(binding = 0, scalar) readonly buffer FrameBuf { AnimFrame frameIn; };
+layout(binding = 0, scalar) readonly buffer FrameBuf {
+  AnimFrame frameIn;
+  vec4 plantRects[];  // per-plant roots (AnimLayer.firstPlant, plantCount)
+};
 // Loaded once per invocation: the shared helpers take the frame by value, and passing the buffer
 // member copies it from memory at every call (shaders/sim_common.glsl).
 AnimFrame f;
@@ -120,5 +123,16 @@ void main() {
   }
   uint at = layer * corners + id;
   prevDisp[at] = disp[at];
-  disp[at] = displacementPixels(f, f.layers[layer], pixel.y, vi);
+  // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's.
+  AnimLayer rooted = f.layers[layer];
+  float bestD = 3.0e38, bestA = 3.0e38;
+  for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
+    vec4 r = plantRects[j];
+    if (plantRectBetter(r, pixel, bestD, bestA)) {
+      bestD = plantRectDistance2(r, pixel);
+      bestA = (r.y - r.x) * (r.w - r.z);
+      rooted = withPlantRoot(f.layers[layer], r);
+    }
+  }
+  disp[at] = displacementPixels(f, rooted, pixel.y, vi);
 }

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/packing.hpp>
@@ -604,6 +605,108 @@ TEST_F(CanopyTest, ThePlantInMetresCentimetresAndInchesSwaysTheSame) {
     EXPECT_GE(worldCm.maxDelay, maxDelay * 0.999f);
     EXPECT_TRUE(mean > 1.0 || bad > 0.005) << "world units: the scaled plant should sway differently";
   }
+}
+
+// Issue 36, per-plant roots (beyond eq. 7): a generated field of separated plants (nine shrubs on a
+// 3 x 3 grid, each a plant of VegetationModel::trianglePlant) seen from above at 25 degrees, 300
+// frames of strong wind. Per plant, the largest displacement over the frames at the warp-grid
+// corner nearest its base (the bottom of its projected box, at its middle) and at its leaves' top,
+// in every layer it has leaves in: each base moves less than a fifth of its top. With the paper's
+// single root (RootMode::Vegetation) the plants standing behind the front row bend about the front
+// row's base line, so their bases move with their tops: the measure can fail.
+struct PlantSway {
+  float base = 0, top = 0;
+};
+
+std::map<uint32_t, PlantSway> plantSway(Device& dev, const VegetationModel& field, RootMode roots) {
+  std::map<uint32_t, PlantSway> out;
+  const uint32_t w = 640, h = 480;  // each plant over several 16-pixel warp cells
+  CanopyContext* ctx = nullptr;
+  Status s = createCanopy(dev, field, smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB), &ctx);
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (!s.ok()) return out;
+  CanopyParams p = canopyParams(ctx);
+  p.dynamics.roots = roots;
+  p.simulation.wind.strength = 3.0f;
+  EXPECT_TRUE(setCanopyParams(ctx, p).ok());
+  Host host;
+  EXPECT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
+  CanopyFrame f;
+  f.camera = toCamera(orbitView(field.boundsMin, field.boundsMax, 10.0f, 25.0f, 40.0f, float(w) / float(h), 1.0f));
+  for (int frame = 0; frame < 300 && s.ok(); ++frame) {
+    s = host.frame(ctx, f);
+    if (!s.ok() || frame < 30) continue;  // the wind rising from rest
+    const LayeredVegetation& lv = canopyLayers(ctx);
+    const LayerDynamics& dyn = canopyDynamics(ctx);
+    const gpu::AnimFrame& a = dyn.current;
+    const uint32_t corners = a.gridX * a.gridY;
+    std::vector<glm::vec2> d(size_t(corners) * a.layerCount);
+    s = readbackBuffer(dev, dyn.displacement, d.data(), d.size() * 8, rg::stateOf(rg::Use::ComputeStorageRead));
+    // The displacement the inverse warp applies at layer pixel (x, y): the grid's bilinear mix.
+    auto at = [&](uint32_t layer, float x, float y) {
+      const float gx = std::clamp(x / a.cellSize, 0.0f, float(a.gridX - 1)), gy = std::clamp(y / a.cellSize, 0.0f, float(a.gridY - 1));
+      const uint32_t x0 = std::min(uint32_t(gx), a.gridX - 2), y0 = std::min(uint32_t(gy), a.gridY - 2);
+      const float tx = gx - float(x0), ty = gy - float(y0);
+      auto c = [&](uint32_t i, uint32_t j) { return d[size_t(layer) * corners + j * a.gridX + i]; };
+      return glm::length(glm::mix(glm::mix(c(x0, y0), c(x0 + 1, y0), tx), glm::mix(c(x0, y0 + 1), c(x0 + 1, y0 + 1), tx), ty));
+    };
+    for (uint32_t i = 0; i < lv.visible.layers.size(); ++i) {
+      const LayerInfo& li = lv.visible.layers[i];
+      for (size_t k = 0; k < li.plants.size(); ++k) {
+        const glm::vec4 r = li.plants[k];
+        const float cx = 0.5f * (r.x + r.y);
+        PlantSway& ps = out[li.plantKeys[k]];
+        ps.base = std::max(ps.base, at(i, cx, r.w));
+        ps.top = std::max(ps.top, at(i, cx, r.z));
+      }
+    }
+  }
+  EXPECT_TRUE(s.ok()) << s.message();
+  host.destroy();
+  destroyCanopy(ctx);
+  return out;
+}
+
+TEST_F(CanopyTest, EachPlantOfAFieldBendsAboutItsOwnBase) {
+  SceneDesc sd;
+  sd.kind = SceneKind::Shrub;
+  sd.faces = 6000;
+  VegetationModel shrub;
+  ASSERT_TRUE(generateScene(sd, &shrub).ok());
+  const glm::vec3 size = shrub.boundsMax - shrub.boundsMin;
+  const float spacing = 2.0f * std::max(size.x, size.z);
+  VegetationModel field = shrub;
+  field.positions.clear(), field.normals.clear(), field.uvs.clear(), field.indices.clear();
+  field.triangleMaterial.clear(), field.trianglePlant.clear(), field.bend.clear(), field.branches.clear();
+  field.boxParent.clear(), field.triangleBox.clear();
+  field.boundsMin = glm::vec3(INFINITY);
+  field.boundsMax = glm::vec3(-INFINITY);
+  for (uint32_t k = 0; k < 9; ++k) {
+    const glm::vec3 offset(spacing * float(k % 3), 0.0f, -spacing * float(k / 3));
+    const uint32_t base = uint32_t(field.positions.size());
+    for (const glm::vec3& q : shrub.positions) field.positions.push_back(q + offset);
+    field.normals.insert(field.normals.end(), shrub.normals.begin(), shrub.normals.end());
+    field.uvs.insert(field.uvs.end(), shrub.uvs.begin(), shrub.uvs.end());
+    for (uint32_t i : shrub.indices) field.indices.push_back(base + i);
+    field.triangleMaterial.insert(field.triangleMaterial.end(), shrub.triangleMaterial.begin(), shrub.triangleMaterial.end());
+    field.trianglePlant.resize(field.triangleMaterial.size(), k);
+    field.boundsMin = glm::min(field.boundsMin, shrub.boundsMin + offset);
+    field.boundsMax = glm::max(field.boundsMax, shrub.boundsMax + offset);
+  }
+  const std::map<uint32_t, PlantSway> own = plantSway(dev, field, RootMode::PerPlant);
+  ASSERT_EQ(own.size(), 9u) << "every plant has leaves in some layer";
+  for (const auto& [key, ps] : own) {
+    std::printf("plant %u: base %.2f px, top %.2f px (%.3f)\n", key, ps.base, ps.top, ps.top > 0 ? ps.base / ps.top : 0.0f);
+    EXPECT_GT(ps.top, 1.0f) << "plant " << key << " sways";
+    EXPECT_LT(ps.base, 0.2f * ps.top) << "plant " << key;
+  }
+  const std::map<uint32_t, PlantSway> one = plantSway(dev, field, RootMode::Vegetation);
+  uint32_t moved = 0;
+  for (const auto& [key, ps] : one) {
+    std::printf("one root for the field: plant %u: base %.2f px, top %.2f px\n", key, ps.base, ps.top);
+    moved += ps.base >= 0.2f * ps.top;
+  }
+  EXPECT_GE(moved, 3u) << "with one root the back rows' bases move with their tops";
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, GoldenTest,

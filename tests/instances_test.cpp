@@ -44,6 +44,7 @@ VegetationModel baked(const VegetationModel& m, const glm::mat4& t, const glm::v
 // The copies of `m` under `transforms` as one mesh (each copy's leaves its own).
 VegetationModel merged(const VegetationModel& m, const std::vector<glm::mat4>& transforms) {
   VegetationModel out = baked(m, transforms[0]);
+  out.trianglePlant.assign(out.triangleCount(), 0u);  // each copy a plant, as instances are (eq. 7 per plant)
   for (size_t k = 1; k < transforms.size(); ++k) {
     const VegetationModel c = baked(m, transforms[k]);
     const uint32_t base = uint32_t(out.positions.size());
@@ -52,6 +53,7 @@ VegetationModel merged(const VegetationModel& m, const std::vector<glm::mat4>& t
     out.uvs.insert(out.uvs.end(), c.uvs.begin(), c.uvs.end());
     for (uint32_t i : c.indices) out.indices.push_back(base + i);
     out.triangleMaterial.insert(out.triangleMaterial.end(), c.triangleMaterial.begin(), c.triangleMaterial.end());
+    out.trianglePlant.resize(out.triangleMaterial.size(), uint32_t(k));
     out.boundsMin = glm::min(out.boundsMin, c.boundsMin);
     out.boundsMax = glm::max(out.boundsMax, c.boundsMax);
   }

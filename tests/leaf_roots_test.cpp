@@ -9,6 +9,7 @@
 #include "render/gltf_loader.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
+#include "render/plants.h"
 
 #include "tests/assets.h"
 
@@ -306,4 +307,53 @@ TEST(LeafRoots, RealModelsSplitAndWeld) {
       EXPECT_LE(r.leafCount(), foliage);
     }
   }
+}
+
+// Per-plant roots (docs/design.md "Per-plant roots"): leaves take their plant from
+// VegetationModel::trianglePlant; plants whose ground boxes overlap merge when the model asks (a
+// glTF file's root nodes); no plant ids: one plant, the whole model.
+TEST(Plants, LeavesTakeTheirPlantAndOverlappingNodesMerge) {
+  // Four one-triangle leaves: two at x ~ 0, two at x ~ 10 (plants 0 and 1), one ground triangle.
+  VegetationModel m;
+  auto tri = [&](glm::vec3 o, uint32_t plant) {
+    const uint32_t b = uint32_t(m.positions.size());
+    for (glm::vec3 q : {glm::vec3(0, 0, 0), glm::vec3(1, 0, 0), glm::vec3(0, 1, 0)}) m.positions.push_back(o + q);
+    m.indices.insert(m.indices.end(), {b, b + 1, b + 2});
+    m.triangleMaterial.push_back(0);
+    m.trianglePlant.push_back(plant);
+  };
+  tri({0, 1, 0}, 0);
+  tri({0, 2, 0.5f}, 0);
+  tri({10, 1, 0}, 1);
+  tri({10, 3, 0}, 1);
+  tri({-20, 0, 0}, kNoPlant);
+  m.normals.assign(m.positions.size(), glm::vec3(0, 0, 1));
+  m.uvs.assign(m.positions.size(), glm::vec2(0));
+  m.materials.resize(1);
+  m.boundsMin = glm::vec3(-20, 0, 0);
+  m.boundsMax = glm::vec3(11, 4, 0.5f);
+  std::vector<uint8_t> foliage = {1, 1, 1, 1, 0};
+  LeafRoots roots;
+  ASSERT_TRUE(computeLeafRoots(m, foliage, {}, &roots).ok());
+  ASSERT_EQ(roots.leafCount(), 4u);
+  Plants p;
+  ASSERT_TRUE(findPlants(m, roots, &p).ok());
+  ASSERT_EQ(p.count(), 2u);
+  for (uint32_t leaf = 0; leaf < 4; ++leaf) {
+    const float x = m.positions[roots.leafRoot[leaf]].x;
+    EXPECT_EQ(p.boundsMin[p.leafPlant[leaf]].x, x < 5 ? 0.0f : 10.0f) << "leaf " << leaf;
+  }
+  EXPECT_EQ(p.boundsMax[p.leafPlant[0]].y, 3.0f);  // the plant's own box, not the ground's
+  // Overlapping on the ground: one plant when the model asks for merging.
+  m.positions[6] = glm::vec3(0.5f, 1, 0);  // plant 1's first triangle reaches into plant 0's box
+  m.mergeOverlappingPlants = true;
+  ASSERT_TRUE(findPlants(m, roots, &p).ok());
+  EXPECT_EQ(p.count(), 1u);
+  m.mergeOverlappingPlants = false;
+  ASSERT_TRUE(findPlants(m, roots, &p).ok());
+  EXPECT_EQ(p.count(), 2u);
+  // No plant ids: the whole model.
+  m.trianglePlant.clear();
+  ASSERT_TRUE(findPlants(m, roots, &p).ok());
+  EXPECT_EQ(p.count(), 1u);
 }

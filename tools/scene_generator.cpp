@@ -247,6 +247,7 @@ struct LeafBatch {
   uint64_t count = 0, seed = 0;
   uint64_t firstVertex = 0, firstIndex = 0, firstTriangle = 0;
   uint32_t box = 0;            // Blade, Ribbon: the batch's box (SceneDesc::boxes)
+  uint32_t plant = kNoPlant;   // VegetationModel::trianglePlant of its leaves
 };
 
 struct Plan {
@@ -255,7 +256,11 @@ struct Plan {
   HierarchyBuild hierarchy;
   std::vector<uint32_t> boxParent{0xffffffffu};  // box 0: the scene
   SceneStats stats;
+  std::vector<uint32_t> rigidPlant;  // plant of each rigid triangle so far (VegetationModel::trianglePlant)
 };
+
+// The rigid triangles added since the last call belong to `plant` (kNoPlant: the ground, a rock).
+void markRigid(Plan& p, uint32_t plant) { p.rigidPlant.resize(p.model.triangleMaterial.size(), plant); }
 
 // ---------------------------------------------------------------------------------------------
 // L-system: bracketed string rewriting, then a 3D turtle (ABOP chapter 1.5 symbols).
@@ -505,13 +510,16 @@ void planPlant(Plan& p, SceneKind kind, uint64_t faces, const Placement& place, 
   b.count = std::max<uint64_t>(b.count, 1);
   b.seed = mix64(seed ^ 0x1eafull);
   sizeCards(b, kind == SceneKind::TreeCrown ? 5.0f : 6.0f, 0.55f);
+  markRigid(p, p.stats.plants);
+  b.plant = p.stats.plants;
   p.batches.push_back(std::move(b));
   p.stats.plants++;
 }
 
 // A patch of grass blades over [lo, hi] on y = 0 with `faces` faces.
-void planGrass(Plan& p, uint64_t faces, glm::vec2 lo, glm::vec2 hi, float height, uint64_t seed) {
+void planGrass(Plan& p, uint64_t faces, glm::vec2 lo, glm::vec2 hi, float height, uint64_t seed, uint32_t plant) {
   LeafBatch b;
+  b.plant = plant;
   b.shape = LeafShape::Blade;
   b.material = kGrass;
   b.lo = lo;
@@ -564,6 +572,8 @@ void planKelp(Plan& p, uint64_t faces, uint64_t seed) {
   // Blade area ~10x the plants' silhouette (about 2.4 x 2.4 world units): kelp is a thick tangle.
   b.width = std::clamp(10.0f * 2.4f * 2.4f / (float(b.count) * b.length * 0.5f), 0.002f, 0.12f);
   b.seed = mix64(seed ^ 0xce1bull);
+  markRigid(p, 0);  // the rock and its stems: one plant, as its blades are one batch
+  b.plant = 0;
   p.batches.push_back(std::move(b));
 }
 
@@ -572,6 +582,7 @@ void planField(Plan& p, uint64_t faces, uint64_t seed, uint32_t* lsysIterations)
   const float half = 8.0f;
   const uint32_t groundCells = uint32_t(std::clamp<double>(std::sqrt(double(faces) * 0.005 / 2.0), 1.0, 32.0));
   addGround(p.model, kGround, {-half, -half}, {half, half}, 0.0f, groundCells);
+  markRigid(p, kNoPlant);
   Rng rng(seed);
   const uint32_t trees = 3 + uint32_t(std::min<uint64_t>(12, faces / 4'000'000)), shrubs = 2 * trees;
   std::vector<glm::vec3> placed;  // x, z, radius
@@ -606,7 +617,7 @@ void planField(Plan& p, uint64_t faces, uint64_t seed, uint32_t* lsysIterations)
   for (const LeafBatch& b : p.batches) leafFaces += b.count * facesPerLeaf(b.shape);
   const uint64_t sofar = used + leafFaces;
   planGrass(p, faces > sofar ? faces - sofar : facesPerLeaf(LeafShape::Blade), {-half, -half}, {half, half}, 0.3f,
-            mix64(seed ^ 0xf1e1dull));
+            mix64(seed ^ 0xf1e1dull), p.stats.plants);
   p.stats.plants++;
   *lsysIterations = p.stats.lsystemIterations;
 }
@@ -661,7 +672,12 @@ struct Arrays {
   uint32_t* mat;
   gpu::BendVertex* bend;  // null: no hierarchy asked for
   uint32_t* box;          // per triangle; null: no boxes asked for
+  uint32_t* plant;        // per triangle (VegetationModel::trianglePlant)
 };
+
+// A grass patch is kGrassCells x kGrassCells plants (eq. 7 per plant: a blade bends about its own
+// cell's front, not the whole field's); a blade's plant is its root's cell.
+constexpr uint32_t kGrassCells = 4;
 
 void writeCard(const LeafBatch& b, uint64_t j, Rng& rng, glm::vec3* P, glm::vec3* N, glm::vec2* T) {
   const Attach& a = b.attach[j % b.attach.size()];
@@ -762,6 +778,14 @@ void writeLeaves(const LeafBatch& b, uint64_t first, uint64_t last, const Arrays
       }
     }
     std::fill(out.mat + b.firstTriangle + j * nf, out.mat + b.firstTriangle + (j + 1) * nf, b.material);
+    uint32_t plant = b.plant;
+    if (b.shape == LeafShape::Blade && plant != kNoPlant) {
+      const glm::vec2 t = (glm::vec2(P[0].x, P[0].z) - b.lo) / glm::max(b.hi - b.lo, glm::vec2(1e-6f));
+      const uint32_t cx = std::min(uint32_t(std::max(t.x, 0.0f) * kGrassCells), kGrassCells - 1);
+      const uint32_t cz = std::min(uint32_t(std::max(t.y, 0.0f) * kGrassCells), kGrassCells - 1);
+      plant += cz * kGrassCells + cx;
+    }
+    std::fill(out.plant + b.firstTriangle + j * nf, out.plant + b.firstTriangle + (j + 1) * nf, plant);
     if (out.box)
       std::fill(out.box + b.firstTriangle + j * nf, out.box + b.firstTriangle + (j + 1) * nf,
                 b.shape == LeafShape::Card ? b.attach[j % b.attach.size()].box : b.box);
@@ -872,7 +896,8 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
       case SceneKind::TreeCrown: planPlant(p, desc.kind, desc.faces, Placement{}, seed); break;
       case SceneKind::GrassField:
         addGround(p.model, kGround, {-2.5f, -2.5f}, {2.5f, 2.5f}, 0.0f, 8);
-        planGrass(p, desc.faces - p.model.triangleMaterial.size(), {-2.5f, -2.5f}, {2.5f, 2.5f}, 0.35f, seed);
+        markRigid(p, kNoPlant);
+        planGrass(p, desc.faces - p.model.triangleMaterial.size(), {-2.5f, -2.5f}, {2.5f, 2.5f}, 0.35f, seed, 0);
         p.stats.plants = 1;
         break;
       case SceneKind::Kelp: planKelp(p, desc.faces, seed); break;
@@ -898,6 +923,10 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
     m.uvs.resize(vertices);
     m.indices.resize(triangles * 3);
     m.triangleMaterial.resize(triangles);
+    // Each triangle's plant: rigid parts as marked, each batch's leaves its plant's.
+    p.rigidPlant.resize(rigidTriangles, kNoPlant);
+    m.trianglePlant = std::move(p.rigidPlant);
+    m.trianglePlant.resize(triangles, kNoPlant);  // the leaves': writeLeaves
     if (desc.hierarchy) m.bend.resize(vertices);
     if (desc.boxes) {
       // Cards take their attachment's box; a blade or ribbon batch gets one box under the scene's.
@@ -910,7 +939,8 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
       m.boxParent = p.boxParent;
     }
     const Arrays arrays{m.positions.data(), m.normals.data(), m.uvs.data(), m.indices.data(), m.triangleMaterial.data(),
-                        desc.hierarchy ? m.bend.data() : nullptr, desc.boxes ? m.triangleBox.data() : nullptr};
+                        desc.hierarchy ? m.bend.data() : nullptr, desc.boxes ? m.triangleBox.data() : nullptr,
+                        m.trianglePlant.data()};
 
     // Jobs of up to 64K leaves, taken by the workers in order; each leaf has its own random stream.
     struct Job {

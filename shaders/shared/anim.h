@@ -24,10 +24,15 @@ struct AnimLayer {
   float rootLineY;    // pixel row of the root line (y down)
   float height;       // h of eq. 7, pixels
   float vd;           // V_D of eq. 4 for this layer, domain units/s (DynamicsParams.vd and vdJitter)
-  float pad1;
-  float pad2;
+  // Per-plant roots (docs/design.md "Per-plant roots"): this layer's plant rects in the frame
+  // block's plant table (after the AnimFrame); plantCount 0: the layer's rootLineY and height.
+  uint firstPlant;
+  uint plantCount;
 };
 CANOPY_SIZE_CHECK(AnimLayer, 32)
+// Plant rects the frame block holds after the AnimFrame (all layers together): vec4 (x lo, x hi,
+// top, root row), pixels, y down.
+#define ANIM_MAX_PLANT_RECTS 3072u
 
 struct AnimFrame {
   mat4 invViewProj;   // Vulkan clip -> world (unprojects grid corners)
@@ -97,6 +102,24 @@ CANOPY_INLINE float rigidityFactor(AnimFrame f, AnimLayer layer, float pixelY) {
   float l = layer.rootLineY - pixelY;
   float x = clamp(l / max(layer.height, 1.0f), 0.0f, 1.0f);
   return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
+}
+
+// Per-plant roots: the distance (squared, pixels) from pixel p to plant rect r (0 inside) and the
+// rect's area; a corner takes the nearest rect, the smallest of those it lies in (a plant inside
+// a larger one's rect: a tree in a grass patch).
+CANOPY_INLINE float plantRectDistance2(vec4 r, vec2 p) {
+  float dx = max(max(r.x - p.x, p.x - r.y), 0.0f), dy = max(max(r.z - p.y, p.y - r.w), 0.0f);
+  return dx * dx + dy * dy;
+}
+CANOPY_INLINE bool plantRectBetter(vec4 r, vec2 p, float bestDistance2, float bestArea) {
+  float d = plantRectDistance2(r, p), a = (r.y - r.x) * (r.w - r.z);
+  return d < bestDistance2 || (d == bestDistance2 && a < bestArea);
+}
+// The layer's record with eq. 7's root line and height of plant rect r.
+CANOPY_INLINE AnimLayer withPlantRoot(AnimLayer layer, vec4 r) {
+  layer.rootLineY = r.w;
+  layer.height = max(r.w - r.z, 1.0f);
+  return layer;
 }
 
 // Eq. 6 (docs/design.md's reading) in pixels, y pointing down the image (view y points up).

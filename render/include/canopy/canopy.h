@@ -307,6 +307,10 @@ enum class LambdaUnits { Cells, Pixels };
 // Eq. 5's offset: gamma s V/|V| (the paper: "the distance the movement travels during gamma", V
 // taken as the direction and s the wave's propagation speed), or gamma s V as before 0.7.
 enum class Eq5Offset { Direction, Velocity };
+// Eq. 7's root: the bottom of each plant's bounding box (every generated plant, glTF scene root,
+// or copy; beyond the paper: docs/design.md "Per-plant roots"), or of the whole vegetation's as the
+// paper says (before 0.7: every plant of a field bends about the field's lowest point).
+enum class RootMode { PerPlant, Vegetation };
 // Eq. 6's Delta t is the simulation's nominal step (SimulationDesc.nominalDt, the paper's "simulation
 // time step") unless dt > 0 overrides it; never the frame's measured time, so the sway does not
 // depend on the frame rate. V_D of eq. 4: vd, plus per layer a seeded uniform number in
@@ -326,7 +330,8 @@ enum class Eq5Offset { Direction, Velocity };
   X(LambdaUnits, lambdaUnits, LambdaUnits::Cells, Enum, 0, 1, "Cells | Pixels", "units of lambda (Pixels: before 0.7)")  \
   X(float, vdJitter, 0.0f, Closed, 0, 1000, "domain units/s", "per-layer random part of V_D, uniform in [-vdJitter, vdJitter]") \
   X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
-  X(Eq5Offset, approximateOffset, Eq5Offset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)")
+  X(Eq5Offset, approximateOffset, Eq5Offset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
+  X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)")
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
@@ -596,6 +601,7 @@ struct LayerStats {
   bool rootCacheHit = false;
   std::string rootCacheNote;  // why the cache was not used, or where it was written
   uint32_t leafCount = 0;
+  uint32_t plants = 1;        // plants of the model (eq. 7 per plant: DynamicsParams.roots; each copy is one more)
   uint64_t foliageTriangles = 0, rigidTriangles = 0;
   bool singlePass = false;    // the draw mode in use
   // The layer images' size, pixels: the targets' plus the guard band on each side (CanopyDesc.guardBand).

@@ -94,6 +94,10 @@ struct LayerCountOptions {
 };
 int runLayerCountBench(Device& dev, const LayerCountOptions& options);
 
+// The translucency light sheet (issue 36, seed 004 Figure 5's layout): a leaf's unlit side with the
+// light behind it from steep to grazing, Habel's translucency above the diffuse BTDF, as one PNG.
+int runLeafSheet(Device& dev, const std::string& outPath);
+
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int rebuilds,
                      uint32_t width, uint32_t height, const std::string& imageDir);
 }

@@ -53,6 +53,8 @@ static int usage(const char* why) {
                "  layercount     the layer-count study: 1, 2, 3, 5, 7, 9 layers, 3(1-1-1), 5(3-1-1) against 16 layers, animated\n"
                "                 frames frame by frame at a still camera (--faces default 80000, --scene shrub, --gltf FILE\n"
                "                 too, --frames default 90, --size default 512x384, --csv FILE)\n"
+               "  leafsheet      the translucency light sheet: a leaf's unlit side, light behind it from steep to grazing,\n"
+               "                 Habel's translucency above the diffuse BTDF (--out FILE, default translucency_sheet.png)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1: resolution (default 1024x768)\n"
@@ -83,7 +85,8 @@ int main(int argc, char** argv) {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 0;  // 0: the section's default
   bool detail = false;
-  bool runLayerCount = false, sizeGiven = false;
+  bool runLayerCount = false, sizeGiven = false, runLeafSheetSection = false;
+  std::string sheetPath = "translucency_sheet.png";
   bench::LayerCountOptions layerCount;
   bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false, runTable1 = false;
   bench::Table1Options t1;
@@ -135,6 +138,12 @@ int main(int argc, char** argv) {
     else if (a == "impostors") runImpostors = true;
     else if (a == "camera") runCamera = true;
     else if (a == "layercount") runLayerCount = true;
+    else if (a == "leafsheet") runLeafSheetSection = true;
+    else if (a == "--out") {
+      const char* v = next();
+      if (!v) return usage("--out needs a file");
+      sheetPath = v;
+    }
     else if (a == "--gltf") {
       const char* v = next();
       if (!v) return usage("--gltf needs a file");
@@ -284,7 +293,7 @@ int main(int argc, char** argv) {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount)
+      !runLayerCount && !runLeafSheetSection)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -325,6 +334,7 @@ int main(int argc, char** argv) {
     layerCount.csvPath = csvPath;
     rc = bench::runLayerCountBench(dev, layerCount);
   }
+  if (rc == 0 && runLeafSheetSection) rc = bench::runLeafSheet(dev, sheetPath);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

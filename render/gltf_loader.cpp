@@ -707,6 +707,34 @@ Status transmissionFactors(const tinygltf::Material& src, const std::string& wha
     const Status s = factor(extension->second, "KHR_materials_transmission", "transmissionFactor", &mm->transmissionFactor);
     if (!s.ok()) return s;
   }
+  // KHR_materials_volume: the leaf's thickness and its Beer-Lambert attenuation (Habel's
+  // translucency). thicknessTexture is not read: the factor applies over the whole material.
+  extension = src.extensions.find("KHR_materials_volume");
+  if (extension != src.extensions.end() && extension->second.IsObject()) {
+    const tinygltf::Value& ext = extension->second;
+    // A finite number in [lo, 1e30] (`range` says which in the message).
+    auto number = [&](const char* key, double lo, const char* range, float* out) -> Status {
+      if (!ext.Has(key)) return Status();
+      const tinygltf::Value& v = ext.Get(key);
+      const double x = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
+      if (!(x >= lo && x <= 1e30)) return Status::error(what + ": KHR_materials_volume." + key + " must be a number " + range);
+      *out = float(x);
+      return Status();
+    };
+    mm->thicknessFactor = 0.0f;  // the extension's default
+    CANOPY_TRY(number("thicknessFactor", 0.0, ">= 0", &mm->thicknessFactor));
+    CANOPY_TRY(number("attenuationDistance", 1e-30, "> 0", &mm->attenuationDistance));
+    if (ext.Has("attenuationColor")) {
+      const tinygltf::Value& c = ext.Get("attenuationColor");
+      bool good = c.IsArray() && c.ArrayLen() == 3;
+      for (int k = 0; good && k < 3; ++k) {
+        const double x = c.Get(k).IsNumber() ? c.Get(k).GetNumberAsDouble() : NAN;
+        good = x >= 0.0 && x <= 1.0;
+        if (good) mm->attenuationColor[k] = float(x);
+      }
+      if (!good) return Status::error(what + ": KHR_materials_volume.attenuationColor must be 3 numbers in [0, 1]");
+    }
+  }
   return Status();
 }
 

@@ -321,6 +321,15 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
                         (mat.transmissionImage >= 0 ? LAYER_SHADE_TRANSMISSION_TEXTURE : 0u) |
                         (mat.transmissionColorImage >= 0 ? LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE : 0u);
     push.normalScale = mat.normalImage >= 0 ? mat.normalScale : 0.0f;
+    // Habel's translucency: optical depth through the leaf (KHR_materials_volume, else the setting).
+    glm::vec3 tau(lv.settings.leafOpticalDepth);
+    if (mat.thicknessFactor >= 0.0f) {
+      tau = glm::vec3(0.0f);
+      if (std::isfinite(mat.attenuationDistance) && mat.attenuationDistance > 0.0f)
+        for (int k = 0; k < 3; ++k)
+          tau[k] = mat.thicknessFactor * -std::log(std::max(mat.attenuationColor[k], 1e-6f)) / mat.attenuationDistance;
+    }
+    push.volume = glm::vec4(glm::min(tau, glm::vec3(100.0f)), 0.0f);
     push.passKind = passKind;
     push.lod = glm::vec4(part ? part->weight : 1.0f, o.debugLevels ? float((part ? part->level : 0u) + 1u) : 0.0f, 0.0f, 0.0f);
     push.triangleBase = uint32_t(c.firstTriangle);

@@ -294,7 +294,8 @@ gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
   const glm::mat4 cameraToWorld = glm::inverse(view.view);
   const bool orthographic = view.proj[0][3] == 0.0f && view.proj[1][3] == 0.0f && view.proj[2][3] == 0.0f;
   f.eye = orthographic ? glm::vec4(glm::normalize(glm::vec3(cameraToWorld[2])), 0.0f) : glm::vec4(glm::vec3(cameraToWorld[3]), 1.0f);
-  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f, 0.0f);
+  f.leafShading = glm::vec4(s.leafRefractiveIndex, s.leafRoughness, s.translucency ? 1.0f : 0.0f,
+                           s.translucencyModel == TranslucencyModel::Habel ? LAYER_TRANSLUCENCY_HABEL : LAYER_TRANSLUCENCY_DIFFUSE);
   return f;
 }
 

@@ -2,6 +2,7 @@
 // The vegetation model Canopy animates, as the loader (render/gltf_loader.h) and the scene
 // generator (tools/) produce it and the runtime consumes it: one triangle list in world space
 // with per-triangle materials, decoded images, and the optional branch and box hierarchies.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,6 +33,12 @@ struct ModelMaterial {
   int32_t transmissionColorImage = -1;  // its colour texture (RGB), -1: none
   int32_t normalImage = -1;             // tangent-space normal map (glTF normalTexture), -1: none
   float normalScale = 1.0f;             // glTF normalTexture.scale
+  // KHR_materials_volume (Habel's translucency: Beer-Lambert through the leaf): thickness in the
+  // mesh's units, and the distance at which light falls to attenuationColor (infinite: none). A
+  // negative thickness: the file has no volume (LayerSettings.leafOpticalDepth applies).
+  float thicknessFactor = -1.0f;
+  float attenuationDistance = INFINITY;
+  glm::vec3 attenuationColor{1.0f};
 };
 
 struct ModelImage {

@@ -42,6 +42,7 @@ bool shade() {
   // it faces them, else the back, lit with the flipped normal.
   vec3 n = normalize(vNormal);
   bool front = dot(n, v) >= 0.0;
+  vec3 nGeom = front ? n : -n;
   if (pc.normalScale != 0.0) n = perturbNormal(n, vWorld, vUv, texture(normalTex, vUv).xyz * 2.0 - 1.0, pc.normalScale);
   if (!front) n = -n;
   float t = pc.transmission.a * f.leafShading.z;
@@ -49,8 +50,12 @@ bool shade() {
   if ((pc.shadingFlags & LAYER_SHADE_TRANSMISSION_TEXTURE) != 0u) t *= texture(transmissionTex, vUv).a;
   if ((pc.shadingFlags & LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE) != 0u) tc *= texture(transmissionColorTex, vUv).rgb;
   if ((pc.shadingFlags & LAYER_SHADE_TINT_FROM_BASE) != 0u) tc *= leafTransmissionTint(base.rgb);
-  vec3 lit = leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
-                       f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
+  // leafShading.w: the translucency model (docs/design.md "Layers: leaf shading").
+  vec3 lit = f.leafShading.w == LAYER_TRANSLUCENCY_HABEL
+                 ? leafShadeHabel(base.rgb, n, nGeom, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
+                                  f.leafShading.x, f.leafShading.y, pc.specular, t, tc, pc.volume.rgb)
+                 : leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
+                             f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
   // The impostor debug view: leaves in their box level's colour, darker than impostors.
   if (pc.lod.y > 0.0) lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.2 + 0.35 * max(dot(n, f.lightDirection.xyz), 0.0));
   // A box fading towards its impostor (issue 18): its leaves' share of the pixels, premultiplied.

@@ -228,8 +228,23 @@ TEST(GltfLoader, HandMadeBrokenFilesAreRefused) {
       {"transmission factor out of range", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_diffuse_transmission":{"diffuseTransmissionFactor":2}}}])"), "KHR_materials_diffuse_transmission.diffuseTransmissionFactor must be a number in [0, 1]"},
       {"transmission colour not 3 numbers", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_diffuse_transmission":{"diffuseTransmissionColorFactor":[1,"x",1]}}}])"), "diffuseTransmissionColorFactor must be 3 numbers"},
       {"transmission factor a string", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_transmission":{"transmissionFactor":"1"}}}])"), "KHR_materials_transmission.transmissionFactor"},
+      {"transmission volume thickness negative", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_volume":{"thicknessFactor":-1}}}])"), "KHR_materials_volume.thicknessFactor must be a number"},
+      {"transmission volume attenuation zero", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_volume":{"attenuationDistance":0}}}])"), "KHR_materials_volume.attenuationDistance"},
+      {"transmission volume colour", gltfJson("tri.bin", kPos, kIdxView, R"(,"materials":[{"extensions":{"KHR_materials_volume":{"attenuationColor":[1,2,1]}}}])"), "KHR_materials_volume.attenuationColor must be 3 numbers in [0, 1]"},
   };
   t.write("model/junk.png", "this is not a png");
+  // KHR_materials_volume read (Habel's translucency: the leaf's thickness and attenuation).
+  {
+    std::string json = gltfJson("tri.bin", kPos, kIdxView,
+                                R"(,"materials":[{"extensions":{"KHR_materials_volume":{"thicknessFactor":0.002,"attenuationDistance":0.004,"attenuationColor":[0.5,0.9,0.3]}}}])");
+    json.replace(json.find(R"("indices":1)"), 11, R"("indices":1,"material":0)");
+    t.write("model/volume.gltf", json);
+    ASSERT_TRUE(loadGltf(t.path + "/model/volume.gltf", {}, &m).ok());
+    EXPECT_FLOAT_EQ(m.materials[0].thicknessFactor, 0.002f);
+    EXPECT_FLOAT_EQ(m.materials[0].attenuationDistance, 0.004f);
+    EXPECT_FLOAT_EQ(m.materials[0].attenuationColor.z, 0.3f);
+    EXPECT_LT(m.materials[1].thicknessFactor, 0.0f) << "the default material has no volume";
+  }
   for (const Case& c : cases) {
     std::string json = c.json;
     if (std::string(c.name) == "broken texture" || std::string(c.name).rfind("transmission", 0) == 0)

@@ -1007,9 +1007,13 @@ TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
       {"back seen, light in front of it: diffuse only", {0, 0, -1}, {0.3f, 0.4f, 0.8f}, 1.45f, 0.25f, 0.35f},
       {"back seen, light behind it: transmission", {0, 0, -1}, {-0.3f, 0.1f, -0.9f}, 1.45f, 0.25f, 0.8f},
   };
+  for (TranslucencyModel model : {TranslucencyModel::Habel, TranslucencyModel::DiffuseBtdf})
   for (const Case& k : cases) {
+    SCOPED_TRACE(model == TranslucencyModel::Habel ? "Habel's translucency" : "diffuse BTDF");
     const VegetationModel m = oneLeaf(glm::normalize(k.normal));
     LayeredVegetationDesc d = smallDesc("1");
+    d.settings.translucencyModel = model;
+    d.settings.leafOpticalDepth = 0.4f;
     d.settings.lightDirection = {k.light.x, k.light.y, k.light.z};
     d.settings.lightColor = {1.5f, 1.2f, 1.0f};
     d.settings.ambient = 0.2f;
@@ -1024,8 +1028,12 @@ TEST_F(LayersTest, LeafShadingMatchesTheCpuEvaluation) {
     const bool front = glm::dot(n, v) >= 0.0f;
     if (!front) n = -n;
     const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
-    const glm::vec3 want = gpu::leafShade(base, n, front, v, l, glm::vec3(1.5f, 1.2f, 1.0f), 0.2f, k.ior, k.roughness, 1.0f,
-                                          k.transmission, gpu::leafTransmissionTint(base));
+    const glm::vec3 want =
+        model == TranslucencyModel::Habel
+            ? gpu::leafShadeHabel(base, n, n, front, v, l, glm::vec3(1.5f, 1.2f, 1.0f), 0.2f, k.ior, k.roughness, 1.0f, k.transmission,
+                                  gpu::leafTransmissionTint(base), glm::vec3(0.4f))
+            : gpu::leafShade(base, n, front, v, l, glm::vec3(1.5f, 1.2f, 1.0f), 0.2f, k.ior, k.roughness, 1.0f, k.transmission,
+                             gpu::leafTransmissionTint(base));
     EXPECT_NEAR(got.a, 1.0f, 1e-3f) << k.what;
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(got[i], want[i], 2e-3f * std::max(1.0f, want[i]) + 1e-3f) << k.what << ", channel " << i;
@@ -1102,6 +1110,7 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
     LayeredVegetationDesc d = smallDesc("1");
     d.settings.lightDirection = {k.light.x, k.light.y, k.light.z};
     d.settings.ambient = 0.2f;
+    d.settings.translucencyModel = TranslucencyModel::DiffuseBtdf;  // Habel's: LayersTest.HabelsTranslucency*
     glm::vec4 got;
     const Status s = shadeCentre(dev, m, d, &got);
     ASSERT_TRUE(s.ok()) << s.message();
@@ -1120,4 +1129,59 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
   Status s = createLayeredVegetation(dev, m, smallDesc("1"), &bad);
   EXPECT_FALSE(s.ok());
   EXPECT_NE(s.message().find("names image 7 of 2"), std::string::npos) << s.message();
+}
+
+// Habel's translucency (seed 004 III.C) against the CPU evaluation on a backlit leaf with a normal
+// map and a KHR_materials_volume thickness: the light-facing side's relief and its Fresnel entry,
+// its self-shadowing at grazing light and Beer-Lambert through the thickness. The relief's effect
+// grows from steep to grazing light (seed Figure 5); the thickness darkens and tints.
+TEST_F(LayersTest, HabelsTranslucencyMatchesTheCpuEvaluation) {
+  VegetationModel m = oneLeaf({0, 0, 1});
+  const uint8_t enc[4] = {204, 166, 220, 255};  // about (0.6, 0.3, 0.73): a facet of a vein's flank
+  ModelImage normals;
+  normals.name = "normal map";
+  normals.width = normals.height = 1;
+  normals.rgba.assign(enc, enc + 4);
+  normals.linear = true;
+  m.images = {normals};
+  m.materials[0].normalImage = 0;
+  m.materials[0].normalScale = 1.0f;
+  m.materials[0].transmissionFactor = 0.7f;
+  m.materials[0].transmissionColor = glm::vec3(0.8f, 1.0f, 0.4f);
+  m.materials[0].thicknessFactor = 0.002f;  // 2 mm (KHR_materials_volume)
+  m.materials[0].attenuationDistance = 0.004f;
+  m.materials[0].attenuationColor = glm::vec3(0.5f, 0.9f, 0.3f);
+  const glm::vec3 tau = 0.002f * -glm::log(glm::vec3(0.5f, 0.9f, 0.3f)) / 0.004f;
+  const glm::vec3 mapped = glm::vec3(enc[0], enc[1], enc[2]) / 255.0f * 2.0f - 1.0f;
+  const glm::vec3 tilted = glm::normalize(mapped);
+  const glm::vec3 base = glm::vec3(m.materials[0].baseColorFactor);
+  float reliefSteep = 0, reliefGrazing = 0;
+  for (float elevation : {80.0f, 45.0f, 20.0f, 8.0f}) {
+    // The light behind the leaf (seen from +z, its front), from steep to grazing.
+    const float e = glm::radians(elevation);
+    const glm::vec3 l(-std::cos(e), 0.0f, -std::sin(e));
+    LayeredVegetationDesc d = smallDesc("1");
+    d.settings.lightDirection = {l.x, l.y, l.z};
+    d.settings.ambient = 0.2f;
+    glm::vec4 got;
+    const Status s = shadeCentre(dev, m, d, &got);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const glm::vec3 want = gpu::leafShadeHabel(base, tilted, glm::vec3(0, 0, 1), true, glm::vec3(0, 0, 1), l, glm::vec3(1.0f), 0.2f,
+                                               1.45f, 0.25f, 1.0f, 0.7f, glm::vec3(0.8f, 1.0f, 0.4f), tau);
+    const glm::vec3 flat = gpu::leafShadeHabel(base, glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), true, glm::vec3(0, 0, 1), l, glm::vec3(1.0f),
+                                               0.2f, 1.45f, 0.25f, 1.0f, 0.7f, glm::vec3(0.8f, 1.0f, 0.4f), tau);
+    const glm::vec3 btdf = gpu::leafShade(base, tilted, true, glm::vec3(0, 0, 1), l, glm::vec3(1.0f), 0.2f, 1.45f, 0.25f, 1.0f, 0.7f,
+                                          glm::vec3(0.8f, 1.0f, 0.4f));
+    std::printf("light %2.0f deg above the leaf's plane: Habel (%.4f %.4f %.4f), flat relief (%.4f %.4f %.4f), diffuse BTDF (%.4f %.4f %.4f)\n",
+                elevation, want.r, want.g, want.b, flat.r, flat.g, flat.b, btdf.r, btdf.g, btdf.b);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(got[i], want[i], 3e-3f * std::max(1.0f, want[i]) + 2e-3f) << elevation << " deg, channel " << i;
+    const float ambient = 0.2f * base.g;
+    const float relief = std::abs((want.g - ambient) / std::max(flat.g - ambient, 1e-6f) - 1.0f);
+    if (elevation == 80.0f) reliefSteep = relief;
+    if (elevation == 8.0f) reliefGrazing = relief;
+    // Beer-Lambert: the red and blue channels (attenuated more) fall below what the colour alone gives.
+    EXPECT_LT((want.b - 0.2f * base.b) / 0.4f, (want.g - 0.2f * base.g) / 1.0f) << elevation;
+  }
+  EXPECT_GT(reliefGrazing, 2.0f * reliefSteep) << "the relief shows at grazing light, not at steep light";
 }

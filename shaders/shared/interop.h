@@ -18,7 +18,7 @@
   using glm::uvec2; using glm::uvec4; using glm::mat4; using uint = uint32_t;            \
   using std::sin; using std::cos; using std::abs; using std::floor; using std::sqrt; using std::pow; \
   using glm::fract; using glm::mix; using glm::clamp; using glm::smoothstep; using glm::min; using glm::max; \
-  using glm::normalize; using glm::dot; using std::exp;
+  using glm::normalize; using glm::dot; using std::exp; using std::acos; using std::asin;
 #define CANOPY_NAMESPACE_END }
 #define CANOPY_SIZE_CHECK(T, bytes) \
   static_assert(sizeof(T) == (bytes), #T ": size differs from its GLSL scalar-layout size");

@@ -7,6 +7,9 @@
 #include "leaf_shading.h"
 
 #define CANOPY_MAX_LAYERS 32
+// LayerFrame.leafShading.w: the unlit side's model (LayerSettings.translucencyModel).
+#define LAYER_TRANSLUCENCY_DIFFUSE 0.0f  // the diffuse BTDF, (1 - a)(-n.l) t c_t
+#define LAYER_TRANSLUCENCY_HABEL 1.0f    // Habel's (shared/leaf_shading.h leafTransmittedHabel)
 #define LAYER_NO_LEAF 0xffffffffu
 
 // How a draw routes triangles (LayerDrawPush.passKind).
@@ -41,7 +44,8 @@ struct LayerFrame {
   // orthographic projection, the unit direction towards the viewer (w = 0).
   vec4 eye;
   // Leaf shading (shared/leaf_shading.h): x the effective refractive index n, y the Beckmann
-  // roughness sigma, z 1 with translucency (0: unlit sides get the ambient term only), w unused.
+  // roughness sigma, z 1 with translucency (0: unlit sides get the ambient term only), w the
+  // translucency model (LAYER_TRANSLUCENCY_*).
   vec4 leafShading;
   uint layerCount;      // 1..CANOPY_MAX_LAYERS
   uint sliceMode;       // LAYER_SLICE_*
@@ -75,8 +79,11 @@ struct LayerDrawPush {
   // premultiplied output (1: as drawn; below 1: a box fading out towards its impostor); y the debug
   // view: 0 material colours, else the hierarchy level + 1 of the draw's box (colour by level).
   vec4 lod;
+  // Habel's translucency: rgb the leaf's optical depth through its thickness (KHR_materials_volume:
+  // thicknessFactor x -ln(attenuationColor) / attenuationDistance; else LayerSettings.leafOpticalDepth); a unused.
+  vec4 volume;
 };
-CANOPY_SIZE_CHECK(LayerDrawPush, 112)
+CANOPY_SIZE_CHECK(LayerDrawPush, 128)
 
 // One step of a spread re-slice's cross-fade (docs/design.md "Layers: spread re-slicing"): the
 // visible layer's (or background's) colour becomes visible * (1 - weight) + new * weight, with

@@ -80,5 +80,37 @@ CANOPY_INLINE vec3 leafShade(vec3 base, vec3 n, bool front, vec3 v, vec3 l, vec3
   return lit * light;
 }
 
+// Habel's translucency (seed 004, section III.C; docs/design.md "Layers: leaf shading"): the light
+// seen on the unlit side enters through the light-facing side's relief — its normal-mapped normal,
+// the viewer-facing `n` negated (the same relief seen from the other side), not the geometric one —
+// less what that surface reflects (Fresnel, normalised to 1 at normal incidence), shadowed by its own
+// relief at grazing light (a facet tilted by alpha from the leaf's plane is fully lit only above an
+// elevation alpha: lit by elevation / alpha below it), attenuated through the leaf (Beer-Lambert,
+// optical depth `tau` per channel along the refracted path) and leaves diffusely. `nGeom`: the
+// viewer-facing geometric normal. Returns the irradiance factor that replaces the diffuse BTDF's -n.l.
+CANOPY_INLINE vec3 leafTransmittedHabel(vec3 n, vec3 nGeom, vec3 l, float ior, vec3 tau) {
+  float cosIn = -dot(n, l);
+  float cosGeom = -dot(nGeom, l);
+  if (cosIn <= 0.0f || cosGeom <= 0.0f) return vec3(0.0f, 0.0f, 0.0f);
+  float tilt = acos(clamp(dot(n, nGeom), -1.0f, 1.0f));
+  float elevation = asin(clamp(cosGeom, 0.0f, 1.0f));
+  float shadow = tilt > 1e-4f ? clamp(elevation / tilt, 0.0f, 1.0f) : 1.0f;
+  float enter = (1.0f - leafFresnel(cosIn, ior)) / (1.0f - leafFresnel(1.0f, ior));
+  float sinT = sqrt(max(1.0f - cosIn * cosIn, 0.0f)) / ior;
+  float cosT = max(sqrt(max(1.0f - sinT * sinT, 0.0f)), 1e-3f);
+  vec3 through = vec3(exp(-tau.x / cosT), exp(-tau.y / cosT), exp(-tau.z / cosT));
+  return through * (cosIn * shadow * enter);
+}
+
+// leafShade with Habel's translucency on the unlit side (the lit side is leafShade's).
+CANOPY_INLINE vec3 leafShadeHabel(vec3 base, vec3 n, vec3 nGeom, bool front, vec3 v, vec3 l, vec3 light, float ambient,
+                                  float ior, float roughness, float specular, float transmission, vec3 transmissionColor,
+                                  vec3 tau) {
+  if (dot(n, l) > 0.0f)
+    return leafShade(base, n, front, v, l, light, ambient, ior, roughness, specular, transmission, transmissionColor);
+  vec3 lit = base * ambient + transmissionColor * leafTransmittedHabel(n, nGeom, l, ior, tau) * ((1.0f - ambient) * transmission);
+  return lit * light;
+}
+
 CANOPY_NAMESPACE_END
 #endif

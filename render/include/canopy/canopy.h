@@ -275,6 +275,10 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 // them over crossFadeFrames frames (in one copy when drawn from another camera). 0: every re-slice is drawn at once in the frame that asks for
 // it. The first view, a camera cut, a new layer count or size, ReslicePolicy::EveryFrame and the
 // id output always re-slice at once.
+// The unlit side of a leaf (docs/design.md "Layers: leaf shading"): Habel's translucency (Habel et al.,
+// III.C: the light-facing side's relief, its self-shadowing, Fresnel entry, Beer-Lambert through the
+// leaf's thickness), or the diffuse BTDF he contrasts it with.
+enum class TranslucencyModel { Habel, DiffuseBtdf };
 #define CANOPY_LAYER_SETTINGS(X)                                                                                        \
   X(LayerLayout, layout, {}, None, 1, kMaxLayers, "layers", "default 5(3-1-1), at most CanopyDesc.maxLayers layers (checked as a whole)") \
   X(RegionSplit, regions, {}, Nested, 0, 0, "", "where the depth regions meet")                                        \
@@ -291,6 +295,8 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
   X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range)")     \
   X(float, leafTransmission, 0.35f, Closed, 0, 1, "", "diffuse transmission of foliage materials whose file gives none") \
   X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \
+  X(TranslucencyModel, translucencyModel, TranslucencyModel::Habel, Enum, 0, 1, "Habel | DiffuseBtdf", "the unlit side's light (DiffuseBtdf: before 0.7)") \
+  X(float, leafOpticalDepth, 0.3f, Closed, 0, 100, "", "Habel: optical depth through a leaf whose file gives no KHR_materials_volume")       \
   X(float, rebuildBudgetMs, 0.0f, Closed, 0, 1000, "ms", "work a frame of a spread re-slice; 0: re-slices at once")   \
   X(uint32_t, crossFadeFrames, 8, Closed, 1, 240, "frames", "a spread re-slice fades in over this many frames")       \
   X(ImpostorSettings, impostors, {}, Nested, 0, 0, "", "Lluch et al.'s impostors (a change re-slices)")

@@ -149,6 +149,14 @@ Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& 
   return Status();
 }
 
+// Lluch et al.'s level limit: the volume of a node's box over its parent's. A flat box (leaves in a
+// plane) counts each extent as at least a thousandth of the parent's largest, so it is not zero.
+float volumeRatio(const ImpostorNode& parent, const ImpostorNode& n) {
+  const float floor = 1e-3f * std::max(parent.half.x, std::max(parent.half.y, parent.half.z));
+  const glm::vec3 a = glm::max(n.half, glm::vec3(floor)), b = glm::max(parent.half, glm::vec3(floor));
+  return (a.x * a.y * a.z) / std::max(b.x * b.y * b.z, 1e-30f);
+}
+
 Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32_t maxArrayLayers, Impostors* imp) {
   const uint32_t nb = uint32_t(imp->nodes.size());
   // A node gets views when it is within maxLevel, holds leaves, is not over maxBoxTriangles and is
@@ -167,6 +175,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
     twin[i] = children[i] == 1 && i + 1 < nb && subtreeTriangles(*imp, i + 1) == tris;
     level[i] = n.parent == kNoTile ? 0 : level[n.parent] + (twin[n.parent] ? 0 : 1);
     if (level[i] > desc.maxLevel || tris == 0 || tris > desc.maxBoxTriangles || twin[i]) continue;
+    if (desc.minVolumeRatio > 0.0f && n.parent != kNoTile && volumeRatio(imp->nodes[n.parent], n) < desc.minVolumeRatio) continue;
     eligible[i] = 1;
     perLevel[level[i]]++;
   }

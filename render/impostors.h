@@ -98,6 +98,8 @@ Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& 
 // tiles, tileSize, tilesPerRow, rowsPerLayer, atlasLayers, bytes (the atlas as allocated, within
 // the budget). Errors name the budget.
 Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32_t maxArrayLayers, Impostors* imp);
+// The volume of n's box over its parent's (ImpostorDesc.minVolumeRatio).
+float volumeRatio(const ImpostorNode& parent, const ImpostorNode& n);
 
 // The orthographic view-projection of node `box`'s view k (Vulkan clip space, depth 0 at the
 // side the view looks from): the bake's camera, and what the tests render directly.

@@ -602,3 +602,45 @@ TEST_F(ImpostorTest, WhatImpostorsNeedIsRefusedWithTheReason) {
 }
 
 }  // namespace
+
+// Lluch et al.'s level limit (seed 002 section 3): "if the ratio [of a node's box volume to its
+// parent's] is smaller than a threshold, we do not generate textures for the node's box". With
+// ImpostorDesc.minVolumeRatio every baked box below the root meets the ratio, fewer boxes are
+// baked than without it, and a box it leaves out had views without it.
+TEST_F(ImpostorTest, BoxesUnderTheVolumeRatioGetNoViews) {
+  const VegetationModel m = treeWithBoxes();
+  LayeredVegetationDesc d;
+  d.width = 128;
+  d.height = 96;
+  d.impostors.enable = true;
+  d.impostors.maxLevel = 4;
+  LayeredVegetation all, limited;
+  ASSERT_TRUE(createLayeredVegetation(dev, m, d, &all).ok());
+  std::vector<float> ratios;
+  for (const ImpostorNode& n : all.impostors.nodes)
+    if (n.parent != kNoTile && n.firstTile != kNoTile) ratios.push_back(volumeRatio(all.impostors.nodes[n.parent], n));
+  std::sort(ratios.begin(), ratios.end());
+  ASSERT_GT(ratios.size(), 4u);
+  std::printf("baked boxes' volume ratios: min %.3f, median %.3f, max %.3f\n", ratios.front(), ratios[ratios.size() / 2], ratios.back());
+  const float threshold = ratios[ratios.size() / 2];  // the median: about half the boxes fall under it
+  d.impostors.minVolumeRatio = threshold;
+  ASSERT_TRUE(createLayeredVegetation(dev, m, d, &limited).ok());
+  const auto& na = all.impostors.nodes;
+  const auto& nl = limited.impostors.nodes;
+  ASSERT_EQ(na.size(), nl.size());
+  uint32_t bakedAll = 0, bakedLimited = 0, leftOut = 0;
+  for (size_t i = 0; i < nl.size(); ++i) {
+    bakedAll += na[i].firstTile != kNoTile;
+    bakedLimited += nl[i].firstTile != kNoTile;
+    if (nl[i].parent == kNoTile) continue;
+    const float r = volumeRatio(nl[nl[i].parent], nl[i]);
+    if (nl[i].firstTile != kNoTile) EXPECT_GE(r, threshold) << "node " << i;
+    leftOut += na[i].firstTile != kNoTile && nl[i].firstTile == kNoTile && r < threshold;
+  }
+  std::printf("boxes baked: %u without the volume ratio, %u with %.3f (%u left out by it); atlas %llu -> %llu bytes\n", bakedAll,
+              bakedLimited, threshold, leftOut, (unsigned long long)all.impostors.bytes, (unsigned long long)limited.impostors.bytes);
+  EXPECT_LT(bakedLimited, bakedAll);
+  EXPECT_GT(leftOut, 0u);
+  destroyLayeredVegetation(all);
+  destroyLayeredVegetation(limited);
+}

@@ -260,7 +260,8 @@ CANOPY_PARAM_STRUCT(ImpostorSettings, CANOPY_IMPOSTOR_SETTINGS)
   X(uint32_t, maxLevel, 2, Closed, 0, 64, "", "the deepest hierarchy level baked")                                     \
   X(uint64_t, maxBoxTriangles, 1'000'000, Closed, 1, 1099511627776.0, "triangles", "a larger box gets no views")      \
   X(uint64_t, memoryBudget, 256ull << 20, Closed, 1048576, 17179869184.0, "bytes", "the views' colour and depth")      \
-  X(uint32_t, maxLeavesPerBox, 256, Closed, 1, 1073741824, "leaves", "models without a box hierarchy (glTF): k-d split of the leaf roots")
+  X(uint32_t, maxLeavesPerBox, 256, Closed, 1, 1073741824, "leaves", "models without a box hierarchy (glTF): k-d split of the leaf roots") \
+  X(float, minVolumeRatio, 0.0f, Closed, 0, 1, "", "a box under this share of its parent box's volume gets no views (Lluch et al.'s level limit; 0: none)")
 CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 
 // Leaf shading (Habel et al.'s leaf model, section III; docs/design.md "Layers: leaf shading"): on

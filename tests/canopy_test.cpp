@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -514,6 +515,16 @@ TEST_P(GoldenTest, MatchesTheCheckedInImage) {
 // simulation's domain units. Frames compared by the golden images' metric, and no layer's delay
 // reaches maxDelay. With the old world units the centimetre plant's delays pass maxDelay and its
 // frames differ: the comparison can fail.
+// A context drawing into a fresh test host of w x h (sRGB), its parameters edited by `edit`.
+Status openScene(Device& dev, const VegetationModel& m, uint32_t w, uint32_t h, const std::function<void(CanopyParams&)>& edit,
+                 CanopyContext** ctx, Host* host) {
+  CANOPY_TRY(createCanopy(dev, m, smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB), ctx));
+  CanopyParams p = canopyParams(*ctx);
+  edit(p);
+  CANOPY_TRY(setCanopyParams(*ctx, p));
+  return host->create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB);
+}
+
 struct ScaleRun {
   std::vector<uint8_t> frame;
   float maxDelay = 0;  // the largest |L_i / V_D| over the layers, s (V_0z = 0)
@@ -526,15 +537,16 @@ ScaleRun renderScaled(Device& dev, VegetationModel model, float scale, DelayDist
   model.boundsMin *= scale;
   model.boundsMax *= scale;
   CanopyContext* ctx = nullptr;
-  Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB), &ctx);
-  EXPECT_TRUE(s.ok()) << s.message();
-  if (!s.ok()) return r;
-  CanopyParams p = canopyParams(ctx);
-  p.dynamics.delayUnits = units;
-  p.simulation.wind.strength = 1.5f;
-  EXPECT_TRUE(setCanopyParams(ctx, p).ok());
   Host host;
-  EXPECT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
+  Status s = openScene(dev, model, w, h, [&](CanopyParams& p) {
+    p.dynamics.delayUnits = units;
+    p.simulation.wind.strength = 1.5f;
+  }, &ctx, &host);
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (!s.ok()) {
+    destroyCanopy(ctx);
+    return r;
+  }
   CanopyFrame f;
   f.camera = toCamera(cameraFor(model, w, h, 20.0f));
   for (int i = 0; i < 30 && s.ok(); ++i) s = host.frame(ctx, f);
@@ -622,15 +634,16 @@ std::map<uint32_t, PlantSway> plantSway(Device& dev, const VegetationModel& fiel
   std::map<uint32_t, PlantSway> out;
   const uint32_t w = 640, h = 480;  // each plant over several 16-pixel warp cells
   CanopyContext* ctx = nullptr;
-  Status s = createCanopy(dev, field, smallDesc(w, h, VK_FORMAT_R8G8B8A8_SRGB), &ctx);
-  EXPECT_TRUE(s.ok()) << s.message();
-  if (!s.ok()) return out;
-  CanopyParams p = canopyParams(ctx);
-  p.dynamics.roots = roots;
-  p.simulation.wind.strength = 3.0f;
-  EXPECT_TRUE(setCanopyParams(ctx, p).ok());
   Host host;
-  EXPECT_TRUE(host.create(dev, w, h, VK_FORMAT_R8G8B8A8_SRGB).ok());
+  Status s = openScene(dev, field, w, h, [&](CanopyParams& p) {
+    p.dynamics.roots = roots;
+    p.simulation.wind.strength = 3.0f;
+  }, &ctx, &host);
+  EXPECT_TRUE(s.ok()) << s.message();
+  if (!s.ok()) {
+    destroyCanopy(ctx);
+    return out;
+  }
   CanopyFrame f;
   f.camera = toCamera(orbitView(field.boundsMin, field.boundsMax, 10.0f, 25.0f, 40.0f, float(w) / float(h), 1.0f));
   for (int frame = 0; frame < 300 && s.ok(); ++frame) {

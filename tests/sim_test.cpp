@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <numeric>
 
 #include "compute/sim_reference.h"
@@ -631,6 +632,19 @@ TEST_F(Sim, HeldOrOtherSchemePassesRecordNoBarrier) {
   EXPECT_NE(fields().vs, before.vs) << "a step that runs changes the field";
 }
 
+// `steps` CPU-reference steps of 1/30 s from rest with `p` (a 4-slot ring); `each(k, state)` after step k.
+void referenceSteps(const SimulationParams& p, uint32_t n, int steps, const std::function<void(int, const ref::SimState&)>& each) {
+  ref::SimState s = ref::makeState(n, 4);
+  double t = 0;
+  for (int k = 0; k < steps; ++k) {
+    gpu::SimFrame f;
+    ASSERT_TRUE(makeSimFrame(p, n, float(t), 1.0f / 30.0f, uint32_t(k % 4), 4, &f).ok());
+    ref::step(f, s);
+    t += 1.0 / 30.0;
+    each(k, s);
+  }
+}
+
 // Issue 36: how long a motor's push takes to reach the far side of a plant's projection (a framed
 // plant spans ~0.7 domain units: the plane's tile is the view's width at the plant). A motor
 // switched on at t = 0 (no wind), the wave's |V| sampled at the motor and at distances D along x
@@ -645,20 +659,14 @@ TEST(SimCrossing, AMotorsPushCrossesThePlantInUnderASecond) {
     p.wind.sides = 0;
     p.wave.speed = c;
     p.motors.push_back({0.2f, 0.5f, 0.05f, 1.0f});
-    ref::SimState s = ref::makeState(n, 4);
     const float ds[] = {0.0f, 0.25f, 0.5f, 0.7f};
     std::vector<std::vector<float>> mag(4);
-    double t = 0;
-    for (int k = 0; k < 90; ++k) {
-      gpu::SimFrame f;
-      ASSERT_TRUE(makeSimFrame(p, n, float(t), dt, uint32_t(k % 4), 4, &f).ok());
-      ref::step(f, s);
-      t += dt;
+    referenceSteps(p, n, 90, [&](int, const ref::SimState& s) {
       for (int i = 0; i < 4; ++i) {
-        const uint32_t x = uint32_t((0.2f + ds[i]) * n), y = n / 2;
+        const uint32_t x = uint32_t((0.2f + ds[i]) * float(n)), y = n / 2;
         mag[i].push_back(std::hypot(s.wave[2 * (y * n + x)], s.wave[2 * (y * n + x) + 1]));
       }
-    }
+    });
     std::printf("wave speed c = %.2f domain units/s: a motor's push arrives", c);
     for (int i = 0; i < 4; ++i) {
       const float peak = *std::max_element(mag[i].begin(), mag[i].end());
@@ -680,19 +688,11 @@ TEST(SimCrossing, AMotorsPushCrossesThePlantInUnderASecond) {
 // default c (and so eq. 5's s = c) is; the old c = 0.05 errs ~6x as much.
 TEST(SimCrossing, Eq5sSpeedIsHowFastTheFieldTravels) {
   const uint32_t n = 64;
-  const float dt = 1.0f / 30.0f, gamma = 0.2f;
+  const float gamma = 0.2f;  // 6 steps of 1/30 s
   const int lag = 6;
   SimulationParams p;
-  ref::SimState s = ref::makeState(n, 4);
   std::vector<std::vector<float>> snaps;
-  double t = 0;
-  for (int k = 0; k < 150; ++k) {
-    gpu::SimFrame f;
-    ASSERT_TRUE(makeSimFrame(p, n, float(t), dt, uint32_t(k % 4), 4, &f).ok());
-    ref::step(f, s);
-    t += dt;
-    snaps.push_back(std::vector<float>(s.wave.begin(), s.wave.begin() + 2 * n * n));
-  }
+  referenceSteps(p, n, 150, [&](int, const ref::SimState& s) { snaps.push_back(std::vector<float>(s.wave.begin(), s.wave.begin() + 2 * n * n)); });
   auto at = [&](const std::vector<float>& v, float x, float y) {
     const float fx = x * n - 0.5f, fy = y * n - 0.5f;
     const int i = std::clamp(int(std::floor(fx)), 0, int(n) - 2), j = std::clamp(int(std::floor(fy)), 0, int(n) - 2);

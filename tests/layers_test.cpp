@@ -1185,3 +1185,52 @@ TEST_F(LayersTest, HabelsTranslucencyMatchesTheCpuEvaluation) {
   }
   EXPECT_GT(reliefGrazing, 2.0f * reliefSteep) << "the relief shows at grazing light, not at steep light";
 }
+
+// Habel's translucency on the shared plant with a thickness added (KHR_materials_volume's values
+// set on its foliage materials): the backlit leaves transmit less; the diffuse BTDF ignores the
+// thickness.
+TEST_F(LayersTest, ThePlantWithAThicknessAddedTransmitsLess) {
+  const std::string path = kAssets + "/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared assets folder absent (" << kAssets << "): skipped";
+  VegetationModel plain;
+  ASSERT_TRUE(loadGltf(path, {}, &plain).ok());
+  VegetationModel thick = plain;
+  for (ModelMaterial& mat : thick.materials)
+    if (mat.transmissionFactor > 0.0f) {
+      mat.thicknessFactor = 0.002f;
+      mat.attenuationDistance = 0.002f;
+      mat.attenuationColor = glm::vec3(0.3f, 0.8f, 0.2f);
+    }
+  const LayerView view = orbitView(plain.boundsMin, plain.boundsMax, 0.0f, 10.0f, 40.0f, float(kW) / float(kH), 1.0f);
+  // Mean colour of layer 0's covered texels, the light behind the plant.
+  auto mean = [&](const VegetationModel& m, TranslucencyModel model) {
+    LayeredVegetationDesc d = smallDesc("1");
+    d.settings.lightDirection = {0.2f, 0.4f, -1.0f};
+    d.settings.translucencyModel = model;
+    d.settings.leafTransmission = 0.8f;
+    LayeredVegetation lv;
+    Status s = createLayeredVegetation(dev, m, d, &lv);
+    std::vector<glm::vec4> c;
+    if (s.ok()) s = renderOnce(dev, lv, view);
+    if (s.ok()) s = readLayerColor(lv, 0, &c);
+    EXPECT_TRUE(s.ok()) << s.message();
+    destroyLayeredVegetation(lv);
+    glm::dvec3 sum(0.0);
+    size_t n = 0;
+    for (const glm::vec4& p : c)
+      if (p.a > 0.5f) sum += glm::dvec3(p) / double(p.a), ++n;
+    EXPECT_GT(n, 1000u);
+    return glm::vec3(sum / double(std::max<size_t>(n, 1)));
+  };
+  const glm::vec3 a = mean(plain, TranslucencyModel::Habel), b = mean(thick, TranslucencyModel::Habel);
+  const glm::vec3 c = mean(plain, TranslucencyModel::DiffuseBtdf), e = mean(thick, TranslucencyModel::DiffuseBtdf);
+  std::printf("backlit plant, mean leaf colour: Habel (%.4f %.4f %.4f) -> with thickness (%.4f %.4f %.4f); diffuse BTDF (%.4f %.4f %.4f) -> (%.4f %.4f %.4f)\n",
+              a.r, a.g, a.b, b.r, b.g, b.b, c.r, c.g, c.b, e.r, e.g, e.b);
+  // The file's transmission colour texture passes mostly red: the glow, and so what the thickness
+  // takes away, is in the channels the leaves transmit; no channel gains.
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LE(b[k], a[k] + 1e-5f) << "channel " << k << ": the thickness absorbs";
+    EXPECT_NEAR(e[k], c[k], 1e-4f) << "channel " << k << ": the BTDF has no thickness";
+  }
+  EXPECT_LT(b.r + b.g + b.b, a.r + a.g + a.b - 0.003f) << "the backlit plant transmits less through a thickness";
+}

@@ -1,8 +1,10 @@
-// canopy-bench impostors (issue 18): what Lluch et al.'s impostors save at a re-slice and what they
-// change in the far layers. Per face count, one generated scene with its box hierarchy (default
-// the large vegetation field), 5(3-1-1), a low camera looking across it (a far region full of
-// plants), every frame a re-slice (ReslicePolicy::EveryFrame), the three modes (off, far region,
-// by projected size) alternated round by round in the same run:
+// canopy-bench impostors (issues 18, 36): what Lluch et al.'s impostors save at a re-slice and what
+// they change in the far layers. Per face count, one generated scene with its box hierarchy
+// (default the large vegetation field), 5(3-1-1), a low camera looking across it (a far region full
+// of plants) and one far away, every frame a re-slice (ReslicePolicy::EveryFrame); per view set
+// (six diagonal views, the default; twelve, before 0.7: each baked in its own context, storage per
+// box printed) the variants (off, far region, by projected size; crossed or facing polygons)
+// alternated round by round in the same run:
 //   - re-slice wall clock (view update with the CPU placement and the cut, record, submit, fence),
 //     the GPU timestamps of the foliage pass, the CPU placement, triangles and impostors drawn;
 //   - the image difference against the mode without impostors: the far region's layers flattened
@@ -75,10 +77,6 @@ Status writeImage(const std::string& path, uint32_t w, uint32_t h, const std::ve
   return writePng(path, w, h, rgba);
 }
 
-const char* modeName(ImpostorMode m) {
-  return m == ImpostorMode::Off ? "off" : m == ImpostorMode::FarRegion ? "far region" : "projected size";
-}
-
 }  // namespace
 
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& sceneName, int rebuilds,
@@ -109,24 +107,8 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
       return 1;
     }
     const double genMs = nowMs() - g0;
-    LayeredVegetationDesc d;
-    d.width = width;
-    d.height = height;
-    d.impostors.enable = true;
-    d.settings.policy = ReslicePolicy::EveryFrame;
-    LayeredVegetation lv;
-    const double c0 = nowMs();
-    s = createLayeredVegetation(dev, m, d, &lv);
-    const double createMs = nowMs() - c0;
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-bench: %llu faces: %s\n", (unsigned long long)faces, s.message().c_str());
-      return 1;
-    }
-    std::printf("\n%llu faces (%llu foliage, %u leaves), generated in %.0f ms; created in %.0f ms: %u boxes, %u with views of "
-                "%u px (%.1f MiB), bake %.0f ms\n",
-                (unsigned long long)st.faces, (unsigned long long)lv.stats.foliageTriangles, lv.stats.leafCount, genMs,
-                createMs, lv.stats.impostorBoxes, lv.stats.impostorBakedBoxes, lv.stats.impostorTilePixels,
-                double(lv.stats.impostorBytes) / double(1 << 20), lv.stats.impostorBakeMs);
+    std::printf("\n%llu faces (%llu leaf faces), generated in %.0f ms\n", (unsigned long long)st.faces,
+                (unsigned long long)st.leafFaces, genMs);
     const glm::vec3 lo = m.boundsMin, hi = m.boundsMax, c = 0.5f * (lo + hi);
     // Two cameras: across the scene from its near edge, low (a far region behind a near one), and
     // the whole scene in the distance (five times its depth away, 30-degree field of view).
@@ -137,7 +119,50 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
     const float depth = hi.z - lo.z;
     views[1].view = glm::lookAt(glm::vec3(c.x, lo.y + 0.6f * (hi.y - lo.y), hi.z + 5.0f * depth), c, glm::vec3(0, 1, 0));
     views[1].proj = perspectiveVulkan(glm::radians(30.0f), float(width) / float(height), 0.1f, 10000.0f);
-    m = VegetationModel{};  // the layers keep what they need
+    // The 'off' images of the first view set are every later row's reference (the leaves do not
+    // depend on the views baked).
+    std::vector<glm::vec4> refFar[2], refAll[2];
+    // The view sets, each baked in its own context: Lluch et al.'s six diagonal views (the default),
+    // then the twelve of before 0.7. Per set the variants alternated round by round.
+    for (ImpostorViews set : {ImpostorViews::Diagonal6, ImpostorViews::FacesAndDiagonals12}) {
+    const bool six = set == ImpostorViews::Diagonal6;
+    LayeredVegetationDesc d;
+    d.width = width;
+    d.height = height;
+    d.impostors.enable = true;
+    d.impostors.views = set;
+    d.settings.policy = ReslicePolicy::EveryFrame;
+    LayeredVegetation lv;
+    const double c0 = nowMs();
+    s = createLayeredVegetation(dev, m, d, &lv);
+    const double createMs = nowMs() - c0;
+    if (!s.ok()) {
+      std::fprintf(stderr, "canopy-bench: %llu faces: %s\n", (unsigned long long)faces, s.message().c_str());
+      return 1;
+    }
+    std::printf("\n%s: created in %.0f ms: %llu foliage triangles, %u leaves, %u boxes, %u with %u views of %u px "
+                "(%.0f KiB a box, colour and depth; atlas %.1f MiB), bake %.0f ms\n",
+                six ? "six diagonal views (default)" : "twelve views (before 0.7)", createMs,
+                (unsigned long long)lv.stats.foliageTriangles, lv.stats.leafCount, lv.stats.impostorBoxes,
+                lv.stats.impostorBakedBoxes, lv.stats.impostorViewsPerBox, lv.stats.impostorTilePixels,
+                double(lv.stats.impostorBytesPerBox) / 1024.0, double(lv.stats.impostorBytes) / double(1 << 20),
+                lv.stats.impostorBakeMs);
+    struct Variant {
+      ImpostorMode mode;
+      ImpostorShape shape;
+      const char* name;
+      const char* file;
+    };
+    std::vector<Variant> variants = {{ImpostorMode::Off, ImpostorShape::CrossedPolygons, "off", "off"}};
+    if (six) {
+      variants.push_back({ImpostorMode::FarRegion, ImpostorShape::CrossedPolygons, "far, crossed", "far"});
+      variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::CrossedPolygons, "size, crossed", "size"});
+      variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::FacingPolygon, "size, facing", "size_facing6"});
+    } else {
+      variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::FacingPolygon, "size, facing", "size_facing12"});
+      variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::CrossedPolygons, "size, crossed", "size_crossed12"});
+    }
+    const int nv = int(variants.size());
     for (int cam = 0; cam < 2 && s.ok(); ++cam) {
     const LayerView& view = views[cam];
     const char* camName = cam == 0 ? "across" : "distant";
@@ -147,16 +172,17 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
     if (s.ok()) s = g.compile();
     if (s.ok()) s = g.realize(dev);
     if (s.ok()) s = timer.init(dev, 16);
-    const ImpostorMode modes[3] = {ImpostorMode::Off, ImpostorMode::FarRegion, ImpostorMode::ByProjectedSize};
     struct Samples {
       std::vector<double> wall, gpu, place;
       uint64_t triangles = 0;
       uint32_t impostors = 0, fading = 0;
       std::vector<glm::vec4> far, all;
-    } per[3];
-    auto reslice = [&](int mode, bool keep, bool debug) -> Status {
+    };
+    std::vector<Samples> per(nv);
+    auto reslice = [&](int v, bool keep, bool debug) -> Status {
       LayerSettings ls = lv.settings;
-      ls.impostors.mode = modes[mode];
+      ls.impostors.mode = variants[v].mode;
+      ls.impostors.shape = variants[v].shape;
       ls.impostors.debugView = debug;
       CANOPY_TRY(setLayerSettings(lv, ls));
       const double w0 = nowMs();
@@ -170,32 +196,36 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
       std::vector<PassTiming> t;
       CANOPY_TRY(timer.read(dev, &t));
       if (!keep) return Status();
-      Samples& p = per[mode];
+      Samples& p = per[v];
+      const bool off = variants[v].mode == ImpostorMode::Off;
       p.wall.push_back(w1 - w0);
       p.place.push_back(lv.stats.lastPlacementMs);
       for (const PassTiming& x : t)
         if (x.name == "layers: foliage") p.gpu.push_back(x.milliseconds);
-      p.triangles = modes[mode] == ImpostorMode::Off ? lv.stats.foliageTriangles : lv.stats.lastDrawnTriangles;
-      p.impostors = modes[mode] == ImpostorMode::Off ? 0 : lv.stats.lastImpostors;
-      p.fading = modes[mode] == ImpostorMode::Off ? 0 : lv.stats.lastFadingBoxes;
+      p.triangles = off ? lv.stats.foliageTriangles : lv.stats.lastDrawnTriangles;
+      p.impostors = off ? 0 : lv.stats.lastImpostors;
+      p.fading = off ? 0 : lv.stats.lastFadingBoxes;
       return Status();
     };
     for (int r = 0; r <= rebuilds && s.ok(); ++r)
-      for (int mode = 0; mode < 3 && s.ok(); ++mode) s = reslice(mode, r > 0, false);
-    // The images of each mode (one more re-slice each), and the debug view.
+      for (int v = 0; v < nv && s.ok(); ++v) s = reslice(v, r > 0, false);
+    // The images of each variant (one more re-slice each), and the debug view.
     const LayerLayout& l = lv.settings.layout;
     const uint32_t farFirst = l.region[0] + l.region[1], n = l.count();
-    for (int mode = 0; mode < 3 && s.ok(); ++mode) {
-      s = reslice(mode, false, false);
-      if (s.ok()) s = flatten(lv, farFirst, n, &per[mode].far);
-      if (s.ok()) s = flatten(lv, 0, n, &per[mode].all);
-      if (s.ok() && !imageDir.empty()) {
-        const std::string name = imageDir + "/impostors_" + camName + "_" + std::to_string(faces) + "_" +
-                                 (mode == 0 ? "off" : mode == 1 ? "far" : "size") + ".png";
-        s = writeImage(name, width, height, per[mode].far);
+    for (int v = 0; v < nv && s.ok(); ++v) {
+      s = reslice(v, false, false);
+      if (s.ok()) s = flatten(lv, farFirst, n, &per[v].far);
+      if (s.ok()) s = flatten(lv, 0, n, &per[v].all);
+      if (s.ok() && !imageDir.empty() && (six || v > 0)) {
+        const std::string name = imageDir + "/impostors_" + camName + "_" + std::to_string(faces) + "_" + variants[v].file + ".png";
+        s = writeImage(name, width, height, per[v].far);
       }
     }
-    if (s.ok() && !imageDir.empty()) {
+    if (s.ok() && six) {
+      refFar[cam] = per[0].far;
+      refAll[cam] = per[0].all;
+    }
+    if (s.ok() && six && !imageDir.empty()) {
       std::vector<glm::vec4> dbg;
       s = reslice(2, false, true);  // by projected size: the most impostors
       if (s.ok()) s = flatten(lv, 0, n, &dbg);
@@ -209,12 +239,12 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
     std::printf("  %-15s %10s %9s %9s %11s %10s %9s | %-16s | %-16s\n", "mode", "wall ms", "GPU ms", "place ms",
                 "tris drawn", "impostors", "x wall", "far |d|  IoU", "all |d|  IoU");
     const double base = medianOf(per[0].wall);
-    for (int mode = 0; mode < 3; ++mode) {
-      const Samples& p = per[mode];
-      const Diff far = compare(p.far, per[0].far), all = compare(p.all, per[0].all);
+    for (int v = 0; v < nv; ++v) {
+      const Samples& p = per[v];
+      const Diff far = compare(p.far, refFar[cam]), all = compare(p.all, refAll[cam]);
       char imp[32];
       std::snprintf(imp, sizeof imp, "%u (%u)", p.impostors, p.fading);
-      std::printf("  %-15s %10.2f %9.2f %9.2f %11llu %10s %9.2f | %7.4f %7.3f  | %7.4f %7.3f\n", modeName(modes[mode]),
+      std::printf("  %-15s %10.2f %9.2f %9.2f %11llu %10s %9.2f | %7.4f %7.3f  | %7.4f %7.3f\n", variants[v].name,
                   medianOf(p.wall), medianOf(p.gpu), medianOf(p.place), (unsigned long long)p.triangles, imp,
                   base / std::max(medianOf(p.wall), 1e-9), far.meanAbs, far.iou, all.meanAbs, all.iou);
     }
@@ -224,8 +254,11 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
       std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
       return 1;
     }
+    }
     std::printf("  (impostors: boxes drawn as impostors, in parentheses those inside the transition band; x wall: "
-                "speed-up of the re-slice against 'off'; far |d|: the far region's layers, all |d|: every layer)\n");
+                "speed-up of the re-slice against 'off' of the same set; far |d|: the far region's layers, all |d|: every\n"
+                "  layer, against 'off' of the six-view set; crossed: Lluch et al.'s crossed polygons, facing: one polygon\n"
+                "  facing the viewer, two views blended)\n");
   }
   return 0;
 }

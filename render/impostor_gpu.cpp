@@ -1,5 +1,5 @@
 // The GPU side of the impostors (render/impostors.h; docs/design.md "Impostors"): the atlas, the
-// bake (each baked box's twelve views drawn with the layers' own pipeline and shading, orthographic,
+// bake (each baked box's views drawn with the layers' own pipeline and shading, orthographic,
 // into its tiles) and the draw of a cut's impostors into the layers.
 #include "render/impostor_gpu.h"
 
@@ -65,14 +65,14 @@ std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
   const gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
   for (const ImpostorNode& n : imp.nodes) {
     if (n.firstTile == kNoTile) continue;
-    for (uint32_t k = 0; k < IMPOSTOR_VIEWS; ++k) {
+    for (uint32_t k = imp.firstView; k < IMPOSTOR_VIEWS; ++k) {
       gpu::LayerFrame f = base;
       f.viewProj = impostorViewProj(n, k);
       const glm::vec3 dir = gpu::impostorDirection(k);
       f.eye = glm::vec4(dir, 0.0f);
       f.depthRow = glm::vec4(-dir, glm::dot(n.center, dir));
       f.layerCount = 1;
-      std::memcpy(bytes.data() + size_t(n.firstTile + k) * stride, &f, sizeof f);
+      std::memcpy(bytes.data() + size_t(n.firstTile + k - imp.firstView) * stride, &f, sizeof f);
     }
   }
   return bytes;
@@ -179,8 +179,8 @@ Status bake(LayeredVegetation& lv) {
        for (uint32_t i = 0; i < im.nodes.size() && s.ok(); ++i) {
          const ImpostorNode& n = im.nodes[i];
          if (n.firstTile == kNoTile) continue;
-         for (uint32_t k = 0; k < IMPOSTOR_VIEWS && s.ok(); ++k) {
-           const uint32_t tile = n.firstTile + k;
+         for (uint32_t k = im.firstView; k < IMPOSTOR_VIEWS && s.ok(); ++k) {
+           const uint32_t tile = n.firstTile + k - im.firstView;
            if (tile / perLayer != layer) continue;
            if (parts[i].empty())
              for (uint32_t m = 0; m < im.materials; ++m)
@@ -319,6 +319,8 @@ Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, 
   push.rowsPerLayer = imp.rowsPerLayer;
   push.fading = fading ? 1u : 0u;
   push.debugLevels = lv.settings.impostors.debugView ? 1u : 0u;
+  push.firstView = imp.firstView;
+  push.shape = lv.settings.impostors.shape == ImpostorShape::CrossedPolygons ? IMPOSTOR_SHAPE_CROSSED : IMPOSTOR_SHAPE_FACING;
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
   CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
                           {bindBuffer(lv.visible.frameBuffer.buffer), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),

@@ -159,6 +159,7 @@ float volumeRatio(const ImpostorNode& parent, const ImpostorNode& n) {
 
 Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32_t maxArrayLayers, Impostors* imp) {
   const uint32_t nb = uint32_t(imp->nodes.size());
+  imp->firstView = desc.views == ImpostorViews::Diagonal6 ? IMPOSTOR_FIRST_VIEW_DIAGONAL : IMPOSTOR_FIRST_VIEW_ALL;
   // A node gets views when it is within maxLevel, holds leaves, is not over maxBoxTriangles and is
   // not its only child's twin (the same leaves: a scene box over a single plant).
   std::vector<uint32_t> children(nb, 0);
@@ -195,7 +196,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
         lastLevel = l;
         continue;
       }
-      if (atlasShape((total + perLevel[l]) * IMPOSTOR_VIEWS, tile, maxImageSide).bytes > desc.memoryBudget) break;
+      if (atlasShape((total + perLevel[l]) * imp->viewCount(), tile, maxImageSide).bytes > desc.memoryBudget) break;
       total += perLevel[l];
       lastLevel = l;
       any = true;
@@ -211,7 +212,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
         break;
       }
     return Status::error("impostors: memoryBudget " + mib(desc.memoryBudget) + " holds no level of the box hierarchy: its top level's " +
-                         std::to_string(first) + " boxes need " + mib(first * IMPOSTOR_VIEWS * 8 * 8 * 8) +
+                         std::to_string(first) + " boxes need " + mib(first * imp->viewCount() * 8 * 8 * 8) +
                          " at 8-pixel views; raise CanopyDesc.impostors.memoryBudget or lower maxLevel");
   }
   imp->tileSize = tile;
@@ -223,7 +224,7 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
     if (!eligible[i] || level[i] > lastLevel) continue;
     n.firstTile = imp->tiles;
     n.gpuIndex = imp->baked++;
-    imp->tiles += IMPOSTOR_VIEWS;
+    imp->tiles += imp->viewCount();
   }
   const AtlasShape shape = atlasShape(imp->tiles, tile, maxImageSide);
   imp->tilesPerRow = shape.perRow;
@@ -261,7 +262,7 @@ uint64_t impostorModelKey(const Impostors& imp, const VegetationModel& m, const 
     const float b[] = {n.center.x, n.center.y, n.center.z, n.half.x, n.half.y, n.half.z};
     h = hashBytes(hashBytes(h, b, sizeof b), &n.firstTile, 4);
   }
-  const uint32_t plan[] = {imp.tiles, imp.tileSize, imp.tilesPerRow, imp.rowsPerLayer, imp.atlasLayers};
+  const uint32_t plan[] = {imp.tiles, imp.tileSize, imp.tilesPerRow, imp.rowsPerLayer, imp.atlasLayers, imp.firstView};
   return hashBytes(h, plan, sizeof plan);
 }
 

@@ -5,9 +5,10 @@
 //      k-d split of the leaf roots), and the foliage's GPU triangle order laid out box by box in
 //      depth-first order, so that every box's own leaves and every box's subtree are one contiguous
 //      triangle run per material (a cut through the hierarchy is a short list of draw ranges);
-//   2. the bake: per box of the top levels, twelve orthographic views of its subtree's leaves
-//      (shared/impostor.h: six faces, six diagonal planes), colour and depth, drawn once on the GPU
-//      with the layers' own shading into a tiled atlas within a memory budget.
+//   2. the bake: per box of the top levels, orthographic views of its subtree's leaves
+//      (shared/impostor.h: the six diagonal planes, or those and the six faces: ImpostorDesc.views),
+//      colour and depth, drawn once on the GPU with the layers' own shading into a tiled atlas
+//      within a memory budget.
 // At a re-slice (LayerSettings.impostors): the cut for the view (impostorCut), its impostors drawn
 // into the layers (each in the layer of its box's root depth), then the leaves of the boxes left.
 #include <cstdint>
@@ -52,6 +53,8 @@ struct Impostors {
   uint64_t ownFirst(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 0]; }
   uint64_t ownCount(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 1]; }
   uint64_t subtreeEnd(uint32_t node, uint32_t m) const { return runs[(size_t(node) * materials + m) * 3 + 2]; }
+  uint32_t firstView = IMPOSTOR_FIRST_VIEW_DIAGONAL;  // the stored views [firstView, IMPOSTOR_VIEWS)
+  uint32_t viewCount() const { return IMPOSTOR_VIEWS - firstView; }
   uint32_t baked = 0, tileSize = 0, tilesPerRow = 0, rowsPerLayer = 0, atlasLayers = 0, tiles = 0;
   uint32_t tilesPerLayer() const { return tilesPerRow * rowsPerLayer; }
   Image color, depth;                                   // the atlas (2D arrays)

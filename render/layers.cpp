@@ -216,6 +216,8 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
       lv.stats.impostorBakedBoxes = lv.impostors.baked;
       lv.stats.impostorTilePixels = lv.impostors.tileSize;
       lv.stats.impostorBytes = lv.impostors.bytes;
+      lv.stats.impostorViewsPerBox = lv.impostors.viewCount();
+      lv.stats.impostorBytesPerBox = uint64_t(lv.impostors.viewCount()) * lv.impostors.tileSize * lv.impostors.tileSize * 8;
       lv.stats.impostorBakeMs = lv.impostors.bakeMs;
       lv.stats.impostorCacheHit = lv.impostors.cacheHit;
       lv.stats.impostorCacheNote = lv.impostors.cacheNote;

@@ -1,7 +1,8 @@
 // Bindings and the shared vertex stage of the impostor draws (render/impostor_gpu.cpp declares the
 // same five push-descriptor bindings; shared/impostor.h the structs and view frames): one polygon
-// per box facing the viewer, textured from the box's two views nearest the viewer's direction
-// (Lluch et al.: the box's images alpha-blended against popping), in the layer of the box's root.
+// per box facing the viewer and covering its outline, in the layer of the box's root. Its fragments
+// show either the paper's crossed polygons (every stored view on its plane, met by the viewer's ray)
+// or the two views nearest the viewer's direction (Lluch et al.: alpha-blended against popping).
 #include "shared/layers.h"
 #include "shared/impostor.h"
 
@@ -29,9 +30,9 @@ uint impostorVertex() {
   vec3 c = b.center.xyz, h = b.halfExtent.xyz;
   vec3 w = towardsViewer(c);
   // The two views that face the viewer best; the first's share falls to 1/2 as the second catches up.
-  uint k1 = 0u, k2 = 1u;
+  uint k1 = pc.firstView, k2 = pc.firstView + 1u;
   float s1 = -2.0, s2 = -2.0;
-  for (uint k = 0u; k < IMPOSTOR_VIEWS; ++k) {
+  for (uint k = pc.firstView; k < IMPOSTOR_VIEWS; ++k) {
     float s = impostorViewScore(k, w);
     if (s > s1) { s2 = s1; k2 = k1; s1 = s; k1 = k; }
     else if (s > s2) { s2 = s; k2 = k; }

@@ -1,15 +1,24 @@
-// Image-based levels of detail for the foliage (seed 002, Lluch et al.; issue 18; docs/design.md
-// "Impostors"): per foliage box twelve orthographic views of its leaves (colour, alpha and depth),
-// the paper's six box faces and its six diagonally aligned planes (Figure 6), baked once into an
-// atlas of square tiles; at a re-slice the far boxes are drawn as one textured polygon each, blended
-// from the two views nearest the viewer's direction, in the layer of the box's root depth. The bake
+// Image-based levels of detail for the foliage (seed 002, Lluch et al.; issues 18 and 36;
+// docs/design.md "Impostors"): per foliage box orthographic views of its leaves (colour, alpha and
+// depth) baked once into an atlas of square tiles — by default the paper's six diagonally aligned
+// planes (Figure 6), or (before 0.7) those and the six box faces; at a re-slice the far boxes are
+// drawn in the layer of their root depth, either as the paper's crossed polygons (every view on its
+// own plane through the box, alpha-blended by how squarely it faces the viewer) or as one polygon
+// facing the viewer blended from the two views nearest the viewer's direction. The bake
 // (render/impostors.cpp) and the draw (shaders/layers_impostor.*) use the same view frames below.
 #ifndef CANOPY_SHARED_IMPOSTOR_H
 #define CANOPY_SHARED_IMPOSTOR_H
 #include "interop.h"
 
-#define IMPOSTOR_VIEWS 12u        // 6 box faces (+X, -X, +Y, -Y, +Z, -Z), then 6 diagonal planes
+// View directions k = 0..11: the 6 box faces (+X, -X, +Y, -Y, +Z, -Z), then the 6 diagonal planes.
+// A box stores the views [firstView, IMPOSTOR_VIEWS) of its view set (ImpostorDesc.views): view k in
+// tile firstTile + k - firstView.
+#define IMPOSTOR_VIEWS 12u
 #define IMPOSTOR_FACE_VIEWS 6u
+#define IMPOSTOR_FIRST_VIEW_DIAGONAL 6u  // ImpostorViews::Diagonal6: the paper's six (default)
+#define IMPOSTOR_FIRST_VIEW_ALL 0u       // ImpostorViews::FacesAndDiagonals12: before 0.7
+#define IMPOSTOR_SHAPE_CROSSED 0u        // ImpostorShape::CrossedPolygons (default)
+#define IMPOSTOR_SHAPE_FACING 1u         // ImpostorShape::FacingPolygon
 
 CANOPY_NAMESPACE_BEGIN
 
@@ -43,9 +52,13 @@ struct ImpostorPush {
   uint rowsPerLayer; // tile rows per atlas layer
   uint fading;       // 1: boxes inside the transition band, drawn over their fading leaves: depth at
                      // the front of the box's bounding sphere (their own leaves never hide them)
+  uint firstView;    // the first stored view direction (IMPOSTOR_FIRST_VIEW_*)
+  uint shape;        // IMPOSTOR_SHAPE_*
+  uint pad0;
+  uint pad1;
   uint pad2;
 };
-CANOPY_SIZE_CHECK(ImpostorPush, 32)
+CANOPY_SIZE_CHECK(ImpostorPush, 48)
 
 // A view's frame: n points from the box towards the view's (orthographic) camera, u and v span the
 // image (u to the right, v up; texel row 0 is +v).
@@ -99,6 +112,14 @@ CANOPY_INLINE vec3 impostorExtent(ImpostorFrame f, vec3 h, float floorValue) {
 CANOPY_INLINE float impostorViewScore(uint k, vec3 w) {
   float c = dot(impostorDirection(k), w);
   return k < IMPOSTOR_FACE_VIEWS ? c : abs(c);
+}
+
+// A crossed polygon's weight (ImpostorShape::CrossedPolygons) from its view's score for the viewer's
+// direction: 0 edge-on (a polygon seen edge-on is a streak, not an image), rising to 1 where the
+// polygon faces the viewer at least as squarely as a box face's diagonal planes do when the box is
+// seen along an axis (cos 45 deg): from any direction the best-facing views carry the image.
+CANOPY_INLINE float impostorCrossWeight(float score) {
+  return clamp((score - 0.2f) / (0.70710678f - 0.2f), 0.0f, 1.0f);
 }
 
 // The impostor's share of a box at a level-of-detail switch (docs/design.md "Impostors"): 0 while

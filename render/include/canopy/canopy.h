@@ -235,6 +235,10 @@ enum class ImpostorMode {
                     // foliage's depth range / the layer count) before the far region's start
   ByProjectedSize,  // any box whose projected size is below switchPixels, whatever its depth
 };
+// How a box's stored views are drawn: the paper's crossed polygons (each view on its own plane
+// through the box, alpha-blended by how squarely it faces the viewer: parallax inside the box) or,
+// before 0.7, one polygon facing the viewer blending the two views nearest its direction.
+enum class ImpostorShape { CrossedPolygons, FacingPolygon };
 // mode other than Off needs CanopyDesc.impostors.enable, rebuildBudgetMs 0 and a resident mesh.
 // A box is an impostor where its projected size (bounding-sphere diameter, pixels of the layer
 // images) is at most switchPixels; its leaves fade out and its impostor in while the size falls
@@ -244,14 +248,18 @@ enum class ImpostorMode {
   X(ImpostorMode, mode, ImpostorMode::Off, Enum, 0, 2, "Off | FarRegion | ByProjectedSize", "which boxes are drawn as impostors") \
   X(float, switchPixels, 64.0f, Closed, 1, 4096, "pixels", "projected size at and below which a box is an impostor")   \
   X(float, band, 0.2f, Closed, 0, 4, "", "the fade's width above switchPixels, relative; 0: a hard switch")            \
-  X(bool, debugView, false, None, 0, 0, "", "colour leaves and impostors by their box's level (also with mode Off)")
+  X(bool, debugView, false, None, 0, 0, "", "colour leaves and impostors by their box's level (also with mode Off)") \
+  X(ImpostorShape, shape, ImpostorShape::CrossedPolygons, Enum, 0, 1, "CrossedPolygons | FacingPolygon", "how a box's views are drawn (FacingPolygon: before 0.7)")
 CANOPY_PARAM_STRUCT(ImpostorSettings, CANOPY_IMPOSTOR_SETTINGS)
 
+// Which views a box stores: Lluch et al.'s six diagonally aligned planes (Figure 6; each contains two
+// opposite edges of the box), or (before 0.7) those and the six box faces, twice the storage.
+enum class ImpostorViews { Diagonal6, FacesAndDiagonals12 };
 // Fixed at creation: the foliage's box hierarchy and its baked views. Boxes of hierarchy levels
-// 0..maxLevel get views (12 each: six faces, six diagonal planes), level by level from the top
-// while memoryBudget allows; a box over maxBoxTriangles (its subtree's leaves) gets none (its
-// children do): baking costs 12 draws of a box's leaves, and a box this large is rarely small on
-// screen. Levels count boxes with other leaves than their only child's (an L-system's bracketed
+// 0..maxLevel get views (6 or 12 each, `views`; tilePixels^2 x 8 bytes each: RGBA8 colour, 32-bit
+// depth), level by level from the top while memoryBudget allows; a box over maxBoxTriangles (its
+// subtree's leaves) gets none (its children do): baking costs a draw of a box's leaves per view,
+// and a box this large is rarely small on screen. Levels count boxes with other leaves than their only child's (an L-system's bracketed
 // axiom is not a level of its own). When not even the top level fits memoryBudget (RGBA8 colour
 // and 32-bit depth), the tiles are halved (down to 8 pixels) before the creation is refused.
 #define CANOPY_IMPOSTOR_DESC(X)                                                                                         \
@@ -261,7 +269,8 @@ CANOPY_PARAM_STRUCT(ImpostorSettings, CANOPY_IMPOSTOR_SETTINGS)
   X(uint64_t, maxBoxTriangles, 1'000'000, Closed, 1, 1099511627776.0, "triangles", "a larger box gets no views")      \
   X(uint64_t, memoryBudget, 256ull << 20, Closed, 1048576, 17179869184.0, "bytes", "the views' colour and depth")      \
   X(uint32_t, maxLeavesPerBox, 256, Closed, 1, 1073741824, "leaves", "models without a box hierarchy (glTF): k-d split of the leaf roots") \
-  X(float, minVolumeRatio, 0.0f, Closed, 0, 1, "", "a box under this share of its parent box's volume gets no views (Lluch et al.'s level limit; 0: none)")
+  X(float, minVolumeRatio, 0.0f, Closed, 0, 1, "", "a box under this share of its parent box's volume gets no views (Lluch et al.'s level limit; 0: none)") \
+  X(ImpostorViews, views, ImpostorViews::Diagonal6, Enum, 0, 1, "Diagonal6 | FacesAndDiagonals12", "the views stored per box (FacesAndDiagonals12: before 0.7)")
 CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 
 // Leaf shading (Habel et al.'s leaf model, section III; docs/design.md "Layers: leaf shading"): on
@@ -635,7 +644,9 @@ struct LayerStats {
   uint32_t impostorBoxes = 0;        // boxes in the hierarchy
   uint32_t impostorBakedBoxes = 0;   // of which have views
   uint32_t impostorTilePixels = 0;   // the views' side after the budget
-  uint64_t impostorBytes = 0;        // the views' colour and depth
+  uint64_t impostorBytes = 0;        // the views' colour and depth (the atlas as allocated)
+  uint32_t impostorViewsPerBox = 0;  // 6 or 12 (ImpostorDesc.views)
+  uint64_t impostorBytesPerBox = 0;  // a box's views: impostorViewsPerBox x tile^2 x 8 bytes
   double impostorBakeMs = 0;         // wall clock of the bake (creation), or of reading its cache
   // The views' file cache (CanopyDesc.rootCacheDir, beside the leaf roots', for a model with a
   // path): whether it was read, else why not and whether it was written.

@@ -53,11 +53,16 @@ void printHelp() {
       "  --delay MODE        layer delay: exact or approx (default exact)\n"
       "  --method M          2d (the paper's layers) or per-vertex (the 3D baseline: every vertex bent through\n"
       "                      its branch hierarchy each frame, Habel); the window switches with M (default 2d)\n"
+      "  --per-vertex-wind W field (Kaimal wind field, damped oscillators per level) or uniform (one wind,\n"
+      "                      noise per branch: before 0.7) for the per-vertex baseline (default field)\n"
       "  --impostors MODE    off, far (boxes in the far region) or size (any box) drawn as Lluch et al.'s\n"
       "                      impostors when their projected size is below --impostor-pixels; re-slices\n"
       "                      are then at once (default off)\n"
       "%s"
       "  --impostor-debug    colour leaves and impostors by their box's hierarchy level\n"
+      "  --impostor-views N  6 (Lluch et al.'s diagonal planes) or 12 (and the box faces: before 0.7) (default 6)\n"
+      "  --impostor-shape S  crossed (the paper's crossed polygons) or facing (one polygon facing the viewer,\n"
+      "                      two views blended: before 0.7) (default crossed)\n"
       "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
       "                      (default none)\n"
       "Light and leaf shading (Habel: specular front, diffuse back, transmission on the unlit side):\n"
@@ -275,6 +280,21 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (std::string(v) == "2d") o->method = AnimationMode::Layers2D;
       else if (std::string(v) == "per-vertex") o->method = AnimationMode::PerVertex;
       else return bad(quoted(v) + " is not 2d or per-vertex");
+    } else if (a == "--per-vertex-wind") {
+      if (!takes()) return bad("needs field or uniform");
+      if (std::string(v) == "field") o->perVertexWind = PerVertexWind::KaimalField;
+      else if (std::string(v) == "uniform") o->perVertexWind = PerVertexWind::UniformNoise;
+      else return bad(quoted(v) + " is not field or uniform");
+    } else if (a == "--impostor-views") {
+      if (!takes()) return bad("needs 6 or 12");
+      if (std::string(v) == "6") o->impostorViews = ImpostorViews::Diagonal6;
+      else if (std::string(v) == "12") o->impostorViews = ImpostorViews::FacesAndDiagonals12;
+      else return bad(quoted(v) + " is not 6 or 12");
+    } else if (a == "--impostor-shape") {
+      if (!takes()) return bad("needs crossed or facing");
+      if (std::string(v) == "crossed") o->impostorShape = ImpostorShape::CrossedPolygons;
+      else if (std::string(v) == "facing") o->impostorShape = ImpostorShape::FacingPolygon;
+      else return bad(quoted(v) + " is not crossed or facing");
     } else if (a == "--impostors") {
       if (!takes()) return bad("needs off, far or size");
       if (std::string(v) == "off") o->impostors = ImpostorMode::Off;
@@ -442,6 +462,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.simulation.wind.gust = o.windGust;
   p.dynamics.delay = o.delay;
   p.animation = o.method;
+  p.perVertex.wind = o.perVertexWind;
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
   p.layers.errorThresholdPixels = o.resliceErrorPixels;
   p.layers.policy = o.reslice;
@@ -455,6 +476,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.impostors.mode = o.impostors;
   p.layers.impostors.switchPixels = o.impostorPixels;
   p.layers.impostors.debugView = o.impostorDebug;
+  p.layers.impostors.shape = o.impostorShape;
   // Impostors are drawn by re-slices at once (ImpostorSettings).
   if (o.impostors != ImpostorMode::Off || o.impostorDebug) p.layers.rebuildBudgetMs = 0.0f;
   p.composite.debugView = o.debug;
@@ -629,6 +651,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));
   desc.allowPerVertex = bothMethods(o);
   desc.impostors.enable = withImpostors(o);
+  desc.impostors.views = o.impostorViews;
   // The preparation's own peak above what is resident before it (the model): issue 16's
   // "bytes per face" of preparation, printed below.
   const uint64_t residentBefore = cli::residentBytes();

@@ -42,11 +42,14 @@ struct Options {
   // The 2D method or the per-vertex baseline (Habel), on the same scene; the window can switch
   // (key M) when the context allows both, which it does in window mode and with per-vertex.
   AnimationMode method = AnimationMode::Layers2D;
+  PerVertexWind perVertexWind = PerVertexWind::KaimalField;  // PerVertexParams.wind
   // Lluch et al.'s impostors for the far boxes (LayerSettings.impostors; docs/design.md
   // "Impostors"); the window cycles the mode (key I) and the debug view (key B).
   ImpostorMode impostors = ImpostorMode::Off;
   float impostorPixels = 64.0f;        // ImpostorSettings.switchPixels
   bool impostorDebug = false;          // colour leaves and impostors by their box's level
+  ImpostorViews impostorViews = ImpostorViews::Diagonal6;            // ImpostorDesc.views
+  ImpostorShape impostorShape = ImpostorShape::CrossedPolygons;      // ImpostorSettings.shape
   // Light and leaf shading (LayerSettings; docs/design.md "Layers: leaf shading")
   Float3 light = LayerSettings{}.lightDirection;     // towards the light, world space
   Float3 lightColor = LayerSettings{}.lightColor;

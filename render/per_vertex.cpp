@@ -103,6 +103,13 @@ gpu::BendFrame makeBendFrame(const PerVertexParams& p, const WindParams& wind, c
   f.time = time;
   f.previousTime = previousTime;
   f.seed = p.seed;
+  f.windModel = p.wind == PerVertexWind::KaimalField ? BEND_WIND_FIELD : BEND_WIND_UNIFORM;
+  f.damping = glm::vec4(p.damping[0], p.damping[1], p.damping[2], p.damping[3]);
+  f.leafDamping = p.leafDamping;
+  f.integralScale = p.integralScale;
+  // The field's coordinates: from the fallback trunk's root, in the simulation's domain units (one
+  // tile of the plane), like the 2D method's wind.
+  f.fieldOrigin = glm::vec4(glm::vec3(f.root), std::max(plane.tileSize, 1e-6f));
   return f;
 }
 

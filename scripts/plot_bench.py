@@ -44,8 +44,11 @@ def plot_pervertex(path, out, title):
         rows = list(csv.DictReader(f))
     faces = [float(r["faces"]) for r in rows]
     fig, (ax, rx) = plt.subplots(1, 2, figsize=(9.0, 3.6), dpi=100)
-    for key, label in (("2d_still", "2D method, still camera"), ("2d_turning", "2D method, camera turning (re-slice every frame)"),
-                       ("per_vertex", "per-vertex baseline (Habel)")):
+    series = [("2d_still", "2D method, still camera"), ("2d_turning", "2D method, camera turning (re-slice every frame)"),
+              ("per_vertex", "per-vertex baseline (Habel; wind field)")]
+    if "per_vertex_uniform_ms" in rows[0]:
+        series.append(("per_vertex_uniform", "per-vertex baseline, uniform wind (before 0.7)"))
+    for key, label in series:
         med = [float(r[key + "_ms"]) for r in rows]
         p95 = [float(r[key + "_p95"]) for r in rows]
         ax.plot(faces, med, marker="o", label=label)

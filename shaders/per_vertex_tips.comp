@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // The per-vertex baseline's motion table (shared/bend.h): once per frame, for every placed copy
 // (CanopyInstance: its model-space wind and wind phase, bendFrameForCopy), the tip bend of every
-// branch (spectral noise at its level's flexibility and frequency) and of every leaf, at this
+// branch (the wind field at its base through its level's oscillator) and of every leaf, at this
 // frame's time and, for motion vectors, at the previous frame's. The vertex shader then reads a
 // branch's motion for each of its vertices instead of synthesising it again (Habel IV: the
 // hierarchy's data in a table every vertex indexes).
@@ -28,9 +28,10 @@ void main() {
     uint base = copy * sets * f.tipCount;
     bool branch = i < f.branchCount;
     uint level = branch ? branches[i].level : 0u;
-    tipTable[base + i] = branch ? bendBranchTip(f, f.time, level, i) : bendLeafTip(f, f.time, i - f.branchCount);
+    vec3 origin = branch ? branches[i].origin : vec3(0.0);
+    tipTable[base + i] = branch ? bendBranchTip(f, f.time, level, i, origin) : bendLeafTip(f, f.time, i - f.branchCount);
     if (sets == 2u)
-      tipTable[base + f.tipCount + i] = branch ? bendBranchTip(f, f.previousTime, level, i)
+      tipTable[base + f.tipCount + i] = branch ? bendBranchTip(f, f.previousTime, level, i, origin)
                                                : bendLeafTip(f, f.previousTime, i - f.branchCount);
   }
 }

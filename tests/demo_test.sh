@@ -75,11 +75,21 @@ pv=$(sway_range "$out/pv") pvcalm=$(sway_range "$out/pvcalm")
 awk -v w="$pv" -v c="$pvcalm" 'BEGIN { exit !(w >= 1.0 && c == 0) }' ||
   fail "per-vertex sway: wind $pv px (expected >= 1), no wind $pvcalm px (expected 0)"
 echo "per-vertex sway over 24 frames at 320x240: wind $pv px, no wind $pvcalm px"
+# The uniform wind of before 0.7 is still reachable and sways too.
+"$demo" --method per-vertex --per-vertex-wind uniform --frames 24 --size 320x240 --warmup 1 --no-mp4 --out "$out/pvu" >/dev/null 2>&1 ||
+  fail "per-vertex uniform run: exit $?"
+pvu=$(sway_range "$out/pvu")
+awk -v w="$pvu" 'BEGIN { exit !(w >= 1.0) }' || fail "per-vertex uniform sway: $pvu px (expected >= 1)"
 
 # Impostors (issue 18) on a field, every box with views an impostor, with the debug view (validation on).
 "$demo" --scene field --faces 60K --impostors size --impostor-pixels 4096 --impostor-debug --frames 2 --size 160x120 \
   --warmup 0 --validate --no-mp4 --out "$out/imp" >/dev/null 2>"$out/stderr5" || fail "impostors: exit $? ($(tail -5 "$out/stderr5"))"
 [ -s "$out/imp/frame_0001.png" ] || fail "impostor frames missing"
+# The twelve views and the facing polygon of before 0.7 (validation on).
+"$demo" --scene field --faces 60K --impostors size --impostor-pixels 4096 --impostor-views 12 --impostor-shape facing \
+  --frames 2 --size 160x120 --warmup 0 --validate --no-mp4 --out "$out/imp12" >/dev/null 2>"$out/stderr8" ||
+  fail "impostors, 12 views, facing: exit $? ($(tail -5 "$out/stderr8"))"
+[ -s "$out/imp12/frame_0001.png" ] || fail "impostor frames (12 views) missing"
 
 # No display: --window says so and renders headless.
 env -u DISPLAY -u WAYLAND_DISPLAY "$demo" --window --frames 2 --size 96x72 --no-mp4 --out "$out/fallback" \
@@ -100,6 +110,8 @@ expect_refusal "--frames" --frames 0
 expect_refusal "--layers" --layers "5(3-1)"
 expect_refusal "palm" --scene palm
 expect_refusal "--impostors" --impostors near
+expect_refusal "--impostor-views" --impostor-views 8
+expect_refusal "--per-vertex-wind" --per-vertex-wind gusty
 expect_refusal "--size" --size 10x10
 expect_refusal "north" --wind north
 expect_refusal "--strength" --strength -1

@@ -62,9 +62,11 @@ std::vector<gpu::BendProbeVertex> probeVertices(const VegetationModel& m, uint32
   return v;
 }
 
-gpu::BendFrame windFrame(const VegetationModel& m, float strength, float t, uint32_t seed = 1) {
+gpu::BendFrame windFrame(const VegetationModel& m, float strength, float t, uint32_t seed = 1,
+                         PerVertexWind model = PerVertexWind::KaimalField) {
   PerVertexParams p;
   p.seed = seed;
+  p.wind = model;
   WindParams w;
   w.strength = strength;
   w.frequency = 0.5f;
@@ -181,9 +183,12 @@ TEST_F(PerVertexTest, TheGpuBendMatchesTheCpuAndZeroWindMovesNothingExactly) {
   const VegetationModel m = treeWithHierarchy(20000);
   ASSERT_FALSE(m.branches.empty());
   const std::vector<gpu::BendProbeVertex> in = probeVertices(m);
-  // With wind: the GPU's sin/cos/pow/tanh against the CPU's, within 1e-5 of the model's size.
+  // With wind: the GPU's sin/cos/pow/tanh against the CPU's, within 1e-5 of the model's size, for
+  // the wind field (default) and the uniform wind of before 0.7.
+  for (PerVertexWind model : {PerVertexWind::KaimalField, PerVertexWind::UniformNoise})
   for (float t : {0.7f, 2.3f}) {
-    const gpu::BendFrame f = windFrame(m, 2.0f, t);
+    SCOPED_TRACE(model == PerVertexWind::KaimalField ? "Kaimal field" : "uniform noise");
+    const gpu::BendFrame f = windFrame(m, 2.0f, t, 1, model);
     const std::vector<glm::vec3> gpu = gpuBend(m, in, f);
     ASSERT_EQ(gpu.size(), in.size());
     float worst = 0.0f, moved = 0.0f;
@@ -561,4 +566,167 @@ TEST(PerVertexHierarchy, AHostMeshCarriesItsHierarchyThroughMeshDesc) {
   d.vertexW = nullptr;
   s = createModel(d, &model);
   EXPECT_NE(s.message().find("vertexBranches, vertexW and branches"), std::string::npos) << s.message();
+}
+
+// The wind field of the per-vertex baseline (shared/bend.h bendFieldResponse; docs/design.md
+// "Per-vertex wind baseline"), evaluated on the CPU: the GPU runs the same header
+// (PerVertexTest.TheGpuBendMatchesTheCpuAndZeroWindMovesNothingExactly).
+namespace {
+
+gpu::BendFrame fieldFrame(float meanSpeed, float gust = 0.3f) {
+  PerVertexParams p;
+  WindParams w;
+  w.strength = meanSpeed;
+  w.baseline = 1.0f;
+  w.modulation = 0.0f;
+  w.gust = gust;
+  SimulationPlane plane;
+  plane.tileSize = 2.0f;  // two world units a domain unit
+  return makeBendFrame(p, w, plane, glm::vec3(-1, 0, -1), glm::vec3(1, 2, 1), 0.0f, 0.0f);
+}
+
+// Pearson correlation of two series.
+double correlation(const std::vector<double>& a, const std::vector<double>& b) {
+  double ma = 0, mb = 0;
+  for (size_t i = 0; i < a.size(); ++i) ma += a[i], mb += b[i];
+  ma /= double(a.size()), mb /= double(b.size());
+  double sab = 0, saa = 0, sbb = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    sab += (a[i] - ma) * (b[i] - mb);
+    saa += (a[i] - ma) * (a[i] - ma);
+    sbb += (b[i] - mb) * (b[i] - mb);
+  }
+  return sab / std::sqrt(saa * sbb);
+}
+
+}  // namespace
+
+TEST(PerVertexWindField, AGustReachesTheLeeSideLaterByTheDistanceOverTheMeanSpeed) {
+  // Taylor's frozen turbulence: the field at a point d downwind is the field here d / U earlier.
+  const gpu::BendFrame f = fieldFrame(1.5f);
+  const glm::vec3 wind = glm::vec3(f.wind), p(0.1f, 0.8f, -0.2f);
+  const float dWorld = 0.6f, dDomain = dWorld / f.fieldOrigin.w, lag = dDomain / f.wind.w;
+  std::vector<double> here, lee, leeLagged;
+  double worst = 0;
+  for (float t = 0.0f; t < 60.0f; t += 0.05f) {
+    const double a = gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 0u, 0u);
+    const double b = gpu::bendFieldResponse(f, p + dWorld * wind, t + lag, 1e6f, 1.0f, 0u, 0u);
+    worst = std::max(worst, std::abs(a - b));
+    here.push_back(a);
+    lee.push_back(gpu::bendFieldResponse(f, p + dWorld * wind, t, 1e6f, 1.0f, 0u, 0u));
+  }
+  const double sameTime = correlation(here, lee);
+  std::printf("gust %.2f world units downwind: arrives %.3f s later (|difference| at that lag %.2e); correlation at the same time %.3f\n",
+              dWorld, lag, worst, sameTime);
+  EXPECT_LT(worst, 1e-3);
+  EXPECT_LT(sameTime, 0.95) << "the lee side sways with the windward side: the field does not travel";
+}
+
+TEST(PerVertexWindField, TheFieldDecorrelatesAcrossThePlant) {
+  // Across the wind nearby points feel nearly the same wind, points a quarter of a domain unit and
+  // more apart clearly less alike.
+  const gpu::BendFrame f = fieldFrame(1.5f);
+  const glm::vec3 across = glm::vec3(f.lateral), p(0.0f, 0.5f, 0.0f);
+  std::vector<double> base;
+  std::vector<std::vector<double>> at(3);
+  const float offsets[3] = {0.02f, 0.5f, 2.0f};  // world units (the frame: two a domain unit)
+  for (float t = 0.0f; t < 200.0f; t += 0.05f) {
+    base.push_back(gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 1u, 0u));
+    for (int k = 0; k < 3; ++k) at[k].push_back(gpu::bendFieldResponse(f, p + offsets[k] * across, t, 1e6f, 1.0f, 1u, 0u));
+  }
+  double c[3];
+  for (int k = 0; k < 3; ++k) c[k] = correlation(base, at[k]);
+  std::printf("v component across the wind: correlation %.3f at %.2f, %.3f at %.2f, %.3f at %.2f world units\n", c[0],
+              offsets[0], c[1], offsets[1], c[2], offsets[2]);
+  // Eight components: the slowest (wavelengths of several domain units) stay coherent over any
+  // plant, so the correlation levels off instead of reaching 0 (stated bounds: > 0.98 at 1 % of a
+  // domain unit, < 0.8 from a quarter of one).
+  EXPECT_GT(c[0], 0.98);
+  EXPECT_LT(c[1], 0.8);
+  EXPECT_LT(c[2], 0.8);
+}
+
+TEST(PerVertexWindField, ItsVarianceIsKaimalsOverTheBand) {
+  // Unit-variance field before the oscillator: the components' power (the mean of the square over a
+  // long time, no oscillator: f0 far above the band) against the integral of Kaimal's S(f) / sigma^2
+  // over [BEND_FIELD_LOW_HZ, BEND_FIELD_HIGH_HZ] (trapezoids on a log grid). One cosine per octave
+  // band samples the spectrum coarsely: within 25 %.
+  for (float U : {0.5f, 2.0f, 6.0f}) {
+    const gpu::BendFrame f = fieldFrame(U);
+    double power = 0;
+    int n = 0;
+    for (float t = 0.0f; t < 2000.0f; t += 0.013f, ++n) {
+      const double r = gpu::bendFieldResponse(f, glm::vec3(0.3f, 0.4f, 0.1f), t, 1e6f, 1.0f, 0u, 0u);
+      power += r * r;
+    }
+    power /= n;
+    double integral = 0;
+    const int steps = 4000;
+    for (int i = 0; i < steps; ++i) {
+      const double a = BEND_FIELD_LOW_HZ * std::pow(double(BEND_FIELD_HIGH_HZ / BEND_FIELD_LOW_HZ), double(i) / steps);
+      const double b = BEND_FIELD_LOW_HZ * std::pow(double(BEND_FIELD_HIGH_HZ / BEND_FIELD_LOW_HZ), double(i + 1) / steps);
+      integral += 0.5 * (gpu::bendKaimal(float(a), f.integralScale, U) + gpu::bendKaimal(float(b), f.integralScale, U)) * (b - a);
+    }
+    std::printf("mean speed %.1f: the field's variance %.3f, Kaimal's over the band %.3f (sigma^2 = 1 over all frequencies)\n", U,
+                power, integral);
+    EXPECT_NEAR(power, integral, 0.25 * integral) << "U = " << U;
+  }
+}
+
+TEST(PerVertexWindField, EachLevelRespondsAsADampedOscillator) {
+  // H(f) = 1 / (1 - r^2 + 2 i zeta r): static gain 1, 1 / (2 zeta) and a quarter period late at
+  // resonance, falling as 1 / r^2 above it.
+  for (float zeta : {0.05f, 0.2f, 0.6f}) {
+    const glm::vec2 h0 = gpu::bendOscillator(0.0f, 1.3f, zeta), h1 = gpu::bendOscillator(1.3f, 1.3f, zeta),
+                    h10 = gpu::bendOscillator(13.0f, 1.3f, zeta);
+    EXPECT_NEAR(h0.x, 1.0f, 1e-6f);
+    EXPECT_NEAR(h0.y, 0.0f, 1e-6f);
+    EXPECT_NEAR(h1.x, 1.0f / (2.0f * zeta), 1e-4f);
+    EXPECT_NEAR(h1.y, 1.5707963f, 1e-5f);
+    EXPECT_NEAR(h10.x, 1.0f / std::sqrt(99.0f * 99.0f + 400.0f * zeta * zeta), 1e-6f);
+  }
+  // A lightly damped level sways at its own frequency: its response's zero crossings come at about
+  // 2 f0 a second, and its variance exceeds a heavily damped one's.
+  const gpu::BendFrame f = fieldFrame(2.0f);
+  const glm::vec3 p(0.0f, 1.0f, 0.0f);
+  for (float f0 : {0.8f, 2.6f}) {
+    double varLight = 0, varHeavy = 0, last = 0;
+    int crossings = 0, n = 0;
+    const float T = 400.0f;
+    for (float t = 0.0f; t < T; t += 0.01f, ++n) {
+      const double light = gpu::bendFieldResponse(f, p, t, f0, 0.05f, 0u, 0u);
+      const double heavy = gpu::bendFieldResponse(f, p, t, f0, 1.0f, 0u, 0u);
+      varLight += light * light;
+      varHeavy += heavy * heavy;
+      if (n > 0 && (light > 0) != (last > 0)) crossings++;
+      last = light;
+    }
+    const double rate = crossings / (2.0 * T);
+    std::printf("f0 %.1f Hz: zeta 0.05 crosses zero at %.2f Hz (half-rate), variance %.3f; zeta 1.0 variance %.3f\n", f0, rate,
+                varLight / n, varHeavy / n);
+    EXPECT_NEAR(rate, f0, 0.25 * f0);
+    EXPECT_GT(varLight, 2.0 * varHeavy);
+  }
+}
+
+TEST(PerVertexWindField, TheBranchesOfOnePlantSwayApartAndTheUniformWindDoesNot) {
+  // Two level-1 branches on opposite sides of the crown (1.2 world units apart across the wind):
+  // with the field their tips' along-wind bends decorrelate; the uniform wind of before 0.7 gives
+  // each branch its own noise phases but one wind speed, so only the noise differs.
+  gpu::BendFrame field = fieldFrame(2.0f);
+  gpu::BendFrame uniform = field;
+  uniform.windModel = BEND_WIND_UNIFORM;
+  const glm::vec3 a = glm::vec3(field.lateral) * -0.6f + glm::vec3(0, 1.2f, 0), b = glm::vec3(field.lateral) * 0.6f + glm::vec3(0, 1.2f, 0);
+  std::vector<double> fa, fb, ua, ub;
+  for (float t = 0.0f; t < 120.0f; t += 0.02f) {
+    fa.push_back(glm::dot(gpu::bendBranchTip(field, t, 1u, 3u, a), glm::vec3(field.wind)));
+    fb.push_back(glm::dot(gpu::bendBranchTip(field, t, 1u, 3u, b), glm::vec3(field.wind)));
+    ua.push_back(glm::dot(gpu::bendBranchTip(uniform, t, 1u, 3u, a), glm::vec3(field.wind)));
+    ub.push_back(glm::dot(gpu::bendBranchTip(uniform, t, 1u, 3u, b), glm::vec3(field.wind)));
+  }
+  // The same branch id at two places: the field tells them apart, the uniform wind cannot.
+  const double cf = correlation(fa, fb), cu = correlation(ua, ub);
+  std::printf("one branch id at two places 1.2 world units apart: correlation %.3f with the field, %.3f with the uniform wind\n", cf, cu);
+  EXPECT_GT(cu, 0.999);
+  EXPECT_LT(cf, 0.9);
 }

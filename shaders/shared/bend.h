@@ -3,8 +3,11 @@
 // index of its innermost branch and Habel's vector w (its normalised coordinate along that branch
 // and, propagated down the hierarchy, the coordinate at which each ancestor carries it); each
 // branch bends as a beam whose rotation grows along it (the tip more flexible: tapered), driven by
-// spectral noise whose frequencies follow the wind. The same functions run in the vertex shader
-// (shaders/per_vertex.vert), in the probe kernel the tests read back, and on the CPU.
+// a stochastic wind field (Kaimal's turbulence spectrum as random-phase components, frozen and
+// carried by the mean wind over the plant) through a damped oscillator per hierarchy level
+// (Habel VI's spectral synthesis); before 0.7 by one uniform wind and spectral noise per branch
+// (BEND_WIND_UNIFORM). The same functions run in the vertex shader (shaders/per_vertex.vert), in
+// the motion kernel, in the probe kernel the tests read back, and on the CPU.
 #ifndef CANOPY_SHARED_BEND_H
 #define CANOPY_SHARED_BEND_H
 #include "interop.h"
@@ -13,6 +16,20 @@
 #define BEND_NO_BRANCH 0xffffffffu    // no hierarchy: a trunk and a radial branch from the position (fallback)
 #define BEND_LEAF_ONLY 0xfffffffeu    // only the leaf level moves (grass blades; ground, rock: nothing)
 #define BEND_NO_PARENT 0xffffffffu
+
+// BendFrame.windModel (PerVertexWind)
+#define BEND_WIND_FIELD 0u    // Kaimal field through damped oscillators per level (default)
+#define BEND_WIND_UNIFORM 1u  // one wind speed, Kolmogorov noise per branch (before 0.7)
+// The field's random-phase components: log-spaced bands over [LOW, HIGH] Hz (the levels' sway
+// frequencies and the leaves' lie inside).
+#define BEND_FIELD_COMPONENTS 8u
+#define BEND_FIELD_LOW_HZ 0.04f
+#define BEND_FIELD_HIGH_HZ 10.0f
+// Each component's wavefront tilts across the wind by a random slope in [-SPREAD, SPREAD] (lateral
+// and vertical): two points dx apart across the wind then share a component of wavenumber k with
+// coherence sinc(2 pi SPREAD k dx), which at SPREAD 3 falls to 1/2 at k dx = 0.1 as Davenport's
+// exp(-7 k dx) does (wind engineering's usual coherence decay for lateral separations).
+#define BEND_FIELD_SPREAD 3.0f
 
 // BendFrame.flags
 #define BEND_FLAG_HIERARCHY 1u  // the per-vertex BendVertex buffer is bound (else every vertex is BEND_NO_BRANCH)
@@ -81,8 +98,15 @@ struct BendFrame {
   // The previous frame's camera (projection x view; this frame's on the first frame and after a
   // camera cut): motion vectors carry the camera's motion as well as the bend's (issue 34).
   mat4 previousViewProj;
+  // The wind field (BEND_WIND_FIELD; docs/design.md "Per-vertex wind baseline").
+  vec4 damping;          // levels 0..3: damping ratio zeta of each level's oscillator
+  vec4 fieldOrigin;      // xyz: where the field's coordinates start (the root); w: world units per domain unit
+  float leafDamping;     // the leaf level's zeta
+  float integralScale;   // Kaimal's length scale L, domain units
+  uint windModel;        // BEND_WIND_*
+  uint pad0;
 };
-CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 4 + 64)
+CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 4 + 64 + 32 + 16)
 
 // The bend frame as one placed copy sees it (CanopyInstance; docs/design.md "Instances"): the wind
 // and its lateral direction taken into the copy's model space by the inverse of its linear part
@@ -148,9 +172,80 @@ CANOPY_INLINE float bendWindSpeed(BendFrame f, float t) {
   return f.strength * (f.baseline + f.modulation * sin(6.2831853f * f.windFrequency * t));
 }
 
+// Kaimal's one-sided spectrum of a wind component over its variance, S(f) / sigma^2 =
+// (4 L / U) / (1 + 6 f L / U)^(5/3) (Kaimal et al. 1972; IEC 61400-1's turbulence model): flat
+// below the energy-containing scale U / L, Kolmogorov's f^(-5/3) above it, and it moves to higher
+// frequencies as the mean speed U grows.
+CANOPY_INLINE float bendKaimal(float frequency, float L, float U) {
+  return (4.0f * L / U) / pow(1.0f + 6.0f * frequency * L / U, 5.0f / 3.0f);
+}
+
+// The response of a damped oscillator (natural frequency f0, damping ratio zeta) to a unit force
+// at frequency f, relative to its static response: gain |H| and phase lag (radians), H(r) =
+// 1 / (1 - r^2 + 2 i zeta r), r = f / f0.
+CANOPY_INLINE vec2 bendOscillator(float frequency, float f0, float zeta) {
+  float r = frequency / max(f0, 1e-3f);
+  float re = 1.0f - r * r, im = 2.0f * zeta * r;
+  return vec2(1.0f / sqrt(re * re + im * im), bendAtan2(im, re));
+}
+
+// The wind field's fluctuation at model-space point p and time t as an oscillator (f0, zeta) there
+// responds to it, in units of the component's standard deviation (unit variance before the
+// oscillator): BEND_FIELD_COMPONENTS random-phase cosines of Kaimal amplitudes sqrt(2 S df),
+// frozen and carried along the wind at the mean speed (Taylor's hypothesis: a gust reaches the lee
+// side later) and decorrelated across it (each component's wavefront tilted by a random slope in
+// the lateral and vertical directions, BEND_FIELD_SPREAD), each through H. `component` 0: along the wind (u), 1:
+// across it (v); `ownPhase` != 0 adds phases of its own (a leaf: eddies smaller than the leaves'
+// spacing, so neighbouring leaves flutter apart).
+CANOPY_INLINE float bendFieldResponse(BendFrame f, vec3 p, float t, float f0, float zeta, uint component, uint ownPhase) {
+  const float tau = 6.2831853f;
+  float U = max(abs(f.wind.w), 1e-3f);
+  float L = max(f.integralScale, 1e-4f);
+  vec3 rel = (p - vec3(f.fieldOrigin)) / max(f.fieldOrigin.w, 1e-9f);
+  float sAlong = dot(rel, vec3(f.wind)), sLat = dot(rel, vec3(f.lateral)), sUp = dot(rel, vec3(f.up));
+  float ratio = BEND_FIELD_HIGH_HZ / BEND_FIELD_LOW_HZ;
+  float sum = 0.0f;
+  for (uint j = 0u; j < BEND_FIELD_COMPONENTS; ++j) {
+    uint key = bendHashU(f.seed * 7919u + component * 104729u + j * 31u) * 4u;
+    // Band j of the log-spaced bands; its frequency jittered within it (no common period).
+    float lo = BEND_FIELD_LOW_HZ * pow(ratio, float(j) / float(BEND_FIELD_COMPONENTS));
+    float hi = BEND_FIELD_LOW_HZ * pow(ratio, float(j + 1u) / float(BEND_FIELD_COMPONENTS));
+    float fj = lo + (hi - lo) * (0.25f + 0.5f * bendHash(key));
+    float amp = sqrt(2.0f * bendKaimal(fj, L, U) * (hi - lo));
+    float k = fj / U;  // cycles per domain unit along the wind
+    float slopeLat = BEND_FIELD_SPREAD * (2.0f * bendHash(key + 1u) - 1.0f);
+    float slopeUp = BEND_FIELD_SPREAD * (2.0f * bendHash(key + 2u) - 1.0f);
+    float phase = bendHash(key + 3u);
+    if (ownPhase != 0u) phase += bendHash(bendHashU(ownPhase) ^ key);
+    vec2 h = bendOscillator(fj, f0, zeta);
+    // The phase in cycles, reduced to one before the cosine: a GPU's cos is only accurate near
+    // [-pi, pi] (far from it llvmpipe's drifted ~1e-3 from the CPU's).
+    float cycles = fract(fj * t - k * sAlong + k * (slopeLat * sLat + slopeUp * sUp) + phase);
+    sum += amp * h.x * cos(tau * cycles - h.y);
+  }
+  return sum;
+}
+
+// The tip bend with the wind field (BEND_WIND_FIELD): the mean wind's drag as before (quasi-static,
+// flexibility x s|s|, s = speed(t) / referenceSpeed), plus the fluctuation's drag linearised about
+// the mean speed U (2 U u' / referenceSpeed^2, u' = gust x U x the field's response at p, so gust is
+// the turbulence intensity sigma_u / U), across the wind the v component scaled by `lateral`.
+CANOPY_INLINE vec3 bendFieldTip(BendFrame f, vec3 p, float t, float flexibility, float f0, float zeta, uint ownPhase) {
+  float u = bendWindSpeed(f, t) / max(f.referenceSpeed, 1e-6f);
+  float m = abs(f.wind.w) / max(f.referenceSpeed, 1e-6f);
+  float gain = 2.0f * flexibility * m * m * f.gust;
+  float along = flexibility * u * abs(u) + gain * bendFieldResponse(f, p, t, f0, zeta, 0u, ownPhase);
+  float across = gain * f.lateral.w * bendFieldResponse(f, p, t, f0, zeta, 1u, ownPhase);
+  if (f.strength == 0.0f) return vec3(0.0f);
+  vec3 b = along * vec3(f.wind) + across * vec3(f.lateral);
+  float a = sqrt(dot(b, b));
+  if (a <= 0.0f) return vec3(0.0f);
+  return b * (f.maxAngle * bendTanh(a / f.maxAngle) / a);
+}
+
 // The tip bend of one branch (or leaf) as a vector: its direction the way the branch leans, its
-// length the angle in radians. Drag grows with the square of the speed (the flexibility is the
-// bend at the reference speed); the noise frequencies
+// length the angle in radians (BEND_WIND_UNIFORM, before 0.7). Drag grows with the square of the
+// speed (the flexibility is the bend at the reference speed); the noise frequencies
 // scale with the mean speed (a stronger wind sways faster); a lateral noise sways across the wind.
 CANOPY_INLINE vec3 bendTip(BendFrame f, float t, float flexibility, float frequency, uint key) {
   float u = bendWindSpeed(f, t) / max(f.referenceSpeed, 1e-6f);
@@ -188,16 +283,21 @@ CANOPY_INLINE void bendAbout(vec3 pivot, vec3 axis, vec3 tip, float x, float tap
 
 CANOPY_INLINE float bendW(uint w, uint level) { return float((w >> (8u * level)) & 255u) * (1.0f / 255.0f); }
 
-// The tip bend of branch `id` (at `level`) and of leaf `leaf` at time t: what the motion kernel
-// (shaders/per_vertex_tips.comp) writes once per branch and leaf each frame, so the vertex shader
-// reads a branch's motion instead of synthesising it for each of its vertices.
-CANOPY_INLINE vec3 bendBranchTip(BendFrame f, float t, uint level, uint id) {
+// The tip bend of branch `id` (at `level`, its base at `origin`) and of leaf `leaf` at time t: what
+// the motion kernel (shaders/per_vertex_tips.comp) writes once per branch and leaf each frame, so
+// the vertex shader reads a branch's motion instead of synthesising it for each of its vertices.
+// With the field a branch feels the wind at its base; a leaf (the kernel has no leaf positions)
+// the field at the root with phases of its own.
+CANOPY_INLINE float bendLevelOf(vec4 v, uint l) { return l == 0u ? v.x : l == 1u ? v.y : l == 2u ? v.z : v.w; }
+CANOPY_INLINE vec3 bendBranchTip(BendFrame f, float t, uint level, uint id, vec3 origin) {
   uint l = min(level, uint(BEND_LEVELS - 1));
-  float flex = l == 0u ? f.flexibility.x : l == 1u ? f.flexibility.y : l == 2u ? f.flexibility.z : f.flexibility.w;
-  float freq = l == 0u ? f.frequency.x : l == 1u ? f.frequency.y : l == 2u ? f.frequency.z : f.frequency.w;
+  float flex = bendLevelOf(f.flexibility, l), freq = bendLevelOf(f.frequency, l);
+  if (f.windModel == BEND_WIND_FIELD) return bendFieldTip(f, origin, t, flex, freq, bendLevelOf(f.damping, l), 0u);
   return bendTip(f, t, flex, freq, id + 2u);
 }
 CANOPY_INLINE vec3 bendLeafTip(BendFrame f, float t, uint leaf) {
+  if (f.windModel == BEND_WIND_FIELD)
+    return bendFieldTip(f, vec3(f.fieldOrigin), t, f.leafFlexibility, f.leafFrequency, f.leafDamping, leaf + 1u);
   return bendTip(f, t, f.leafFlexibility, f.leafFrequency, 0x9e3779b9u ^ leaf);
 }
 
@@ -229,12 +329,19 @@ CANOPY_INLINE vec3 bendApply(BendFrame f, BendChain chain, BendTips tips, BendVe
     float r = sqrt(dot(radial, radial));
     if (r > 1e-6f * max(f.root.w, 1e-6f)) {
       vec3 dir = radial / r;
-      float az = bendAtan2(dot(dir, vec3(f.lateral)), dot(dir, vec3(f.wind)));
-      float shift = (0.6f * sin(az) + 0.4f * cos(2.0f * az)) / max(f.frequency.y, 1e-3f);
-      vec3 tip = bendTip(f, t + shift, f.flexibility.y, f.frequency.y, 1u);
+      vec3 tip;
+      if (f.windModel == BEND_WIND_FIELD) {
+        // The field where the part is: neighbouring parts feel nearly the same wind.
+        tip = bendFieldTip(f, ref, t, f.flexibility.y, f.frequency.y, f.damping.y, 0u);
+      } else {
+        float az = bendAtan2(dot(dir, vec3(f.lateral)), dot(dir, vec3(f.wind)));
+        float shift = (0.6f * sin(az) + 0.4f * cos(2.0f * az)) / max(f.frequency.y, 1e-3f);
+        tip = bendTip(f, t + shift, f.flexibility.y, f.frequency.y, 1u);
+      }
       bendAbout(vec3(f.root) + h * up, dir, tip, clamp(r / max(f.root.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
     }
-    vec3 tip0 = bendTip(f, t, f.flexibility.x, f.frequency.x, 0u);
+    vec3 tip0 = f.windModel == BEND_WIND_FIELD ? bendFieldTip(f, vec3(f.root), t, f.flexibility.x, f.frequency.x, f.damping.x, 0u)
+                                               : bendTip(f, t, f.flexibility.x, f.frequency.x, 0u);
     bendAbout(vec3(f.root), up, tip0, clamp(h / max(f.up.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
     return p;
   }
@@ -252,7 +359,7 @@ CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool
   BendTips tips;
   tips.leaf = hasLeaf ? bendLeafTip(f, t, leaf) : vec3(0.0f);
   for (uint i = 0u; i < uint(BEND_LEVELS); ++i)
-    tips.level[i] = i < chain.count ? bendBranchTip(f, t, chain.b[i].level, chain.id[i]) : vec3(0.0f);
+    tips.level[i] = i < chain.count ? bendBranchTip(f, t, chain.b[i].level, chain.id[i], chain.b[i].origin) : vec3(0.0f);
   return bendApply(f, chain, tips, v, hasLeaf, leafRoot, p, t, n);
 }
 

@@ -393,23 +393,35 @@ enum class AnimationMode : uint32_t {
                   // the host's targets, every vertex bent through its branch hierarchy in the vertex
                   // shader; no simulation, layers or composite run
 };
+// The per-vertex baseline's wind (docs/design.md "Per-vertex wind baseline").
+enum class PerVertexWind {
+  KaimalField,   // a stochastic wind field over the plant (Kaimal's spectrum, random-phase components
+                 // carried by the mean wind), each level a damped oscillator responding to it (default)
+  UniformNoise,  // one wind speed for the whole plant, spectral noise per branch (before 0.7)
+};
 // The per-vertex baseline's hierarchical bending. The wind is SimulationParams.wind's: its speed
-// profile strength * (baseline + modulation sin(2 pi frequency t)), its direction from the source
-// sides on the simulation plane, its gust as the relative amplitude of the spectral sway noise.
-// Levels: 0 trunk, 1 branch, 2 twig, 3 finer; then each leaf about its root. Tip bends are given at
-// referenceSpeed (drag makes them grow with the speed squared); the defaults sway the demo's shrub
-// as much as the 2D method does in the same wind (docs/performance.md "The 2D method against the
-// per-vertex baseline"). Sway frequencies scale as 0.5 + 0.5 speed / referenceSpeed.
+// profile strength * (baseline + modulation sin(2 pi frequency t)) as the mean wind, its direction
+// from the source sides on the simulation plane, its gust as the turbulence intensity (the
+// fluctuation's standard deviation over the mean speed). Levels: 0 trunk, 1 branch, 2 twig,
+// 3 finer; then each leaf about its root. Tip bends are given at referenceSpeed (drag makes them
+// grow with the speed squared); with KaimalField each level responds as a damped oscillator of
+// natural frequency `frequency` and damping ratio `damping`. The defaults sway the demo's shrub as
+// much as the 2D method does in the same wind (docs/performance.md "The 2D method against the
+// per-vertex baseline").
 #define CANOPY_PER_VERTEX_PARAMS(X)                                                                                     \
-  X(Float4, flexibility, (Float4{{0.036f, 0.063f, 0.09f, 0.108f}}), Closed, 0, 100, "rad", "tip bend per level")      \
-  X(float, leafFlexibility, 0.27f, Closed, 0, 100, "rad", "a leaf's bend about its root")                             \
-  X(Float4, frequency, (Float4{{0.35f, 0.8f, 1.6f, 2.6f}}), Closed, 0, 100, "Hz", "sway frequency per level")         \
-  X(float, leafFrequency, 4.0f, Closed, 0, 100, "Hz", "a leaf's sway frequency")                                       \
+  X(Float4, flexibility, (Float4{{0.045f, 0.079f, 0.1125f, 0.135f}}), Closed, 0, 100, "rad", "tip bend per level (0.036, 0.063, 0.09, 0.108 before 0.7)") \
+  X(float, leafFlexibility, 0.3375f, Closed, 0, 100, "rad", "a leaf's bend about its root (0.27 before 0.7)")        \
+  X(Float4, frequency, (Float4{{0.35f, 0.8f, 1.6f, 2.6f}}), Closed, 0, 100, "Hz", "natural (sway) frequency per level") \
+  X(float, leafFrequency, 4.0f, Closed, 0, 100, "Hz", "a leaf's natural frequency")                                    \
   X(float, referenceSpeed, 2.0f, AboveMin, 0, 1000, "domain units/s", "the mean wind speed the two above are given at") \
   X(float, lateral, 0.4f, Closed, 0, 1, "", "sway across the wind relative to the sway along it")                      \
   X(float, maxAngle, 0.5f, AboveMin, 0, 1.5, "rad", "saturation of any one bend")                                      \
   X(float, taper, 1.5f, Closed, 0.5, 4, "", "the rotation at coordinate x along a branch is tip * x^taper")            \
-  X(uint32_t, seed, 1, None, 0, 0, "", "noise phases")
+  X(uint32_t, seed, 1, None, 0, 0, "", "noise phases")                                                                   \
+  X(PerVertexWind, wind, PerVertexWind::KaimalField, Enum, 0, 1, "KaimalField | UniformNoise", "the wind model (UniformNoise: before 0.7)") \
+  X(Float4, damping, (Float4{{0.15f, 0.2f, 0.25f, 0.3f}}), Closed, 0.01, 10, "", "KaimalField: damping ratio per level") \
+  X(float, leafDamping, 0.4f, Closed, 0.01, 10, "", "KaimalField: a leaf's damping ratio")                            \
+  X(float, integralScale, 1.0f, AboveMin, 0, 1000, "domain units", "KaimalField: the turbulence's length scale L")
 CANOPY_PARAM_STRUCT(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
 
 // customPlane unset: the plane is fixed from the first frame's camera, one tile over the visible

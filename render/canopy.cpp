@@ -452,6 +452,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
       CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->pending));
+    std::vector<glm::vec4>().swap(c->layers.mesh.leafRootPositions);  // uploaded (or not needed)
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
     // written, motion) are among them.
     const AnimationMode mode = c->params.animation;

@@ -263,6 +263,10 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
   lv.mesh.boundsMin = m.boundsMin;
   lv.mesh.boundsMax = m.boundsMax;
   lv.mesh.leafCount = roots.leafCount();
+  if (lv.desc.keepBend) {
+    lv.mesh.leafRootPositions.resize(roots.leafCount());
+    for (uint32_t l = 0; l < roots.leafCount(); ++l) lv.mesh.leafRootPositions[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
+  }
   CANOPY_TRY(buildMesh(lv, m, foliage, roots, out));
   roots = LeafRoots{};
   CANOPY_TRY(uploadTextures(lv, m));

@@ -44,6 +44,9 @@ struct LayerMesh {
   // model is kept), and a streamed mesh's re-slices copy from it into the ring.
   CompactMesh hostMesh;
   uint32_t leafCount = 0;                 // model leaves (LayerLeafRoot.leaf < leafCount)
+  // With desc.keepBend: each leaf's root position (xyz), for the per-vertex baseline's wind field
+  // (render/per_vertex.cpp uploads it at creation and the context then drops it).
+  std::vector<glm::vec4> leafRootPositions;
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each

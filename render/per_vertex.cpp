@@ -142,6 +142,12 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   std::vector<gpu::BendBranch> table = branches;
   if (table.empty()) table.push_back(gpu::BendBranch{glm::vec3(0), BEND_NO_PARENT, glm::vec3(0, 1, 0), 0});  // never read
   CANOPY_TRY(uploadBuffer(d, deferred, pv.branches, table.data(), branchBytes, kFrameRead));
+  // Each leaf's root, where the motion kernel samples the wind field for it (16 bytes a leaf).
+  std::vector<glm::vec4> leafPositions = lv.mesh.leafRootPositions;
+  leafPositions.resize(std::max<size_t>(pv.leafCount, 1), glm::vec4(0.0f));
+  const VkDeviceSize leafBytes = leafPositions.size() * sizeof(glm::vec4);
+  CANOPY_TRY(createBuffer(d, leafBytes, usage, MemoryUsage::DeviceLocal, &pv.leafPositions, "per-vertex: leaf roots"));
+  CANOPY_TRY(uploadBuffer(d, deferred, pv.leafPositions, leafPositions.data(), leafBytes, kFrameRead));
   if (!pv.hierarchy) {
     CANOPY_TRY(createBuffer(d, 16, usage, MemoryUsage::DeviceLocal, &pv.dummy, "per-vertex: no hierarchy"));
     const uint32_t zero[4] = {};
@@ -169,7 +175,7 @@ void destroyPerVertex(PerVertexAnimation& pv) {
   Device& d = *pv.device;
   destroyGraphicsPipeline(d, pv.pipeline);
   destroyComputePipeline(d, pv.tipsPipeline);
-  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy, &pv.tips}) destroyBuffer(d, *b);
+  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy, &pv.tips, &pv.leafPositions}) destroyBuffer(d, *b);
   pv = PerVertexAnimation{};
 }
 
@@ -220,10 +226,12 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
    })
       .write(frame, rg::Use::TransferDst)
       .write(bendFrame, rg::Use::TransferDst);
-  // The branch table is uploaded at creation and never written again: bound outside the graph.
+  // The branch table and the leaf roots are uploaded at creation and never written again: bound
+  // outside the graph.
   rg::addSlotPass(g, "per-vertex: branch motion",
                   {rg::slot(bendFrame, rg::Use::ComputeStorageRead), rg::outsideGraph(bindBuffer(pv.branches.buffer)),
-                   rg::slot(tips, rg::Use::ComputeStorageWrite), rg::outsideGraph(bindBuffer(lv.instances.buffer.buffer))},
+                   rg::slot(tips, rg::Use::ComputeStorageWrite), rg::outsideGraph(bindBuffer(lv.instances.buffer.buffer)),
+                   rg::outsideGraph(bindBuffer(pv.leafPositions.buffer))},
                   [p](rg::PassContext& c, const rg::Slots& s) {
                     // The shader strides over the rest.
                     const uint32_t n = uint32_t(std::min<uint64_t>(uint64_t(p->current.tipCount) * p->copies, 64u * 4096u));

@@ -27,6 +27,7 @@ struct PerVertexAnimation {
   ComputePipeline tipsPipeline;              // shaders/per_vertex_tips.comp: the motion table
   Buffer frame, bendFrame, branches, dummy;  // dummy: BendVertexBuf when the model has no hierarchy
   Buffer tips;                               // the motion table: per copy, a vec3 per branch and leaf (twice with motion)
+  Buffer leafPositions;                      // a vec4 per leaf: its root (the wind field's sample point)
   uint32_t branchCount = 0, leafCount = 0;
   uint32_t copies = 1;                       // the placed copies the motion table holds (CanopyDesc.instances)
   std::vector<InstanceRun> runs;             // the copies this frame's camera sees

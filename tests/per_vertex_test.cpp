@@ -127,6 +127,12 @@ class PerVertexTest : public GpuTest {
     make(output, nullptr, in.size() * sizeof(glm::vec4), "probe output");
     make(tips, nullptr, std::max<size_t>(f.tipCount, 1) * sizeof(glm::vec3), "probe motion table");
     make(copies, &origin, sizeof origin, "probe copies");
+    // Each leaf's root, as render/per_vertex.cpp uploads it (the wind field's sample point).
+    std::vector<glm::vec4> leafRoots(std::max<uint32_t>(leaves, 1), glm::vec4(0.0f));
+    for (const gpu::BendProbeVertex& v : in)
+      if (v.leaf != BEND_NO_LEAF) leafRoots[v.leaf] = glm::vec4(v.leafRoot, 1.0f);
+    Buffer leafBuf;
+    make(leafBuf, leafRoots.data(), leafRoots.size() * sizeof(glm::vec4), "probe leaf roots");
     std::vector<glm::vec4> out(in.size());
     if (s.ok()) {
       rg::RenderGraph g;
@@ -135,7 +141,8 @@ class PerVertexTest : public GpuTest {
       const uint32_t count = uint32_t(in.size());
       g.addPass("motion table", [&](rg::PassContext& c) {
          return dispatch(dev, c.cmd, tipsPipe, f.tipCount, 1, 1,
-                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(c.buffer(table)), bindBuffer(copies.buffer)},
+                         {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(c.buffer(table)), bindBuffer(copies.buffer),
+                          bindBuffer(leafBuf.buffer)},
                          nullptr, 0);
        }).write(table, rg::Use::ComputeStorageWrite);
       g.addPass("probe", [&](rg::PassContext& c) {
@@ -154,7 +161,7 @@ class PerVertexTest : public GpuTest {
       if (s.ok()) s = readbackBuffer(dev, output, out.data(), out.size() * sizeof(glm::vec4), write);
     }
     EXPECT_TRUE(s.ok()) << s.message();
-    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips, &copies}) destroyBuffer(dev, *b);
+    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips, &copies, &leafBuf}) destroyBuffer(dev, *b);
     destroyComputePipeline(dev, pipe);
     destroyComputePipeline(dev, tipsPipe);
     std::vector<glm::vec3> p;
@@ -609,11 +616,11 @@ TEST(PerVertexWindField, AGustReachesTheLeeSideLaterByTheDistanceOverTheMeanSpee
   std::vector<double> here, lee, leeLagged;
   double worst = 0;
   for (float t = 0.0f; t < 60.0f; t += 0.05f) {
-    const double a = gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 0u, 0u);
-    const double b = gpu::bendFieldResponse(f, p + dWorld * wind, t + lag, 1e6f, 1.0f, 0u, 0u);
+    const double a = gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 0u);
+    const double b = gpu::bendFieldResponse(f, p + dWorld * wind, t + lag, 1e6f, 1.0f, 0u);
     worst = std::max(worst, std::abs(a - b));
     here.push_back(a);
-    lee.push_back(gpu::bendFieldResponse(f, p + dWorld * wind, t, 1e6f, 1.0f, 0u, 0u));
+    lee.push_back(gpu::bendFieldResponse(f, p + dWorld * wind, t, 1e6f, 1.0f, 0u));
   }
   const double sameTime = correlation(here, lee);
   std::printf("gust %.2f world units downwind: arrives %.3f s later (|difference| at that lag %.2e); correlation at the same time %.3f\n",
@@ -631,8 +638,8 @@ TEST(PerVertexWindField, TheFieldDecorrelatesAcrossThePlant) {
   std::vector<std::vector<double>> at(3);
   const float offsets[3] = {0.02f, 0.5f, 2.0f};  // world units (the frame: two a domain unit)
   for (float t = 0.0f; t < 200.0f; t += 0.05f) {
-    base.push_back(gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 1u, 0u));
-    for (int k = 0; k < 3; ++k) at[k].push_back(gpu::bendFieldResponse(f, p + offsets[k] * across, t, 1e6f, 1.0f, 1u, 0u));
+    base.push_back(gpu::bendFieldResponse(f, p, t, 1e6f, 1.0f, 1u));
+    for (int k = 0; k < 3; ++k) at[k].push_back(gpu::bendFieldResponse(f, p + offsets[k] * across, t, 1e6f, 1.0f, 1u));
   }
   double c[3];
   for (int k = 0; k < 3; ++k) c[k] = correlation(base, at[k]);
@@ -656,7 +663,7 @@ TEST(PerVertexWindField, ItsVarianceIsKaimalsOverTheBand) {
     double power = 0;
     int n = 0;
     for (float t = 0.0f; t < 2000.0f; t += 0.013f, ++n) {
-      const double r = gpu::bendFieldResponse(f, glm::vec3(0.3f, 0.4f, 0.1f), t, 1e6f, 1.0f, 0u, 0u);
+      const double r = gpu::bendFieldResponse(f, glm::vec3(0.3f, 0.4f, 0.1f), t, 1e6f, 1.0f, 0u);
       power += r * r;
     }
     power /= n;
@@ -694,8 +701,8 @@ TEST(PerVertexWindField, EachLevelRespondsAsADampedOscillator) {
     int crossings = 0, n = 0;
     const float T = 400.0f;
     for (float t = 0.0f; t < T; t += 0.01f, ++n) {
-      const double light = gpu::bendFieldResponse(f, p, t, f0, 0.05f, 0u, 0u);
-      const double heavy = gpu::bendFieldResponse(f, p, t, f0, 1.0f, 0u, 0u);
+      const double light = gpu::bendFieldResponse(f, p, t, f0, 0.05f, 0u);
+      const double heavy = gpu::bendFieldResponse(f, p, t, f0, 1.0f, 0u);
       varLight += light * light;
       varHeavy += heavy * heavy;
       if (n > 0 && (light > 0) != (last > 0)) crossings++;
@@ -710,23 +717,27 @@ TEST(PerVertexWindField, EachLevelRespondsAsADampedOscillator) {
 }
 
 TEST(PerVertexWindField, TheBranchesOfOnePlantSwayApartAndTheUniformWindDoesNot) {
-  // Two level-1 branches on opposite sides of the crown (1.2 world units apart across the wind):
-  // with the field their tips' along-wind bends decorrelate; the uniform wind of before 0.7 gives
+  // Two level-1 branches (and two leaves) on opposite sides of the crown (1.2 world units apart
+  // across the wind): with the field their tips' along-wind bends decorrelate; the uniform wind of before 0.7 gives
   // each branch its own noise phases but one wind speed, so only the noise differs.
   gpu::BendFrame field = fieldFrame(2.0f);
   gpu::BendFrame uniform = field;
   uniform.windModel = BEND_WIND_UNIFORM;
   const glm::vec3 a = glm::vec3(field.lateral) * -0.6f + glm::vec3(0, 1.2f, 0), b = glm::vec3(field.lateral) * 0.6f + glm::vec3(0, 1.2f, 0);
-  std::vector<double> fa, fb, ua, ub;
+  std::vector<double> fa, fb, ua, ub, la, lb;
   for (float t = 0.0f; t < 120.0f; t += 0.02f) {
+    la.push_back(glm::dot(gpu::bendLeafTip(field, t, 5u, a), glm::vec3(field.wind)));
+    lb.push_back(glm::dot(gpu::bendLeafTip(field, t, 5u, b), glm::vec3(field.wind)));
     fa.push_back(glm::dot(gpu::bendBranchTip(field, t, 1u, 3u, a), glm::vec3(field.wind)));
     fb.push_back(glm::dot(gpu::bendBranchTip(field, t, 1u, 3u, b), glm::vec3(field.wind)));
     ua.push_back(glm::dot(gpu::bendBranchTip(uniform, t, 1u, 3u, a), glm::vec3(field.wind)));
     ub.push_back(glm::dot(gpu::bendBranchTip(uniform, t, 1u, 3u, b), glm::vec3(field.wind)));
   }
   // The same branch id at two places: the field tells them apart, the uniform wind cannot.
-  const double cf = correlation(fa, fb), cu = correlation(ua, ub);
-  std::printf("one branch id at two places 1.2 world units apart: correlation %.3f with the field, %.3f with the uniform wind\n", cf, cu);
+  const double cf = correlation(fa, fb), cu = correlation(ua, ub), cl = correlation(la, lb);
+  std::printf("one branch id at two places 1.2 world units apart: correlation %.3f with the field, %.3f with the uniform wind; "
+              "a leaf there %.3f\n", cf, cu, cl);
   EXPECT_GT(cu, 0.999);
   EXPECT_LT(cf, 0.9);
+  EXPECT_LT(cl, 0.9);  // leaves feel the field at their roots too
 }

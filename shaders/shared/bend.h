@@ -195,9 +195,8 @@ CANOPY_INLINE vec2 bendOscillator(float frequency, float f0, float zeta) {
 // frozen and carried along the wind at the mean speed (Taylor's hypothesis: a gust reaches the lee
 // side later) and decorrelated across it (each component's wavefront tilted by a random slope in
 // the lateral and vertical directions, BEND_FIELD_SPREAD), each through H. `component` 0: along the wind (u), 1:
-// across it (v); `ownPhase` != 0 adds phases of its own (a leaf: eddies smaller than the leaves'
-// spacing, so neighbouring leaves flutter apart).
-CANOPY_INLINE float bendFieldResponse(BendFrame f, vec3 p, float t, float f0, float zeta, uint component, uint ownPhase) {
+// across it (v).
+CANOPY_INLINE float bendFieldResponse(BendFrame f, vec3 p, float t, float f0, float zeta, uint component) {
   const float tau = 6.2831853f;
   float U = max(abs(f.wind.w), 1e-3f);
   float L = max(f.integralScale, 1e-4f);
@@ -216,7 +215,6 @@ CANOPY_INLINE float bendFieldResponse(BendFrame f, vec3 p, float t, float f0, fl
     float slopeLat = BEND_FIELD_SPREAD * (2.0f * bendHash(key + 1u) - 1.0f);
     float slopeUp = BEND_FIELD_SPREAD * (2.0f * bendHash(key + 2u) - 1.0f);
     float phase = bendHash(key + 3u);
-    if (ownPhase != 0u) phase += bendHash(bendHashU(ownPhase) ^ key);
     vec2 h = bendOscillator(fj, f0, zeta);
     // The phase in cycles, reduced to one before the cosine: a GPU's cos is only accurate near
     // [-pi, pi] (far from it llvmpipe's drifted ~1e-3 from the CPU's).
@@ -230,12 +228,12 @@ CANOPY_INLINE float bendFieldResponse(BendFrame f, vec3 p, float t, float f0, fl
 // flexibility x s|s|, s = speed(t) / referenceSpeed), plus the fluctuation's drag linearised about
 // the mean speed U (2 U u' / referenceSpeed^2, u' = gust x U x the field's response at p, so gust is
 // the turbulence intensity sigma_u / U), across the wind the v component scaled by `lateral`.
-CANOPY_INLINE vec3 bendFieldTip(BendFrame f, vec3 p, float t, float flexibility, float f0, float zeta, uint ownPhase) {
+CANOPY_INLINE vec3 bendFieldTip(BendFrame f, vec3 p, float t, float flexibility, float f0, float zeta) {
   float u = bendWindSpeed(f, t) / max(f.referenceSpeed, 1e-6f);
   float m = abs(f.wind.w) / max(f.referenceSpeed, 1e-6f);
   float gain = 2.0f * flexibility * m * m * f.gust;
-  float along = flexibility * u * abs(u) + gain * bendFieldResponse(f, p, t, f0, zeta, 0u, ownPhase);
-  float across = gain * f.lateral.w * bendFieldResponse(f, p, t, f0, zeta, 1u, ownPhase);
+  float along = flexibility * u * abs(u) + gain * bendFieldResponse(f, p, t, f0, zeta, 0u);
+  float across = gain * f.lateral.w * bendFieldResponse(f, p, t, f0, zeta, 1u);
   if (f.strength == 0.0f) return vec3(0.0f);
   vec3 b = along * vec3(f.wind) + across * vec3(f.lateral);
   float a = sqrt(dot(b, b));
@@ -283,21 +281,19 @@ CANOPY_INLINE void bendAbout(vec3 pivot, vec3 axis, vec3 tip, float x, float tap
 
 CANOPY_INLINE float bendW(uint w, uint level) { return float((w >> (8u * level)) & 255u) * (1.0f / 255.0f); }
 
-// The tip bend of branch `id` (at `level`, its base at `origin`) and of leaf `leaf` at time t: what
-// the motion kernel (shaders/per_vertex_tips.comp) writes once per branch and leaf each frame, so
-// the vertex shader reads a branch's motion instead of synthesising it for each of its vertices.
-// With the field a branch feels the wind at its base; a leaf (the kernel has no leaf positions)
-// the field at the root with phases of its own.
+// The tip bend of branch `id` (at `level`, its base at `origin`) and of leaf `leaf` (its root at
+// `root`) at time t: what the motion kernel (shaders/per_vertex_tips.comp) writes once per branch
+// and leaf each frame, so the vertex shader reads a branch's motion instead of synthesising it for
+// each of its vertices. With the field a branch feels the wind at its base, a leaf at its root.
 CANOPY_INLINE float bendLevelOf(vec4 v, uint l) { return l == 0u ? v.x : l == 1u ? v.y : l == 2u ? v.z : v.w; }
 CANOPY_INLINE vec3 bendBranchTip(BendFrame f, float t, uint level, uint id, vec3 origin) {
   uint l = min(level, uint(BEND_LEVELS - 1));
   float flex = bendLevelOf(f.flexibility, l), freq = bendLevelOf(f.frequency, l);
-  if (f.windModel == BEND_WIND_FIELD) return bendFieldTip(f, origin, t, flex, freq, bendLevelOf(f.damping, l), 0u);
+  if (f.windModel == BEND_WIND_FIELD) return bendFieldTip(f, origin, t, flex, freq, bendLevelOf(f.damping, l));
   return bendTip(f, t, flex, freq, id + 2u);
 }
-CANOPY_INLINE vec3 bendLeafTip(BendFrame f, float t, uint leaf) {
-  if (f.windModel == BEND_WIND_FIELD)
-    return bendFieldTip(f, vec3(f.fieldOrigin), t, f.leafFlexibility, f.leafFrequency, f.leafDamping, leaf + 1u);
+CANOPY_INLINE vec3 bendLeafTip(BendFrame f, float t, uint leaf, vec3 root) {
+  if (f.windModel == BEND_WIND_FIELD) return bendFieldTip(f, root, t, f.leafFlexibility, f.leafFrequency, f.leafDamping);
   return bendTip(f, t, f.leafFlexibility, f.leafFrequency, 0x9e3779b9u ^ leaf);
 }
 
@@ -332,7 +328,7 @@ CANOPY_INLINE vec3 bendApply(BendFrame f, BendChain chain, BendTips tips, BendVe
       vec3 tip;
       if (f.windModel == BEND_WIND_FIELD) {
         // The field where the part is: neighbouring parts feel nearly the same wind.
-        tip = bendFieldTip(f, ref, t, f.flexibility.y, f.frequency.y, f.damping.y, 0u);
+        tip = bendFieldTip(f, ref, t, f.flexibility.y, f.frequency.y, f.damping.y);
       } else {
         float az = bendAtan2(dot(dir, vec3(f.lateral)), dot(dir, vec3(f.wind)));
         float shift = (0.6f * sin(az) + 0.4f * cos(2.0f * az)) / max(f.frequency.y, 1e-3f);
@@ -340,7 +336,7 @@ CANOPY_INLINE vec3 bendApply(BendFrame f, BendChain chain, BendTips tips, BendVe
       }
       bendAbout(vec3(f.root) + h * up, dir, tip, clamp(r / max(f.root.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
     }
-    vec3 tip0 = f.windModel == BEND_WIND_FIELD ? bendFieldTip(f, vec3(f.root), t, f.flexibility.x, f.frequency.x, f.damping.x, 0u)
+    vec3 tip0 = f.windModel == BEND_WIND_FIELD ? bendFieldTip(f, vec3(f.root), t, f.flexibility.x, f.frequency.x, f.damping.x)
                                                : bendTip(f, t, f.flexibility.x, f.frequency.x, 0u);
     bendAbout(vec3(f.root), up, tip0, clamp(h / max(f.up.w, 1e-6f), 0.0f, 1.0f), f.taper, p, n);
     return p;
@@ -357,7 +353,7 @@ CANOPY_INLINE vec3 bendApply(BendFrame f, BendChain chain, BendTips tips, BendVe
 CANOPY_INLINE vec3 bendPosition(BendFrame f, BendChain chain, BendVertex v, bool hasLeaf, vec3 leafRoot, uint leaf,
                                 vec3 p, float t, BEND_INOUT(vec3) n) {
   BendTips tips;
-  tips.leaf = hasLeaf ? bendLeafTip(f, t, leaf) : vec3(0.0f);
+  tips.leaf = hasLeaf ? bendLeafTip(f, t, leaf, leafRoot) : vec3(0.0f);
   for (uint i = 0u; i < uint(BEND_LEVELS); ++i)
     tips.level[i] = i < chain.count ? bendBranchTip(f, t, chain.b[i].level, chain.id[i], chain.b[i].origin) : vec3(0.0f);
   return bendApply(f, chain, tips, v, hasLeaf, leafRoot, p, t, n);

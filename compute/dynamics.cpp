@@ -5,6 +5,7 @@
 
 #include "engine/device.h"
 #include "engine/pass_slots.h"
+#include "shared/sim.h"
 
 namespace canopy {
 namespace {
@@ -12,17 +13,9 @@ const rg::State kComputeRead = rg::stateOf(rg::Use::ComputeStorageRead);
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-// A deterministic uniform number in [-1, 1] for layer i under `seed` (an integer hash: the same
-// seed gives the same V_D per layer on every machine and every frame).
-float layerJitter(uint32_t seed, uint32_t i) {
-  uint32_t h = seed * 0x9E3779B9u ^ (i + 1u) * 0x85EBCA6Bu;
-  h ^= h >> 16;
-  h *= 0x7FEB352Du;
-  h ^= h >> 15;
-  h *= 0x846CA68Bu;
-  h ^= h >> 16;
-  return float(h >> 8) / float(1u << 23) - 1.0f;
-}
+// A deterministic uniform number in [-1, 1] for layer i under `seed` (the simulation's integer
+// hash: the same seed gives the same V_D per layer on every machine and every frame).
+float layerJitter(uint32_t seed, uint32_t i) { return gpu::hashToSigned(seed * 0x9E3779B9u ^ (i + 1u) * 0x85EBCA6Bu); }
 }  // namespace
 
 SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth) {
@@ -72,7 +65,6 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     return Status::error("dynamics: DynamicsParams.dt = 0 asks for the simulation's nominal step, and none was given");
   f.lambda = glm::vec4(toGlm(p.lambda) * lambdaScale, dt);
   f.time = d.time;
-  f.vd = p.vd;
   // Eq. 5's s: the wave's propagation speed (the paper's meaning) unless the host gives one.
   f.propagation = p.propagationSpeed > 0.0f ? p.propagationSpeed : d.waveSpeed;
   f.offsetMode = p.approximateOffset == Eq5Offset::Direction ? ANIM_OFFSET_DIRECTION : ANIM_OFFSET_VELOCITY;

@@ -48,9 +48,13 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out)
           merged = true;
         }
     }
-  else if (m.mergeOverlappingPlants)
-    std::fill(parent.begin(), parent.end(), 0u), lo.assign(groups, glm::vec3(INFINITY)), hi.assign(groups, glm::vec3(-INFINITY)),
-        lo[0] = m.boundsMin, hi[0] = m.boundsMax;  // too many root nodes to compare: one plant
+  else if (m.mergeOverlappingPlants) {  // too many root nodes to compare: one plant
+    std::fill(parent.begin(), parent.end(), 0u);
+    lo.assign(groups, glm::vec3(INFINITY));
+    hi.assign(groups, glm::vec3(-INFINITY));
+    lo[0] = m.boundsMin;
+    hi[0] = m.boundsMax;
+  }
   // Plants with leaves, numbered densely.
   std::vector<uint32_t> dense(groups, kNoPlant);
   out->leafPlant.assign(roots.leafCount(), 0u);

@@ -76,6 +76,7 @@ struct CameraBenchOptions {
   std::string csvPath;    // per-frame rows (faces, path, frame, both frame times, re-slice, world-lock error); "" none
   bool crossFade = true;  // the cross-fade's coverage at one camera (a light change, a layout change)
   float guardBand = CanopyDesc{}.guardBand;  // the policy side's CanopyDesc.guardBand (the every-frame side: 0)
+  uint32_t halfResolutionLayers = LayerSettings{}.halfResolutionLayers;  // every side's (the still frame's too)
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 

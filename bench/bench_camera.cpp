@@ -38,7 +38,8 @@ struct Side {
   HostTargets host;
   rg::RenderGraph graph;
   uint32_t w = 0, h = 0;
-  explicit Side(Device& dev) : d(dev) {}
+  uint32_t halfResolutionLayers = 0;  // LayerSettings.halfResolutionLayers (both sides alike)
+  explicit Side(Device& dev, uint32_t half = 0) : d(dev), halfResolutionLayers(half) {}
   ~Side() {
     graph.release(d);
     destroyHostTargets(d, host);
@@ -59,6 +60,7 @@ struct Side {
     p.layers.policy = policy;
     p.layers.rebuildBudgetMs = policy == ReslicePolicy::EveryFrame ? 0.0f : budgetMs;
     p.layers.errorThresholdPixels = errorPixels;
+    p.layers.halfResolutionLayers = halfResolutionLayers;
     CANOPY_TRY(setCanopyParams(ctx, p));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
@@ -116,7 +118,7 @@ struct FadeResult {
 };
 Status measureCrossFade(Device& d, const VegetationModel& model, const CameraBenchOptions& o, const std::string& change,
                         const std::function<void(CanopyParams&)>& alter, FadeResult* out) {
-  Side side(d);
+  Side side(d, o.halfResolutionLayers);
   // The fade does not depend on how fast the slices before it were drawn: a large budget keeps the
   // run short at any face count.
   CANOPY_TRY(side.init(model, o.width, o.height, ReslicePolicy::OnViewChange, std::max(o.budgetMs, 100.0f), o.errorPixels, o.guardBand));
@@ -168,8 +170,9 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
   const uint8_t* clear = kHostClearRgba8;
   char policy[192] = "at once";
   if (o.budgetMs > 0) std::snprintf(policy, sizeof policy, "spread over frames, %.1f ms budget", double(o.budgetMs));
-  std::snprintf(policy + std::strlen(policy), sizeof policy - std::strlen(policy), ", error threshold %g px, guard band %g",
-                double(o.errorPixels), double(o.guardBand));
+  std::snprintf(policy + std::strlen(policy), sizeof policy - std::strlen(policy), ", error threshold %g px, guard band %g%s",
+                double(o.errorPixels), double(o.guardBand),
+                o.halfResolutionLayers ? (", the far " + std::to_string(o.halfResolutionLayers) + " layers at half resolution").c_str() : "");
   std::printf("\nMoving camera at %ux%u, 5(3-1-1), generated scene '%s', wind off: each path's %d frames drawn with the\n"
               "re-slicing policy (auto: %s) and re-sliced every frame (the reference), compared frame by frame\n"
               "(coverage IoU, silhouette distance in pixels, colour difference in 8-bit levels over covered pixels);\n"
@@ -201,7 +204,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
     std::vector<double> stillMs;
     const LayerView view0 = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, aspect, 0);
     {
-      Side still(d);
+      Side still(d, o.halfResolutionLayers);
       if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
       if (s.ok()) {
         const LayerStats st = canopyStats(still.ctx).layers;
@@ -227,7 +230,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       path.radiiPerFrame = o.radiiPerFrame;
       path.amplitudeDegrees = o.swingDegrees;
       // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
-      Side autoSide(d), every(d);
+      Side autoSide(d, o.halfResolutionLayers), every(d, o.halfResolutionLayers);
       s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
       if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
       const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);

@@ -25,8 +25,9 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
               toString(layout).c_str(), width, height);
   std::printf("Rebuild: GPU = timestamps around the foliage pass; wall = submit-to-fence of the rebuild alone;\n"
               "placement = CPU depth range + per-layer bounds; medians of %d rebuilds. Draws: one with gl_Layer or\n"
-              "one per layer (clip distances), each shaded once (LayerSettings.shadeOnce: a depth pre-pass first)\n"
-              "and on every fragment.\n\n", rebuilds);
+              "one per layer (clip distances), each shaded once (LayerSettings.shadeOnce: a depth pre-pass first),\n"
+              "on every fragment, and on every fragment with the middle and far regions' layers at half resolution\n"
+              "(LayerSettings.halfResolutionLayers).\n\n", rebuilds);
   std::printf("  %-11s %11s %9s %12s | %-26s %10s %10s %12s %10s\n", "faces", "roots ms", "M tris/s", "cache read ms",
               "draw", "GPU ms", "wall ms", "M tris/s", "place ms");
   for (uint64_t faces : faceCounts) {
@@ -54,11 +55,16 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
     std::remove(cache.c_str());
     const double mtris = double(m.triangleCount()) / rootsMs / 1e3;
     bool first = true;
-    // Each draw path shaded once (a depth pre-pass first) and on every fragment, side by side.
-    for (int run = 0; run < 4; ++run) {
-      const LayerDrawMode mode = run < 2 ? LayerDrawMode::SinglePass : LayerDrawMode::PerLayer;
-      const bool once = run % 2 == 0;
+    // Each draw path shaded once (a depth pre-pass first) and on every fragment, side by side; then
+    // each on every fragment with the middle and far regions' layers at half resolution
+    // (LayerSettings.halfResolutionLayers).
+    const uint32_t halfN = layout.region[1] + layout.region[2];
+    for (int run = 0; run < 6; ++run) {
+      const LayerDrawMode mode = (run < 4 ? run < 2 : run == 4) ? LayerDrawMode::SinglePass : LayerDrawMode::PerLayer;
+      const bool once = run < 4 && run % 2 == 0;
+      const uint32_t half = run >= 4 ? halfN : 0;
       if (mode == LayerDrawMode::SinglePass && !dev.shaderOutputLayer) continue;
+      if (half && (!halfN || !dev.shaderClipDistance)) continue;
       LayeredVegetationDesc d;
       d.width = width;
       d.height = height;
@@ -66,6 +72,7 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
       d.settings.draw = mode;
       d.settings.policy = ReslicePolicy::EveryFrame;
       d.settings.shadeOnce = once;
+      d.settings.halfResolutionLayers = half;
       LayeredVegetation lv;
       s = createLayeredVegetation(dev, m, d, &lv);
       if (!s.ok()) {
@@ -106,10 +113,11 @@ int runLayersBench(Device& dev, const std::vector<uint64_t>& faceCounts, int reb
       }
       const double g50 = median(gpu), w50 = median(wall);
       char drawName[64];
+      const std::string how = half ? "far " + std::to_string(half) + " at half res" : once ? "shaded once" : "every fragment";
       if (mode == LayerDrawMode::SinglePass)
-        std::snprintf(drawName, sizeof drawName, "1 draw, %s", once ? "shaded once" : "every fragment");
+        std::snprintf(drawName, sizeof drawName, "1 draw, %s", how.c_str());
       else
-        std::snprintf(drawName, sizeof drawName, "%u draws, %s", layout.count(), once ? "shaded once" : "every fragment");
+        std::snprintf(drawName, sizeof drawName, "%u draws, %s", layout.count(), how.c_str());
       if (first)
         std::printf("  %-11llu %11.1f %9.2f %12.1f | ", (unsigned long long)faces, rootsMs, mtris, hit ? cacheMs : -1.0);
       else

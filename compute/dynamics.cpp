@@ -84,6 +84,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     return Status::error("dynamics: newestSlot = " + std::to_string(d.newestSlot) + " is outside the ring of " +
                          std::to_string(d.ringSize) + " slots");
   f.newestSlot = d.newestSlot;
+  f.halfResolution = d.halfResolution;
   const float last = d.layers.back().distance;
   // Eq. 4's L_i in the simulation's domain units: one domain unit is one tile of the plane.
   const float distanceScale = p.delayUnits == DelayDistanceUnits::Domain ? 1.0f / tileSize : 1.0f;

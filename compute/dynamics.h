@@ -45,6 +45,7 @@ struct DynamicsFrameDesc {
   float waveSpeed = 0.0f;             // the oscillator's c (eq. 5's s unless DynamicsParams.propagationSpeed), domain units/s
   float nominalDt = 1.0f / 30.0f;     // the simulation's nominal step (eq. 6's Delta t unless DynamicsParams.dt), s
   uint32_t newestSlot = ANIM_RING_UNORDERED;  // ring slot of the newest field, when written in step order
+  uint32_t halfResolution = 0;        // the layers' LayerFrame.halfResolution, passed to the composite
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize);

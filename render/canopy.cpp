@@ -653,6 +653,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.waveSpeed = c->params.simulation.wave.speed;
   // The simulation writes slot step % H: the exact delay can binary-search the ring (anim_displace.comp).
   // Before the first step every slot reads time 0, which is in order from any slot.
+  fd.halfResolution = c->layers.visible.frame.halfResolution;
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
   CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
   const gpu::AnimFrame& a = c->dynamics.current;

@@ -319,6 +319,7 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.originY = float(c.desc.guardY);
   p.layerTilesX = tilesFor(layerW);
   p.layerTilesY = tilesFor(layerH);
+  p.halfResolution = anim.halfResolution;
   p.occupancyX1 = p.layerTilesX;
   p.occupancyY1 = p.layerTilesY;
   if (foliageRect) {

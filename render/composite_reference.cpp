@@ -89,8 +89,9 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
         }
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
         const glm::vec2 q = s - d;
-        // Texel space: centres at integer + 0.5.
-        const glm::vec2 t = q - 0.5f;
+        // Texel space: centres at integer + 0.5; a layer at half resolution holds pixel q at q / 2.
+        const glm::vec2 tq = q * gpu::layerTexelScale(pc.halfResolution, i);
+        const glm::vec2 t = tq - 0.5f;
         const int x0 = int(std::floor(t.x)), y0 = int(std::floor(t.y));
         const float fx = t.x - float(x0), fy = t.y - float(y0);
         glm::vec4 c;
@@ -101,7 +102,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           z = std::min(std::min(tex.depth(i, x0, y0), tex.depth(i, x0 + 1, y0)),
                        std::min(tex.depth(i, x0, y0 + 1), tex.depth(i, x0 + 1, y0 + 1)));
         } else {
-          const int xn = int(std::floor(q.x)), yn = int(std::floor(q.y));
+          const int xn = int(std::floor(tq.x)), yn = int(std::floor(tq.y));
           c = tex.color(i, xn, yn);
           z = tex.depth(i, xn, yn);
         }

@@ -46,6 +46,10 @@ Status createDrawPipelines(LayeredVegetation& lv) {
       p.vertexShader = "layers_impostor.vert";
       CANOPY_TRY(createGraphicsPipeline(d, p, write ? &imp.layered : &imp.layeredFade));
     }
+    if (d.shaderOutputLayer && d.shaderClipDistance) {
+      p.vertexShader = "layers_impostor_half.vert";
+      CANOPY_TRY(createGraphicsPipeline(d, p, write ? &imp.layeredHalf : &imp.layeredHalfFade));
+    }
     if (d.shaderClipDistance) {
       p.vertexShader = "layers_impostor_clip.vert";
       CANOPY_TRY(createGraphicsPipeline(d, p, write ? &imp.perLayer : &imp.perLayerFade));
@@ -62,7 +66,8 @@ Status createDrawPipelines(LayeredVegetation& lv) {
 std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
   const Impostors& imp = lv.impostors;
   std::vector<uint8_t> bytes(size_t(imp.tiles) * stride, 0);
-  const gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
+  gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
+  base.halfResolution = 0;  // the atlas tiles are drawn whole
   for (const ImpostorNode& n : imp.nodes) {
     if (n.firstTile == kNoTile) continue;
     for (uint32_t k = imp.firstView; k < IMPOSTOR_VIEWS; ++k) {
@@ -295,7 +300,7 @@ void destroyImpostors(LayeredVegetation& lv) {
   destroyImage(d, imp.depth);
   destroyBuffer(d, imp.boxTable);
   destroyBuffer(d, imp.instances);
-  for (GraphicsPipeline* p : {&imp.bake, &imp.layered, &imp.layeredFade, &imp.perLayer, &imp.perLayerFade})
+  for (GraphicsPipeline* p : {&imp.bake, &imp.layered, &imp.layeredFade, &imp.perLayer, &imp.perLayerFade, &imp.layeredHalf, &imp.layeredHalfFade})
     destroyGraphicsPipeline(d, *p);
   for (VkSampler s : {imp.linearSampler, imp.nearestSampler})
     if (s) d.vk.DestroySampler(d.device, s, d.allocationCallbacks);
@@ -307,8 +312,10 @@ Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, 
   const uint32_t total = uint32_t(lv.visible.cutInstances.size());
   const uint32_t first = fading ? lv.visible.cutOpaque : 0, count = fading ? total - lv.visible.cutOpaque : lv.visible.cutOpaque;
   if (!count) return Status();
-  const GraphicsPipeline& pipe =
-      lv.pipelines.singlePass ? (fading ? imp.layeredFade : imp.layered) : (fading ? imp.perLayerFade : imp.perLayer);
+  const bool half = lv.settings.halfResolutionLayers > 0;  // the single pass's clip-distance variant
+  const GraphicsPipeline& pipe = lv.pipelines.singlePass
+                                     ? (half ? (fading ? imp.layeredHalfFade : imp.layeredHalf) : (fading ? imp.layeredFade : imp.layered))
+                                     : (fading ? imp.perLayerFade : imp.perLayer);
   const Device& d = *lv.device;
   setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
   gpu::ImpostorPush push{};

@@ -63,6 +63,7 @@ struct Impostors {
   PreparedList pendingUploads;  // the bake (or the cached views' upload) and the box table, not yet recorded (host devices)
   uint32_t instanceCapacity = 0;
   GraphicsPipeline bake, layered, layeredFade, perLayer, perLayerFade;
+  GraphicsPipeline layeredHalf, layeredHalfFade;  // single pass with layers at half resolution (clip distances)
   VkSampler linearSampler = VK_NULL_HANDLE, nearestSampler = VK_NULL_HANDLE;
   double bakeMs = 0;
   uint64_t bytes = 0;

@@ -94,7 +94,9 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
       const std::vector<ChunkPart>* drawn = cut ? &lv.visible.cutParts : parts;
       if (!cut || !lv.visible.cutParts.empty())
         CANOPY_TRY(lv.pipelines.singlePass
-                       ? drawShaded(lv, cmd, lv.pipelines.layered, lv.pipelines.layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
+                       ? (lv.settings.halfResolutionLayers > 0
+                              ? drawShaded(lv, cmd, lv.pipelines.layeredHalf, lv.pipelines.layeredHalfOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
+                              : drawShaded(lv, cmd, lv.pipelines.layered, lv.pipelines.layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o))
                        : drawShaded(lv, cmd, lv.pipelines.perLayer, lv.pipelines.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
       return cut ? recordImpostors(lv, cmd, true, i) : Status();
     }));

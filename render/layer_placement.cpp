@@ -281,8 +281,16 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
 }
 
 
+uint32_t halfResolutionMask(const LayerSettings& s) {
+  const uint32_t n = s.layout.count(), k = std::min(s.halfResolutionLayers, n);
+  if (k == 0) return 0;
+  const uint32_t bits = k >= 32 ? ~0u : (1u << k) - 1u;
+  return bits << (n - k);  // the farthest k layers
+}
+
 gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
   gpu::LayerFrame f{};
+  f.halfResolution = halfResolutionMask(s);
   f.viewProj = view.proj * view.view;
   f.depthRow = -glm::vec4(view.view[0][2], view.view[1][2], view.view[2][2], view.view[3][2]);
   const glm::vec3 dir = toGlm(s.lightDirection);

@@ -97,5 +97,7 @@ VkRect2D layerFootprint(const LayeredVegetation& lv);
 // The frame block's camera and lighting for `view` (no placement): the layers' start and the
 // per-vertex baseline's every frame.
 gpu::LayerFrame cameraFrame(const LayerSettings& settings, const LayerView& view);
+// LayerFrame.halfResolution for the settings: the farthest halfResolutionLayers layers' bits.
+uint32_t halfResolutionMask(const LayerSettings& settings);
 
 }  // namespace canopy

@@ -15,6 +15,7 @@
 #include "engine/timing.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
+#include "render/layer_placement.h"
 
 namespace canopy {
 namespace {
@@ -111,6 +112,11 @@ Status createPipelines(LayeredVegetation& lv) {
     CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.layered));
     if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.layeredOnce));
   }
+  if (d.shaderOutputLayer && d.shaderClipDistance) {
+    p.vertexShader = "layers_half.vert";
+    CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.layeredHalf));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.layeredHalfOnce));
+  }
   return Status();
 }
 
@@ -125,6 +131,9 @@ Status chooseDrawPath(const LayeredVegetation& lv, const LayerSettings& s, bool*
   *singlePass = s.draw == LayerDrawMode::PerLayer ? false : canSingle;
   if (!*singlePass && !d.shaderClipDistance)
     return Status::error("layers: the device has neither shaderOutputLayer nor shaderClipDistance; cannot slice");
+  if (s.halfResolutionLayers > 0 && !d.shaderClipDistance)
+    return Status::error(Result::UnsupportedDevice, "LayerSettings.halfResolutionLayers = " + std::to_string(s.halfResolutionLayers) +
+                                                  ": drawing a layer into its image's quarter needs shaderClipDistance, which the device lacks");
   return Status();
 }
 }  // namespace
@@ -141,6 +150,9 @@ Status validateLayerSettings(const LayerSettings& s) {
   static_assert(LEAF_IOR_MIN == 1.2f && LEAF_IOR_MAX == 1.7f, "CANOPY_LAYER_SETTINGS's leafRefractiveIndex range");
   static_assert(LEAF_ROUGHNESS_MIN == 0.078f && LEAF_ROUGHNESS_MAX == 0.5f, "CANOPY_LAYER_SETTINGS's leafRoughness range");
   CANOPY_TRY(checkParams(s, "LayerSettings."));
+  if (s.halfResolutionLayers > s.layout.count())
+    return Status::error("LayerSettings.halfResolutionLayers = " + std::to_string(s.halfResolutionLayers) + " is outside [0, " +
+                         std::to_string(s.layout.count()) + "] (the layers of layout " + toString(s.layout) + ")");
   return validateRegionSplit(s.regions);
 }
 
@@ -238,10 +250,10 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   Device& d = *lv.device;
   destroyLayerTargets(lv);
   destroyImpostors(lv);
-  for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground,
+  for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.layeredHalf, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground,
                              &lv.pipelines.fadeDepth, &lv.pipelines.fadeOver, &lv.pipelines.fadeOverBackground})
     destroyGraphicsPipeline(d, *p);
-  for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce}) {
+  for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce, &lv.pipelines.layeredHalfOnce}) {
     destroyGraphicsPipeline(d, o->depth);
     destroyGraphicsPipeline(d, o->shade);
   }
@@ -269,7 +281,9 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   bool single = false;
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
   const bool nextSetBefore = usesNextSet(lv);
-  const bool countChanged = s.layout.count() != lv.settings.layout.count();
+  // A new layer count, or layers changing resolution: texels of the two sets no longer match, so
+  // no cross-fade between them (a re-slice at once into new targets).
+  const bool countChanged = s.layout.count() != lv.settings.layout.count() || halfResolutionMask(s) != halfResolutionMask(lv.settings);
   // How a re-slice is scheduled does not change what the layers hold: no re-slice for it.
   LayerSettings content = s;
   content.rebuildBudgetMs = lv.settings.rebuildBudgetMs;

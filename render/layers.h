@@ -81,11 +81,14 @@ struct LayeredVegetationDesc {
 // the cross-fade's.
 struct LayerPipelines {
   GraphicsPipeline layered, perLayer, background;
+  // The single pass with layers at half resolution (layers_half.vert: clip distances keep each
+  // such layer's quarter); the one-layer path does it in layers_clip.vert.
+  GraphicsPipeline layeredHalf;
   // Shading once (docs/design.md "Layers: shading once"): each path's depth pre-pass and its
   // shading on the depth it left (EQUAL, early fragment tests); absent with the id output.
   struct ShadeOnce {
     GraphicsPipeline depth, shade;
-  } layeredOnce, perLayerOnce, backgroundOnce;
+  } layeredOnce, perLayerOnce, backgroundOnce, layeredHalfOnce;
   GraphicsPipeline fade, fadeBackground;  // spread re-slicing only
   GraphicsPipeline fadeOver, fadeOverBackground;  // the cross-fade's first half: the new set laid over
   GraphicsPipeline fadeDepth;             // the cross-fade's depth merge (nearer of the two sets)

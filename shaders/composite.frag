@@ -126,7 +126,7 @@ void main() {
       uvec2 tile = uvec2(clamp(q, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
       if (occupancy[(i * pc.layerTilesY + tile.y) * pc.layerTilesX + tile.x] == 0u) continue;
     }
-    vec3 uvw = vec3(q / size, float(i));
+    vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
     vec4 c = texture(layerColor, uvw);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
     if (reproject && bilinear) {

@@ -38,11 +38,15 @@ void main() {
   // texels (x, y) and (x + 1, y + 1) returns those four (the border sampler reads outside texels
   // as transparent; a clamped read would land on an edge texel of this tile, read anyway). A
   // quarter of the texel reads of one fetch each, which is what this pass costs on CPU devices.
-  ivec2 t0 = ivec2(tile) * int(COMPOSITE_TILE);
+  // A layer at half resolution (shared/layers.h layerTexelScale) holds the tile's pixels in half
+  // as many texels per side; the margin stays one texel of its own (a bilinear footprint's).
+  const float scale = background ? 1.0 : layerTexelScale(pc.halfResolution, layer);
+  const int extent = int(float(COMPOSITE_TILE) * scale);
+  ivec2 t0 = ivec2(tile) * extent;
   vec2 size = vec2(pc.layerWidth, pc.layerHeight);
   uint any = 0u;
-  for (int y = -1; y <= int(COMPOSITE_TILE) && any == 0u; y += 2)
-    for (int x = -1; x <= int(COMPOSITE_TILE); x += 2) {
+  for (int y = -1; y <= extent && any == 0u; y += 2)
+    for (int x = -1; x <= extent; x += 2) {
       vec2 uv = vec2(t0 + ivec2(x + 1, y + 1)) / size;
       vec4 a = background ? (unite ? textureGather(nextBackgroundColor, uv, 3) : textureGather(backgroundColor, uv, 3))
                           : (unite ? textureGather(nextLayerColor, vec3(uv, float(layer)), 3)

@@ -77,7 +77,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
     vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
-    vec3 uvw = vec3(q / size, float(i));
+    vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
     vec4 c = textureLod(layerColor, uvw, 0.0);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
     if (reproject && bilinear) {

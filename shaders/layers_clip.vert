@@ -22,4 +22,7 @@ void main() {
   }
   gl_ClipDistance[0] = keepNear;
   gl_ClipDistance[1] = keepFar;
+  // One layer's pass draws into that layer's quarter when it is at half resolution; the background
+  // (and the impostor bake) never are.
+  layerHalfResolution(pc.passKind == LAYER_PASS_ONE_LAYER && layerTexelScale(f.halfResolution, pc.targetLayer) < 1.0);
 }

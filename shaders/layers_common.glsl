@@ -16,7 +16,15 @@ layout(binding = 5) uniform sampler2D transmissionColorTex;
 layout(push_constant, scalar) uniform Push { LayerDrawPush pc; };
 
 #ifdef CANOPY_VERTEX
-#ifdef CANOPY_CLIP_DISTANCES
+#if defined(CANOPY_CLIP_DISTANCES)
+// Near/far of the one-layer pass, then the half-resolution quarter (layers_half.glsl).
+#define LAYER_HALF_CLIP_FIRST 2
+out gl_PerVertex {
+  vec4 gl_Position;
+  float gl_ClipDistance[4];
+};
+#elif defined(CANOPY_HALF_RESOLUTION)
+#define LAYER_HALF_CLIP_FIRST 0
 out gl_PerVertex {
   vec4 gl_Position;
   float gl_ClipDistance[2];
@@ -68,4 +76,7 @@ void emitVertex() {
   vLeaf = hasLeaf() ? leafRoot[inPositionLeaf.w].leaf : LAYER_NO_LEAF;
   vTint = inst.tint.rgb;
 }
+#ifdef LAYER_HALF_CLIP_FIRST
+#include "layers_half.glsl"
+#endif
 #endif

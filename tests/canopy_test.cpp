@@ -180,12 +180,15 @@ struct CrownFrame {
   CompositeReferenceOutputs ref;
   float maxDisplacement = -1.0f;
   uint64_t graphBuilds = 0;
+  uint32_t layerWidth = 0;  // the layer images' width (guard band included)
+  uint64_t reslices = 0, reslicesBeforeLast = 0;
 };
 
 class CanopyTest : public GpuTest {
  protected:
   void renderCrown(float windStrength, uint32_t cellSize, int frames, CrownFrame* out,
-                   CompositeDebugView view = CompositeDebugView::None) {
+                   CompositeDebugView view = CompositeDebugView::None, uint32_t halfResolutionLayers = 0,
+                   std::vector<std::vector<glm::vec4>>* layers = nullptr, float lastTurnDegrees = 0.0f) {
     const uint32_t w = 128, h = 96;
     const VegetationModel model = makeLeafCloud(4000, 3, true);
     CanopyContext* ctx = nullptr;
@@ -196,14 +199,32 @@ class CanopyTest : public GpuTest {
     p.dynamics.cellSize = cellSize;
     p.composite.debugView = view;
     p.composite.debugVelocityScale = std::max(windStrength, 0.1f);
+    p.layers.halfResolutionLayers = halfResolutionLayers;
     Host host;
     s = setCanopyParams(ctx, p);
     if (s.ok()) s = host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
     CanopyFrame f;
-    f.camera = toCamera(cameraFor(model, w, h, 20.0f));
-    for (int i = 0; i < frames && s.ok(); ++i) s = host.frame(ctx, f);
+    const LayerView view = cameraFor(model, w, h, 20.0f);
+    f.camera = toCamera(view);
+    for (int i = 0; i < frames && s.ok(); ++i) {
+      // The last frame turned (a pure rotation): shown reprojected, without a re-slice.
+      if (i + 1 == frames && lastTurnDegrees != 0.0f) {
+        LayerView turned = view;
+        turned.view = glm::rotate(glm::mat4(1.0f), glm::radians(lastTurnDegrees), glm::vec3(0, 1, 0)) * view.view;
+        f.camera = toCamera(turned);
+        out->reslicesBeforeLast = canopyStats(ctx).layers.rebuilds;
+      }
+      s = host.frame(ctx, f);
+    }
+    out->reslices = canopyStats(ctx).layers.rebuilds;
     if (s.ok()) s = host.read(&out->color, &out->depth);
     if (s.ok()) s = referenceFrame(dev, ctx, w, h, &out->ref, &out->maxDisplacement);
+    if (layers && s.ok()) {
+      LayeredVegetation& lv = canopyLayers(ctx);
+      layers->resize(lv.settings.layout.count());
+      out->layerWidth = lv.desc.width;
+      for (uint32_t l = 0; l < layers->size() && s.ok(); ++l) s = readLayerColor(lv, l, &(*layers)[l]);
+    }
     EXPECT_TRUE(s.ok()) << s.message();
     out->graphBuilds = canopyStats(ctx).internalGraphBuilds;
     if (host.dev) host.destroy();
@@ -235,6 +256,75 @@ TEST_F(CanopyTest, WindWarpsTheLayersAsTheCpuReferenceDoes) {
   if (HasFailure()) return;
   EXPECT_GT(r.maxDisplacement, 0.5f) << "the wind moves the layers by more than half a pixel somewhere";
   expectNearReference(r.color, r.depth, r.ref, "with wind");
+}
+
+// Far layers at half resolution (issue 34's cheaper re-slice; docs/design.md "Layers: half
+// resolution"): each is drawn into its image's top-left quarter and nothing beyond it, the composite
+// reads it there as the CPU reference does, and the picture stays close to the full-resolution one.
+TEST_F(CanopyTest, HalfResolutionLayersAreDrawnInTheirQuarterAndReadThere) {
+  LayerSettings bad;
+  bad.halfResolutionLayers = 6;  // of the default 5(3-1-1)
+  const Status refused = validateLayerSettings(bad);
+  EXPECT_FALSE(refused.ok());
+  EXPECT_NE(refused.message().find("halfResolutionLayers = 6 is outside [0, 5]"), std::string::npos) << refused.message();
+  CrownFrame full, half;
+  std::vector<std::vector<glm::vec4>> fullLayers, halfLayers;
+  renderCrown(2.0f, 8, 15, &full, CompositeDebugView::None, 0, &fullLayers);
+  renderCrown(2.0f, 8, 15, &half, CompositeDebugView::None, 2, &halfLayers);
+  if (HasFailure()) return;
+  ASSERT_EQ(halfLayers.size(), 5u) << "the default layout 5(3-1-1)";
+  expectNearReference(half.color, half.depth, half.ref, "two far layers at half resolution");
+  // The layer images: the output and the guard band.
+  const size_t texels = fullLayers[0].size();
+  const uint32_t lw = half.layerWidth, lh = uint32_t(texels / std::max(lw, 1u));
+  ASSERT_EQ(size_t(lw) * lh, texels);
+  for (uint32_t l = 0; l < 5; ++l) {
+    size_t outside = 0, covered = 0, fullCovered = 0;
+    for (uint32_t y = 0; y < lh; ++y)
+      for (uint32_t x = 0; x < lw; ++x) {
+        const float a = halfLayers[l][size_t(y) * lw + x].a;
+        covered += a > 0.0f;
+        fullCovered += fullLayers[l][size_t(y) * lw + x].a > 0.0f;
+        outside += a > 0.0f && (x >= lw / 2 || y >= lh / 2);
+      }
+    if (l < 3) {
+      // Near layers are drawn by the single pass's other vertex shader with the same arithmetic.
+      float worst = 0.0f;
+      for (size_t i = 0; i < texels; ++i) worst = std::max(worst, maxDiff(halfLayers[l][i], fullLayers[l][i]));
+      EXPECT_LE(worst, 1.0f / 255.0f) << "layer " << l << " is at full resolution";
+    } else {
+      EXPECT_EQ(outside, 0u) << "layer " << l << " drew beyond its quarter";
+      EXPECT_GT(covered, 0u) << "layer " << l << " holds leaves";
+      // A quarter of the texels, give or take the leaves' edges.
+      EXPECT_NEAR(double(covered), 0.25 * double(fullCovered), 0.08 * double(fullCovered)) << "layer " << l;
+    }
+    std::printf("layer %u: %zu texels with alpha > 0 (full resolution: %zu), %zu beyond the quarter\n", l, covered,
+                fullCovered, outside);
+  }
+  // The composite against the full-resolution one: foliage coverage (depth written) and colour.
+  size_t both = 0, either = 0, colourOff = 0;
+  double colourSum = 0.0;
+  for (size_t i = 0; i < full.color.size(); ++i) {
+    const bool a = full.depth[i] < 1.0f, b = half.depth[i] < 1.0f;
+    both += a && b;
+    either += a || b;
+    if (a || b) {
+      const float d = maxDiff(full.color[i], half.color[i]);
+      colourSum += d;
+      colourOff += d > 16.0f / 255.0f;
+    }
+  }
+  // Turned by a degree in the last frame: reprojected (no re-slice), still as the CPU reference.
+  CrownFrame turned;
+  renderCrown(2.0f, 8, 15, &turned, CompositeDebugView::None, 2, nullptr, 1.0f);
+  if (HasFailure()) return;
+  EXPECT_EQ(turned.reslices, turned.reslicesBeforeLast) << "a 1 degree turn within the guard band does not re-slice";
+  expectNearReference(turned.color, turned.depth, turned.ref, "half resolution, reprojected");
+  const double iou = either ? double(both) / double(either) : 1.0;
+  std::printf("composite against full resolution: coverage IoU %.4f, mean colour difference %.4f over foliage, %.2f %% "
+              "of foliage pixels off by > 16/255\n",
+              iou, either ? colourSum / double(either) : 0.0, either ? 100.0 * double(colourOff) / double(either) : 0.0);
+  EXPECT_GT(iou, 0.9) << "the far layers at half resolution cover about the same pixels";
 }
 
 // The demo's debug views (issue 6), drawn by the composite pass itself.

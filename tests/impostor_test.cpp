@@ -426,9 +426,14 @@ TEST_F(ImpostorTest, OneDrawPerLayerGivesTheSingleDrawsImpostors) {
   LayeredVegetation single, perLayer;
   ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &single, LayerDrawMode::SinglePass).ok());
   ASSERT_TRUE(createSwitchLayers(dev, sc, w, h, &perLayer, LayerDrawMode::PerLayer).ok());
+  // Also with every layer at half resolution (docs/design.md "Layers: half resolution"): both paths
+  // draw the impostors and leaves into each layer's quarter alike, and nothing beyond it.
+  const uint32_t layers = single.settings.layout.count();
+  for (uint32_t half : {0u, layers})
   for (float share : {1.0f, 0.5f}) {
     for (LayeredVegetation* lv : {&single, &perLayer}) {
       LayerSettings s = lv->settings;
+      s.halfResolutionLayers = half;
       s.impostors.mode = ImpostorMode::ByProjectedSize;
       s.impostors.band = 0.5f;
       s.impostors.switchPixels = sc.projected / (1.5f - share * 0.5f) * 1.001f;
@@ -436,13 +441,27 @@ TEST_F(ImpostorTest, OneDrawPerLayerGivesTheSingleDrawsImpostors) {
       ASSERT_TRUE(renderOnce(dev, *lv, sc.view).ok());
       EXPECT_EQ(lv->stats.lastFadingBoxes, share < 1.0f ? 1u : 0u);
     }
+    size_t covered = 0;
     for (uint32_t l = 0; l < single.settings.layout.count(); ++l) {
       std::vector<glm::vec4> a, b;
       ASSERT_TRUE(readLayerColor(single, l, &a).ok());
       ASSERT_TRUE(readLayerColor(perLayer, l, &b).ok());
       const ImageDiff diff = compareImages(a, b);
-      EXPECT_LE(diff.meanAbs, 1e-3) << "share " << share << " layer " << l;
-      EXPECT_GE(diff.coverageIoU, 0.999) << "share " << share << " layer " << l;
+      EXPECT_LE(diff.meanAbs, 1e-3) << "share " << share << " layer " << l << " half " << half;
+      EXPECT_GE(diff.coverageIoU, 0.999) << "share " << share << " layer " << l << " half " << half;
+      if (!half) continue;
+      const uint32_t lw = single.desc.width, lh = single.desc.height;
+      size_t beyond = 0;
+      for (uint32_t y = 0; y < lh; ++y)
+        for (uint32_t x = 0; x < lw; ++x) {
+          covered += a[size_t(y) * lw + x].a > 0.0f;
+          beyond += a[size_t(y) * lw + x].a > 0.0f && (x >= (lw + 1) / 2 || y >= (lh + 1) / 2);
+        }
+      EXPECT_EQ(beyond, 0u) << "share " << share << " layer " << l << ": drawn beyond the quarter";
+    }
+    if (half) {
+      std::printf("every layer at half resolution, impostor share %.1f: %zu texels covered\n", share, covered);
+      EXPECT_GT(covered, 0u) << "share " << share;
     }
   }
   destroyLayeredVegetation(single);

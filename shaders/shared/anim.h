@@ -43,7 +43,7 @@ struct AnimFrame {
   vec4 simUp;         // xyz: its y axis (unit, world)
   vec4 lambda;        // xyz: lambda_x, lambda_y, lambda_z, pixels per domain unit; w: dt of eq. 6, s
   float time;         // time of the newest simulation field, s
-  float pad3;         // (V_D is per layer since 0.7: AnimLayer.vd)
+  uint halfResolution;  // LayerFrame.halfResolution of the layers drawn (the composite's reads)
   float propagation;  // s of eq. 5 (ANIM_OFFSET_DIRECTION: domain units/s; B moves gamma s domain units)
   float rigidity;     // r of eq. 7, [0, 10]
   uint everyPartMoves;  // 1: R = 1 (eq. 7)

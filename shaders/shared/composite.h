@@ -84,8 +84,10 @@ struct CompositePush {
   float originY;
   uint layerTilesX;    // occupancy tiles per row: ceil(layerWidth / COMPOSITE_TILE)
   uint layerTilesY;
+  uint halfResolution; // LayerFrame.halfResolution: layer i read at texel s x layerTexelScale(halfResolution, i)
+  uint pad0;
 };
-CANOPY_SIZE_CHECK(CompositePush, 104)
+CANOPY_SIZE_CHECK(CompositePush, 112)
 
 // Reprojection between re-slices (docs/design.md "Layers: reprojection"): the layers and the rigid
 // background were drawn from the slice camera; the composite shows them from the current camera.

@@ -49,7 +49,9 @@ struct LayerFrame {
   vec4 leafShading;
   uint layerCount;      // 1..CANOPY_MAX_LAYERS
   uint sliceMode;       // LAYER_SLICE_*
-  uint pad0;
+  // Bit i: layer i is drawn at half resolution, into the top-left quarter of its image (layer pixel
+  // s at texel s / 2; LayerSettings.halfResolutionLayers, docs/design.md "Layers: half resolution").
+  uint halfResolution;
   uint pad1;
   // Layer i holds depths in (boundaries[i], boundaries[i+1]]; depths outside the range clamp to
   // the first or last layer, so every triangle lands in exactly one layer.
@@ -155,6 +157,13 @@ CANOPY_INLINE vec3 lodLevelColor(uint level) {
   if (k == 3u) return vec3(0.15f, 0.75f, 0.9f);
   if (k == 4u) return vec3(0.3f, 0.35f, 0.95f);
   return vec3(0.85f, 0.3f, 0.9f);
+}
+
+// Texels of layer i's image per layer pixel: 1/2 for a layer drawn at half resolution (bit i of
+// `halfResolution`, LayerFrame.halfResolution), else 1. Every reader of a layer image samples at
+// s x layerTexelScale (the composite's two paths, its occupancy, the CPU reference).
+CANOPY_INLINE float layerTexelScale(uint halfResolution, uint layer) {
+  return ((halfResolution >> layer) & 1u) != 0u ? 0.5f : 1.0f;
 }
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {

@@ -295,6 +295,7 @@ enum class TranslucencyModel { Habel, DiffuseBtdf };
   X(SliceMode, slice, SliceMode::LeafRoots, Enum, 0, 1, "LeafRoots | Geometry", "how leaves go into layers")          \
   X(LayerDrawMode, draw, LayerDrawMode::Auto, Enum, 0, 2, "Auto | SinglePass | PerLayer", "how the layers are drawn") \
   X(bool, shadeOnce, false, None, 0, 0, "", "a depth pre-pass first, so leaf shading runs once per layer texel (slower on lavapipe: docs/design.md)") \
+  X(uint32_t, halfResolutionLayers, 0, Closed, 0, kMaxLayers, "layers", "the farthest this many layers are drawn at half resolution (a quarter of their fill); at most the layout's count") \
   X(ReslicePolicy, policy, ReslicePolicy::OnViewChange, Enum, 0, 1, "OnViewChange | EveryFrame", "when layers are re-sliced") \
   X(float, errorThresholdPixels, 1.0f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers)") \
   X(float, turnThresholdDegrees, 2.0f, Closed, 0, 180, "degrees", "change of the view direction to the vegetation that re-slices (baked shading)") \

@@ -483,8 +483,6 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.impostors.switchPixels = o.impostorPixels;
   p.layers.impostors.debugView = o.impostorDebug;
   p.layers.impostors.shape = o.impostorShape;
-  // Impostors are drawn by re-slices at once (ImpostorSettings).
-  if (o.impostors != ImpostorMode::Off || o.impostorDebug) p.layers.rebuildBudgetMs = 0.0f;
   p.composite.debugView = o.debug;
   p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
   return p;

@@ -307,10 +307,10 @@ void destroyImpostors(LayeredVegetation& lv) {
   imp = Impostors{};
 }
 
-Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer) {
+Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer) {
   const Impostors& imp = lv.impostors;
-  const uint32_t total = uint32_t(lv.visible.cutInstances.size());
-  const uint32_t first = fading ? lv.visible.cutOpaque : 0, count = fading ? total - lv.visible.cutOpaque : lv.visible.cutOpaque;
+  const uint32_t total = uint32_t(draws.instances.size());
+  const uint32_t first = fading ? draws.opaque : 0, count = fading ? total - draws.opaque : draws.opaque;
   if (!count) return Status();
   const bool half = lv.settings.halfResolutionLayers > 0;  // the single pass's clip-distance variant
   const GraphicsPipeline& pipe = lv.pipelines.singlePass

@@ -10,12 +10,14 @@
 namespace canopy {
 
 struct LayeredVegetation;
+struct ImpostorDraws;
 
 // Creates the atlas and pipelines and bakes (or reads) the views; stats in lv.imp.
 Status createImpostors(LayeredVegetation& lv);
 void destroyImpostors(LayeredVegetation& lv);
-// Draws the cut's opaque (fading = false) or fading impostors inside the caller's rendering of the
-// layers (`layer`: the per-layer path's layer, ignored by the single pass).
-Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, bool fading, uint32_t layer);
+// Draws a cut's opaque (fading = false) or fading impostors inside the caller's rendering of the
+// layers (`layer`: the per-layer path's layer, ignored by the single pass); the list `draws` holds
+// is the one uploaded to Impostors.instances for this draw.
+Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer);
 
 }  // namespace canopy

@@ -83,22 +83,25 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
         attachment(lv.pipelines.singlePass ? t.color : (*t.colorLayers)[i], false, clear),
         attachment(ids ? (lv.pipelines.singlePass ? t.ids : (*t.idsLayers)[i]) : VK_NULL_HANDLE, false, clear)};
     const VkRenderingAttachmentInfo depth = attachment(lv.pipelines.singlePass ? t.depth : (*t.depthLayers)[i], true, clear);
-    // With an impostor cut (a re-slice at once): the opaque impostors, the foliage left, then the
-    // impostors fading in over their fading leaves (docs/design.md "Impostors").
-    const bool cut = lv.visible.cut.active && !parts;
+    // With an impostor cut: the opaque impostors, the foliage left, then the impostors fading in
+    // over their fading leaves (docs/design.md "Impostors"); a spread re-slice's slices draw its
+    // cut's parts, the opaque impostors with the first slice and the fading ones with the last.
+    const ImpostorDraws* imp = parts ? &lv.reslice.spread.impostors : &lv.visible.impostors;
+    const bool cut = imp->cut.active;
+    const bool opaque = cut && (!parts || lv.reslice.spread.sliceClears), fading = cut && (!parts || lv.reslice.spread.sliceLast);
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
     o.runs = t.runs;
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
-      if (cut) CANOPY_TRY(recordImpostors(lv, cmd, false, i));
-      const std::vector<ChunkPart>* drawn = cut ? &lv.visible.cutParts : parts;
-      if (!cut || !lv.visible.cutParts.empty())
+      if (opaque) CANOPY_TRY(recordImpostors(lv, cmd, *imp, false, i));
+      const std::vector<ChunkPart>* drawn = parts ? parts : cut ? &imp->parts : nullptr;
+      if (!drawn || !drawn->empty())
         CANOPY_TRY(lv.pipelines.singlePass
                        ? (lv.settings.halfResolutionLayers > 0
                               ? drawShaded(lv, cmd, lv.pipelines.layeredHalf, lv.pipelines.layeredHalfOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
                               : drawShaded(lv, cmd, lv.pipelines.layered, lv.pipelines.layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o))
                        : drawShaded(lv, cmd, lv.pipelines.perLayer, lv.pipelines.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
-      return cut ? recordImpostors(lv, cmd, true, i) : Status();
+      return fading ? recordImpostors(lv, cmd, *imp, true, i) : Status();
     }));
   }
   return Status();
@@ -252,15 +255,18 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   // neither the passes nor their barriers (the layer images stay in their rest state).
   auto constants = g.addPass("layers: frame constants", [p](rg::PassContext& c) {
      if (p->reslice.rebuildPending) c.device->vk.CmdUpdateBuffer(c.cmd, p->visible.frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->visible.frame);
-     // The cut's impostor list, in vkCmdUpdateBuffer's 64 KiB pieces.
-     if (p->reslice.rebuildPending && !p->visible.cutInstances.empty()) {
-       const size_t bytes = p->visible.cutInstances.size() * sizeof(gpu::ImpostorInstance);
+     // A spread re-slice's first slice: its frame block, and its cut's impostor list (the visible
+     // set's list was read only by the draw that made it); lists in vkCmdUpdateBuffer's 64 KiB pieces.
+     const bool first = !p->reslice.rebuildPending && p->reslice.slicePending && p->reslice.spread.sliceClears;
+     if (first) c.device->vk.CmdUpdateBuffer(c.cmd, p->visible.frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->reslice.spread.job.frame);
+     const std::vector<gpu::ImpostorInstance>& list =
+         p->reslice.rebuildPending ? p->visible.impostors.instances : p->reslice.spread.impostors.instances;
+     if ((p->reslice.rebuildPending || first) && !list.empty()) {
+       const size_t bytes = list.size() * sizeof(gpu::ImpostorInstance);
        for (size_t at = 0; at < bytes; at += 65536)
          c.device->vk.CmdUpdateBuffer(c.cmd, p->impostors.instances.buffer, at, std::min<size_t>(65536, bytes - at),
-                                      reinterpret_cast<const uint8_t*>(p->visible.cutInstances.data()) + at);
+                                      reinterpret_cast<const uint8_t*>(list.data()) + at);
      }
-     else if (p->reslice.slicePending && p->reslice.spread.sliceClears)
-       c.device->vk.CmdUpdateBuffer(c.cmd, p->visible.frameBuffer.buffer, 0, sizeof(gpu::LayerFrame), &p->reslice.spread.job.frame);
      return Status();
    })
       .write(frame, rg::Use::TransferDst)
@@ -293,19 +299,28 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
     const auto nextDepth = g.importImage("layers (next set): depth", descOf(lv.targets.next.depth), kNextRest, kNextRest);
     const auto nextBgColor = g.importImage("background (next set): colour", descOf(lv.targets.next.backgroundColor), kNextRest, kNextRest);
     const auto nextBgDepth = g.importImage("background (next set): depth", descOf(lv.targets.next.backgroundDepth), kNextRest, kNextRest);
-    drawsMesh(g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
+    auto slice = g.addPass("layers: spread slice", [p](rg::PassContext& c) -> Status {
        if (!p->reslice.slicePending) return Status();
        const bool clear = p->reslice.spread.sliceClears;
-       if (clear || sliceHas(*p, true)) CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
+       // The fading impostors come with the last slice, which may hold rigid parts only.
+       const bool lastImpostors = p->reslice.spread.sliceLast && p->reslice.spread.impostors.cut.active;
+       if (clear || sliceHas(*p, true) || lastImpostors)
+         CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
        if (p->mesh.hasRigid && (clear || sliceHas(*p, false)))
          CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
        return Status();
-     }))
+     });
+    drawsMesh(slice)
         .write(nextColor, rg::Use::ColorAttachmentReadWrite)
         .write(nextDepth, rg::Use::DepthAttachmentWrite)
         .write(nextBgColor, rg::Use::ColorAttachmentReadWrite)
         .write(nextBgDepth, rg::Use::DepthAttachmentWrite)
         .when([p] { return p->reslice.slicePending; });
+    if (lv.impostors.enabled)
+      slice.access(impostorList, kFrameRead)
+          .access(impostorBoxes, kFrameRead)
+          .read(atlasColor, rg::Use::FragmentSampled)
+          .read(atlasDepth, rg::Use::FragmentSampled);
     const bool rigid = lv.mesh.hasRigid;
     auto blend = g.addPass("layers: cross-fade", [p](rg::PassContext& c) {
       return p->reslice.fadePending && !p->reslice.spread.fadeCopy ? recordFadeBlend(*p, c.cmd) : Status();

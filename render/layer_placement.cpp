@@ -233,33 +233,30 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
 
 // The impostor cut of the visible placement (LayerSettings.impostors; render/impostors.h): which
 // boxes are drawn as impostors, with which weight, and the remaining foliage as chunk parts.
-void planImpostorCut(LayeredVegetation& lv, const LayerView& view) {
+void planImpostorCut(LayeredVegetation& lv, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out) {
   const auto t0 = PlacementClock::now();
-  lv.visible.cut = ImpostorCut{};
-  lv.visible.cutParts.clear();
-  lv.visible.cutInstances.clear();
-  lv.visible.cutOpaque = 0;
+  *out = ImpostorDraws{};
   const LayerSettings& s = lv.settings;
   if ((s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) || !lv.impostors.enabled) return;
   ImpostorCutInput in;
   in.settings = s.impostors;
-  in.depthRow = lv.visible.frame.depthRow;
+  in.depthRow = frame.depthRow;
   in.perspective = view.proj[2][3] != 0.0f;
   in.pixelScale = std::abs(view.proj[1][1]) * 0.5f * float(lv.desc.height);
   // The far region begins at the first far layer's near boundary (none: no far region); boxes ramp
   // in over band x the mean layer thickness before it.
   const LayerLayout& l = s.layout;
   const uint32_t n = l.count();
-  in.farStart = l.region[2] ? lv.visible.frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
-  in.farBand = s.impostors.band * (lv.visible.frame.boundaries[n] - lv.visible.frame.boundaries[0]) / float(n);
-  impostorCut(lv.impostors, in, &lv.visible.cut);
-  for (const ImpostorCut::Run& r : lv.visible.cut.geometry) appendRunParts(lv, r.first, r.count, r.weight, r.level, &lv.visible.cutParts);
-  lv.visible.cutInstances = lv.visible.cut.opaque;
-  lv.visible.cutOpaque = uint32_t(lv.visible.cut.opaque.size());
-  lv.visible.cutInstances.insert(lv.visible.cutInstances.end(), lv.visible.cut.fading.begin(), lv.visible.cut.fading.end());
-  lv.stats.lastImpostors = uint32_t(lv.visible.cutInstances.size());
-  lv.stats.lastFadingBoxes = uint32_t(lv.visible.cut.fading.size());
-  lv.stats.lastDrawnTriangles = lv.visible.cut.triangles;
+  in.farStart = l.region[2] ? frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
+  in.farBand = s.impostors.band * (frame.boundaries[n] - frame.boundaries[0]) / float(n);
+  impostorCut(lv.impostors, in, &out->cut);
+  for (const ImpostorCut::Run& r : out->cut.geometry) appendRunParts(lv, r.first, r.count, r.weight, r.level, &out->parts);
+  out->instances = out->cut.opaque;
+  out->opaque = uint32_t(out->cut.opaque.size());
+  out->instances.insert(out->instances.end(), out->cut.fading.begin(), out->cut.fading.end());
+  lv.stats.lastImpostors = uint32_t(out->instances.size());
+  lv.stats.lastFadingBoxes = uint32_t(out->cut.fading.size());
+  lv.stats.lastDrawnTriangles = out->cut.triangles;
   lv.stats.lastPlacementMs += msSince(t0);
 }
 
@@ -276,7 +273,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   lv.visible.frame = job.frame;
   lv.visible.layers = std::move(job.layers);
   lv.stats.lastPlacementMs = job.ms;
-  planImpostorCut(lv, view);
+  planImpostorCut(lv, lv.visible.frame, view, &lv.visible.impostors);
   return Status();
 }
 

@@ -61,9 +61,17 @@ struct PlacementJob {
   double ms = 0;  // CPU time spent so far
 };
 
+// The impostor cut of one placement (CanopyDesc.impostors; render/impostors.h) as draws: the cut, its
+// foliage as chunk parts, its impostor list (the opaque ones first, uploaded with the frame block).
+struct ImpostorDraws {
+  ImpostorCut cut;
+  std::vector<ChunkPart> parts;
+  std::vector<gpu::ImpostorInstance> instances;
+  uint32_t opaque = 0;
+};
+
 // What the visible layers show: the placement's frame block (uploaded to frameBuffer) and layers,
-// and the impostor cut it draws (CanopyDesc.impostors): the cut, its foliage as chunk parts, its
-// impostor list (the opaque ones first, uploaded with the frame block).
+// and the impostor cut it draws.
 struct VisibleLayers {
   // The slice camera: the view the visible images were drawn from (docs/design.md "Layers:
   // reprojection"); the composite maps the current camera's pixels into its pixels.
@@ -73,10 +81,7 @@ struct VisibleLayers {
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   Buffer frameBuffer;
-  ImpostorCut cut;
-  std::vector<ChunkPart> cutParts;
-  std::vector<gpu::ImpostorInstance> cutInstances;
-  uint32_t cutOpaque = 0;
+  ImpostorDraws impostors;
 };
 
 using PlacementClock = std::chrono::steady_clock;
@@ -86,8 +91,9 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
 Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline,
                         bool* done);
 Status placeForView(LayeredVegetation& lv, const LayerView& view);
-// The impostor cut for `view` into lv.visible (nothing when impostors are off).
-void planImpostorCut(LayeredVegetation& lv, const LayerView& view);
+// The impostor cut of the placement `frame` for `view` (nothing when impostors are off): the visible
+// set's at a re-slice at once, a spread re-slice's when its placement is done.
+void planImpostorCut(LayeredVegetation& lv, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out);
 
 // The pixels the visible layers (and, during a spread re-slice, the next set) can cover: the
 // model's bounding box projected by the placements' views, 2 pixels of margin; the whole target

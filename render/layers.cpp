@@ -25,9 +25,6 @@ Status checkImpostorSettings(const LayeredVegetation& lv, const LayerSettings& s
   if (!lv.impostors.enabled)
     return Status::error("LayerSettings.impostors.mode: impostors need CanopyDesc.impostors.enable at creation (the box "
                          "hierarchy and its baked views)");
-  if (s.rebuildBudgetMs > 0)
-    return Status::error("LayerSettings.impostors.mode: impostors are drawn by re-slices at once; rebuildBudgetMs must be 0 "
-                         "(it is " + std::to_string(s.rebuildBudgetMs) + ")");
   if (lv.desc.writeIds) return Status::error("LayerSettings.impostors.mode: the id output draws every leaf; impostors are off with it");
   return Status();
 }

@@ -18,29 +18,47 @@ namespace {
 using Clock = std::chrono::steady_clock;
 // Why the layers drawn from the slice camera `slice` no longer serve the camera `view` (docs/design.md
 // "Layers: reprojection", the policy), or "" while the reprojection's estimated error stays within
-// the settings. The layer images reach beyond the output by the guard band, so content beyond the
-// output is there until the view leaves the guard band.
-std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& slice, const LayerView& view) {
+// the settings (their pixel and degree thresholds times `scale`). The layer images reach beyond the
+// output by the guard band, so content beyond the output is there until the view leaves the guard band.
+// `ratio` (optional): the largest of the error's parts over its threshold (parallax and content
+// beyond the layers over errorThresholdPixels, the turn over turnThresholdDegrees).
+std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& slice, const LayerView& view, float scale = 1.0f,
+                               double* ratio = nullptr) {
   const LayerSettings& s = lv.settings;
+  const float pixels = s.errorThresholdPixels * scale, degrees = s.turnThresholdDegrees * scale;
   std::vector<SlabRange> slabs;
   for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
   const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
   const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.instances.boundsMin, lv.instances.boundsMax, size,
                                                         glm::dvec2(layerOutputSize(lv)),
                                                         lv.visible.extent.known ? &lv.visible.extent : nullptr);
+  if (ratio)
+    *ratio = std::max({e.parallaxPx / std::max(s.errorThresholdPixels, 1e-6f), e.outsidePx / std::max(s.errorThresholdPixels, 1e-6f),
+                       e.turnDegrees / std::max(s.turnThresholdDegrees, 1e-6f)});
   // The message is built only for a re-slice (this runs every frame the camera moves).
   auto over = [&](double v, const char* what) {
     return "reprojection error " + (std::isfinite(v) ? std::to_string(v) : std::string("unbounded")) + " px (threshold " +
-           std::to_string(s.errorThresholdPixels) + "): " + what;
+           std::to_string(pixels) + "): " + what;
   };
-  if (e.parallaxPx > s.errorThresholdPixels) return over(e.parallaxPx, "parallax within the slabs");
-  if (e.outsidePx > s.errorThresholdPixels) return over(e.outsidePx, "content beyond the layers");
+  if (e.parallaxPx > pixels) return over(e.parallaxPx, "parallax within the slabs");
+  if (e.outsidePx > pixels) return over(e.outsidePx, "content beyond the layers");
   if (e.magnification > kMaxMagnification)
     return "layer texels magnified " + std::to_string(e.magnification) + "x (limit " + std::to_string(kMaxMagnification) + ")";
-  if (e.turnDegrees > s.turnThresholdDegrees)
+  if (e.turnDegrees > degrees)
     return "view direction to the vegetation turned " + std::to_string(e.turnDegrees) + " degrees (threshold " +
-           std::to_string(s.turnThresholdDegrees) + "): baked shading";
+           std::to_string(degrees) + "): baked shading";
   return "";
+}
+
+// Frames a spread re-slice of the whole mesh would take at the measured drawing rate: its placement,
+// its slices, the frame that unites the occupancy and the copy (a set from another camera).
+double spreadFrames(const LayeredVegetation& lv) {
+  uint64_t triangles = 0;
+  for (const MeshChunk& c : lv.mesh.chunks) triangles += c.triangleCount;
+  const double perFrame = lv.desc.fixedSliceTriangles
+                              ? double(lv.desc.fixedSliceTriangles)
+                              : std::max(1024.0, double(lv.settings.rebuildBudgetMs) * lv.reslice.rate.trianglesPerMs);
+  return 3.0 + std::ceil(double(triangles) / perFrame);
 }
 
 // The interval since the last view update tells what the last frame's layer work cost
@@ -90,7 +108,7 @@ void planSlice(LayeredVegetation& lv) {
                             ? lv.desc.fixedSliceTriangles
                             : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.reslice.rate.trianglesPerMs));
   sp.slice.clear();
-  sp.sliceClears = sp.cursorChunk == 0 && sp.cursorTriangle == 0;
+  sp.sliceClears = sp.cursorItem == 0 && sp.cursorTriangle == 0;
   MeshRing& r = lv.mesh.ring;
   uint64_t segment = 0, usedV = 0, usedI = 0, usedR = 0;
   if (lv.mesh.streamed) {
@@ -98,10 +116,13 @@ void planSlice(LayeredVegetation& lv) {
     segment = (d.anyFrame ? d.frameNumber : r.counter++) % r.segments;
   }
   uint64_t drawn = 0;
-  while (sp.cursorChunk < lv.mesh.chunks.size() && drawn < want) {
-    const MeshChunk& c = lv.mesh.chunks[sp.cursorChunk];
-    uint32_t count = uint32_t(std::min<uint64_t>(c.triangleCount - sp.cursorTriangle, want - drawn));
-    ChunkPart part{sp.cursorChunk, sp.cursorTriangle, count};
+  while (sp.cursorItem < sp.items.size() && drawn < want) {
+    const ChunkPart& item = sp.items[sp.cursorItem];
+    const MeshChunk& c = lv.mesh.chunks[item.chunk];
+    uint32_t count = uint32_t(std::min<uint64_t>(item.triangleCount - sp.cursorTriangle, want - drawn));
+    ChunkPart part = item;  // its weight and level (a part of the impostor cut)
+    part.firstTriangle = item.firstTriangle + sp.cursorTriangle;
+    part.triangleCount = count;
     if (lv.mesh.streamed && count) {
       const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment);
       if (usedV + c.vertexCount > r.vertexCapacity || usedR + roots > r.rootCapacity || usedI + 3 > r.indexCapacity) break;
@@ -122,11 +143,12 @@ void planSlice(LayeredVegetation& lv) {
     if (count) sp.slice.push_back(part);
     drawn += count;
     sp.cursorTriangle += count;
-    if (sp.cursorTriangle >= c.triangleCount) {
-      sp.cursorChunk++;
+    if (sp.cursorTriangle >= item.triangleCount) {
+      sp.cursorItem++;
       sp.cursorTriangle = 0;
     }
   }
+  sp.sliceLast = sp.cursorItem >= sp.items.size();
   lv.reslice.slicePending = true;
   // A slice sized by the ring alone says nothing about the drawing rate the budget sizes.
   lv.reslice.rate.lastWork = sp.immediate ? SliceRateControl::Work::Other : SliceRateControl::Work::Slice;
@@ -145,6 +167,20 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
   return m;
 }
 
+// What a spread re-slice draws once its placement is done (SpreadRebuild.items): the impostor cut of
+// its placement (docs/design.md "Impostors") — the cut's foliage parts, the impostors drawn with the
+// first and last slices — or every foliage chunk, then the rigid chunks, each whole.
+void planSpreadItems(LayeredVegetation& lv) {
+  SpreadRebuild& sp = lv.reslice.spread;
+  planImpostorCut(lv, sp.job.frame, sp.job.view, &sp.impostors);
+  const bool cut = sp.impostors.cut.active;
+  sp.items = cut ? sp.impostors.parts : std::vector<ChunkPart>{};
+  for (uint32_t c = 0; c < lv.mesh.chunks.size(); ++c) {
+    const MeshChunk& mc = lv.mesh.chunks[c];
+    if ((!cut || !mc.foliage) && mc.triangleCount) sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
+  }
+}
+
 // The frame of the last step (the copy of the next set): its placement becomes the visible one.
 void finishSpread(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.reslice.spread;
@@ -154,6 +190,7 @@ void finishSpread(LayeredVegetation& lv) {
   lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
   lv.visible.frame = sp.job.frame;
   lv.visible.layers = std::move(sp.job.layers);
+  lv.visible.impostors = std::move(sp.impostors);
   lv.stats.spreadRebuilds++;
   lv.stats.lastSpreadFrames = sp.frames;
   lv.stats.crossFade = 1.0f;
@@ -177,6 +214,7 @@ Status advanceSpread(LayeredVegetation& lv) {
       lv.reslice.rate.lastPlacementMs = sp.job.ms - before;
       if (done) {
         lv.stats.lastPlacementMs = sp.job.ms;
+        planSpreadItems(lv);
         sp.phase = SpreadPhase::Drawing;
         // No visible placement of this layer count yet (the first view, or new layer images, of a
         // streamed mesh): the new one describes the visible images, still empty, until the copy.
@@ -193,7 +231,7 @@ Status advanceSpread(LayeredVegetation& lv) {
     }
     case SpreadPhase::Drawing:
       planSlice(lv);
-      if (sp.cursorChunk < lv.mesh.chunks.size()) break;
+      if (!sp.sliceLast) break;
       if (!sp.immediate) {
         sp.phase = SpreadPhase::CrossFading;  // from the next frame
         break;
@@ -288,9 +326,13 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   lv.reslice.occupancyRecomputeNext = false;
   std::string reason;
   const LayerSettings& s = lv.settings;
-  bool forced = false;
+  bool forced = false, outrun = false, byCamera = false;
   // The layers are drawn from the slice camera: `view` widened by the guard band.
   const LayerView slice = sliceCameraFor(lv, view);
+  const bool stillFrame = !lv.reslice.haveView || sameCamera(view, lv.reslice.lastFrameView);  // the first view counts as still
+  lv.reslice.movingFrames = stillFrame ? 0 : lv.reslice.movingFrames + 1;
+  if (stillFrame) lv.reslice.outrun = false;
+  lv.reslice.lastFrameView = view;
   if (!lv.reslice.haveView) {
     reason = "first view";
   } else if (!lv.reslice.forcedReason.empty()) {
@@ -304,9 +346,36 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   } else {
     // Error-driven: the visible layers are shown reprojected until that shows (the newest set's
     // camera, which the visible set has once a spread re-slice ends).
-    if (!sameCamera(slice, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view);
+    double ratio = 0.0;
+    if (!sameCamera(slice, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view, 1.0f, &ratio);
+    byCamera = !reason.empty();
+    // A spread re-slice that would be outrun is not started: for a camera moving for more than a
+    // frame (a single jump is not a pace), at the pace the error grew since the last frame (in
+    // thresholds), would it pass kSpreadBehind before the new set is in?
+    const double perFrame = std::max(ratio - lv.reslice.lastErrorRatio, 0.0);
+    lv.reslice.lastErrorRatio = ratio;
+    if (byCamera && spreadEnabled(lv) && lv.reslice.spread.phase == SpreadPhase::Idle && lv.reslice.movingFrames >= 2) {
+      if (ratio + perFrame * spreadFrames(lv) > kSpreadBehind) {
+        reason = "a spread re-slice would fall behind the camera: " + reason;
+        outrun = true;
+      }
+    }
+    // A spread re-slice shows the visible set, reprojected, until its copy. When a moving camera
+    // outruns it (the visible set's error past kSpreadBehind x the thresholds) it is dropped for a
+    // re-slice at once at this view: the error stays bounded (docs/design.md "Layers: spread re-slicing").
+    if (lv.reslice.spread.phase != SpreadPhase::Idle && !sameCamera(slice, lv.visible.view)) {
+      const std::string behind = reprojectionReason(lv, lv.visible.view, view, kSpreadBehind);
+      if (!behind.empty()) {
+        reason = "a spread re-slice fell behind the camera: " + behind;
+        outrun = true;
+      }
+    }
   }
-  const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) || s.policy == ReslicePolicy::EveryFrame;
+  // Once outrun, the camera's re-slices are at once while it keeps moving (a spread one would be
+  // outrun again: each frame of a steady move adds to the error its slices take frames to remove).
+  if (outrun) lv.reslice.outrun = true;
+  const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) ||
+                          s.policy == ReslicePolicy::EveryFrame || outrun || (byCamera && lv.reslice.outrun);
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
   // allows, copied in without a fade (SpreadRebuild.immediate).
   const bool atOnce = wantAtOnce && !lv.mesh.streamed;
@@ -314,6 +383,8 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
   // re-slice or new settings restart it).
   if (!reason.empty() && (atOnce || !spreading || forced)) {
+    if (outrun) lv.stats.outrunSpreads++;
+    lv.reslice.lastErrorRatio = 0.0;
     lv.reslice.haveView = true;
     lv.reslice.settingsChanged = false;
     lv.reslice.forcedReason.clear();

@@ -20,13 +20,22 @@ struct LayeredVegetation;
 enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFading = 3 };  // = LayerStats.spreadPhase
 
 // docs/design.md "Layers: spread re-slicing".
+// A spread re-slice whose visible set's estimated error passes this many times the thresholds
+// (errorThresholdPixels, turnThresholdDegrees) is dropped for a re-slice at once.
+constexpr float kSpreadBehind = 2.0f;
+
 struct SpreadRebuild {
   SpreadPhase phase = SpreadPhase::Idle;
   PlacementJob job;
   uint32_t frames = 0;                 // frames since it started
-  uint32_t cursorChunk = 0, cursorTriangle = 0;  // the next triangle to draw
+  // What the re-slice draws, in order, once its placement is done: every chunk whole, or with
+  // impostors the cut's foliage parts and then the rigid chunks (the cut is `impostors`).
+  std::vector<ChunkPart> items;
+  ImpostorDraws impostors;
+  uint32_t cursorItem = 0, cursorTriangle = 0;  // the next triangle to draw: items[cursorItem], from its cursorTriangle-th
   std::vector<ChunkPart> slice;        // this frame's draws into the next set
-  bool sliceClears = false;            // this frame's slice is the first: clear the next set
+  bool sliceClears = false;            // this frame's slice is the first: clear the next set (and draw the opaque impostors)
+  bool sliceLast = false;              // this frame's slice is the last (and draws the fading impostors)
   bool united = false;                 // the frame after the last slice unites the occupancy (no fade)
   uint32_t fadeStep = 0;               // 1..crossFadeFrames during the cross-fade (the last copies)
   bool fadeCopy = false;               // this frame's step is the last: copy the next set
@@ -74,6 +83,12 @@ struct ResliceScheduler {
   SpreadRebuild spread;
   SliceRateControl rate;
   LayerView lastRebuildView;  // the slice camera of the last re-slice (the guard band's widened view)
+  // A moving camera outran a spread re-slice: the camera's re-slices are at once until it stops
+  // (a frame at the previous frame's camera).
+  bool outrun = false;
+  LayerView lastFrameView;
+  uint32_t movingFrames = 0;  // consecutive view updates whose camera differs from the previous one's
+  double lastErrorRatio = 0;  // the last frame's estimated error over its threshold (its growth a frame)
 };
 
 // Asks for a re-slice at the next updateLayerView, for `reason` (LayerStats.lastRebuildReason);

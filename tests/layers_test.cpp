@@ -732,9 +732,35 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   EXPECT_NE(lv.stats.spreadPhase, 0u);
   EXPECT_EQ(lv.stats.rebuilds, 2u);
   LayerView c = b;
-  c.view = b.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));
+  c.view = b.view * glm::rotate(glm::mat4(1.0f), glm::radians(0.3f), glm::vec3(0, 1, 0));
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
   EXPECT_EQ(lv.stats.rebuilds, 2u) << "a turn during a spread re-slice waits for it";
+  EXPECT_NE(lv.stats.spreadPhase, 0u);
+  // ... unless the camera outruns it: the visible set's error past twice the thresholds (here the
+  // view direction turned 7.3 degrees from the visible set's, twice 2 degrees) re-slices at once.
+  c.view = c.view * glm::rotate(glm::mat4(1.0f), glm::radians(4.0f), glm::vec3(0, 1, 0));
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_TRUE(changed);
+  EXPECT_EQ(lv.stats.rebuilds, 3u);
+  EXPECT_EQ(lv.stats.spreadPhase, 0u);
+  EXPECT_EQ(lv.stats.outrunSpreads, 1u);
+  EXPECT_NE(lv.stats.lastRebuildReason.find("a spread re-slice fell behind the camera"), std::string::npos)
+      << lv.stats.lastRebuildReason;
+  // A camera that keeps moving re-slices at once from then on (a spread one would be outrun again).
+  c.view = c.view * glm::rotate(glm::mat4(1.0f), glm::radians(4.5f), glm::vec3(0, 1, 0));
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_TRUE(changed);
+  EXPECT_EQ(lv.stats.rebuilds, 4u);
+  EXPECT_EQ(lv.stats.spreadPhase, 0u);
+  // Standing still ends that; the next move spreads again.
+  ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());
+  EXPECT_FALSE(lv.reslice.outrun);
+  LayerView e = c;
+  e.view = c.view * glm::rotate(glm::mat4(1.0f), glm::radians(3.0f), glm::vec3(0, 1, 0));
+  ASSERT_TRUE(updateLayerView(lv, e, &changed).ok());
+  EXPECT_FALSE(changed);
+  EXPECT_NE(lv.stats.spreadPhase, 0u) << lv.stats.lastRebuildReason;
+  EXPECT_EQ(lv.stats.rebuilds, 5u);
   lv.reslice.forcedReason = "camera cut";
   lv.reslice.forceImmediate = true;
   ASSERT_TRUE(updateLayerView(lv, c, &changed).ok());

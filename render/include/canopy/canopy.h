@@ -239,7 +239,8 @@ enum class ImpostorMode {
 // through the box, alpha-blended by how squarely it faces the viewer: parallax inside the box) or,
 // before 0.7, one polygon facing the viewer blending the two views nearest its direction.
 enum class ImpostorShape { CrossedPolygons, FacingPolygon };
-// mode other than Off needs CanopyDesc.impostors.enable, rebuildBudgetMs 0 and a resident mesh.
+// A mode other than Off needs CanopyDesc.impostors.enable and a resident mesh; the cut is made for
+// each re-slice's view, at once or, spread over frames (rebuildBudgetMs > 0), when its placement is done.
 // A box is an impostor where its projected size (bounding-sphere diameter, pixels of the layer
 // images) is at most switchPixels; its leaves fade out and its impostor in while the size falls
 // from switchPixels x (1 + band) to switchPixels (a distance band: size ~ 1 / distance). At
@@ -648,6 +649,7 @@ struct LayerStats {
   // Spread re-slicing (LayerSettings.rebuildBudgetMs):
   uint32_t spreadPhase = 0;          // 0 idle, 1 placing (CPU), 2 drawing the new set, 3 cross-fading
   uint64_t spreadRebuilds = 0;       // spread re-slices completed
+  uint64_t outrunSpreads = 0;        // spread re-slices a moving camera outran, replaced by one at once
   uint32_t lastSpreadFrames = 0;     // frames the last completed one took, placement to last fade step
   uint64_t lastSliceTriangles = 0;   // triangles drawn by the last drawing frame
   uint64_t maxSliceTriangles = 0;    // the most one drawing frame of the last (or running) one drew

@@ -699,7 +699,7 @@ TEST_F(ImpostorTest, WhatImpostorsNeedIsRefusedWithTheReason) {
   ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
   s = lv.settings;
   s.impostors.mode = ImpostorMode::ByProjectedSize;
-  s.rebuildBudgetMs = 4.0f;  // spread re-slicing draws impostors too (since 0.8)
+  s.rebuildBudgetMs = 4.0f;  // spread re-slicing draws impostors too (since 0.7)
   st = setLayerSettings(lv, s);
   EXPECT_TRUE(st.ok()) << st.message();
   s.rebuildBudgetMs = 0.0f;

@@ -713,14 +713,19 @@ TEST_F(LayersTest, SpreadReslicingEqualsReslicingAtOnce) {
 
 // The policy with spreading on: a camera cut, a new layer count and the EveryFrame policy
 // re-slice at once; a turn while a spread re-slice runs waits for it; bad values are refused.
-TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
-  const VegetationModel m = straddlingLeaves(6, 4, false);
+// Spread re-slicing in slices of 4 triangles (many frames a re-slice) on a small model.
+Status createSlowSpread(Device& dev, const VegetationModel& m, LayeredVegetation* lv) {
   LayeredVegetationDesc d = smallDesc();
   d.writeIds = false;
   d.fixedSliceTriangles = 4;
   d.settings.rebuildBudgetMs = 1.0f;
+  return createLayeredVegetation(dev, m, d, lv);
+}
+
+TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
+  const VegetationModel m = straddlingLeaves(6, 4, false);
   LayeredVegetation lv;
-  ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+  ASSERT_TRUE(createSlowSpread(dev, m, &lv).ok());
   bool changed = false;
   const LayerView a = frontView();
   ASSERT_TRUE(updateLayerView(lv, a, &changed).ok());
@@ -806,6 +811,31 @@ TEST_F(LayersTest, SpreadReslicingFollowsThePolicy) {
   bad.crossFadeFrames = 0;
   s = setLayerSettings(lv, bad);
   EXPECT_NE(s.message().find("crossFadeFrames"), std::string::npos) << s.message();
+  destroyLayeredVegetation(lv);
+}
+
+// A camera that keeps moving (issue 34): the first re-slice it causes is not spread when, at the
+// pace its error grows, the spread one would fall behind (slices of 4 triangles take many frames);
+// the error at that re-slice is the threshold's, not more.
+TEST_F(LayersTest, ASteadilyMovingCameraIsNotOutrunByASpreadReslice) {
+  const VegetationModel m = straddlingLeaves(6, 4, false);
+  LayeredVegetation lv;
+  ASSERT_TRUE(createSlowSpread(dev, m, &lv).ok());
+  bool changed = false;
+  LayerView v = frontView();
+  ASSERT_TRUE(updateLayerView(lv, v, &changed).ok());
+  int frame = 0;
+  for (; frame < 200 && lv.stats.rebuilds == 1; ++frame) {
+    v.view = v.view * glm::rotate(glm::mat4(1.0f), glm::radians(0.2f), glm::vec3(0, 1, 0));  // an orbit
+    ASSERT_TRUE(updateLayerView(lv, v, &changed).ok());
+  }
+  ASSERT_EQ(lv.stats.rebuilds, 2u) << "the orbit re-slices within 200 frames";
+  EXPECT_TRUE(changed && lv.reslice.rebuildPending) << "at once, frame " << frame;
+  EXPECT_EQ(lv.stats.spreadPhase, 0u);
+  EXPECT_EQ(lv.stats.outrunSpreads, 1u);
+  EXPECT_NE(lv.stats.lastRebuildReason.find("a spread re-slice would fall behind the camera"), std::string::npos)
+      << lv.stats.lastRebuildReason;
+  std::printf("re-sliced at once after %d frames of 0.2 degrees: %s\n", frame, lv.stats.lastRebuildReason.c_str());
   destroyLayeredVegetation(lv);
 }
 

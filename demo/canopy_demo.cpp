@@ -189,13 +189,15 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
   std::snprintf(head, sizeof head,
                 "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
                 "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices (%u spread over frames "
-                "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles; the last for: %s)\n"
+                "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles; %u at once for a moving "
+                "camera a spread one would fall behind; the last for: %s)\n"
                 "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
                 "(docs/design.md): the wall-clock line is the figure to trust there.\n",
                 label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
                 o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, cameraMotionName(o.camera),
                 dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
-                st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles, st.layers.lastRebuildReason.c_str());
+                st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles, uint32_t(st.layers.outrunSpreads),
+                st.layers.lastRebuildReason.c_str());
   std::string text = head;
   text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
   if (!steady.wallMs.empty())

@@ -352,10 +352,11 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     // A spread re-slice that would be outrun is not started: for a camera moving for more than a
     // frame (a single jump is not a pace), at the pace the error grew since the last frame (in
     // thresholds), would it pass kSpreadBehind before the new set is in?
-    const double perFrame = std::max(ratio - lv.reslice.lastErrorRatio, 0.0);
+    // (An unbounded error, a camera inside the vegetation's bounds, is outrun at once.)
+    const double perFrame = std::isfinite(ratio) && std::isfinite(lv.reslice.lastErrorRatio) ? std::max(ratio - lv.reslice.lastErrorRatio, 0.0) : 0.0;
     lv.reslice.lastErrorRatio = ratio;
     if (byCamera && spreadEnabled(lv) && lv.reslice.spread.phase == SpreadPhase::Idle && lv.reslice.movingFrames >= 2) {
-      if (ratio + perFrame * spreadFrames(lv) > kSpreadBehind) {
+      if (!std::isfinite(ratio) || ratio + perFrame * spreadFrames(lv) > kSpreadBehind) {
         reason = "a spread re-slice would fall behind the camera: " + reason;
         outrun = true;
       }

@@ -89,6 +89,10 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     const ImpostorDraws* imp = parts ? &lv.reslice.spread.impostors : &lv.visible.impostors;
     const bool cut = imp->cut.active;
     const bool opaque = cut && (!parts || lv.reslice.spread.sliceClears), fading = cut && (!parts || lv.reslice.spread.sliceLast);
+    // The single pass with layers at half resolution uses its clip-distance variant.
+    const bool half = lv.settings.halfResolutionLayers > 0;
+    const GraphicsPipeline& layered = half ? lv.pipelines.layeredHalf : lv.pipelines.layered;
+    const LayerPipelines::ShadeOnce& layeredOnce = half ? lv.pipelines.layeredHalfOnce : lv.pipelines.layeredOnce;
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
     o.runs = t.runs;
@@ -97,9 +101,7 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
       const std::vector<ChunkPart>* drawn = parts ? parts : cut ? &imp->parts : nullptr;
       if (!drawn || !drawn->empty())
         CANOPY_TRY(lv.pipelines.singlePass
-                       ? (lv.settings.halfResolutionLayers > 0
-                              ? drawShaded(lv, cmd, lv.pipelines.layeredHalf, lv.pipelines.layeredHalfOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
-                              : drawShaded(lv, cmd, lv.pipelines.layered, lv.pipelines.layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o))
+                       ? drawShaded(lv, cmd, layered, layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
                        : drawShaded(lv, cmd, lv.pipelines.perLayer, lv.pipelines.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
       return fading ? recordImpostors(lv, cmd, *imp, true, i) : Status();
     }));

@@ -50,15 +50,19 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
   return "";
 }
 
+// Triangles a spread slice draws: as many as the budget and the measured rate allow (at least 1024,
+// so a re-slice always ends), or the fixed size a test asks for.
+uint64_t sliceTriangles(const LayeredVegetation& lv) {
+  return lv.desc.fixedSliceTriangles ? lv.desc.fixedSliceTriangles
+                                     : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.reslice.rate.trianglesPerMs));
+}
+
 // Frames a spread re-slice of the whole mesh would take at the measured drawing rate: its placement,
 // its slices, the frame that unites the occupancy and the copy (a set from another camera).
 double spreadFrames(const LayeredVegetation& lv) {
   uint64_t triangles = 0;
   for (const MeshChunk& c : lv.mesh.chunks) triangles += c.triangleCount;
-  const double perFrame = lv.desc.fixedSliceTriangles
-                              ? double(lv.desc.fixedSliceTriangles)
-                              : std::max(1024.0, double(lv.settings.rebuildBudgetMs) * lv.reslice.rate.trianglesPerMs);
-  return 3.0 + std::ceil(double(triangles) / perFrame);
+  return 3.0 + std::ceil(double(triangles) / double(sliceTriangles(lv)));
 }
 
 // The interval since the last view update tells what the last frame's layer work cost
@@ -103,10 +107,7 @@ void updateSliceRate(LayeredVegetation& lv) {
 // them is the one being recorded: docs/design.md "Layers: mesh budget and staging ring").
 void planSlice(LayeredVegetation& lv) {
   SpreadRebuild& sp = lv.reslice.spread;
-  const uint64_t want = sp.immediate ? UINT64_MAX
-                        : lv.desc.fixedSliceTriangles
-                            ? lv.desc.fixedSliceTriangles
-                            : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.reslice.rate.trianglesPerMs));
+  const uint64_t want = sp.immediate ? UINT64_MAX : sliceTriangles(lv);
   sp.slice.clear();
   sp.sliceClears = sp.cursorItem == 0 && sp.cursorTriangle == 0;
   MeshRing& r = lv.mesh.ring;

@@ -77,6 +77,7 @@ struct CameraBenchOptions {
   bool crossFade = true;  // the cross-fade's coverage at one camera (a light change, a layout change)
   float guardBand = CanopyDesc{}.guardBand;  // the policy side's CanopyDesc.guardBand (the every-frame side: 0)
   uint32_t halfResolutionLayers = LayerSettings{}.halfResolutionLayers;  // every side's (the still frame's too)
+  uint32_t depthSearchSteps = CompositeParams{}.depthSearchSteps;  // the policy side's (0: the slabs' planes alone)
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 

@@ -39,6 +39,7 @@ struct Side {
   rg::RenderGraph graph;
   uint32_t w = 0, h = 0;
   uint32_t halfResolutionLayers = 0;  // LayerSettings.halfResolutionLayers (both sides alike)
+  uint32_t depthSearchSteps = CompositeParams{}.depthSearchSteps;  // CompositeParams.depthSearchSteps
   explicit Side(Device& dev, uint32_t half = 0) : d(dev), halfResolutionLayers(half) {}
   ~Side() {
     graph.release(d);
@@ -61,6 +62,7 @@ struct Side {
     p.layers.rebuildBudgetMs = policy == ReslicePolicy::EveryFrame ? 0.0f : budgetMs;
     p.layers.errorThresholdPixels = errorPixels;
     p.layers.halfResolutionLayers = halfResolutionLayers;
+    p.composite.depthSearchSteps = depthSearchSteps;
     CANOPY_TRY(setCanopyParams(ctx, p));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     return buildHostGraph(d, ctx, host, true, rg::stateOf(rg::Use::ColorAttachmentReadWrite), &graph);
@@ -231,6 +233,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       path.amplitudeDegrees = o.swingDegrees;
       // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
       Side autoSide(d, o.halfResolutionLayers), every(d, o.halfResolutionLayers);
+      autoSide.depthSearchSteps = o.depthSearchSteps;
       s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
       if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
       const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);

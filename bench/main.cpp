@@ -11,7 +11,7 @@
 //   canopy-bench layercount [--faces 80000] [--scene shrub] [--gltf FILE] [--frames N] [--size WxH] [--csv FILE]
 //   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
 //                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS] [--reslice-error PX]
-//                [--csv FILE] [--no-cross-fade] [--half-res N]
+//                [--csv FILE] [--no-cross-fade] [--half-res N] [--depth-search N]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -50,7 +50,9 @@ static int usage(const char* why) {
                "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1;\n"
                "                 --csv FILE: a row per frame; then the cross-fade's coverage at one camera, a light and a\n"
                "                 layout change, unless --no-cross-fade; --half-res N: the farthest N layers at half\n"
-               "                 resolution on every side, LayerSettings.halfResolutionLayers, default 0)\n"
+               "                 resolution on every side, LayerSettings.halfResolutionLayers, default 0;\n"
+               "                 --depth-search N: CompositeParams.depthSearchSteps of the policy side, 0: the\n"
+               "                 slabs' planes alone, default 16)\n"
                "  layercount     the layer-count study: 1, 2, 3, 5, 7, 9 layers, 3(1-1-1), 5(3-1-1) against 16 layers, animated\n"
                "                 frames frame by frame at a still camera (--faces default 80000, --scene shrub, --gltf FILE\n"
                "                 too, --frames default 90, --size default 512x384, --csv FILE)\n"
@@ -168,6 +170,8 @@ int main(int argc, char** argv) {
       if (!parseNumber(next(), -90, 90, &cam.degreesPerFrame)) return usage("--degrees-per-frame needs degrees in [-90, 90]");
     } else if (a == "--radii-per-frame") {
       if (!parseNumber(next(), 0, 10, &cam.radiiPerFrame)) return usage("--radii-per-frame needs radii in [0, 10]");
+    } else if (a == "--depth-search") {
+      if (!cli::parseUint(next(), 0, 64, &cam.depthSearchSteps)) return usage("--depth-search needs a sample count in [0, 64]");
     } else if (a == "--half-res") {
       if (!cli::parseUint(next(), 0, 32, &cam.halfResolutionLayers)) return usage("--half-res needs a layer count in [0, 32]");
     } else if (a == "--no-cross-fade") {

@@ -93,6 +93,7 @@ void printHelp() {
       "%s"
       "%s"
       "%s"
+      "%s"
       "  --compare-frames A B  the world-lock error of folder A's frame_NNNN.png against folder B's (coverage\n"
       "                      IoU, silhouette distance, colour; tools/world_lock.h), then exit\n"
       "%s"
@@ -137,6 +138,7 @@ void printHelp() {
       mirrored("--reslice-error PX", "LayerSettings.errorThresholdPixels", d.resliceErrorPixels).c_str(),
       mirrored("--guard-band F", "CanopyDesc.guardBand", d.guardBand).c_str(),
       mirrored("--half-res-layers N", "LayerSettings.halfResolutionLayers", d.halfResolutionLayers).c_str(),
+      mirrored("--depth-search N", "CompositeParams.depthSearchSteps", d.depthSearchSteps).c_str(),
       mirrored("--rebuild-budget MS", "LayerSettings.rebuildBudgetMs", d.rebuildBudgetMs).c_str(), d.deviceBudgetMiB,
       d.ringMiB, d.outDir.c_str());
   std::printf("Caches of a --gltf model (leaf roots, impostor views; docs/design.md \"Files\"):\n%s", cli::cacheHelp());
@@ -183,6 +185,7 @@ const NumberOption kNumberOptions[] = {
     {"--reslice-error", 0, 0, &Options::resliceErrorPixels, "a number", "LayerSettings.errorThresholdPixels"},
     {"--guard-band", 0, 0, &Options::guardBand, "a number", "CanopyDesc.guardBand"},
     {"--half-res-layers", 0, 0, &Options::halfResolutionLayers, "a number", "LayerSettings.halfResolutionLayers"},
+    {"--depth-search", 0, 0, &Options::depthSearchSteps, "a number", "CompositeParams.depthSearchSteps"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
 };
@@ -230,6 +233,8 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (const int rc = number(num->low(), num->high(), &(o->*(num->field)), num->what)) return rc;
       if (num->field == &Options::halfResolutionLayers && o->halfResolutionLayers != std::floor(o->halfResolutionLayers))
         return bad("needs a whole number of layers");
+      if (num->field == &Options::depthSearchSteps && o->depthSearchSteps != std::floor(o->depthSearchSteps))
+        return bad("needs a whole number of samples");
     } else if (sw) {
       o->*(sw->field) = sw->value;
     } else if (a == "--help" || a == "-h" || a == "--param-table") {
@@ -472,6 +477,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.rebuildBudgetMs = o.rebuildBudgetMs;
   p.layers.errorThresholdPixels = o.resliceErrorPixels;
   p.layers.halfResolutionLayers = uint32_t(o.halfResolutionLayers);
+  p.composite.depthSearchSteps = uint32_t(o.depthSearchSteps);
   p.layers.policy = o.reslice;
   p.layers.lightDirection = o.light;
   p.layers.lightColor = o.lightColor;

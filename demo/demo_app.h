@@ -74,6 +74,7 @@ struct Options {
   float resliceErrorPixels = 1.0f;     // LayerSettings.errorThresholdPixels: the reprojection error that re-slices
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
   float guardBand = 0.1f;              // CanopyDesc.guardBand: the layers reach this fraction beyond each edge
+  float depthSearchSteps = float(CompositeParams{}.depthSearchSteps);  // CompositeParams.depthSearchSteps (0: the slabs' planes alone)
   float halfResolutionLayers = 0.0f;  // LayerSettings.halfResolutionLayers: the farthest this many layers at half resolution
   float deviceBudgetMiB = 1536.0f;     // CanopyDesc.deviceMemoryBudget (0: no limit)
   float ringMiB = 64.0f;               // CanopyDesc.meshStagingRingBytes

@@ -667,13 +667,21 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   // as this frame's when that widening gives it bit for bit (layer pixel = pixel + guard).
   if (!sameCamera(slice, sliceCameraFor(c->layers, view)) || !sameCamera(previous, view)) {
     std::vector<float> depths;
-    for (const LayerInfo& l : c->layers.visible.layers) depths.push_back(l.slab.depth);
+    std::vector<LayerSearch> search;
+    for (const LayerInfo& l : c->layers.visible.layers) {
+      depths.push_back(l.slab.depth);
+      // The leaf vertices' depths, widened by 2 % of the range (impostor cards, rounding); a layer
+      // without leaves searches its slab.
+      const float lo = std::isfinite(l.drawnNear) ? l.drawnNear : l.slab.zNear, hi = std::isfinite(l.drawnFar) ? l.drawnFar : l.slab.zFar;
+      const float pad = 0.02f * std::max(hi - lo, 0.0f) + 1e-4f * std::max(std::abs(hi), 1.0f);
+      search.push_back({std::max(lo - pad, 1e-6f), hi + pad});
+    }
     // The rigid background's plane: the vegetation's centre.
     const glm::vec3 centre = 0.5f * (c->layers.instances.boundsMin + c->layers.instances.boundsMax);
     const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
     const gpu::CompositeView cv =
         compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
-                      glm::dvec2(c->layers.desc.width, c->layers.desc.height));
+                      glm::dvec2(c->layers.desc.width, c->layers.desc.height), search, c->params.composite.depthSearchSteps);
     setCompositeReprojection(c->compositor, &cv);
   }
   c->lastView = view;

@@ -17,6 +17,11 @@ struct Texels {
     if (x < 0 || y < 0 || x >= int(w) || y >= int(h)) return 1.0f;
     return in.layerDepth[(size_t(layer) * h + y) * w + x];
   }
+  // The nearest texel's depth at layer pixel q of a layer read at texel scale `scale` (half resolution).
+  float depthAt(uint32_t layer, const glm::vec2& q, float scale) const {
+    const glm::vec2 t = q * scale;
+    return depth(layer, int(std::floor(t.x)), int(std::floor(t.y)));
+  }
 };
 
 glm::vec2 displacementAt(const std::vector<glm::vec2>& d, uint32_t base, const gpu::GridSample& g) {
@@ -80,6 +85,8 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       float frontZ = 1.0f;
       bool front = false;
       glm::vec2 motion(0.0f);
+      const glm::vec4 rayA = reproject ? gpu::compositeRayOrigin(in.view.currentToSlice, p, outSize) : glm::vec4(0.0f);
+      const glm::vec4 rayB = in.view.currentToSlice[2];
       for (uint32_t i = 0; i < n; ++i) {
         if (reproject) {
           const glm::vec3 hp = planePoint(in.view, i, p);
@@ -88,6 +95,24 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           g = gpu::gridSample(pc, s);
         }
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
+        if (reproject) {
+          // The depth search, as the shaders (shared/composite.h compositeRaySearch).
+          const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
+          const float scale = gpu::layerTexelScale(pc.halfResolution, i);
+          bool hit = ray.steps == 0;
+          for (uint32_t k = 0; k < ray.steps && !hit; ++k) {
+            const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
+            if (x.w <= 0.0f) continue;
+            const float zt = tex.depthAt(i, glm::vec2(x) - d, scale);
+            if (zt >= 1.0f) continue;
+            const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
+            if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale) < 1.0f) {
+              s = glm::vec2(c);
+              hit = true;
+            }
+          }
+          if (!hit) continue;
+        }
         const glm::vec2 q = s - d;
         // Texel space: centres at integer + 0.5; a layer at half resolution holds pixel q at q / 2.
         const glm::vec2 tq = q * gpu::layerTexelScale(pc.halfResolution, i);

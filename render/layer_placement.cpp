@@ -185,8 +185,12 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
             job.pixelLo = glm::min(job.pixelLo, px);
             job.pixelHi = glm::max(job.pixelHi, px);
             if (leaf == kNoLeaf) continue;
-            const uint32_t layer = geometric ? gpu::layerOfDepth(f, glm::dot(job.depthRows[k], p)) : job.leafLayer[k * nLeaves + leaf];
-            job.layers[layer].top = std::min(job.layers[layer].top, y);
+            const float z = glm::dot(job.depthRows[k], p);
+            const uint32_t layer = geometric ? gpu::layerOfDepth(f, z) : job.leafLayer[k * nLeaves + leaf];
+            LayerInfo& li = job.layers[layer];
+            li.top = std::min(li.top, y);
+            li.drawnNear = std::min(li.drawnNear, z);
+            li.drawnFar = std::max(li.drawnFar, z);
             if (perPlant) {
               float& top = job.plantTop[(k * nPlants + plants.leafPlant[leaf]) * f.layerCount + layer];
               top = std::min(top, y);

@@ -29,6 +29,9 @@ struct LayerInfo {
   float rootLineY = 0;        // pixel row of the vegetation's root line (bottom of its projected
                               // bounding box; the same for every layer: paper eq. 7)
   float height = 1;           // rootLineY - top, at least 1 pixel (h of eq. 7)
+  // View depths of the layer's leaf vertices (leaves reach beyond their roots' slab): where its
+  // texels' depths lie, for the reprojection's depth search (render/reprojection.h LayerSearch).
+  float drawnNear = INFINITY, drawnFar = -INFINITY;
   uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
   uint64_t triangles = 0;
   // Per-plant roots (docs/design.md "Per-plant roots"), when the vegetation is more than one plant

@@ -29,12 +29,21 @@ glm::dvec2 applyHomography(const glm::dmat3& h, const glm::dvec2& p);
 // Whether two cameras are the same, bit for bit (then the composite reads layer pixel = pixel).
 bool sameCamera(const LayerView& a, const LayerView& b);
 
+// Layer i's depth search (shared/composite.h compositeRaySearch): the slice camera's view depths
+// between which the layer's texels lie (its vertices' range, widened a little; a reversed or
+// unknown range searches nothing).
+struct LayerSearch {
+  float zNear = 0, zFar = 0;
+};
 // The composite's view block: layer i's plane at slice-camera view depth `layerDepths[i]`, the
 // rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
-// `layerSize` (the slice camera's, guard band included).
+// `layerSize` (the slice camera's, guard band included). `search` (one per layer, or empty) and
+// `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, with a
+// sample per layer pixel the ray crosses between the range's ends, at most maxSteps.
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
-                                 const glm::dvec2& layerSize);
+                                 const glm::dvec2& layerSize, const std::vector<LayerSearch>& search = {},
+                                 uint32_t maxSteps = 0);
 
 // The reprojection's estimated screen error (pixels of the current camera) of showing layers drawn
 // from `slice` from `current` (docs/design.md "Layers: reprojection", the policy):

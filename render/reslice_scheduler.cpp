@@ -165,6 +165,8 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
   m.top = glm::mix(a.top, b.top, t);
   m.rootLineY = glm::mix(a.rootLineY, b.rootLineY, t);
   m.height = glm::mix(a.height, b.height, t);
+  m.drawnNear = std::min(a.drawnNear, b.drawnNear);  // both sets' texels are read
+  m.drawnFar = std::max(a.drawnFar, b.drawnFar);
   return m;
 }
 

@@ -34,6 +34,12 @@ vec3 planePoint(uint i, vec2 p) {
   return compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
 }
 
+// Layer i's slice depth at layer pixel q (the nearest texel; 1 = empty, also beyond the image).
+float layerDepthAt(uint i, vec2 q) {
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
+  return textureLod(layerDepth, vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i)), 0.0).r;
+}
+
 vec2 displacementAt(uint base, GridSample g, bool previous) {
   if (previous)
     return blendCorners(g, prevDisp[base + g.i00], prevDisp[base + g.i10], prevDisp[base + g.i01], prevDisp[base + g.i11]);
@@ -85,7 +91,7 @@ void main() {
   float bgZ = 1.0;
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   // The view's matrices read once, before the layer loop (as composite_tiles.comp; docs/performance.md).
-  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious;
+  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious, toSlice = view.currentToSlice;
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
     ivec2 is = ip + ivec2(origin);
     bool inside = true;
@@ -112,6 +118,7 @@ void main() {
   float frontZ = 1.0;
   vec2 motion = vec2(0.0);
   bool front = false;
+  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   for (uint i = 0u; i < pc.layerCount; ++i) {
     if (reproject) {
       vec3 h = planePoint(i, p);
@@ -120,6 +127,26 @@ void main() {
       g = gridSample(pc, s);
     }
     vec2 d = displacementAt(i * corners, g, false);
+    if (reproject) {
+      // The depth search, as composite_tiles.comp (shared/composite.h compositeRaySearch).
+      CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[i]);
+      if (ray.steps > 0u) {
+        bool hit = false;
+        for (uint k = 0u; k < ray.steps && !hit; ++k) {
+          vec4 x = compositeRaySample(ray, k, size);
+          if (x.w <= 0.0) continue;
+          float zt = layerDepthAt(i, x.xy - d);
+          if (zt >= 1.0) continue;
+          vec3 c = compositeRayCrossing(ray, k, zt, size);
+          // The crossing's texel holds a surface (the sample's own texel: known to).
+          if (c.z > 0.0 && (all(equal(floor(c.xy - d), floor(x.xy - d))) || layerDepthAt(i, c.xy - d) < 1.0)) {
+            s = c.xy;
+            hit = true;
+          }
+        }
+        if (!hit) continue;
+      }
+    }
     vec2 q = s - d;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {

@@ -2,8 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Compute path, tile classification (docs/performance.md): for every COMPOSITE_TILE screen tile, which
 // layers can reach it under q = s - d_i(s), s = H_i p (the reprojection, shared/composite.h; s = p
-// for a still camera). d_i is bilinear between warp-grid corners, so over the tile
-// it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
+// for a still camera; the depth search reads within CompositeView.search[i].w of H_i p). d_i is
+// bilinear between warp-grid corners, so over the tile it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
 // layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
 // rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
 // (position with the background bit, layer mask) to the list that sizes the composite's indirect dispatch and the
@@ -80,6 +80,10 @@ void main() {
       if (reproject && !layerBounds(i, lo, hi, slo, shi)) {
         mask |= 1u << i;
         continue;
+      }
+      if (reproject && view.search[i].z > 0.0) {  // the depth search reads this far from the plane's point
+        slo -= view.search[i].w;
+        shi += view.search[i].w;
       }
       if (shi.x - slo.x > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN) ||
           shi.y - slo.y > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN)) {

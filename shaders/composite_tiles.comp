@@ -23,8 +23,14 @@ layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
 layout(binding = 8, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
+// Layer i's slice depth at layer pixel q (the nearest texel; 1 = empty, also beyond the image).
+float layerDepthAt(uint i, vec2 q) {
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
+  return textureLod(layerDepth, vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i)), 0.0).r;
+}
+
 // One listed tile: its pixel at this invocation.
-void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
+void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlice) {
   uvec2 tile = uvec2(compositeTileX(tileEntry.x), compositeTileY(tileEntry.x));
   uint mask = tileEntry.y;
   ivec2 ip = ivec2(tile * COMPOSITE_TILE + gl_LocalInvocationID.xy);
@@ -64,6 +70,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
   vec2 motion = vec2(0.0);
   bool front = false;
   uint layers = mask & compositeLayerBits(pc.layerCount);
+  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   while (layers != 0u) {
     uint i = uint(findLSB(layers));
     layers &= layers - 1u;
@@ -75,6 +82,28 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
       uvGrid = gridTexcoord(pc, gridSample(pc, s));
     }
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
+    if (reproject) {
+      // The depth search (shared/composite.h compositeRaySearch): the first texel the pixel's ray
+      // passes behind, then the ray's point at that texel's depth; nothing found: the layer shows
+      // nothing here. The displacement stays the plane point's (it varies over cells, not pixels).
+      CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[i]);
+      if (ray.steps > 0u) {
+        bool hit = false;
+        for (uint k = 0u; k < ray.steps && !hit; ++k) {
+          vec4 x = compositeRaySample(ray, k, size);
+          if (x.w <= 0.0) continue;
+          float zt = layerDepthAt(i, x.xy - dd.xy);
+          if (zt >= 1.0) continue;
+          vec3 c = compositeRayCrossing(ray, k, zt, size);
+          // The crossing's texel holds a surface (the sample's own texel: known to).
+          if (c.z > 0.0 && (all(equal(floor(c.xy - dd.xy), floor(x.xy - dd.xy))) || layerDepthAt(i, c.xy - dd.xy) < 1.0)) {
+            s = c.xy;
+            hit = true;
+          }
+        }
+        if (!hit) continue;
+      }
+    }
     vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
@@ -125,7 +154,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious) {
 void main() {
   // The view's matrices read once per invocation, not in the layer loop: lavapipe reloads them lane
   // by lane for every layer visited otherwise (docs/performance.md, "What a reprojected frame costs").
-  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious;
+  mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious, toSlice = view.currentToSlice;
   uint first = gl_WorkGroupID.x * pc.tilesPerGroup, end = min(first + pc.tilesPerGroup, header.instanceCount);
-  for (uint k = first; k < end; ++k) compositeTile(tiles[k], toCurrent, toPrevious);
+  for (uint k = first; k < end; ++k) compositeTile(tiles[k], toCurrent, toPrevious, toSlice);
 }

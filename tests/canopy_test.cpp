@@ -953,6 +953,110 @@ TEST_F(CanopyTest, ReprojectedLayersMatchLayersDrawnAtTheNewCamera) {
   }
 }
 
+// Issue 34, the depth search (docs/design.md "Layers: reprojection", per-texel depth): an orbit of
+// 8 degrees shown without a re-slice, on both composite paths, is the CPU reference's search (wind
+// on: the warp composed with it); against layers drawn at the new camera it keeps the leaves where
+// they belong better than the slabs' planes alone (CompositeParams.depthSearchSteps = 0).
+TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
+  struct Run {
+    std::vector<glm::vec4> color;
+    std::vector<float> depth;
+    CompositeReferenceOutputs ref;
+    gpu::CompositeView view{};
+  };
+  // Frames at camera a, then one at b, shown reprojected (the policy's thresholds lifted).
+  auto run = [&](const VegetationModel& model, uint32_t w, uint32_t h, const LayerView& a, const LayerView& b, CompositePath path,
+                 uint32_t steps, float wind, ReslicePolicy policy, bool reference, Run* out) {
+    CanopyContext* ctx = nullptr;
+    ASSERT_TRUE(createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx).ok());
+    CanopyParams p = canopyParams(ctx);
+    p.simulation.wind.strength = wind;
+    p.composite.path = path;
+    p.composite.depthSearchSteps = steps;
+    p.layers.policy = policy;
+    p.layers.rebuildBudgetMs = 0.0f;
+    p.layers.errorThresholdPixels = 1000.0f;
+    p.layers.turnThresholdDegrees = 180.0f;
+    Host host;
+    Status s = setCanopyParams(ctx, p);
+    if (s.ok()) s = host.create(dev, w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
+    CanopyFrame f;
+    f.camera = toCamera(a);
+    for (int i = 0; i < 3 && s.ok(); ++i) s = host.frame(ctx, f);
+    const uint64_t rebuilds = canopyStats(ctx).layers.rebuilds;
+    f.camera = toCamera(b);
+    if (s.ok()) s = host.frame(ctx, f);
+    if (policy != ReslicePolicy::EveryFrame) EXPECT_EQ(canopyStats(ctx).layers.rebuilds, rebuilds);
+    if (s.ok()) s = host.read(&out->color, &out->depth);
+    float maxDisplacement = 0.0f;
+    if (s.ok() && reference) {
+      s = referenceFrame(dev, ctx, w, h, &out->ref, &maxDisplacement);
+      EXPECT_GT(maxDisplacement, 0.1f) << "the wind warps the layers";
+    }
+    out->view = canopyCompositor(ctx).view;
+    EXPECT_TRUE(s.ok()) << s.message();
+    if (host.dev) host.destroy();
+    destroyCanopy(ctx);
+  };
+  {
+    const uint32_t w = 128, h = 96;
+    const VegetationModel model = makeLeafCloud(4000, 3, true);
+    const LayerView a = cameraFor(model, w, h, 20.0f), b = cameraFor(model, w, h, 28.0f);
+    for (CompositePath path : {CompositePath::Compute, CompositePath::Fragment}) {
+      SCOPED_TRACE(path == CompositePath::Compute ? "compute path" : "fragment path");
+      Run r;
+      run(model, w, h, a, b, path, 16, 1.0f, ReslicePolicy::OnViewChange, true, &r);
+      if (HasFailure()) return;
+      for (uint32_t i = 0; i < 5; ++i) EXPECT_GE(r.view.search[i].z, 2.0f) << "layer " << i << " searched";
+      expectNearReference(r.color, r.depth, r.ref, "an 8 degree orbit, reprojected with the depth search");
+    }
+  }
+  auto mask = [](const std::vector<float>& z) {
+    std::vector<uint8_t> m(z.size());
+    for (size_t i = 0; i < z.size(); ++i) m[i] = z[i] < 1.0f;
+    return m;
+  };
+  auto rgba8 = [](const std::vector<glm::vec4>& c) {
+    std::vector<uint8_t> out(c.size() * 4);
+    for (size_t i = 0; i < c.size(); ++i)
+      for (int k = 0; k < 4; ++k) out[4 * i + k] = uint8_t(std::lround(std::clamp(c[i][k], 0.0f, 1.0f) * 255.0f));
+    return out;
+  };
+  // Against layers drawn at the new camera (wind off): a sparse cloud of large leaves, each slab's
+  // leaves far apart in depth, orbited 10 degrees, and the generated shrub orbited 6 degrees.
+  SceneDesc sd;
+  sd.faces = 20000;
+  VegetationModel shrub;
+  ASSERT_TRUE(generateScene(sd, &shrub).ok());
+  const VegetationModel cloud = makeLeafCloud(60, 7, false);
+  struct Config {
+    const char* name;
+    const VegetationModel* model;
+    uint32_t w, h;
+    float degrees, minIoUGain, maxSilhouetteRatio;
+  };
+  const Config configs[] = {{"60 large leaves, 10 degrees", &cloud, 256, 192, 10.0f, 0.03f, 0.6f},
+                            {"20K-face shrub, 6 degrees", &shrub, 320, 240, 6.0f, 0.015f, 0.75f}};
+  for (const Config& c : configs) {
+    SCOPED_TRACE(c.name);
+    const LayerView a = cameraFor(*c.model, c.w, c.h, 20.0f), b = cameraFor(*c.model, c.w, c.h, 20.0f + c.degrees);
+    Run search, plane, fresh;
+    run(*c.model, c.w, c.h, a, b, CompositePath::Compute, 16, 0.0f, ReslicePolicy::OnViewChange, false, &search);
+    run(*c.model, c.w, c.h, a, b, CompositePath::Compute, 0, 0.0f, ReslicePolicy::OnViewChange, false, &plane);
+    run(*c.model, c.w, c.h, a, b, CompositePath::Compute, 16, 0.0f, ReslicePolicy::EveryFrame, false, &fresh);
+    if (HasFailure()) return;
+    for (uint32_t i = 0; i < 5; ++i) EXPECT_EQ(plane.view.search[i].z, 0.0f) << "layer " << i << ": the plane alone";
+    const WorldLockError es = compareMasks(mask(search.depth), mask(fresh.depth), rgba8(search.color), rgba8(fresh.color), c.w, c.h);
+    const WorldLockError ep = compareMasks(mask(plane.depth), mask(fresh.depth), rgba8(plane.color), rgba8(fresh.color), c.w, c.h);
+    std::printf("  %s, against layers drawn at the new camera: depth search IoU %.4f, silhouette mean %.3f px, centroid %.3f px; "
+                "planes alone IoU %.4f, silhouette mean %.3f px, centroid %.3f px\n",
+                c.name, es.coverageIoU, es.silhouetteMeanPx, es.centroidPx, ep.coverageIoU, ep.silhouetteMeanPx, ep.centroidPx);
+    EXPECT_GT(es.coveredB, 500u) << "the vegetation is in view";
+    EXPECT_GE(es.coverageIoU, ep.coverageIoU + c.minIoUGain);
+    EXPECT_LE(es.silhouetteMeanPx, c.maxSilhouetteRatio * ep.silhouetteMeanPx);
+  }
+}
+
 // Issue 16, through the public API: a re-slice spread over frames while the wind keeps animating
 // the old layers; every frame, during the slices and the cross-fade, is the CPU reference's
 // composite of the layers then visible. Issue 34: a turn of the camera is then re-sliced the same

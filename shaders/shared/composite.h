@@ -99,11 +99,16 @@ CANOPY_SIZE_CHECK(CompositePush, 112)
 struct CompositeView {
   mat4 sliceToCurrent;   // slice camera clip -> current camera clip
   mat4 sliceToPrevious;  // slice camera clip -> the previous frame's camera clip (motion vectors)
+  mat4 currentToSlice;   // current camera clip -> slice camera clip (the depth search's ray)
   // Row r of plane i's homography (current pixel -> layer pixel) is homography[3 i + r].xyz; the
   // background's plane is i = COMPOSITE_VIEW_BACKGROUND.
   vec4 homography[3u * (CANOPY_MAX_LAYERS + 1u)];
+  // Layer i's depth search (compositeRaySearch): x, y the slice camera's NDC depths of the two ends
+  // of the range its texels lie in, z the samples along a pixel's ray (0: the plane alone), w how far (layer
+  // pixels) a sample may land from the plane's point (the classification widens its boxes by it).
+  vec4 search[CANOPY_MAX_LAYERS];
 };
-CANOPY_SIZE_CHECK(CompositeView, 128 + 48 * (CANOPY_MAX_LAYERS + 1))
+CANOPY_SIZE_CHECK(CompositeView, 192 + 48 * (CANOPY_MAX_LAYERS + 1) + 16 * CANOPY_MAX_LAYERS)
 
 // H p in homogeneous layer pixels: (x, y, w), the point in front of both cameras where w > 0.
 CANOPY_INLINE vec3 compositeHomogeneous(vec4 r0, vec4 r1, vec4 r2, vec2 p) {
@@ -118,6 +123,65 @@ CANOPY_INLINE vec4 compositeClipOf(mat4 toClip, vec2 s, float z, vec2 size) {
 CANOPY_INLINE float compositeClipDepth(vec4 c) { return c.z / c.w; }
 CANOPY_INLINE vec2 compositeClipPixel(vec4 c, vec2 size) {
   return vec2((c.x / c.w + 1.0f) * 0.5f * size.x, (c.y / c.w + 1.0f) * 0.5f * size.y);
+}
+
+// The depth search (docs/design.md "Layers: reprojection", per-texel depth): the plane's homography
+// puts a texel off its plane where the camera has moved sideways (parallax). Each layer texel holds
+// the slice camera's depth of what it shows, so the layer is a height field seen from the slice
+// camera; pixel p's ray of the current camera, carried into the slice camera's clip space, is the
+// homogeneous line A + t B (t: the current camera's NDC depth). Samples along it between the
+// layer's depths, front to back, find where the ray first passes behind the height field (relief
+// mapping, Policarpo et al. 2005; the iterative inverse warp of Bowles et al. 2012 from the
+// texel's own depth); the ray's point at that texel's depth is the layer pixel shown at p.
+struct CompositeRay {
+  vec4 a;        // slice clip of the ray's point at the current camera's NDC depth 0
+  vec4 b;        // slice clip per unit of the current camera's NDC depth
+  float t0;      // first sample (nearest the current camera)
+  float dt;      // between samples
+  uint steps;    // samples; 0: no search (the plane's point alone)
+  uint pad0;
+};
+// The ray of current pixel p in the slice camera's clip space: (a, b) as in CompositeRay; b is the
+// same for every pixel. Once per pixel, for all layers.
+CANOPY_INLINE vec4 compositeRayOrigin(mat4 currentToSlice, vec2 p, vec2 outSize) {
+  vec2 ndc = p / outSize * 2.0f - 1.0f;
+  return currentToSlice * vec4(ndc.x, ndc.y, 0.0f, 1.0f);
+}
+// The ray parameter t at which its slice NDC depth is z (homogeneous: X = a + t b has depth
+// X.z / X.w whatever its scale): (t, 1), or (0, 0) where no such point exists.
+CANOPY_INLINE vec2 compositeRayT(vec4 a, vec4 b, float z) {
+  float den = b.z - z * b.w;
+  if (abs(den) < 1e-20f) return vec2(0.0f);
+  return vec2((z * a.w - a.z) / den, 1.0f);
+}
+// Layer `search` (CompositeView.search) along the ray (a, b).
+CANOPY_INLINE CompositeRay compositeRaySearch(vec4 a, vec4 b, vec4 search) {
+  CompositeRay r;
+  r.a = a;
+  r.b = b;
+  r.steps = uint(search.z);
+  r.pad0 = 0u;
+  vec2 tNear = compositeRayT(a, b, search.x), tFar = compositeRayT(a, b, search.y);
+  if (tNear.y == 0.0f || tFar.y == 0.0f) r.steps = 0u;
+  r.t0 = min(tNear.x, tFar.x);
+  r.dt = r.steps > 1u ? (max(tNear.x, tFar.x) - r.t0) / float(r.steps - 1u) : 0.0f;
+  return r;
+}
+// Sample k: the layer pixel (x, y) and the ray's slice NDC depth (z); w <= 0: behind a camera.
+CANOPY_INLINE vec4 compositeRaySample(CompositeRay r, uint k, vec2 size) {
+  vec4 x = r.a + (r.t0 + float(k) * r.dt) * r.b;
+  return vec4((x.x / x.w + 1.0f) * 0.5f * size.x, (x.y / x.w + 1.0f) * 0.5f * size.y, x.z / x.w, x.w);
+}
+// Where the ray meets the depth z of the texel found at sample k: (x, y) that layer pixel, z = 1
+// where it does so before sample k + 1 (the last sample: anywhere), in front of the cameras — the
+// ray then meets that texel's surface before it could reach the next sample (a texel's surface
+// is taken flat in depth over the ray's few pixels); else 0.
+CANOPY_INLINE vec3 compositeRayCrossing(CompositeRay r, uint k, float z, vec2 size) {
+  vec2 t = compositeRayT(r.a, r.b, z);
+  vec4 x = r.a + t.x * r.b;
+  bool before = k + 1u >= r.steps || t.x < r.t0 + float(k + 1u) * r.dt;
+  if (t.y == 0.0f || x.w <= 0.0f || !before) return vec3(0.0f);
+  return vec3((x.x / x.w + 1.0f) * 0.5f * size.x, (x.y / x.w + 1.0f) * 0.5f * size.y, 1.0f);
 }
 
 // Reprojection resamples the layers at fractional texel positions (a still camera reads texel

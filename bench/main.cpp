@@ -47,7 +47,7 @@ static int usage(const char* why) {
                "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"
                "                 (--faces default 80000, --frames default 60, --size default 1024x768;\n"
                "                 --degrees-per-frame 0.25, --radii-per-frame 0.005, --swing 5: tools/camera_paths.h;\n"
-               "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 1;\n"
+               "                 --reslice-error PX: LayerSettings.errorThresholdPixels of the policy side, default 0.5;\n"
                "                 --csv FILE: a row per frame; then the cross-fade's coverage at one camera, a light and a\n"
                "                 layout change, unless --no-cross-fade; --half-res N: the farthest N layers at half\n"
                "                 resolution on every side, LayerSettings.halfResolutionLayers, default 0;\n"

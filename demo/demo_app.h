@@ -71,7 +71,7 @@ struct Options {
   float swingDegrees = 5.0f;           // turn, zoom, walk: either side of the start
   ReslicePolicy reslice = ReslicePolicy::OnViewChange;  // --reslice auto | every-frame
   std::string compareA, compareB;      // --compare-frames: two output folders measured against each other
-  float resliceErrorPixels = 1.0f;     // LayerSettings.errorThresholdPixels: the reprojection error that re-slices
+  float resliceErrorPixels = LayerSettings{}.errorThresholdPixels;  // LayerSettings.errorThresholdPixels: the reprojection error that re-slices
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
   float guardBand = 0.1f;              // CanopyDesc.guardBand: the layers reach this fraction beyond each edge
   float depthSearchSteps = float(CompositeParams{}.depthSearchSteps);  // CompositeParams.depthSearchSteps (0: the slabs' planes alone)

@@ -17,10 +17,13 @@ struct Texels {
     if (x < 0 || y < 0 || x >= int(w) || y >= int(h)) return 1.0f;
     return in.layerDepth[(size_t(layer) * h + y) * w + x];
   }
-  // The nearest texel's depth at layer pixel q of a layer read at texel scale `scale` (half resolution).
-  float depthAt(uint32_t layer, const glm::vec2& q, float scale) const {
+  // The depth search's depth at layer pixel q of a layer read at texel scale `scale` (half
+  // resolution): the nearest of the bilinear footprint's texels, or the nearest texel's.
+  float depthAt(uint32_t layer, const glm::vec2& q, float scale, bool bilinear) const {
     const glm::vec2 t = q * scale;
-    return depth(layer, int(std::floor(t.x)), int(std::floor(t.y)));
+    if (!bilinear) return depth(layer, int(std::floor(t.x)), int(std::floor(t.y)));
+    const int x0 = int(std::floor(t.x - 0.5f)), y0 = int(std::floor(t.y - 0.5f));
+    return std::min(std::min(depth(layer, x0, y0), depth(layer, x0 + 1, y0)), std::min(depth(layer, x0, y0 + 1), depth(layer, x0 + 1, y0 + 1)));
   }
 };
 
@@ -103,10 +106,10 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           for (uint32_t k = 0; k < ray.steps && !hit; ++k) {
             const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
             if (x.w <= 0.0f) continue;
-            const float zt = tex.depthAt(i, glm::vec2(x) - d, scale);
+            const float zt = tex.depthAt(i, glm::vec2(x) - d, scale, bilinear);
             if (zt >= 1.0f) continue;
             const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
-            if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale) < 1.0f) {
+            if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f) {
               s = glm::vec2(c);
               hit = true;
             }

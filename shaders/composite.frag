@@ -34,10 +34,20 @@ vec3 planePoint(uint i, vec2 p) {
   return compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
 }
 
-// Layer i's slice depth at layer pixel q (the nearest texel; 1 = empty, also beyond the image).
+// Layer i's slice depth at layer pixel q for the depth search: the nearest of the bilinear
+// footprint's four texels (the colour read there can show a leaf when any of them holds one), the
+// nearest texel without bilinear; 1 = empty, also beyond the image.
 float layerDepthAt(uint i, vec2 q) {
   vec2 size = vec2(pc.layerWidth, pc.layerHeight);
-  return textureLod(layerDepth, vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i)), 0.0).r;
+  vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));
+  if ((pc.flags & COMPOSITE_BILINEAR) == 0u) return textureLod(layerDepth, uvw, 0.0).r;
+  vec4 z4 = textureGather(layerDepth, uvw, 0);
+  return min(min(z4.x, z4.y), min(z4.z, z4.w));
+}
+// The texels layerDepthAt reads at q, named by their first (two positions with the same name read
+// the same depth).
+vec2 searchTexels(uint i, vec2 q) {
+  return floor(q * layerTexelScale(pc.halfResolution, i) - ((pc.flags & COMPOSITE_BILINEAR) != 0u ? 0.5 : 0.0));
 }
 
 vec2 displacementAt(uint base, GridSample g, bool previous) {
@@ -138,8 +148,8 @@ void main() {
           float zt = layerDepthAt(i, x.xy - d);
           if (zt >= 1.0) continue;
           vec3 c = compositeRayCrossing(ray, k, zt, size);
-          // The crossing's texel holds a surface (the sample's own texel: known to).
-          if (c.z > 0.0 && (all(equal(floor(c.xy - d), floor(x.xy - d))) || layerDepthAt(i, c.xy - d) < 1.0)) {
+          // The crossing's texels hold a surface (the sample's own: known to).
+          if (c.z > 0.0 && (all(equal(searchTexels(i, c.xy - d), searchTexels(i, x.xy - d))) || layerDepthAt(i, c.xy - d) < 1.0)) {
             s = c.xy;
             hit = true;
           }

@@ -194,5 +194,37 @@ TEST(Reprojection, TheGuardBandShowsTheOutputOffsetAndHoldsWhatATurnBringsIn) {
   EXPECT_GT(beyondBand, 0);
 }
 
+// The depth search (shared/composite.h compositeRayCrossing, float as on the GPU): a current pixel's
+// ray meets a slice texel's depth where the slice camera saw that point, for every camera path
+// (a pure rotation: the plane's own pixel, whatever the depth).
+TEST(Reprojection, TheDepthSearchFindsAPointAtItsOwnDepth) {
+  const LayerView slice = along(CameraMotion::Still, 0);
+  const double mid = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.1, 0.9), dz(-1.0, 1.0);
+  for (CameraMotion m : {CameraMotion::Orbit, CameraMotion::Dolly, CameraMotion::Strafe, CameraMotion::Turn, CameraMotion::Zoom}) {
+    const LayerView current = along(m, 20);
+    const gpu::CompositeView v = compositeView(slice, current, current, {float(mid)}, float(mid), kSize, kSize,
+                                               {LayerSearch{float(mid - 1.0), float(mid + 1.0)}}, 16);
+    EXPECT_GE(v.search[0].z, 2.0f) << cameraMotionName(m);
+    const glm::dmat4 sliceVP = glm::dmat4(slice.proj) * glm::dmat4(slice.view);
+    double worst = 0.0;
+    for (int k = 0; k < 200; ++k) {
+      const glm::dvec3 x = pointAt(slice, glm::dvec2(u(rng), u(rng)) * kSize, mid + dz(rng));
+      const glm::dvec4 c = sliceVP * glm::dvec4(x, 1.0);
+      const float z = float(c.z / c.w);  // what the layer texel holds
+      const glm::vec2 p(pixelOf(current, x));
+      const gpu::CompositeRay ray =
+          gpu::compositeRaySearch(gpu::compositeRayOrigin(v.currentToSlice, p, glm::vec2(kSize)), v.currentToSlice[2], v.search[0]);
+      ASSERT_GT(ray.steps, 0u);
+      const glm::vec3 got = gpu::compositeRayCrossing(ray, ray.steps - 1, z, glm::vec2(kSize));
+      ASSERT_GT(got.z, 0.0f) << cameraMotionName(m);
+      worst = std::max(worst, glm::length(glm::dvec2(got.x, got.y) - pixelOf(slice, x)));
+    }
+    EXPECT_LT(worst, 0.02) << cameraMotionName(m) << ": layer pixels off the slice camera's";
+    std::printf("  %s: the crossing at most %.4f layer pixels off\n", cameraMotionName(m), worst);
+  }
+}
+
 }  // namespace
 }  // namespace canopy

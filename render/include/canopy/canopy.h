@@ -298,7 +298,7 @@ enum class TranslucencyModel { Habel, DiffuseBtdf };
   X(bool, shadeOnce, false, None, 0, 0, "", "a depth pre-pass first, so leaf shading runs once per layer texel (slower on lavapipe: docs/design.md)") \
   X(uint32_t, halfResolutionLayers, 0, Closed, 0, kMaxLayers, "layers", "the farthest this many layers are drawn at half resolution (a quarter of their fill); at most the layout's count") \
   X(ReslicePolicy, policy, ReslicePolicy::OnViewChange, Enum, 0, 1, "OnViewChange | EveryFrame", "when layers are re-sliced") \
-  X(float, errorThresholdPixels, 1.0f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers)") \
+  X(float, errorThresholdPixels, 0.5f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers; 0.5: the world-lock bar of docs/performance.md)") \
   X(float, turnThresholdDegrees, 2.0f, Closed, 0, 180, "degrees", "change of the view direction to the vegetation that re-slices (baked shading)") \
   X(Float3, lightDirection, (Float3{0.35f, 0.8f, 0.5f}), Finite, 0, 0, "world space", "towards the light (normalised; zero: straight up)") \
   X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \

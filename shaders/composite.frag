@@ -34,21 +34,7 @@ vec3 planePoint(uint i, vec2 p) {
   return compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
 }
 
-// Layer i's slice depth at layer pixel q for the depth search: the nearest of the bilinear
-// footprint's four texels (the colour read there can show a leaf when any of them holds one), the
-// nearest texel without bilinear; 1 = empty, also beyond the image.
-float layerDepthAt(uint i, vec2 q) {
-  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
-  vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));
-  if ((pc.flags & COMPOSITE_BILINEAR) == 0u) return textureLod(layerDepth, uvw, 0.0).r;
-  vec4 z4 = textureGather(layerDepth, uvw, 0);
-  return min(min(z4.x, z4.y), min(z4.z, z4.w));
-}
-// The texels layerDepthAt reads at q, named by their first (two positions with the same name read
-// the same depth).
-vec2 searchTexels(uint i, vec2 q) {
-  return floor(q * layerTexelScale(pc.halfResolution, i) - ((pc.flags & COMPOSITE_BILINEAR) != 0u ? 0.5 : 0.0));
-}
+#include "composite_search.glsl"
 
 vec2 displacementAt(uint base, GridSample g, bool previous) {
   if (previous)
@@ -137,26 +123,8 @@ void main() {
       g = gridSample(pc, s);
     }
     vec2 d = displacementAt(i * corners, g, false);
-    if (reproject) {
-      // The depth search, as composite_tiles.comp (shared/composite.h compositeRaySearch).
-      CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[i]);
-      if (ray.steps > 0u) {
-        bool hit = false;
-        for (uint k = 0u; k < ray.steps && !hit; ++k) {
-          vec4 x = compositeRaySample(ray, k, size);
-          if (x.w <= 0.0) continue;
-          float zt = layerDepthAt(i, x.xy - d);
-          if (zt >= 1.0) continue;
-          vec3 c = compositeRayCrossing(ray, k, zt, size);
-          // The crossing's texels hold a surface (the sample's own: known to).
-          if (c.z > 0.0 && (all(equal(searchTexels(i, c.xy - d), searchTexels(i, x.xy - d))) || layerDepthAt(i, c.xy - d) < 1.0)) {
-            s = c.xy;
-            hit = true;
-          }
-        }
-        if (!hit) continue;
-      }
-    }
+    // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here.
+    if (reproject && !compositeDepthSearch(i, rayA, rayB, d, size, s)) continue;
     vec2 q = s - d;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {

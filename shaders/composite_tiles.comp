@@ -23,21 +23,7 @@ layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
 layout(binding = 8, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
-// Layer i's slice depth at layer pixel q for the depth search: the nearest of the bilinear
-// footprint's four texels (the colour read there can show a leaf when any of them holds one), the
-// nearest texel without bilinear; 1 = empty, also beyond the image.
-float layerDepthAt(uint i, vec2 q) {
-  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
-  vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));
-  if ((pc.flags & COMPOSITE_BILINEAR) == 0u) return textureLod(layerDepth, uvw, 0.0).r;
-  vec4 z4 = textureGather(layerDepth, uvw, 0);
-  return min(min(z4.x, z4.y), min(z4.z, z4.w));
-}
-// The texels layerDepthAt reads at q, named by their first (two positions with the same name read
-// the same depth).
-vec2 searchTexels(uint i, vec2 q) {
-  return floor(q * layerTexelScale(pc.halfResolution, i) - ((pc.flags & COMPOSITE_BILINEAR) != 0u ? 0.5 : 0.0));
-}
+#include "composite_search.glsl"
 
 // One listed tile: its pixel at this invocation.
 void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlice) {
@@ -92,28 +78,8 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       uvGrid = gridTexcoord(pc, gridSample(pc, s));
     }
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
-    if (reproject) {
-      // The depth search (shared/composite.h compositeRaySearch): the first texel the pixel's ray
-      // passes behind, then the ray's point at that texel's depth; nothing found: the layer shows
-      // nothing here. The displacement stays the plane point's (it varies over cells, not pixels).
-      CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[i]);
-      if (ray.steps > 0u) {
-        bool hit = false;
-        for (uint k = 0u; k < ray.steps && !hit; ++k) {
-          vec4 x = compositeRaySample(ray, k, size);
-          if (x.w <= 0.0) continue;
-          float zt = layerDepthAt(i, x.xy - dd.xy);
-          if (zt >= 1.0) continue;
-          vec3 c = compositeRayCrossing(ray, k, zt, size);
-          // The crossing's texels hold a surface (the sample's own: known to).
-          if (c.z > 0.0 && (all(equal(searchTexels(i, c.xy - dd.xy), searchTexels(i, x.xy - dd.xy))) || layerDepthAt(i, c.xy - dd.xy) < 1.0)) {
-            s = c.xy;
-            hit = true;
-          }
-        }
-        if (!hit) continue;
-      }
-    }
+    // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here.
+    if (reproject && !compositeDepthSearch(i, rayA, rayB, dd.xy, size, s)) continue;
     vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter

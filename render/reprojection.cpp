@@ -87,9 +87,10 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
   v.sliceToCurrent = glm::mat4(clipToClip(slice, current));
   v.sliceToPrevious = glm::mat4(clipToClip(slice, previous));
   v.currentToSlice = glm::mat4(clipToClip(current, slice));
-  // The search's samples: a layer pixel apart along the longest stretch a pixel's ray crosses
-  // between the range's two planes (the output's corners and centre; the stretch is the parallax,
-  // smooth over the image), two at least (the ends), maxSteps at most.
+  // The search's samples: kSearchSpacingPx apart along the longest stretch a pixel's ray crosses
+  // between the range's two planes (at the output's corners and centre: the stretch is the parallax,
+  // smooth over the image), two at least (the ends), maxSteps at most. The reach the classification
+  // widens its boxes by gets a quarter more and a pixel, for pixels between those five.
   for (size_t i = 0; i < search.size() && i < CANOPY_MAX_LAYERS && maxSteps > 0; ++i) {
     const LayerSearch& l = search[i];
     if (!(l.zNear > 0 && l.zFar >= l.zNear && std::isfinite(l.zFar))) continue;
@@ -114,7 +115,7 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
     // The ends as the slice camera's NDC depths (what its layer texels hold).
     const glm::dmat4 proj(slice.proj);
     const glm::dvec4 cn = proj * glm::dvec4(0.0, 0.0, -double(l.zNear), 1.0), cf = proj * glm::dvec4(0.0, 0.0, -double(l.zFar), 1.0);
-    v.search[i] = glm::vec4(float(cn.z / cn.w), float(cf.z / cf.w), float(steps), float(reach + 1.0));
+    v.search[i] = glm::vec4(float(cn.z / cn.w), float(cf.z / cf.w), float(steps), float(1.25 * reach + 1.0));
   }
   for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) {
     const bool background = i == COMPOSITE_VIEW_BACKGROUND;

@@ -38,8 +38,8 @@ struct LayerSearch {
 // The composite's view block: layer i's plane at slice-camera view depth `layerDepths[i]`, the
 // rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
 // `layerSize` (the slice camera's, guard band included). `search` (one per layer, or empty) and
-// `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, with a
-// sample per layer pixel the ray crosses between the range's ends, at most maxSteps.
+// `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, a sample
+// every two layer pixels the ray crosses between the range's ends, at most maxSteps.
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
                                  const glm::dvec2& layerSize, const std::vector<LayerSearch>& search = {},

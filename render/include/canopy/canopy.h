@@ -372,7 +372,7 @@ enum class CompositePath : uint32_t {
   X(bool, earlyExit, true, None, 0, 0, "", "front to back, stop at accumulated alpha >= 1 - 1/1024")                   \
   X(bool, skipEmptyTiles, true, None, 0, 0, "", "skip layers that cannot reach a pixel")                              \
   X(bool, bilinear, true, None, 0, 0, "", "bilinear layer colour (false: nearest texel)")                              \
-  X(uint32_t, depthSearchSteps, 16, Closed, 0, 64, "samples", "reprojection: at most this many samples of a layer's depth along a pixel's ray (a layer pixel apart; 0: the slab's plane alone)") \
+  X(uint32_t, depthSearchSteps, 16, Closed, 0, 64, "samples", "reprojection: at most this many samples of a layer's depth along a pixel's ray (two layer pixels apart; 0: the slab's plane alone)") \
   X(float, depthAlpha, 0.5f, AboveMin, 0, 1, "", "alpha at which a layer writes the depth output")                    \
   X(float, exposure, 1.0f, Closed, 0, 65504, "", "multiplies the vegetation's linear colour")                          \
   X(CompositeDebugView, debugView, CompositeDebugView::None, Enum, 0, 3, "None | Layers | Velocity | Grid", "debug views") \

@@ -668,20 +668,24 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (!sameCamera(slice, sliceCameraFor(c->layers, view)) || !sameCamera(previous, view)) {
     std::vector<float> depths;
     std::vector<LayerSearch> search;
+    // A range of vertex depths widened by 2 % (impostor cards, rounding).
+    auto widened = [](float lo, float hi) {
+      const float pad = 0.02f * std::max(hi - lo, 0.0f) + 1e-4f * std::max(std::abs(hi), 1.0f);
+      return LayerSearch{std::max(lo - pad, 1e-6f), hi + pad};
+    };
     for (const LayerInfo& l : c->layers.visible.layers) {
       depths.push_back(l.slab.depth);
-      // The leaf vertices' depths, widened by 2 % of the range (impostor cards, rounding); a layer
-      // without leaves searches its slab.
-      const float lo = std::isfinite(l.drawnNear) ? l.drawnNear : l.slab.zNear, hi = std::isfinite(l.drawnFar) ? l.drawnFar : l.slab.zFar;
-      const float pad = 0.02f * std::max(hi - lo, 0.0f) + 1e-4f * std::max(std::abs(hi), 1.0f);
-      search.push_back({std::max(lo - pad, 1e-6f), hi + pad});
+      // The leaf vertices' depths; a layer without leaves searches its slab.
+      search.push_back(std::isfinite(l.drawnNear) ? widened(l.drawnNear, l.drawnFar) : widened(l.slab.zNear, l.slab.zFar));
     }
+    const glm::vec2 rigid = c->layers.visible.rigidDepth;
+    const LayerSearch backgroundSearch = std::isfinite(rigid.x) ? widened(rigid.x, rigid.y) : LayerSearch{};
     // The rigid background's plane: the vegetation's centre.
     const glm::vec3 centre = 0.5f * (c->layers.instances.boundsMin + c->layers.instances.boundsMax);
     const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
     const gpu::CompositeView cv =
         compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
-                      glm::dvec2(c->layers.desc.width, c->layers.desc.height), search, c->params.composite.depthSearchSteps);
+                      glm::dvec2(c->layers.desc.width, c->layers.desc.height), search, c->params.composite.depthSearchSteps, backgroundSearch);
     setCompositeReprojection(c->compositor, &cv);
   }
   c->lastView = view;

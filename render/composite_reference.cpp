@@ -18,8 +18,14 @@ struct Texels {
     return in.layerDepth[(size_t(layer) * h + y) * w + x];
   }
   // The depth search's depth at layer pixel q of a layer read at texel scale `scale` (half
-  // resolution): the nearest of the bilinear footprint's texels, or the nearest texel's.
+  // resolution): the nearest of the bilinear footprint's texels, or the nearest texel's; the
+  // background's (layer COMPOSITE_VIEW_BACKGROUND) at its nearest texel.
   float depthAt(uint32_t layer, const glm::vec2& q, float scale, bool bilinear) const {
+    if (layer == COMPOSITE_VIEW_BACKGROUND) {
+      const int x = int(std::floor(q.x)), y = int(std::floor(q.y));
+      if (q.x < 0.0f || q.y < 0.0f || x >= int(w) || y >= int(h)) return 1.0f;
+      return in.backgroundDepth[size_t(y) * w + x];
+    }
     const glm::vec2 t = q * scale;
     if (!bilinear) return depth(layer, int(std::floor(t.x)), int(std::floor(t.y)));
     const int x0 = int(std::floor(t.x - 0.5f)), y0 = int(std::floor(t.y - 0.5f));
@@ -59,15 +65,37 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       float bgZ = 1.0f;
       const bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0;
       const glm::vec2 size{float(lw), float(lh)};
+      const glm::vec4 rayA = reproject ? gpu::compositeRayOrigin(in.view.currentToSlice, p, outSize) : glm::vec4(0.0f);
+      const glm::vec4 rayB = in.view.currentToSlice[2];
+      // The depth search of layer i (or the background), as composite_search.glsl: false where
+      // nothing is found; *s the plane's point on entry, the layer pixel shown on return.
+      auto depthSearch = [&](uint32_t i, const glm::vec2& d, glm::vec2* s) {
+        const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
+        if (ray.steps == 0) return true;
+        const float scale = i == COMPOSITE_VIEW_BACKGROUND ? 1.0f : gpu::layerTexelScale(pc.halfResolution, i);
+        for (uint32_t k = 0; k < ray.steps; ++k) {
+          const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
+          if (x.w <= 0.0f) continue;
+          const float zt = tex.depthAt(i, glm::vec2(x) - d, scale, bilinear);
+          if (zt >= 1.0f) continue;
+          const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
+          if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f) {
+            *s = glm::vec2(c);
+            return true;
+          }
+        }
+        return false;
+      };
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
         int bx = int(x) + int(origin.x), by = int(y) + int(origin.y);
         bool inside = true;
         if (reproject) {
           const glm::vec3 hp = planePoint(in.view, COMPOSITE_VIEW_BACKGROUND, p);
-          const glm::vec2 s = glm::vec2(hp) / hp.z;
+          glm::vec2 s = glm::vec2(hp) / hp.z;
+          inside = hp.z > 0.0f && depthSearch(COMPOSITE_VIEW_BACKGROUND, glm::vec2(0.0f), &s);
           bx = int(std::floor(s.x));
           by = int(std::floor(s.y));
-          inside = hp.z > 0.0f && s.x >= 0.0f && s.y >= 0.0f && s.x < size.x && s.y < size.y;
+          inside = inside && s.x >= 0.0f && s.y >= 0.0f && s.x < size.x && s.y < size.y;
         }
         if (inside) {
           const size_t b = size_t(by) * lw + size_t(bx);
@@ -88,8 +116,6 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       float frontZ = 1.0f;
       bool front = false;
       glm::vec2 motion(0.0f);
-      const glm::vec4 rayA = reproject ? gpu::compositeRayOrigin(in.view.currentToSlice, p, outSize) : glm::vec4(0.0f);
-      const glm::vec4 rayB = in.view.currentToSlice[2];
       for (uint32_t i = 0; i < n; ++i) {
         if (reproject) {
           const glm::vec3 hp = planePoint(in.view, i, p);
@@ -98,24 +124,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           g = gpu::gridSample(pc, s);
         }
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
-        if (reproject) {
-          // The depth search, as the shaders (shared/composite.h compositeRaySearch).
-          const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
-          const float scale = gpu::layerTexelScale(pc.halfResolution, i);
-          bool hit = ray.steps == 0;
-          for (uint32_t k = 0; k < ray.steps && !hit; ++k) {
-            const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
-            if (x.w <= 0.0f) continue;
-            const float zt = tex.depthAt(i, glm::vec2(x) - d, scale, bilinear);
-            if (zt >= 1.0f) continue;
-            const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
-            if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f) {
-              s = glm::vec2(c);
-              hit = true;
-            }
-          }
-          if (!hit) continue;
-        }
+        if (reproject && !depthSearch(i, d, &s)) continue;
         const glm::vec2 q = s - d;
         // Texel space: centres at integer + 0.5; a layer at half resolution holds pixel q at q / 2.
         const glm::vec2 tq = q * gpu::layerTexelScale(pc.halfResolution, i);

@@ -184,8 +184,11 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
             const glm::vec2 px((glm::dot(job.rowsX[k], p) / w * 0.5f + 0.5f) * wPx, y);
             job.pixelLo = glm::min(job.pixelLo, px);
             job.pixelHi = glm::max(job.pixelHi, px);
-            if (leaf == kNoLeaf) continue;
             const float z = glm::dot(job.depthRows[k], p);
+            if (leaf == kNoLeaf) {
+              job.rigidDepth = glm::vec2(std::min(job.rigidDepth.x, z), std::max(job.rigidDepth.y, z));
+              continue;
+            }
             const uint32_t layer = geometric ? gpu::layerOfDepth(f, z) : job.leafLayer[k * nLeaves + leaf];
             LayerInfo& li = job.layers[layer];
             li.top = std::min(li.top, y);
@@ -264,6 +267,11 @@ void planImpostorCut(LayeredVegetation& lv, const gpu::LayerFrame& frame, const 
   lv.stats.lastPlacementMs += msSince(t0);
 }
 
+void takeVertexBounds(VisibleLayers& v, const PlacementJob& job) {
+  v.extent = job.behind ? PixelExtent{} : PixelExtent{job.pixelLo, job.pixelHi, true};
+  v.rigidDepth = job.rigidDepth;
+}
+
 // The whole placement for `view` at once, made the visible one.
 Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   PlacementJob job;
@@ -273,7 +281,7 @@ Status placeForView(LayeredVegetation& lv, const LayerView& view) {
   lv.visible.view = job.view;
   lv.visible.runs = job.runs;
   lv.stats.lastVisibleInstances = uint32_t(job.depthRows.size());
-  lv.visible.extent = job.behind ? PixelExtent{} : PixelExtent{job.pixelLo, job.pixelHi, true};
+  takeVertexBounds(lv.visible, job);
   lv.visible.frame = job.frame;
   lv.visible.layers = std::move(job.layers);
   lv.stats.lastPlacementMs = job.ms;

@@ -52,6 +52,7 @@ struct PlacementJob {
   std::vector<glm::vec4> depthRows, rowsX, rowsY, rowsW;
   glm::vec2 pixelLo{INFINITY}, pixelHi{-INFINITY};  // the vertices' projected extent, pixels (unclipped)
   bool behind = false;                               // a vertex is behind the camera (no extent)
+  glm::vec2 rigidDepth{INFINITY, -INFINITY};         // view depths of the rigid vertices (near, far)
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
@@ -80,6 +81,7 @@ struct VisibleLayers {
   // reprojection"); the composite maps the current camera's pixels into its pixels.
   LayerView view;
   PixelExtent extent;  // where the vegetation's vertices project in that camera (unclipped; reprojection policy)
+  glm::vec2 rigidDepth{INFINITY, -INFINITY};  // the rigid vertices' view depths there (the background's depth search)
   std::vector<InstanceRun> runs;  // the instances drawn into the visible set
   gpu::LayerFrame frame{};
   std::vector<LayerInfo> layers;
@@ -91,6 +93,9 @@ using PlacementClock = std::chrono::steady_clock;
 // Starts a placement for `view`; advancePlacement runs it until done or past `deadline` (null: to
 // the end); placeForView runs one to the end into lv.visible.
 void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job);
+// What a finished placement measured of its vertices, for the reprojection: their pixel extent
+// and the rigid ones' depths.
+void takeVertexBounds(VisibleLayers& v, const PlacementJob& job);
 Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline,
                         bool* done);
 Status placeForView(LayeredVegetation& lv, const LayerView& view);

@@ -82,7 +82,8 @@ LayerView guardedView(const LayerView& view, glm::uvec2 outSize, glm::uvec2 guar
 
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
-                                 const glm::dvec2& layerSize, const std::vector<LayerSearch>& search, uint32_t maxSteps) {
+                                 const glm::dvec2& layerSize, const std::vector<LayerSearch>& search, uint32_t maxSteps,
+                                 const LayerSearch& backgroundSearch) {
   gpu::CompositeView v{};
   v.sliceToCurrent = glm::mat4(clipToClip(slice, current));
   v.sliceToPrevious = glm::mat4(clipToClip(slice, previous));
@@ -91,32 +92,30 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
   // between the range's two planes (at the output's corners and centre: the stretch is the parallax,
   // smooth over the image), two at least (the ends), maxSteps at most. The reach the classification
   // widens its boxes by gets a quarter more and a pixel, for pixels between those five.
-  for (size_t i = 0; i < search.size() && i < CANOPY_MAX_LAYERS && maxSteps > 0; ++i) {
-    const LayerSearch& l = search[i];
-    if (!(l.zNear > 0 && l.zFar >= l.zNear && std::isfinite(l.zFar))) continue;
+  auto searchOf = [&](const LayerSearch& l, double planeDepth) -> glm::vec4 {
+    if (maxSteps == 0 || !(l.zNear > 0 && l.zFar >= l.zNear && std::isfinite(l.zFar))) return glm::vec4(0.0f);
     const glm::dmat3 hn = layerHomography(slice, current, l.zNear, outSize, layerSize);
     const glm::dmat3 hf = layerHomography(slice, current, l.zFar, outSize, layerSize);
-    const glm::dmat3 hp = layerHomography(slice, current, i < layerDepths.size() ? layerDepths[i] : 0.5 * (l.zNear + l.zFar), outSize, layerSize);
+    const glm::dmat3 hp = layerHomography(slice, current, planeDepth, outSize, layerSize);
     double stretch = 0, reach = 0;
-    bool finite = true;
     for (int k = 0; k < 5; ++k) {
       const glm::dvec2 p = k < 4 ? glm::dvec2((k & 1) ? outSize.x : 0.0, (k & 2) ? outSize.y : 0.0) : 0.5 * outSize;
       const glm::dvec3 n = hn * glm::dvec3(p, 1.0), f = hf * glm::dvec3(p, 1.0), c = hp * glm::dvec3(p, 1.0);
-      if (n.z <= 0 || f.z <= 0 || c.z <= 0) {
-        finite = false;
-        break;
-      }
+      if (n.z <= 0 || f.z <= 0 || c.z <= 0) return glm::vec4(0.0f);  // the planes cross behind a camera: the plane alone
       const glm::dvec2 a = glm::dvec2(n) / n.z, b = glm::dvec2(f) / f.z, m = glm::dvec2(c) / c.z;
       stretch = std::max(stretch, glm::length(a - b));
       reach = std::max({reach, glm::length(a - m), glm::length(b - m)});
     }
-    if (!finite || !std::isfinite(stretch)) continue;  // the planes cross behind a camera: the plane alone
+    if (!std::isfinite(stretch) || !std::isfinite(reach)) return glm::vec4(0.0f);
     const double steps = std::max(2.0, std::min<double>(maxSteps, std::ceil(stretch / kSearchSpacingPx) + 1.0));
     // The ends as the slice camera's NDC depths (what its layer texels hold).
     const glm::dmat4 proj(slice.proj);
     const glm::dvec4 cn = proj * glm::dvec4(0.0, 0.0, -double(l.zNear), 1.0), cf = proj * glm::dvec4(0.0, 0.0, -double(l.zFar), 1.0);
-    v.search[i] = glm::vec4(float(cn.z / cn.w), float(cf.z / cf.w), float(steps), float(1.25 * reach + 1.0));
-  }
+    return glm::vec4(float(cn.z / cn.w), float(cf.z / cf.w), float(steps), float(1.25 * reach + 1.0));
+  };
+  for (size_t i = 0; i < search.size() && i < CANOPY_MAX_LAYERS; ++i)
+    v.search[i] = searchOf(search[i], i < layerDepths.size() ? layerDepths[i] : 0.5 * (search[i].zNear + search[i].zFar));
+  v.search[COMPOSITE_VIEW_BACKGROUND] = searchOf(backgroundSearch, backgroundDepth);
   for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) {
     const bool background = i == COMPOSITE_VIEW_BACKGROUND;
     if (!background && i >= layerDepths.size()) continue;  // no such layer: never read

@@ -39,11 +39,12 @@ struct LayerSearch {
 // rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
 // `layerSize` (the slice camera's, guard band included). `search` (one per layer, or empty) and
 // `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, a sample
-// every two layer pixels the ray crosses between the range's ends, at most maxSteps.
+// every two layer pixels the ray crosses between the range's ends, at most maxSteps;
+// `backgroundSearch` the rigid background's (its vertices' depths).
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
                                  const glm::dvec2& layerSize, const std::vector<LayerSearch>& search = {},
-                                 uint32_t maxSteps = 0);
+                                 uint32_t maxSteps = 0, const LayerSearch& backgroundSearch = {});
 
 // The reprojection's estimated screen error (pixels of the current camera) of showing layers drawn
 // from `slice` from `current` (docs/design.md "Layers: reprojection", the policy):

@@ -190,7 +190,7 @@ void finishSpread(LayeredVegetation& lv) {
   lv.stats.lastVisibleInstances = uint32_t(sp.job.depthRows.size());
   lv.visible.view = sp.job.view;
   lv.visible.runs = sp.job.runs;
-  lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
+  takeVertexBounds(lv.visible, sp.job);
   lv.visible.frame = sp.job.frame;
   lv.visible.layers = std::move(sp.job.layers);
   lv.visible.impostors = std::move(sp.impostors);
@@ -225,7 +225,7 @@ Status advanceSpread(LayeredVegetation& lv) {
           lv.visible.layers = sp.job.layers;
           lv.visible.view = sp.job.view;
           lv.visible.runs = sp.job.runs;
-          lv.visible.extent = sp.job.behind ? PixelExtent{} : PixelExtent{sp.job.pixelLo, sp.job.pixelHi, true};
+          takeVertexBounds(lv.visible, sp.job);
           lv.visible.frame = sp.job.frame;
         }
       }

@@ -88,14 +88,17 @@ void main() {
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   // The view's matrices read once, before the layer loop (as composite_tiles.comp; docs/performance.md).
   mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious, toSlice = view.currentToSlice;
+  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
     ivec2 is = ip + ivec2(origin);
     bool inside = true;
     if (reproject) {
       vec3 h = planePoint(COMPOSITE_VIEW_BACKGROUND, p);
       vec2 s = h.xy / h.z;
+      // The depth search (composite_search.glsl) from the background plane's point.
+      inside = h.z > 0.0 && compositeDepthSearch(COMPOSITE_VIEW_BACKGROUND, rayA, rayB, vec2(0.0), size, s);
       is = ivec2(floor(s));
-      inside = h.z > 0.0 && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
+      inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
     }
     if (inside) {
       bg = texelFetch(backgroundColor, is, 0);
@@ -114,7 +117,6 @@ void main() {
   float frontZ = 1.0;
   vec2 motion = vec2(0.0);
   bool front = false;
-  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   for (uint i = 0u; i < pc.layerCount; ++i) {
     if (reproject) {
       vec3 h = planePoint(i, p);

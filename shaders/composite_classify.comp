@@ -67,7 +67,9 @@ void main() {
     // The background is read at the nearest texel of H p, or p + origin (the occupancy tiles are
     // dilated by a pixel).
     vec2 slo = lo + origin, shi = hi + origin;
-    bool reached = (reproject && !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi)) || reaches(pc.layerCount, slo, shi, size);
+    bool unbounded = reproject && !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi);
+    float reach = reproject ? view.search[COMPOSITE_VIEW_BACKGROUND].w : 0.0;  // the depth search's (0: none)
+    bool reached = unbounded || reaches(pc.layerCount, slo - reach, shi + reach, size);
     if (reached) position |= COMPOSITE_TILE_BACKGROUND;
   }
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {

@@ -39,6 +39,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
+  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   if ((tileEntry.x & COMPOSITE_TILE_BACKGROUND) != 0u) {
     ivec2 is = ip + ivec2(origin);
     bool inside = true;
@@ -46,8 +47,10 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       const uint b = 3u * COMPOSITE_VIEW_BACKGROUND;
       vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
       vec2 s = h.xy / h.z;
+      // The depth search (composite_search.glsl) from the background plane's point.
+      inside = h.z > 0.0 && compositeDepthSearch(COMPOSITE_VIEW_BACKGROUND, rayA, rayB, vec2(0.0), size, s);
       is = ivec2(floor(s));
-      inside = h.z > 0.0 && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
+      inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
     }
     if (inside) {
       bg = texelFetch(backgroundColor, is, 0);
@@ -66,7 +69,6 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
   vec2 motion = vec2(0.0);
   bool front = false;
   uint layers = mask & compositeLayerBits(pc.layerCount);
-  vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   while (layers != 0u) {
     uint i = uint(findLSB(layers));
     layers &= layers - 1u;

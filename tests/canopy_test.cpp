@@ -954,9 +954,10 @@ TEST_F(CanopyTest, ReprojectedLayersMatchLayersDrawnAtTheNewCamera) {
 }
 
 // Issue 34, the depth search (docs/design.md "Layers: reprojection", per-texel depth): an orbit of
-// 8 degrees shown without a re-slice, on both composite paths, is the CPU reference's search (wind
-// on: the warp composed with it); against layers drawn at the new camera it keeps the leaves where
-// they belong better than the slabs' planes alone (CompositeParams.depthSearchSteps = 0).
+// 8 degrees shown without a re-slice, on both composite paths, is the CPU reference's search of
+// the layers and the trunk (wind on: the warp composed with it); against layers drawn at the new
+// camera it keeps the leaves where they belong better than the planes alone
+// (CompositeParams.depthSearchSteps = 0).
 TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
   struct Run {
     std::vector<glm::vec4> color;
@@ -1008,6 +1009,7 @@ TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
       run(model, w, h, a, b, path, 16, 1.0f, ReslicePolicy::OnViewChange, true, &r);
       if (HasFailure()) return;
       for (uint32_t i = 0; i < 5; ++i) EXPECT_GE(r.view.search[i].z, 2.0f) << "layer " << i << " searched";
+      EXPECT_GE(r.view.search[COMPOSITE_VIEW_BACKGROUND].z, 2.0f) << "the trunk searched";
       expectNearReference(r.color, r.depth, r.ref, "an 8 degree orbit, reprojected with the depth search");
     }
   }

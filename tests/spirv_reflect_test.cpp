@@ -4,6 +4,7 @@
 // declarations) for every shader embedded in the library, and check what it refuses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -202,8 +203,12 @@ TEST(SpirVReflect, RefusesAMalformedModule) {
   std::vector<uint32_t> words(sh->code, sh->code + sh->sizeBytes / 4);
   ASSERT_TRUE(reflectDescriptors(words.data(), words.size(), &t).ok());
   EXPECT_EQ(t.size(), 9u);  // bindings 0..8 (8: the reprojection view block)
-  std::vector<uint32_t> cut(words.begin(), words.begin() + words.size() / 2 + 1);
-  cut.back() = 0x7fff0047u;  // an instruction whose length runs past the end
+  // Cut at the first instruction boundary past the middle, then an instruction whose length runs
+  // past the end (a word inside an instruction would be read as an operand, not as a header).
+  size_t boundary = 5;
+  while (boundary < words.size() / 2) boundary += std::max<uint32_t>(words[boundary] >> 16, 1u);
+  std::vector<uint32_t> cut(words.begin(), words.begin() + boundary);
+  cut.push_back(0x7fff0047u);
   EXPECT_FALSE(reflectDescriptors(cut.data(), cut.size(), &t).ok());
   words[0] = 0;
   Status s = reflectDescriptors(words.data(), words.size(), &t);

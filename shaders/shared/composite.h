@@ -103,12 +103,13 @@ struct CompositeView {
   // Row r of plane i's homography (current pixel -> layer pixel) is homography[3 i + r].xyz; the
   // background's plane is i = COMPOSITE_VIEW_BACKGROUND.
   vec4 homography[3u * (CANOPY_MAX_LAYERS + 1u)];
-  // Layer i's depth search (compositeRaySearch): x, y the slice camera's NDC depths of the two ends
-  // of the range its texels lie in, z the samples along a pixel's ray (0: the plane alone), w how far (layer
-  // pixels) a sample may land from the plane's point (the classification widens its boxes by it).
-  vec4 search[CANOPY_MAX_LAYERS];
+  // Layer i's depth search (compositeRaySearch; the background's at i = COMPOSITE_VIEW_BACKGROUND):
+  // x, y the slice camera's NDC depths of the two ends of the range its texels lie in, z the samples
+  // along a pixel's ray (0: the plane alone), w how far (layer pixels) a sample may land from the
+  // plane's point (the classification widens its boxes by it).
+  vec4 search[CANOPY_MAX_LAYERS + 1u];
 };
-CANOPY_SIZE_CHECK(CompositeView, 192 + 48 * (CANOPY_MAX_LAYERS + 1) + 16 * CANOPY_MAX_LAYERS)
+CANOPY_SIZE_CHECK(CompositeView, 192 + 64 * (CANOPY_MAX_LAYERS + 1))
 
 // H p in homogeneous layer pixels: (x, y, w), the point in front of both cameras where w > 0.
 CANOPY_INLINE vec3 compositeHomogeneous(vec4 r0, vec4 r1, vec4 r2, vec2 p) {

@@ -60,7 +60,7 @@ static int usage(const char* why) {
                "                 Habel's translucency above the diffuse BTDF (--out FILE, default translucency_sheet.png)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
-               "  --size WxH     table1: resolution (default 1024x768)\n"
+               "  --size WxH     table1, layers: resolution (default 1024x768)\n"
                "  --orbit DEG    table1: camera turn per frame in the orbit rows, (0, 90] (default 0.25)\n"
                "  --guard-band F table1, camera: CanopyDesc.guardBand, [0, 0.5] (default 0.1; camera: the policy side,\n"
                "                 the every-frame side has none)\n"
@@ -304,7 +304,7 @@ int main(int argc, char** argv) {
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
-  if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, 1024, 768);
+  if (rc == 0 && runLayers) rc = bench::runLayersBench(dev, faces, int(rebuilds), layout, sizeGiven ? t1.width : 1024u, sizeGiven ? t1.height : 768u);
   if (rc == 0 && runAnim) rc = bench::runAnimBench(dev, faces, {"3(1-1-1)", "5(3-1-1)"}, frames ? frames : 30, 1024, 768,
                                              scene);
   if (rc == 0 && runTable1) {

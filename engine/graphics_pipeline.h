@@ -44,6 +44,9 @@ struct GraphicsPipelineDesc {
   bool colorWrite = true;                // false: colour write mask 0 on every attachment (a depth-only pass)
   VkCompareOp depthCompare = VK_COMPARE_OP_LESS;
   VkCullModeFlags cullMode = VK_CULL_MODE_NONE;
+  // The fragment stage's specialization constants: value i for constant_id i (32-bit); empty: the
+  // shader's defaults.
+  std::vector<uint32_t> fragmentSpecialization;
 };
 
 struct GraphicsPipeline {

@@ -63,7 +63,7 @@ DrawTargets nextTargets(const LayeredVegetation& lv) {
 // for it (docs/design.md "Layers: shading once"): the depth pre-pass, Habel's shading on the depth
 // it left, then what a pre-pass cannot hold (blended materials, parts fading towards their
 // impostors) the plain way, depth-tested against it.
-Status drawShaded(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& plain, const LayerPipelines::ShadeOnce& once,
+Status drawShaded(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& plain, const LayerShadingPipelines::ShadeOnce& once,
                   bool foliage, uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts, MeshDrawOptions o) {
   if (!lv.settings.shadeOnce || !once.depth.pipeline) return drawMaterials(lv, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
   o.subset = MeshDrawOptions::Subset::DepthPrepassed;
@@ -91,8 +91,8 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     const bool opaque = cut && (!parts || lv.reslice.spread.sliceClears), fading = cut && (!parts || lv.reslice.spread.sliceLast);
     // The single pass with layers at half resolution uses its clip-distance variant.
     const bool half = lv.settings.halfResolutionLayers > 0;
-    const GraphicsPipeline& layered = half ? lv.pipelines.layeredHalf : lv.pipelines.layered;
-    const LayerPipelines::ShadeOnce& layeredOnce = half ? lv.pipelines.layeredHalfOnce : lv.pipelines.layeredOnce;
+    const GraphicsPipeline& layered = half ? lv.pipelines.shaded.layeredHalf : lv.pipelines.shaded.layered;
+    const LayerShadingPipelines::ShadeOnce& layeredOnce = half ? lv.pipelines.shaded.layeredHalfOnce : lv.pipelines.shaded.layeredOnce;
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
     o.runs = t.runs;
@@ -102,7 +102,7 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
       if (!drawn || !drawn->empty())
         CANOPY_TRY(lv.pipelines.singlePass
                        ? drawShaded(lv, cmd, layered, layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
-                       : drawShaded(lv, cmd, lv.pipelines.perLayer, lv.pipelines.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
+                       : drawShaded(lv, cmd, lv.pipelines.shaded.perLayer, lv.pipelines.shaded.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
       return fading ? recordImpostors(lv, cmd, *imp, true, i) : Status();
     }));
   }
@@ -116,7 +116,7 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTa
   MeshDrawOptions o;
   o.runs = t.runs;
   return renderInto(*lv.device, cmd, lv, 1, &color, 1, depth, [&] {
-    return drawShaded(lv, cmd, lv.pipelines.background, lv.pipelines.backgroundOnce, false, LAYER_PASS_BACKGROUND, 0, parts, o);
+    return drawShaded(lv, cmd, lv.pipelines.shaded.background, lv.pipelines.shaded.backgroundOnce, false, LAYER_PASS_BACKGROUND, 0, parts, o);
   });
 }
 

@@ -18,6 +18,18 @@
 #include "render/layer_placement.h"
 
 namespace canopy {
+
+uint32_t layerShadingFeatures(const LayeredVegetation& lv, const LayerSettings& s) {
+  uint32_t f = s.translucencyModel == TranslucencyModel::Habel ? LAYER_FEATURE_HABEL : LAYER_FEATURE_DIFFUSE_BTDF;
+  if (s.impostors.debugView) f |= LAYER_FEATURE_LEVEL_COLORS;
+  for (const ModelMaterial& m : lv.mesh.materials) {
+    if (m.normalImage >= 0) f |= LAYER_FEATURE_NORMAL_MAP;
+    if (m.transmissionImage >= 0) f |= LAYER_FEATURE_TRANSMISSION_TEXTURE;
+    if (m.transmissionColorImage >= 0) f |= LAYER_FEATURE_TRANSMISSION_COLOR_TEXTURE;
+  }
+  return f;
+}
+
 namespace {
 
 Status checkImpostorSettings(const LayeredVegetation& lv, const LayerSettings& s) {
@@ -74,7 +86,7 @@ Status createTargets(LayeredVegetation& lv) {
 // Shading once's pair for a draw path (docs/design.md "Layers: shading once"); `p`: the path's
 // plain pipeline. The same vertex shader in both, so the shading pass meets the pre-pass's depth
 // exactly (EQUAL).
-Status createShadeOnce(Device& d, GraphicsPipelineDesc p, LayerPipelines::ShadeOnce* out) {
+Status createShadeOnce(Device& d, GraphicsPipelineDesc p, LayerShadingPipelines::ShadeOnce* out) {
   p.fragmentShader = "layers_depth.frag";
   p.colorWrite = false;
   CANOPY_TRY(createGraphicsPipeline(d, p, &out->depth));
@@ -85,13 +97,24 @@ Status createShadeOnce(Device& d, GraphicsPipelineDesc p, LayerPipelines::ShadeO
   return createGraphicsPipeline(d, p, &out->shade);
 }
 
-Status createPipelines(LayeredVegetation& lv) {
+void destroyShading(Device& d, LayerShadingPipelines& s) {
+  for (GraphicsPipeline* p : {&s.layered, &s.layeredHalf, &s.perLayer, &s.background}) destroyGraphicsPipeline(d, *p);
+  for (LayerShadingPipelines::ShadeOnce* o : {&s.layeredOnce, &s.perLayerOnce, &s.backgroundOnce, &s.layeredHalfOnce}) {
+    destroyGraphicsPipeline(d, o->depth);
+    destroyGraphicsPipeline(d, o->shade);
+  }
+  s = LayerShadingPipelines{};
+}
+
+Status createShading(LayeredVegetation& lv, uint32_t features, LayerShadingPipelines* out) {
   Device& d = *lv.device;
+  out->features = features;
   GraphicsPipelineDesc p = layerMeshPipelineDesc(lv.desc.colorFormat, kLayerDepthFormat);
+  p.fragmentSpecialization = {features};
   if (d.shaderClipDistance) {
     p.vertexShader = "layers_clip.vert";
-    CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.background));
-    CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.backgroundOnce));
+    CANOPY_TRY(createGraphicsPipeline(d, p, &out->background));
+    CANOPY_TRY(createShadeOnce(d, p, &out->backgroundOnce));
   }
   // The id output (a test and debug view) writes every triangle's ids: shaded the plain way.
   const bool once = !lv.desc.writeIds;
@@ -101,19 +124,42 @@ Status createPipelines(LayeredVegetation& lv) {
   }
   if (d.shaderClipDistance) {
     p.vertexShader = "layers_clip.vert";
-    CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.perLayer));
-    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.perLayerOnce));
+    CANOPY_TRY(createGraphicsPipeline(d, p, &out->perLayer));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &out->perLayerOnce));
   }
   if (d.shaderOutputLayer) {
     p.vertexShader = "layers.vert";
-    CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.layered));
-    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.layeredOnce));
+    CANOPY_TRY(createGraphicsPipeline(d, p, &out->layered));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &out->layeredOnce));
   }
   if (d.shaderOutputLayer && d.shaderClipDistance) {
     p.vertexShader = "layers_half.vert";
-    CANOPY_TRY(createGraphicsPipeline(d, p, &lv.pipelines.layeredHalf));
-    if (once) CANOPY_TRY(createShadeOnce(d, p, &lv.pipelines.layeredHalfOnce));
+    CANOPY_TRY(createGraphicsPipeline(d, p, &out->layeredHalf));
+    if (once) CANOPY_TRY(createShadeOnce(d, p, &out->layeredHalfOnce));
   }
+  return Status();
+}
+
+// The draws' pipelines for settings `s`: those in force when their features match, else ones made
+// for them before, else new ones (the others kept: a frame in flight may use them).
+Status useShadingFor(LayeredVegetation& lv, const LayerSettings& s) {
+  LayerPipelines& p = lv.pipelines;
+  const uint32_t features = layerShadingFeatures(lv, s);
+  const bool made = p.shaded.features != 0;  // every set has one translucency model's bit
+  if (made && p.shaded.features == features) return Status();
+  for (LayerShadingPipelines& o : p.otherShading)
+    if (o.features == features) {
+      std::swap(p.shaded, o);
+      return Status();
+    }
+  LayerShadingPipelines fresh;
+  Status st = createShading(lv, features, &fresh);
+  if (!st.ok()) {
+    destroyShading(*lv.device, fresh);
+    return st;
+  }
+  if (made) p.otherShading.push_back(std::move(p.shaded));
+  p.shaded = std::move(fresh);
   return Status();
 }
 
@@ -200,7 +246,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     CANOPY_TRY(placeLayerMesh(lv, std::move(mesh), liveAtStart));
     CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, desc.instances.empty() ? std::vector<glm::mat4>{glm::mat4(1.0f)} : desc.instances,
                             desc.tints, desc.windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
-    CANOPY_TRY(createPipelines(lv));
+    CANOPY_TRY(useShadingFor(lv, lv.settings));
     if (lv.impostors.enabled && !lv.instances.identity)
       return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
                                                     "not yet with instances or a transform (CanopyDesc.instances)");
@@ -247,13 +293,11 @@ void destroyLayeredVegetation(LayeredVegetation& lv) {
   Device& d = *lv.device;
   destroyLayerTargets(lv);
   destroyImpostors(lv);
-  for (GraphicsPipeline* p : {&lv.pipelines.layered, &lv.pipelines.layeredHalf, &lv.pipelines.perLayer, &lv.pipelines.background, &lv.pipelines.fade, &lv.pipelines.fadeBackground,
-                             &lv.pipelines.fadeDepth, &lv.pipelines.fadeOver, &lv.pipelines.fadeOverBackground})
+  destroyShading(d, lv.pipelines.shaded);
+  for (LayerShadingPipelines& o : lv.pipelines.otherShading) destroyShading(d, o);
+  for (GraphicsPipeline* p : {&lv.pipelines.fade, &lv.pipelines.fadeBackground, &lv.pipelines.fadeDepth, &lv.pipelines.fadeOver,
+                             &lv.pipelines.fadeOverBackground})
     destroyGraphicsPipeline(d, *p);
-  for (LayerPipelines::ShadeOnce* o : {&lv.pipelines.layeredOnce, &lv.pipelines.perLayerOnce, &lv.pipelines.backgroundOnce, &lv.pipelines.layeredHalfOnce}) {
-    destroyGraphicsPipeline(d, o->depth);
-    destroyGraphicsPipeline(d, o->shade);
-  }
   destroyLayerMesh(lv);
   destroyInstances(d, lv.instances);
   if (lv.pipelines.nearestSampler) d.vk.DestroySampler(d.device, lv.pipelines.nearestSampler, d.allocationCallbacks);
@@ -277,6 +321,7 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   CANOPY_TRY(checkImpostorSettings(lv, s));
   bool single = false;
   CANOPY_TRY(chooseDrawPath(lv, s, &single));
+  CANOPY_TRY(useShadingFor(lv, s));
   const bool nextSetBefore = usesNextSet(lv);
   // A new layer count, or layers changing resolution: texels of the two sets no longer match, so
   // no cross-fade between them (a re-slice at once into new targets).

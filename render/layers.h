@@ -77,9 +77,12 @@ struct LayeredVegetationDesc {
   Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
 
-// The layer and background draws' pipelines (single pass with gl_Layer, or one draw per layer) and
-// the cross-fade's.
-struct LayerPipelines {
+// The layer and background draws' pipelines (single pass with gl_Layer, or one draw per layer),
+// specialised for the shading inputs they may meet (`features`, LAYER_FEATURE_*: the model's
+// materials and the settings' translucency model and level colours; docs/design.md "Layers: leaf
+// shading", specialised pipelines).
+struct LayerShadingPipelines {
+  uint32_t features = 0;
   GraphicsPipeline layered, perLayer, background;
   // The single pass with layers at half resolution (layers_half.vert: clip distances keep each
   // such layer's quarter); the one-layer path does it in layers_clip.vert.
@@ -89,6 +92,15 @@ struct LayerPipelines {
   struct ShadeOnce {
     GraphicsPipeline depth, shade;
   } layeredOnce, perLayerOnce, backgroundOnce, layeredHalfOnce;
+};
+
+// The draws' pipelines for the settings in force, those of other settings met before, and the
+// cross-fade's.
+struct LayerPipelines {
+  LayerShadingPipelines shaded;
+  // Kept, not destroyed, when the settings change the features: a frame in flight may still use
+  // them, and a setting switched back finds them (at most four: translucency model x level colours).
+  std::vector<LayerShadingPipelines> otherShading;
   GraphicsPipeline fade, fadeBackground;  // spread re-slicing only
   GraphicsPipeline fadeOver, fadeOverBackground;  // the cross-fade's first half: the new set laid over
   GraphicsPipeline fadeDepth;             // the cross-fade's depth merge (nearer of the two sets)
@@ -109,6 +121,13 @@ struct LayeredVegetation {
   Impostors impostors;        // CanopyDesc.impostors: the hierarchy and the atlas
   LayerStats stats;
 };
+
+// Which shading inputs the layer draws may meet (LAYER_FEATURE_*, shared/layers.h): the model's
+// material textures, the translucency model and the impostors' level colours of `s`. A clear bit
+// compiles that input's code out of the fragment shader (layers_shade.glsl): lavapipe runs both
+// sides of a branch under a lane mask, so an input no material has still costs every fragment
+// (docs/performance.md "Specialised shading").
+uint32_t layerShadingFeatures(const LayeredVegetation& lv, const LayerSettings& s);
 
 // Splits materials, computes (or reads from the cache) the leaf roots, uploads the mesh and the
 // textures, creates the targets and pipelines. `model` can be released afterwards.

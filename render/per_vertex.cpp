@@ -128,6 +128,10 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   p.depthCompare = desc.reverseZ ? VK_COMPARE_OP_GREATER : VK_COMPARE_OP_LESS;
   p.vertexShader = motion ? "per_vertex_motion.vert" : "per_vertex.vert";
   p.fragmentShader = motion ? "per_vertex_motion.frag" : "layers.frag";
+  // Specialised for the model's materials as the layers' draws are (the same shading, at the same
+  // cost per fragment); the settings' parts stay open: this pipeline outlives settings changes.
+  p.fragmentSpecialization = {layerShadingFeatures(lv, lv.settings) | LAYER_FEATURE_HABEL | LAYER_FEATURE_DIFFUSE_BTDF |
+                              LAYER_FEATURE_LEVEL_COLORS};
   CANOPY_TRY(createGraphicsPipeline(d, p, &pv.pipeline));
   const VkBufferUsageFlags usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT;
   CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), usage, MemoryUsage::DeviceLocal, &pv.frame, "per-vertex: frame"));

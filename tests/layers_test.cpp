@@ -368,7 +368,7 @@ TEST_F(LayersTest, ShadingOnceEqualsShadingEveryFragment) {
       LayeredVegetation x, y;
       ASSERT_TRUE(createLayeredVegetation(dev, m, a, &x).ok());
       ASSERT_TRUE(createLayeredVegetation(dev, m, b, &y).ok());
-      ASSERT_NE(mode == LayerDrawMode::SinglePass ? x.pipelines.layeredOnce.shade.pipeline : x.pipelines.perLayerOnce.shade.pipeline,
+      ASSERT_NE(mode == LayerDrawMode::SinglePass ? x.pipelines.shaded.layeredOnce.shade.pipeline : x.pipelines.shaded.perLayerOnce.shade.pipeline,
                 VK_NULL_HANDLE);
       const LayerView view = name == "leaves" ? frontView() : orbitView(m.boundsMin, m.boundsMax, 30, 15, 40, float(kW) / kH, 0.8f);
       ASSERT_TRUE(renderOnce(dev, x, view).ok());
@@ -407,7 +407,7 @@ TEST_F(LayersWithoutGlLayerTest, FallbackIsChosenAutomaticallyAndKeepsLeavesWhol
   LayeredVegetation lv;
   ASSERT_TRUE(createLayeredVegetation(dev, m, smallDesc("3(1-1-1)"), &lv).ok());
   EXPECT_FALSE(lv.pipelines.singlePass) << "Auto must pick one draw per layer without shaderOutputLayer";
-  EXPECT_FALSE(lv.pipelines.layered.pipeline) << "no gl_Layer pipeline may be created on such a device";
+  EXPECT_FALSE(lv.pipelines.shaded.layered.pipeline) << "no gl_Layer pipeline may be created on such a device";
   ASSERT_TRUE(renderOnce(dev, lv, frontView()).ok());
   Coverage c = readCoverage(lv);
   EXPECT_EQ(c.layersOfLeaf.size(), 48u);
@@ -1185,6 +1185,68 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
   Status s = createLayeredVegetation(dev, m, smallDesc("1"), &bad);
   EXPECT_FALSE(s.ok());
   EXPECT_NE(s.message().find("names image 7 of 2"), std::string::npos) << s.message();
+}
+
+// The layer draws' fragment shader is specialised for what the model and the settings can meet
+// (docs/performance.md "Specialised shading"): a settings change that changes it switches to
+// pipelines made for the new settings, keeps the old ones, and a switch back reuses them; each
+// switch shades as the CPU evaluation of the model in force.
+TEST_F(LayersTest, SpecialisedShadingFollowsTheModelAndTheSettings) {
+  const glm::vec3 light = glm::normalize(glm::vec3(0.2f, 0.3f, -0.9f));  // behind the leaf: transmission
+  const VegetationModel plain = oneLeaf({0, 0, 1});
+  VegetationModel mapped = plain;
+  ModelImage normals;
+  normals.name = "normal map";
+  normals.width = normals.height = 1;
+  normals.rgba = {128, 128, 255, 255};
+  normals.linear = true;
+  mapped.images = {normals};
+  mapped.materials[0].normalImage = 0;
+  mapped.materials[0].normalScale = 1.0f;
+  LayeredVegetationDesc d = smallDesc("1");
+  d.settings.lightDirection = {light.x, light.y, light.z};
+  d.settings.ambient = 0.2f;
+  d.settings.leafOpticalDepth = 0.4f;
+  {
+    LayeredVegetation lv;
+    ASSERT_TRUE(createLayeredVegetation(dev, mapped, d, &lv).ok());
+    EXPECT_EQ(lv.pipelines.shaded.features, LAYER_FEATURE_HABEL | LAYER_FEATURE_NORMAL_MAP);
+    destroyLayeredVegetation(lv);
+  }
+  LayeredVegetation lv;
+  ASSERT_TRUE(createLayeredVegetation(dev, plain, d, &lv).ok());
+  EXPECT_EQ(lv.pipelines.shaded.features, LAYER_FEATURE_HABEL) << "no texture, no level colours: only Habel's model is compiled";
+  const VkPipeline habelPipeline = lv.pipelines.shaded.layered.pipeline ? lv.pipelines.shaded.layered.pipeline : lv.pipelines.shaded.perLayer.pipeline;
+  const glm::vec3 base = glm::vec3(plain.materials[0].baseColorFactor);
+  const float t = d.settings.leafTransmission;
+  const glm::vec3 tint = gpu::leafTransmissionTint(base);
+  auto expectCentre = [&](const glm::vec3& want, const char* what) {
+    std::vector<glm::vec4> c;
+    Status s = renderOnce(dev, lv, orthoFront());
+    if (s.ok()) s = readLayerColor(lv, 0, &c);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const glm::vec4 got = c[(kH / 2) * kW + kW / 2];
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[i], want[i], 3e-3f * std::max(1.0f, want[i]) + 2e-3f) << what << ", channel " << i;
+  };
+  const glm::vec3 habel = gpu::leafShadeHabel(base, glm::vec3(0, 0, 1), glm::vec3(0, 0, 1), true, glm::vec3(0, 0, 1), light, glm::vec3(1.0f),
+                                              0.2f, 1.45f, 0.25f, 1.0f, t, tint, glm::vec3(0.4f));
+  const glm::vec3 diffuse = gpu::leafShade(base, glm::vec3(0, 0, 1), true, glm::vec3(0, 0, 1), light, glm::vec3(1.0f), 0.2f, 1.45f, 0.25f,
+                                           1.0f, t, tint);
+  ASSERT_GT(glm::length(habel - diffuse), 0.01f) << "the case must tell the two models apart";
+  expectCentre(habel, "Habel's model");
+  LayerSettings s = d.settings;
+  s.translucencyModel = TranslucencyModel::DiffuseBtdf;
+  ASSERT_TRUE(setLayerSettings(lv, s).ok());
+  EXPECT_EQ(lv.pipelines.shaded.features, LAYER_FEATURE_DIFFUSE_BTDF);
+  EXPECT_EQ(lv.pipelines.otherShading.size(), 1u) << "Habel's pipelines kept: a frame in flight may use them";
+  expectCentre(diffuse, "the diffuse BTDF");
+  s.translucencyModel = TranslucencyModel::Habel;
+  ASSERT_TRUE(setLayerSettings(lv, s).ok());
+  EXPECT_EQ(lv.pipelines.shaded.features, LAYER_FEATURE_HABEL);
+  EXPECT_EQ(lv.pipelines.otherShading.size(), 1u) << "switched back: the kept pipelines, none made";
+  EXPECT_EQ(lv.pipelines.shaded.layered.pipeline ? lv.pipelines.shaded.layered.pipeline : lv.pipelines.shaded.perLayer.pipeline, habelPipeline);
+  expectCentre(habel, "Habel's model again");
+  destroyLayeredVegetation(lv);
 }
 
 // Habel's translucency (seed 004 III.C) against the CPU evaluation on a backlit leaf with a normal

@@ -33,6 +33,17 @@
 #define LAYER_SHADE_TRANSMISSION_TEXTURE 2u     // sample transmissionTex (alpha)
 #define LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE 4u  // sample transmissionColorTex (RGB)
 
+// The shading inputs a layer pipeline's fragment shader may meet: its specialization constant 0
+// (layers_shade.glsl LAYER_FEATURES; render/layers.cpp shadingFeatures). A clear bit compiles that
+// input's code out; unspecialised, a shader may meet all and tests each per draw.
+#define LAYER_FEATURE_NORMAL_MAP 1u
+#define LAYER_FEATURE_TRANSMISSION_TEXTURE 2u
+#define LAYER_FEATURE_TRANSMISSION_COLOR_TEXTURE 4u
+#define LAYER_FEATURE_HABEL 8u          // Habel's translucency (LayerFrame.leafShading.w)
+#define LAYER_FEATURE_DIFFUSE_BTDF 16u  // the diffuse BTDF
+#define LAYER_FEATURE_LEVEL_COLORS 32u  // the impostor debug view's colours by box level (LayerDrawPush.lod.y)
+#define LAYER_FEATURE_ALL 0xffffffffu
+
 CANOPY_NAMESPACE_BEGIN
 
 struct LayerFrame {

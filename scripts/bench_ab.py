@@ -9,7 +9,9 @@ Prints, per row (faces, layout, camera), the median over the runs of each build'
 ratio new/old and how many of the adjacent old/new pairs have the new build slower. Defaults:
 4 pairs, the still rows, `table1 --faces 80000 --frames 30 --json ''`. With `--section camera`
 the rows are each face count's still camera and each path's frame under the policy ("auto ms"),
-default `camera --faces 80000 --frames 20 --paths turn --budget 0`.
+default `camera --faces 80000 --frames 20 --paths turn --budget 0`. With `--section layers` the
+rows are each face count's foliage draws of a re-slice (GPU ms per draw path), default
+`layers --faces 80000 --rebuilds 7`.
 """
 import argparse
 import re
@@ -20,6 +22,8 @@ import sys
 ROW = re.compile(r"^\s+(\d+)\s+(\S+)\s+(still|orbit)\s+([\d.]+)\s")
 CAMERA_STILL = re.compile(r"^(\d+) faces: still camera ([\d.]+) ms")
 CAMERA_PATH = re.compile(r"^\s+(orbit|dolly|strafe|turn|zoom|walk)\s+([\d.]+)\s")
+LAYERS_FACES = re.compile(r"^\s+(\d+)\s+[\d.]+\s+[\d.]+\s+[\d.]+ \|")
+LAYERS_DRAW = re.compile(r"\| (\d+ draws?, [^|]*?)\s+([\d.]+)\s+[\d.]+\s+[\d.]+\s+[\d.]+$")
 
 
 def run(bench, section, extra):
@@ -27,6 +31,14 @@ def run(bench, section, extra):
     rows = {}
     faces = "?"
     for line in out.splitlines():
+        if section == "layers":
+            m = LAYERS_FACES.match(line)
+            if m:
+                faces = m.group(1)
+            m = LAYERS_DRAW.search(line)
+            if m:
+                rows[(faces, "-", m.group(1).replace(" ", "_"))] = float(m.group(2))
+            continue
         if section == "table1":
             m = ROW.match(line)
             if m:
@@ -55,9 +67,13 @@ def main():
     ap.add_argument("new")
     ap.add_argument("--pairs", type=int, default=4)
     ap.add_argument("--rows", choices=["still", "orbit", "all"], default="still")
-    ap.add_argument("--section", choices=["table1", "camera"], default="table1")
+    ap.add_argument("--section", choices=["table1", "camera", "layers"], default="table1")
     a = ap.parse_args(argv)
-    if a.section == "camera":
+    if a.section == "layers":
+        a.rows = "all"
+        if extra is None:
+            extra = ["--faces", "80000", "--rebuilds", "7"]
+    elif a.section == "camera":
         a.rows = "all"
         if extra is None:
             extra = ["--faces", "80000", "--frames", "20", "--paths", "turn", "--budget", "0"]
@@ -71,7 +87,8 @@ def main():
             runs[which].append(rows)
             shown = "  ".join(f"{k[1]} {k[2]} {v:.2f}" for k, v in rows.items() if a.rows in ("all", k[2]))
             print(f"pair {p + 1} {which}: {shown}", flush=True)
-    print(f"\n{'row':<26} {'old ms':>8} {'new ms':>8} {'new/old':>8}  new slower in")
+    width = max([26] + [len(" ".join(k)) for k in runs["old"][0]])
+    print(f"\n{'row':<{width}} {'old ms':>8} {'new ms':>8} {'new/old':>8}  new slower in")
     for key in runs["old"][0]:
         if a.rows != "all" and key[2] != a.rows:
             continue
@@ -79,7 +96,7 @@ def main():
         new = [r[key] for r in runs["new"]]
         mo, mn = statistics.median(old), statistics.median(new)
         slower = sum(n > o for o, n in zip(old, new))
-        print(f"{' '.join(key):<26} {mo:8.2f} {mn:8.2f} {mn / mo:8.3f}  {slower} of {len(old)} pairs")
+        print(f"{' '.join(key):<{width}} {mo:8.2f} {mn:8.2f} {mn / mo:8.3f}  {slower} of {len(old)} pairs")
     return 0
 
 

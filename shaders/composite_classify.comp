@@ -3,8 +3,8 @@
 // Compute path, tile classification (docs/performance.md): for every COMPOSITE_TILE screen tile, which
 // layers can reach it under q = s - d_i(s), s = H_i p (the reprojection, shared/composite.h; s = p
 // for a still camera; the depth search reads within CompositeView.search[i].w of H_i p). d_i is
-// bilinear between warp-grid corners, so over the tile it stays within the per-axis min/max of the corners of the grid cells the tile touches; the
-// layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
+// bilinear between warp-grid corners, so over the tile it stays within the per-axis min/max of the
+// corners of the grid cells the tile touches; the layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
 // rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
 // (position with the background bit, layer mask) to the list that sizes the composite's indirect dispatch and the
 // resolve's indirect draw. Without COMPOSITE_SKIP_EMPTY every tile lists every layer (the

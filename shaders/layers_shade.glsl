@@ -49,22 +49,26 @@ bool shade() {
   vec3 n = normalize(vNormal);
   bool front = dot(n, v) >= 0.0;
   vec3 nGeom = front ? n : -n;
-  if (mayMeet(LAYER_FEATURE_NORMAL_MAP) && pc.normalScale != 0.0) n = perturbNormal(n, vWorld, vUv, texture(normalTex, vUv).xyz * 2.0 - 1.0, pc.normalScale);
+  if (mayMeet(LAYER_FEATURE_NORMAL_MAP) && pc.normalScale != 0.0)
+    n = perturbNormal(n, vWorld, vUv, texture(normalTex, vUv).xyz * 2.0 - 1.0, pc.normalScale);
   if (!front) n = -n;
   float t = pc.transmission.a * f.leafShading.z;
   vec3 tc = pc.transmission.rgb;
-  if (mayMeet(LAYER_FEATURE_TRANSMISSION_TEXTURE) && (pc.shadingFlags & LAYER_SHADE_TRANSMISSION_TEXTURE) != 0u) t *= texture(transmissionTex, vUv).a;
-  if (mayMeet(LAYER_FEATURE_TRANSMISSION_COLOR_TEXTURE) && (pc.shadingFlags & LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE) != 0u) tc *= texture(transmissionColorTex, vUv).rgb;
+  if (mayMeet(LAYER_FEATURE_TRANSMISSION_TEXTURE) && (pc.shadingFlags & LAYER_SHADE_TRANSMISSION_TEXTURE) != 0u)
+    t *= texture(transmissionTex, vUv).a;
+  if (mayMeet(LAYER_FEATURE_TRANSMISSION_COLOR_TEXTURE) && (pc.shadingFlags & LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE) != 0u)
+    tc *= texture(transmissionColorTex, vUv).rgb;
   if ((pc.shadingFlags & LAYER_SHADE_TINT_FROM_BASE) != 0u) tc *= leafTransmissionTint(base.rgb);
   // leafShading.w: the translucency model (docs/design.md "Layers: leaf shading").
-  bool habel = mayMeet(LAYER_FEATURE_DIFFUSE_BTDF) ? (mayMeet(LAYER_FEATURE_HABEL) && f.leafShading.w == LAYER_TRANSLUCENCY_HABEL) : true;
+  bool habel = !mayMeet(LAYER_FEATURE_DIFFUSE_BTDF) || (mayMeet(LAYER_FEATURE_HABEL) && f.leafShading.w == LAYER_TRANSLUCENCY_HABEL);
   vec3 lit = habel
                  ? leafShadeHabel(base.rgb, n, nGeom, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
                                   f.leafShading.x, f.leafShading.y, pc.specular, t, tc, pc.volume.rgb)
                  : leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
                              f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
   // The impostor debug view: leaves in their box level's colour, darker than impostors.
-  if (mayMeet(LAYER_FEATURE_LEVEL_COLORS) && pc.lod.y > 0.0) lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.2 + 0.35 * max(dot(n, f.lightDirection.xyz), 0.0));
+  if (mayMeet(LAYER_FEATURE_LEVEL_COLORS) && pc.lod.y > 0.0)
+    lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.2 + 0.35 * max(dot(n, f.lightDirection.xyz), 0.0));
   // A box fading towards its impostor (issue 18): its leaves' share of the pixels, premultiplied.
   outColor = vec4(lit * alpha, alpha) * pc.lod.x;
   return true;

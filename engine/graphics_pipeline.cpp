@@ -48,11 +48,9 @@ Status createGraphicsPipeline(Device& d, const GraphicsPipelineDesc& desc, Graph
     stages[1].stage = VK_SHADER_STAGE_FRAGMENT_BIT;
     stages[1].module = fs;
     stages[1].pName = "main";
-    std::vector<VkSpecializationMapEntry> entries(desc.fragmentSpecialization.size());
-    for (size_t i = 0; i < entries.size(); ++i) entries[i] = {uint32_t(i), uint32_t(i * 4), 4};
-    const VkSpecializationInfo spec{uint32_t(entries.size()), entries.data(), desc.fragmentSpecialization.size() * 4,
-                                    desc.fragmentSpecialization.data()};
-    if (!entries.empty()) stages[1].pSpecializationInfo = &spec;
+    std::vector<VkSpecializationMapEntry> entries;
+    VkSpecializationInfo spec{};
+    stages[1].pSpecializationInfo = specializationOf(desc.fragmentSpecialization, &entries, &spec);
 
     std::vector<VkVertexInputBindingDescription> vb;
     if (desc.vertexStride) vb.push_back({0, desc.vertexStride, VK_VERTEX_INPUT_RATE_VERTEX});

@@ -42,6 +42,15 @@ Status createPushDescriptorLayouts(Device& d, const std::vector<VkDescriptorType
   return Status();
 }
 
+const VkSpecializationInfo* specializationOf(const std::vector<uint32_t>& values, std::vector<VkSpecializationMapEntry>* entries,
+                                             VkSpecializationInfo* info) {
+  if (values.empty()) return nullptr;
+  entries->resize(values.size());
+  for (size_t i = 0; i < values.size(); ++i) (*entries)[i] = {uint32_t(i), uint32_t(i * 4), 4};
+  *info = {uint32_t(entries->size()), entries->data(), values.size() * 4, values.data()};
+  return info;
+}
+
 Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, ComputePipeline* out) {
   *out = ComputePipeline{};
   const EmbeddedShader* sh = desc.shader ? (desc.shaderLookup ? desc.shaderLookup : &findEmbeddedShader)(desc.shader) : nullptr;
@@ -79,11 +88,9 @@ Status createComputePipeline(Device& d, const ComputePipelineDesc& desc, Compute
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
     ci.stage.module = module;
     ci.stage.pName = "main";
-    std::vector<VkSpecializationMapEntry> entries(desc.specialization.size());
-    for (size_t i = 0; i < entries.size(); ++i) entries[i] = {uint32_t(i), uint32_t(i * 4), 4};
-    VkSpecializationInfo spec{uint32_t(entries.size()), entries.data(), desc.specialization.size() * 4,
-                              desc.specialization.data()};
-    if (!entries.empty()) ci.stage.pSpecializationInfo = &spec;
+    std::vector<VkSpecializationMapEntry> entries;
+    VkSpecializationInfo spec{};
+    ci.stage.pSpecializationInfo = specializationOf(desc.specialization, &entries, &spec);
     ci.layout = out->layout;
     VkResult r = d.vk.CreateComputePipelines(d.device, d.pipelineCache, 1, &ci, d.allocationCallbacks, &out->pipeline);
     d.vk.DestroyShaderModule(d.device, module, d.allocationCallbacks);

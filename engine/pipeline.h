@@ -69,6 +69,11 @@ Status createPushDescriptorLayouts(Device& device, const std::vector<VkDescripto
                                    VkDescriptorSetLayout* setLayout, VkPipelineLayout* layout);
 
 // Reads the workgroup size (OpExecutionMode LocalSize) from SPIR-V; false if absent/malformed.
+// A stage's specialization constants, value i for constant_id i (32-bit), as the create info's
+// pointer: null for none; `entries` and `info` hold what it points to.
+const VkSpecializationInfo* specializationOf(const std::vector<uint32_t>& values, std::vector<VkSpecializationMapEntry>* entries,
+                                             VkSpecializationInfo* info);
+
 bool spirvLocalSize(const uint32_t* code, size_t words, uint32_t out[3]);
 
 Status createComputePipeline(Device& device, const ComputePipelineDesc& desc, ComputePipeline* out);

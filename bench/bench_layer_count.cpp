@@ -1,4 +1,4 @@
-// The layer-count study (issue 36; docs/performance.md "How many layers"): the paper reports that
+// The layer-count study (issue 36; docs/lab/performance-notebook.md "How many layers"): the paper reports that
 // three to five layers suffice and that more add little. For 1, 2, 3, 5, 7 and 9 equal layers (and
 // the paper's 3(1-1-1) and 5(3-1-1)), the animated frames against the same wind drawn with 16
 // layers, frame by frame, still camera: the 2D method's own limit of finer slicing (delays nearly

@@ -33,7 +33,7 @@ struct GraphicsPipelineDesc {
   std::vector<VertexAttribute> attributes;
   // A second stream, binding 1, advanced per draw instance (VK_VERTEX_INPUT_RATE_INSTANCE); 0: none.
   // Per-instance data goes here rather than in a storage buffer indexed by gl_InstanceIndex, which
-  // lavapipe gathers lane by lane (docs/performance.md "Instances as a vertex stream").
+  // lavapipe gathers lane by lane (docs/lab/performance-notebook.md "Instances as a vertex stream").
   uint32_t instanceStride = 0;
   std::vector<VertexAttribute> instanceAttributes;
   std::vector<VkFormat> colorFormats;    // one per colour attachment

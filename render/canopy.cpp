@@ -210,7 +210,7 @@ void retire(CanopyContext& c, bool compositor, bool dynamics) {
 }
 
 // The host's images against the context, before anything is recorded (a refused frame records
-// nothing: docs/embedding.md "Errors").
+// nothing: docs/embedding.md "Errors, and what to do").
 Status checkFrameInputs(const CanopyContext& c, const CanopyFrameInputs& in) {
   const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
   if (!in.color.image || !in.color.view || !in.depth.image || !in.depth.view)

@@ -10,7 +10,7 @@
 // draws to a render graph (they record only when a rebuild is due). The layer images stay in
 // desc.restUse between rebuilds.
 //
-// LayeredVegetation is its parts, one concern each, each in its own header (docs/architecture.md):
+// LayeredVegetation is its parts, one concern each, each in its own header (CONTRIBUTING.md):
 // the mesh (render/layer_mesh.h), the layer images (render/layer_targets.h), the visible placement
 // (render/layer_placement.h), the re-slice scheduler (render/reslice_scheduler.h), the impostors
 // (render/impostors.h, render/impostor_gpu.h), the pipelines (below) and the statistics.
@@ -126,7 +126,7 @@ struct LayeredVegetation {
 // material textures, the translucency model and the impostors' level colours of `s`. A clear bit
 // compiles that input's code out of the fragment shader (layers_shade.glsl): lavapipe runs both
 // sides of a branch under a lane mask, so an input no material has still costs every fragment
-// (docs/performance.md "Specialised shading").
+// (docs/lab/performance-notebook.md "Specialised shading").
 uint32_t layerShadingFeatures(const LayeredVegetation& lv, const LayerSettings& s);
 
 // Splits materials, computes (or reads from the cache) the leaf roots, uploads the mesh and the

@@ -131,7 +131,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
 // launch has a fixed cost that one 8x8 tile does not amortise (CompositorDesc.tilesPerGroup).
 void main() {
   // The view's matrices read once per invocation, not in the layer loop: lavapipe reloads them lane
-  // by lane for every layer visited otherwise (docs/performance.md, "What a reprojected frame costs").
+  // by lane for every layer visited otherwise (docs/lab/performance-notebook.md, "What a reprojected frame costs").
   mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious, toSlice = view.currentToSlice;
   uint first = gl_WorkGroupID.x * pc.tilesPerGroup, end = min(first + pc.tilesPerGroup, header.instanceCount);
   for (uint k = first; k < end; ++k) compositeTile(tiles[k], toCurrent, toPrevious, toSlice);

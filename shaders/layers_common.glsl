@@ -36,7 +36,7 @@ layout(location = 1) in vec2 inNormalOct;
 layout(location = 2) in vec2 inUv;
 // The vegetation's placed copies (CanopyInstance): the draws are instanced and the instance table is
 // their per-instance stream (gpu::LayerInstance's eight vec4 in order), not a storage buffer indexed
-// by gl_InstanceIndex (docs/performance.md "Instances as a vertex stream").
+// by gl_InstanceIndex (docs/lab/performance-notebook.md "Instances as a vertex stream").
 layout(location = LAYER_INSTANCE_LOCATION) in mat4 inInstanceModel;
 layout(location = LAYER_INSTANCE_LOCATION + 4) in vec4 inInstanceNormal0;
 layout(location = LAYER_INSTANCE_LOCATION + 5) in vec4 inInstanceNormal1;

@@ -12,7 +12,7 @@ layout(location = 0) out vec4 outColor;
 
 // The inputs this pipeline's draws may meet (LAYER_FEATURE_*), specialised per model and settings
 // (render/layers.cpp shadingFeatures): lavapipe runs both sides of a branch under a lane mask, so
-// an input no draw has would still cost every fragment (docs/performance.md "Specialised shading").
+// an input no draw has would still cost every fragment (docs/lab/performance-notebook.md "Specialised shading").
 layout(constant_id = 0) const uint LAYER_FEATURES = LAYER_FEATURE_ALL;
 bool mayMeet(uint feature) { return (LAYER_FEATURES & feature) != 0u; }
 

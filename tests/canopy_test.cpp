@@ -827,7 +827,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, GoldenTest,
 // edge finds it in the guard band (no re-slice) and matches as well as the same turn mid-image
 // (the resampling's error grows with the turn: the image's local scale changes towards its edges).
 // Bounds: measured on lavapipe (depth-coverage IoU 0.972, 0.954, 0.989, 0.960, 0.956; silhouette
-// mean 0.27, 0.41, 0.22, 0.49, 0.44 px), then rounded outwards (docs/performance.md "Moving camera").
+// mean 0.27, 0.41, 0.22, 0.49, 0.44 px), then rounded outwards (docs/lab/performance-notebook.md "Moving camera: reprojected, re-sliced by its error").
 TEST_F(CanopyTest, ReprojectedLayersMatchLayersDrawnAtTheNewCamera) {
   const uint32_t w = 160, h = 120;
   const VkFormat fmt = VK_FORMAT_R16G16B16A16_SFLOAT;

@@ -34,6 +34,29 @@ echo '#include <canopy/canopy_core.h>
 int main() { canopy::Status s; canopy::ResourceState r; (void)r; return s.ok() ? 0 : 1; }' > "$work/core_alone.cpp"
 c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/core_alone.cpp"
 echo "the public headers compile alone (C++17, -I$inc only)"
+# The version policy (docs/embedding.md "Versions"): below 1.0 a minor version breaks the API, so
+# a host asking for an older minor version (or a newer one) is refused at configure time.
+major=$(sed -n 's/^#define CANOPY_VERSION_MAJOR \([0-9]*\)$/\1/p' "$inc/canopy/canopy_core.h")
+minor=$(sed -n 's/^#define CANOPY_VERSION_MINOR \([0-9]*\)$/\1/p' "$inc/canopy/canopy_core.h")
+for asked in "$major.$((minor - 1))" "$major.$((minor + 1))" "$major.$minor"; do
+  mkdir -p "$work/asks_$asked"
+  printf 'cmake_minimum_required(VERSION 3.20)\nproject(AsksCanopy LANGUAGES CXX)\nfind_package(Canopy %s REQUIRED)\n' "$asked" \
+    > "$work/asks_$asked/CMakeLists.txt"
+  if cmake -S "$work/asks_$asked" -B "$work/asks_$asked/build" -DCMAKE_PREFIX_PATH="$work/prefix" > "$work/asks_$asked.log" 2>&1; then
+    result=accepted
+  else
+    result=refused
+  fi
+  expected=refused
+  [ "$asked" = "$major.$minor" ] && expected=accepted
+  echo "find_package(Canopy $asked) against the installed $major.$minor: $result"
+  if [ "$result" != "$expected" ]; then
+    echo "expected $expected; the configure log:" >&2
+    cat "$work/asks_$asked.log" >&2
+    exit 1
+  fi
+done
+grep -q "version: $major.$minor" "$work/asks_$major.$((minor - 1)).log" || { echo "the refusal does not name the installed version" >&2; cat "$work/asks_$major.$((minor - 1)).log" >&2; exit 1; }
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" -DCANOPY_SOURCE_DIR="$src" >/dev/null
 cmake --build "$work/build" >/dev/null

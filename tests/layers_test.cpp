@@ -1188,7 +1188,7 @@ TEST_F(LayersTest, NormalMapsAndTransmissionTexturesEnterTheShading) {
 }
 
 // The layer draws' fragment shader is specialised for what the model and the settings can meet
-// (docs/performance.md "Specialised shading"): a settings change that changes it switches to
+// (docs/lab/performance-notebook.md "Specialised shading"): a settings change that changes it switches to
 // pipelines made for the new settings, keeps the old ones, and a switch back reuses them; each
 // switch shades as the CPU evaluation of the model in force.
 TEST_F(LayersTest, SpecialisedShadingFollowsTheModelAndTheSettings) {

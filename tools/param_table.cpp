@@ -34,6 +34,17 @@ std::string defaultText(const char* text) {
   return s;
 }
 
+// A table cell: a '|' would end the cell in Markdown (GitHub's tables, also inside a code span), so
+// each is escaped with a backslash, which renders as the bar.
+std::string cell(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '|') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string paramTableMarkdown() {
@@ -57,8 +68,8 @@ std::string paramTableMarkdown() {
       out += std::string("\n## ") + owner + "\n\n| field | type | default | allowed | unit | what |\n|---|---|---|---|---|---|\n";
     }
     const std::string unit = p.check == ParamCheck::Enum ? std::string() : p.unit;
-    out += std::string("| `") + p.name + "` | `" + p.type + "` | `" + defaultText(p.defaultText) + "` | " + allowed(p) +
-           " | " + unit + " | " + p.doc + " |\n";
+    out += "| `" + cell(p.name) + "` | `" + cell(p.type) + "` | `" + cell(defaultText(p.defaultText)) + "` | " +
+           cell(allowed(p)) + " | " + cell(unit) + " | " + cell(p.doc) + " |\n";
   }
   return out;
 }

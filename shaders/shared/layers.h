@@ -133,7 +133,7 @@ struct LayerLeafRoot {
 };
 CANOPY_SIZE_CHECK(LayerLeafRoot, 16)
 
-// One placed copy of the model (CanopyInstance; docs/embedding.md "Where the plant stands"): the
+// One placed copy of the model (CanopyInstance; docs/embedding.md "Several views, several plants, files"): the
 // layer draws are instanced, gl_InstanceIndex indexing this table. World position = model * p,
 // world normal = normalMatrix * n (the inverse transpose of model's linear part, so a non-uniform
 // scale or a mirror keeps normals perpendicular and the leaf's front side where it was).

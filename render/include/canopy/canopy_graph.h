@@ -1,5 +1,6 @@
 #pragma once
-// Canopy as one pass of a host engine's render graph (docs/design.md, "Embedding contract").
+// Canopy as one pass of a host engine's render graph (docs/embedding.md "In a host's render graph";
+// how Canopy keeps it: docs/design.md "Embedding contract").
 //
 // recordCanopy() (<canopy/canopy.h>) places every barrier itself, from the states the host says its
 // images arrive in and must leave in. A host whose own render graph places barriers declares
@@ -37,7 +38,8 @@ Status canopyPassGroupUses(const CanopyContext* context, std::vector<CanopyTarge
 // Records one whole frame as recordCanopy() does, for a host graph that has placed `inputs`'
 // images in the states of canopyPassGroupUses() (their `current` and `final` fields are ignored).
 // Records into `cmd` only; nothing is submitted and nothing waits. Same thread rules as
-// recordCanopy: one thread per context at a time, contexts sharing a simulation on one thread.
+// recordCanopy (<canopy/canopy.h>): no two calls on one Device or its contexts run concurrently,
+// whichever contexts they name (docs/embedding.md "Threads").
 Status recordCanopyPassGroup(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
 }  // namespace canopy

@@ -340,10 +340,15 @@ Status checkVersion(uint32_t header) {
   auto text = [](uint32_t v) {
     return std::to_string(v >> 22) + "." + std::to_string((v >> 12) & 0x3ff) + "." + std::to_string(v & 0xfff);
   };
-  if ((header >> 22) != (lib >> 22) || ((header >> 12) & 0x3ff) > ((lib >> 12) & 0x3ff))
-    return Status::error(Result::VersionMismatch, "createCanopy: the host was compiled against Canopy " + text(header) +
-                                                      " but the library is " + text(lib) +
-                                                      " (the major versions must match and the library's minor version be at least the header's)");
+  // docs/embedding.md "Versions": below 1.0 a minor version breaks the API (its structs' layout
+  // too), so 0.x needs the same minor version; from 1.0 on the library may be newer.
+  const uint32_t major = header >> 22, minor = (header >> 12) & 0x3ff, libMinor = (lib >> 12) & 0x3ff;
+  const bool fits = major == (lib >> 22) && (major == 0 ? minor == libMinor : minor <= libMinor);
+  if (!fits)
+    return Status::error(Result::VersionMismatch,
+                         "createCanopy: the host was compiled against Canopy " + text(header) + " but the library is " + text(lib) +
+                             (major == 0 ? " (below 1.0 the major and minor versions must match)"
+                                         : " (the major versions must match and the library's minor version be at least the header's)"));
   return Status();
 }
 

@@ -59,7 +59,7 @@ done
 grep -q "version: $major.$minor" "$work/asks_$major.$((minor - 1)).log" || { echo "the refusal does not name the installed version" >&2; cat "$work/asks_$major.$((minor - 1)).log" >&2; exit 1; }
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$work/prefix" -DCANOPY_SOURCE_DIR="$src" >/dev/null
-cmake --build "$work/build" >/dev/null
+cmake --build "$work/build" > "$work/build.log" 2>&1 || { cat "$work/build.log" >&2; exit 1; }
 "$work/build/canopy_consumer"
 # The example host, compiled against the installed prefix: its own device, 2 frames in flight,
 # reverse-Z, validation on, its self-check.

@@ -118,6 +118,15 @@ int main() {
   s = canopy::createCanopy(dev, model, future, &ctx);
   if (s.ok() || s.code() != canopy::Result::VersionMismatch) return std::fprintf(stderr, "consumer: version mismatch not refused\n"), 1;
   std::printf("consumer: refused as expected: %s\n", s.message().c_str());
+  // Below 1.0 an older minor version is another API too (docs/embedding.md "Versions").
+  if (CANOPY_VERSION_MAJOR == 0 && CANOPY_VERSION_MINOR > 0) {
+    canopy::CanopyDesc older = desc;
+    older.headerVersion = CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR - 1, 0);
+    s = canopy::createCanopy(dev, model, older, &ctx);
+    if (s.ok() || s.code() != canopy::Result::VersionMismatch)
+      return std::fprintf(stderr, "consumer: an older minor header version not refused\n"), 1;
+    std::printf("consumer: refused as expected: %s\n", s.message().c_str());
+  }
 
   s = canopy::createCanopy(dev, model, desc, &ctx);
   canopy::destroyModel(model);

@@ -9,7 +9,8 @@
 #include <vulkan/vulkan.h>
 
 // The version this header declares. createCanopy() refuses a library of another major version, or
-// an older minor version, naming both (a host built against 0.2 cannot run on a 0.1 library).
+// an older minor version, naming both; below 1.0 a minor version breaks the API, so 0.x needs the
+// library's own minor version (docs/embedding.md "Versions").
 #define CANOPY_VERSION_MAJOR 0
 #define CANOPY_VERSION_MINOR 7
 #define CANOPY_VERSION_PATCH 0

@@ -1,6 +1,5 @@
-#include "render/canopy.h"
-
-#include "render/gltf_loader.h"
+#include "render/canopy_context.h"
+#include "render/host_images.h"
 
 #include <canopy/canopy_graph.h>
 
@@ -17,55 +16,6 @@
 #include "render/reprojection.h"
 
 namespace canopy {
-
-// One simulation, possibly followed by several contexts (CanopyDesc.shareSimulationWith): it is
-// stepped once per host frame number by whichever context records first, and freed with the
-// last context that follows it.
-struct SharedSimulation {
-  Simulation sim;
-  PreparedList pending;  // its first clear, recorded by whichever context records first
-  uint64_t lastStepFrame = 0;
-  bool everStepped = false;
-  ~SharedSimulation() {
-    if (sim.device) dropPreparedWork(*sim.device, pending);
-    destroySimulation(sim);
-  }
-};
-
-struct RecordGraph {
-  std::shared_ptr<rg::RenderGraph> graph;  // compiled and realized
-  CanopyFrameInputs inputs;                // the host images and states it was built for
-  uint64_t generation = 0;                 // CanopyContext::generation at build
-  uint64_t lastUse = 0;
-};
-constexpr size_t kMaxRecordGraphs = 4;
-
-struct CanopyContext {
-  Device* device = nullptr;
-  CanopyDesc desc;
-  CanopyParams params;
-  LayeredVegetation layers;
-  std::shared_ptr<SharedSimulation> shared;
-  bool holdStep = false;  // this context's record of the simulation step: nothing (see SharedSimulation)
-  LayerDynamics dynamics;
-  Compositor compositor;
-  PerVertexAnimation perVertex;  // CanopyDesc.allowPerVertex only
-  bool planeFixed = false;
-  SimulationPlane plane;
-  uint64_t generation = 0;
-  uint64_t frames = 0;
-  bool layersRebuilt = false;
-  bool cut = false;       // the last frame was a camera cut
-  gpu::AnimFrame last{};  // the previous frame's dynamics constants (motion-vector validity)
-  LayerView lastView;     // the previous frame's camera (motion vectors: the camera's motion)
-  // recordCanopy(): one compiled graph per set of host images it has seen recently (a host that
-  // renders into its swapchain images cycles through 2-4 of them), least recently used first out.
-  std::vector<RecordGraph> graphs;
-  uint64_t graphUses = 0;
-  uint64_t graphBuilds = 0;
-  PreparedList pending;  // the per-vertex baseline's uploads not yet recorded (host devices: the first frame records them)
-  std::vector<CanopyTargetUse> groupUses;  // <canopy/canopy_graph.h>: how the passes use the host's images
-};
 
 namespace {
 
@@ -111,64 +61,10 @@ Status validateParams(const CanopyContext& c, const CanopyParams& p) {
   return Status();
 }
 
-bool sameState(const rg::State& a, const rg::State& b) {
-  return a.stage == b.stage && a.access == b.access && a.layout == b.layout;
-}
-bool sameImage(const CanopyImage& a, const CanopyImage& b) {
-  return a.image == b.image && a.view == b.view && sameState(a.current, b.current) && sameState(a.final, b.final) &&
-         a.usage == b.usage && a.format == b.format && a.samples == b.samples && a.viewAspects == b.viewAspects;
-}
 
-std::string usageBitNames(VkImageUsageFlags bits) {
-  const std::pair<VkImageUsageFlags, const char*> names[] = {
-      {VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, "VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT"},
-      {VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, "VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT"},
-      {VK_IMAGE_USAGE_SAMPLED_BIT, "VK_IMAGE_USAGE_SAMPLED_BIT"}};
-  std::string s;
-  for (const auto& [bit, name] : names)
-    if (bits & bit) s += (s.empty() ? "" : " | ") + std::string(name);
-  return s;
-}
 
-std::string handleText(VkImage image) {
-  char h[32];
-  std::snprintf(h, sizeof h, "0x%llx", (unsigned long long)(uintptr_t)image);
-  return h;
-}
 
-// docs/embedding.md "Host images": what the host declared against what Canopy does with the image.
-Status checkHostImage(const char* which, const CanopyImage& img, VkFormat format, VkImageUsageFlags need,
-                      VkImageAspectFlags aspect, const char* why) {
-  const std::string name = std::string("CanopyFrameInputs.") + which + " (VkImage " + handleText(img.image) + ")";
-  if (img.usage == 0)
-    return Status::error(Result::InvalidArgument, name + ": usage is not declared; set it to the VkImageCreateInfo.usage the image "
-                                                         "was created with (Canopy needs " + usageBitNames(need) + ")");
-  if ((img.usage & need) != need)
-    return Status::error(Result::InvalidArgument, name + ": usage lacks " + usageBitNames(need & ~img.usage) + "; create the image with it (" +
-                                                         why + ")");
-  if (img.format != format)
-    return Status::error(Result::InvalidArgument, name + ": format " + std::to_string(int(img.format)) + " is not the CanopyDesc format " +
-                                                         std::to_string(int(format)) + " the context was created for");
-  if (img.samples != VK_SAMPLE_COUNT_1_BIT)
-    return Status::error(Result::InvalidArgument, name + ": " + std::to_string(int(img.samples)) +
-                                                         " samples; Canopy draws into single-sampled targets (resolve the host's first)");
-  if (img.viewAspects != 0 && img.viewAspects != aspect)
-    return Status::error(Result::InvalidArgument, name + ": the view's aspects are " + std::to_string(img.viewAspects) + ", Canopy needs " +
-                                                         (aspect == VK_IMAGE_ASPECT_DEPTH_BIT ? "the depth aspect only (a depth-only view of a "
-                                                                                               "depth-stencil image)"
-                                                                                             : "the colour aspect"));
-  return Status();
-}
 
-Image hostImage(const CanopyImage& h, VkFormat format, uint32_t width, uint32_t height) {
-  Image img;
-  img.image = h.image;
-  img.view = h.view;
-  img.format = format;
-  img.extent = {width, height, 1};
-  img.aspect = aspectOf(format);
-  return img;
-}
 
 // The host's camera in Canopy's standard depth convention (0 = near): a reverse-Z projection is
 // mirrored in depth, z_clip' = w_clip - z_clip (docs/design.md, "Embedding contract"), so the
@@ -184,98 +80,29 @@ LayerView standardView(const CanopyContext& c, const CanopyCamera& cam) {
   return v;
 }
 
-// recordCanopy() graphs, freed once no frame in flight records from them.
-void retireGraphs(CanopyContext& c, std::vector<RecordGraph> graphs) {
-  if (graphs.empty()) return;
-  Device* d = c.device;
-  auto old = std::make_shared<std::vector<RecordGraph>>(std::move(graphs));
-  deferRelease(*d, [d, old] {
-    for (RecordGraph& g : *old) g.graph->release(*d);
-  });
-}
 
-// Objects of the size-dependent parts, freed once no frame in flight reads them.
-void retire(CanopyContext& c, bool compositor, bool dynamics) {
+// The size-dependent parts (compositor, dynamics) and the graphs recorded from them, freed once no
+// frame in flight reads them.
+void retireSizeDependentParts(CanopyContext& c) {
   Device* d = c.device;
-  retireGraphs(c, std::move(c.graphs));
-  c.graphs.clear();
+  retireRecordGraphs(c, std::move(c.recordGraphs));
+  c.recordGraphs.clear();
   auto comp = std::make_shared<Compositor>();
   auto dyn = std::make_shared<LayerDynamics>();
-  if (compositor) std::swap(*comp, c.compositor);
-  if (dynamics) std::swap(*dyn, c.dynamics);
+  std::swap(*comp, c.compositor);
+  std::swap(*dyn, c.dynamics);
   deferRelease(*d, [comp, dyn] {
     destroyCompositor(*comp);
     destroyLayerDynamics(*dyn);
   });
 }
 
-// The host's images against the context, before anything is recorded (a refused frame records
-// nothing: docs/embedding.md "Errors, and what to do").
-Status checkFrameInputs(const CanopyContext& c, const CanopyFrameInputs& in) {
-  const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
-  if (!in.color.image || !in.color.view || !in.depth.image || !in.depth.view)
-    return Status::error("recordCanopy: the colour and depth images and views are required");
-  if (motion != (in.motion.image != VK_NULL_HANDLE) || (motion && !in.motion.view))
-    return Status::error(motion ? "recordCanopy: CanopyDesc.motionFormat is set but no motion image (and view) was given"
-                                : "recordCanopy: a motion image was given but CanopyDesc.motionFormat is UNDEFINED");
-  // The host's declarations, checked once per set of images (a graph is built for each).
-  CANOPY_TRY(checkHostImage("color", in.color, c.desc.colorFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
-                            "Canopy blends the vegetation into it as a colour attachment"));
-  CANOPY_TRY(checkHostImage("depth", in.depth, c.desc.depthFormat,
-                            VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, VK_IMAGE_ASPECT_DEPTH_BIT,
-                            "Canopy reads the host's depth to put the scene between its layers, then writes the vegetation's"));
-  if (motion)
-    CANOPY_TRY(checkHostImage("motion", in.motion, c.desc.motionFormat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, VK_IMAGE_ASPECT_COLOR_BIT,
-                              "Canopy writes the vegetation's motion as a colour attachment"));
-  return Status();
-}
 
-// `in` passed checkFrameInputs (recordCanopy checks images it has no graph for).
-Status buildRecordGraph(CanopyContext& c, const CanopyFrameInputs& in, RecordGraph** out) {
-  const bool motion = c.desc.motionFormat != VK_FORMAT_UNDEFINED;
-  // Graphs of replaced resources, and the least recently used beyond the cache size, may still be
-  // executing: they are released frames later.
-  std::vector<RecordGraph> keep, drop;
-  for (RecordGraph& g : c.graphs) (g.generation == c.generation ? keep : drop).push_back(std::move(g));
-  if (keep.size() >= kMaxRecordGraphs) {
-    auto lru = std::min_element(keep.begin(), keep.end(),
-                                [](const RecordGraph& a, const RecordGraph& b) { return a.lastUse < b.lastUse; });
-    drop.push_back(std::move(*lru));
-    keep.erase(lru);
-  }
-  c.graphs = std::move(keep);
-  retireGraphs(c, std::move(drop));
-  auto graph = std::make_shared<rg::RenderGraph>();
-  const uint32_t w = c.desc.width, h = c.desc.height;
-  auto import = [&](const char* name, const CanopyImage& img, VkFormat format, rg::ResourceId* id) -> Status {
-    ImageDesc d;
-    d.format = format;
-    d.width = w;
-    d.height = h;
-    *id = graph->importImage(name, d, img.current, img.final);
-    return graph->bindImage(*id, hostImage(img, format, w, h));
-  };
-  CompositeTargets t;
-  CANOPY_TRY(import("host: colour", in.color, c.desc.colorFormat, &t.color));
-  CANOPY_TRY(import("host: depth", in.depth, c.desc.depthFormat, &t.depth));
-  if (motion) CANOPY_TRY(import("host: motion", in.motion, c.desc.motionFormat, &t.motion));
-  CANOPY_TRY(addCanopyPasses(&c, *graph, t));
-  CANOPY_TRY(graph->compile());
-  CANOPY_TRY(graph->realize(*c.device));
-  RecordGraph r;
-  r.graph = std::move(graph);
-  r.inputs = in;
-  r.generation = c.generation;
-  c.graphs.push_back(std::move(r));
-  c.graphBuilds++;
-  *out = &c.graphs.back();
-  return Status();
-}
 
 void destroyNow(CanopyContext* c) {
   if (c->device) {
-    dropPreparedWork(*c->device, c->pending);
-    for (RecordGraph& g : c->graphs) g.graph->release(*c->device);
+    dropPreparedWork(*c->device, c->perVertexUploads);
+    for (RecordGraph& g : c->recordGraphs) g.graph->release(*c->device);
     destroyCompositor(c->compositor);
     destroyPerVertex(c->perVertex);
     destroyLayerDynamics(c->dynamics);
@@ -293,7 +120,7 @@ Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTarg
   // generation, so graphs are rebuilt).
   if (c->params.animation == AnimationMode::PerVertex) return addPerVertexPasses(c->perVertex, c->layers, g, targets);
   SimulationResources sr;
-  CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->holdStep));
+  CANOPY_TRY(addSimulationPasses(c->shared->sim, g, &sr, &c->skipSimulationStep));
   LayerResources lr;
   CANOPY_TRY(addLayerPasses(c->layers, g, &lr));
   rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
@@ -304,7 +131,7 @@ Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTarg
 
 // How the passes use the host's images, from a graph declared with placeholder imports (never
 // realized): the union of each image's uses and the layout the last one leaves.
-Status computeGroupUses(CanopyContext& c) {
+Status derivePassGroupUses(CanopyContext& c) {
   rg::RenderGraph probe;
   ImageDesc d;
   d.width = c.desc.width;
@@ -456,13 +283,13 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
-      CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->pending));
-    std::vector<glm::vec4>().swap(c->layers.mesh.leafRootPositions);  // uploaded (or not needed)
+      CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
+    releaseLeafRootPositions(c->layers.mesh);  // uploaded (or not needed)
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
     // written, motion) are among them.
     const AnimationMode mode = c->params.animation;
     c->params.animation = AnimationMode::Layers2D;
-    Status uses = computeGroupUses(*c);
+    Status uses = derivePassGroupUses(*c);
     c->params.animation = mode;
     return uses;
   }();
@@ -510,7 +337,7 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
         // Back to the layers: they are as old as the last 2D frame; re-slice at once, and no
         // motion vectors against a displacement from before the switch.
         requestReslice(c->layers, "animation mode", true);
-        c->last = gpu::AnimFrame{};
+        c->previousAnimFrame = gpu::AnimFrame{};
       } else {
         // To the baseline: its last frame's camera and time are from before the switch, so its
         // first frame carries no motion (as after a camera cut).
@@ -519,9 +346,9 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
     }
     if (p.customPlane) {
       c->plane = p.plane;
-      c->planeFixed = true;
+      c->planeChosen = true;
     } else if (c->params.customPlane) {
-      c->planeFixed = false;  // back to the default: taken from the next frame's camera
+      c->planeChosen = false;  // back to the default: taken from the next frame's camera
     }
     c->params = p;
     return Status();
@@ -544,7 +371,7 @@ Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& i
     CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases).context("setCanopyInstances"));
     // The default simulation plane stands at the vegetation's depth and its tile spans the view
     // there (eq. 4's domain units): taken again from the next frame for the copies' new bounds.
-    if (!c->params.customPlane) c->planeFixed = false;
+    if (!c->params.customPlane) c->planeChosen = false;
     // The per-vertex baseline's motion table holds one block per copy: sized again, graphs rebuilt.
     if (c->desc.allowPerVertex) {
       CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(models.size())).context("setCanopyInstances"));
@@ -562,7 +389,7 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
     if (width == c->desc.width && height == c->desc.height) return Status();
     Device& d = *c->device;
     const CompositorDesc before = c->compositor.desc;
-    retire(*c, true, true);  // no wait: the old objects go once the frames using them completed
+    retireSizeDependentParts(*c);  // no wait: the old objects go once the frames using them completed
     c->desc.width = width;
     c->desc.height = height;
     c->perVertex.desc.width = width;
@@ -577,7 +404,7 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
       CANOPY_TRY(createCompositor(d, cd, &c->compositor));
       // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
       // motion vectors against (beginCanopyFrame sees the grid change).
-      c->last = gpu::AnimFrame{};
+      c->previousAnimFrame = gpu::AnimFrame{};
       return createLayerDynamics(d, compositorLayerWidth(cd), compositorLayerHeight(cd), c->desc.minCellSize, c->desc.maxLayers,
                                  &c->dynamics);
     }();
@@ -588,14 +415,14 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
 
 // docs/design.md: unless the host set one, the plane of the first view, one tile over the region
 // visible at the vegetation's centre depth.
-static void fixPlane(CanopyContext& c, const LayerView& view) {
-  if (c.planeFixed) return;
+static void chooseSimulationPlane(CanopyContext& c, const LayerView& view) {
+  if (c.planeChosen) return;
   const LayerInstances& lv = c.layers.instances;  // the world bounds of every copy
   const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
   const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));
   const float radius = 0.5f * glm::length(lv.boundsMax - lv.boundsMin);
   c.plane = simulationPlaneFromView(view, std::max(depth, std::max(radius, 1e-3f)));
-  c.planeFixed = true;
+  c.planeChosen = true;
 }
 
 Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
@@ -618,9 +445,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (c->params.animation == AnimationMode::PerVertex) {
     // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's
     // direction comes from the simulation plane, fixed as the 2D method fixes it.
-    fixPlane(*c, standardView(*c, f.camera));
+    chooseSimulationPlane(*c, standardView(*c, f.camera));
     CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, c->params, c->plane, f.camera, f.dt, f.cameraCut));
-    c->cut = f.cameraCut;
     c->layersRebuilt = false;
     c->frames++;
     return Status();
@@ -629,19 +455,18 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   Simulation& sim = sh.sim;
   // One step per host frame for a shared simulation, by the first context recorded in it.
   const bool stepHere = !sh.everStepped || sh.lastStepFrame != frameNumber;
-  c->holdStep = !stepHere || f.dt == 0.0f;
-  sim.paused = c->holdStep;
+  c->skipSimulationStep = !stepHere || f.dt == 0.0f;
+  sim.paused = c->skipSimulationStep;
   if (stepHere) {
     sh.everStepped = true;
     sh.lastStepFrame = frameNumber;
     if (f.dt > 0.0f) CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
   }
   const LayerView view = standardView(*c, f.camera);
-  c->cut = f.cameraCut;
   if (f.cameraCut) requestReslice(c->layers, "camera cut", true);
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
-  fixPlane(*c, view);
+  chooseSimulationPlane(*c, view);
   // The dynamics run in the slice camera's pixels, where the layers and their warp grid are
   // (docs/design.md "Layers: reprojection"); the composite maps the current camera into them.
   const LayerView& slice = c->layers.visible.view;
@@ -662,8 +487,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
   CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
   const gpu::AnimFrame& a = c->dynamics.current;
-  const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->last.gridX && a.gridY == c->last.gridY &&
-                           a.layerCount == c->last.layerCount;
+  const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->previousAnimFrame.gridX && a.gridY == c->previousAnimFrame.gridY &&
+                           a.layerCount == c->previousAnimFrame.layerCount;
   const VkRect2D footprint = layerFootprint(c->layers);
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.mesh.hasRigid, c->layers.reslice.occupancyDirty,
                               motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
@@ -694,7 +519,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     setCompositeReprojection(c->compositor, &cv);
   }
   c->lastView = view;
-  c->last = a;
+  c->previousAnimFrame = a;
   c->layersRebuilt = rebuild;
   c->frames++;
   return Status();
@@ -702,7 +527,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
-  if (!c->pending.empty() || !c->shared->pending.empty() || layerWorkPending(c->layers))
+  if (!c->perVertexUploads.empty() || !c->shared->pending.empty() || layerWorkPending(c->layers))
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
   return declarePasses(*c, g, targets);
@@ -724,19 +549,15 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
     if (!cmd) return Status::error("recordCanopy: null command buffer");
     // The graph compiled for these images; images not seen before are checked before anything is
     // recorded or stepped (beginCanopyFrame changes no graph).
-    RecordGraph* graph = nullptr;
-    for (RecordGraph& g : c->graphs)
-      if (g.generation == c->generation && sameImage(g.inputs.color, in.color) && sameImage(g.inputs.depth, in.depth) &&
-          sameImage(g.inputs.motion, in.motion))
-        graph = &g;
-    if (!graph) CANOPY_TRY(checkFrameInputs(*c, in));
+    RecordGraph* graph = findRecordGraph(*c, in);
+    if (!graph) CANOPY_TRY(checkFrameInputs(c->desc, in));
     CANOPY_TRY(beginCanopyFrame(c, in.frame));
     // Uploads and clears prepared since the last frame, before anything reads them.
     CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
     CANOPY_TRY(flushLayerWork(c->layers, cmd));
-    CANOPY_TRY(flushPreparedWork(*c->device, c->pending, cmd));
+    CANOPY_TRY(flushPreparedWork(*c->device, c->perVertexUploads, cmd));
     if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
-    graph->lastUse = ++c->graphUses;
+    graph->lastUse = ++c->recordGraphUses;
     return graph->graph->record(cmd);
   });
 }
@@ -768,7 +589,7 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.frames = c->frames;
   s.layersRebuilt = c->layersRebuilt;
   s.resourceGeneration = c->generation;
-  s.internalGraphBuilds = c->graphBuilds;
+  s.internalGraphBuilds = c->recordGraphBuilds;
   s.pendingReleases = c->device->pending.size();
   s.deviceBytes = c->device->allocator->liveBytes;
   s.peakDeviceBytes = c->device->allocator->peakLiveBytes;
@@ -787,167 +608,5 @@ LayeredVegetation& canopyLayers(CanopyContext* c) { return c->layers; }
 LayerDynamics& canopyDynamics(CanopyContext* c) { return c->dynamics; }
 Simulation& canopySimulation(CanopyContext* c) { return c->shared->sim; }
 Compositor& canopyCompositor(CanopyContext* c) { return c->compositor; }
-
-// ---- Models ---------------------------------------------------------------------------------
-
-Status loadModel(const std::string& path, const GltfLoadOptions& options, Model** out) {
-  return guardApi("loadModel", [&]() -> Status {
-    if (!out) return Status::error("loadModel: out is null");
-    *out = nullptr;
-    auto* m = new (std::nothrow) Model();
-    if (!m) return Status::error(Result::OutOfHostMemory, "loadModel: out of host memory");
-    Status s = loadGltf(path, options, &m->data);
-    if (!s.ok()) {
-      delete m;
-      return s.code() == Result::InvalidArgument ? Status::error(Result::InvalidModel, s.message()) : s;
-    }
-    *out = m;
-    return Status();
-  });
-}
-
-Status createModel(const MeshDesc& desc, Model** out) {
-  return guardApi("createModel", [&]() -> Status {
-    if (!out) return Status::error("createModel: out is null");
-    *out = nullptr;
-    const std::string what = "MeshDesc '" + desc.name + "'";
-    if (!desc.positions || desc.vertexCount == 0) return Status::error(Result::InvalidModel, what + ": no positions");
-    if (!desc.indices || desc.indexCount == 0 || desc.indexCount % 3 != 0)
-      return Status::error(Result::InvalidModel, what + ": indexCount = " + std::to_string(desc.indexCount) +
-                                                     " is not a positive multiple of 3 (or indices is null)");
-    const uint64_t triangles = desc.indexCount / 3;
-    if (desc.triangleMaterials && (desc.materialCount == 0 || !desc.materials))
-      return Status::error(Result::InvalidModel, what + ": triangleMaterials needs materials (materialCount >= 1)");
-    if (desc.imageCount && !desc.images) return Status::error(Result::InvalidModel, what + ": imageCount without images");
-    if ((desc.vertexBranches != nullptr) != (desc.vertexW != nullptr) || (desc.vertexBranches && !desc.branches) ||
-        (desc.branchCount && !desc.branches))
-      return Status::error(Result::InvalidModel,
-                           what + ": a branch hierarchy needs vertexBranches, vertexW and branches (branchCount >= 1) together");
-    auto m = std::unique_ptr<Model>(new (std::nothrow) Model());
-    if (!m) return Status::error(Result::OutOfHostMemory, "createModel: out of host memory");
-    VegetationModel& v = m->data;
-    try {
-      v.positions.resize(desc.vertexCount);
-      for (uint32_t i = 0; i < desc.vertexCount; ++i) {
-        const glm::vec3 p(desc.positions[3 * i], desc.positions[3 * i + 1], desc.positions[3 * i + 2]);
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-          return Status::error(Result::InvalidModel, what + ": position " + std::to_string(i) + " is not finite");
-        v.positions[i] = p;
-      }
-      v.indices.assign(desc.indices, desc.indices + desc.indexCount);
-      for (uint64_t i = 0; i < desc.indexCount; ++i)
-        if (v.indices[i] >= desc.vertexCount)
-          return Status::error(Result::InvalidModel, what + ": indices[" + std::to_string(i) + "] = " +
-                                                         std::to_string(v.indices[i]) + " is not below vertexCount " +
-                                                         std::to_string(desc.vertexCount));
-      v.uvs.assign(desc.vertexCount, glm::vec2(0.0f));
-      if (desc.uvs)
-        for (uint32_t i = 0; i < desc.vertexCount; ++i) v.uvs[i] = {desc.uvs[2 * i], desc.uvs[2 * i + 1]};
-      v.normals.assign(desc.vertexCount, glm::vec3(0.0f));
-      if (desc.normals) {
-        for (uint32_t i = 0; i < desc.vertexCount; ++i) {
-          const glm::vec3 n(desc.normals[3 * i], desc.normals[3 * i + 1], desc.normals[3 * i + 2]);
-          const float len = glm::length(n);
-          v.normals[i] = std::isfinite(len) && len > 0 ? n / len : glm::vec3(0, 1, 0);
-        }
-      } else {
-        // Area-weighted face normals, as the glTF loader computes them for files without normals.
-        for (uint64_t t = 0; t < triangles; ++t) {
-          const uint32_t a = v.indices[3 * t], b = v.indices[3 * t + 1], cc = v.indices[3 * t + 2];
-          const glm::vec3 n = glm::cross(v.positions[b] - v.positions[a], v.positions[cc] - v.positions[a]);
-          v.normals[a] += n;
-          v.normals[b] += n;
-          v.normals[cc] += n;
-        }
-        for (glm::vec3& n : v.normals) n = glm::length(n) > 0 ? glm::normalize(n) : glm::vec3(0, 1, 0);
-      }
-      for (uint32_t i = 0; i < desc.imageCount; ++i) {
-        const MeshImage& im = desc.images[i];
-        if (im.width < 1 || im.height < 1 || im.width > 16384 || im.height > 16384 || !im.rgba)
-          return Status::error(Result::InvalidModel, what + ": images[" + std::to_string(i) + "] is " +
-                                                         std::to_string(im.width) + "x" + std::to_string(im.height) +
-                                                         " (1..16384 per side, with texels)");
-        ModelImage mi;
-        mi.name = "image " + std::to_string(i);
-        mi.width = im.width;
-        mi.height = im.height;
-        mi.rgba.assign(im.rgba, im.rgba + size_t(im.width) * im.height * 4);
-        v.images.push_back(std::move(mi));
-      }
-      const uint32_t materialCount = std::max(desc.materialCount, 1u);
-      for (uint32_t i = 0; i < desc.materialCount; ++i) {
-        const MeshMaterial& mm = desc.materials[i];
-        if (mm.image < -1 || mm.image >= int32_t(desc.imageCount))
-          return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) + "].image = " +
-                                                         std::to_string(mm.image) + " is outside -1.." +
-                                                         std::to_string(int32_t(desc.imageCount) - 1));
-        if (!(mm.alphaCutoff >= 0.0f && mm.alphaCutoff <= 1.0f) || uint32_t(mm.alphaMode) > 2)
-          return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
-                                                         "]: alphaCutoff outside [0, 1] or an unknown alphaMode");
-        ModelMaterial mat;
-        mat.name = mm.name;
-        mat.baseColorFactor = {mm.baseColor[0], mm.baseColor[1], mm.baseColor[2], mm.baseColor[3]};
-        mat.baseColorImage = mm.image;
-        mat.alphaMode = mm.alphaMode;
-        mat.alphaCutoff = mm.alphaCutoff;
-        mat.doubleSided = mm.doubleSided;
-        v.materials.push_back(mat);
-      }
-      // The loader's convention: the file's materials, then one default material last.
-      ModelMaterial fallback;
-      fallback.name = "default";
-      v.materials.push_back(fallback);
-      v.triangleMaterial.assign(triangles, desc.triangleMaterials ? 0u : uint32_t(v.materials.size() - 1));
-      if (desc.triangleMaterials) {
-        for (uint64_t t = 0; t < triangles; ++t) {
-          if (desc.triangleMaterials[t] >= materialCount)
-            return Status::error(Result::InvalidModel, what + ": triangleMaterials[" + std::to_string(t) + "] = " +
-                                                           std::to_string(desc.triangleMaterials[t]) +
-                                                           " is not below materialCount " + std::to_string(desc.materialCount));
-          v.triangleMaterial[t] = desc.triangleMaterials[t];
-        }
-      }
-      if (desc.vertexBranches) {
-        // Checked for consistency (parents, levels, axes, indices) by createCanopy's
-        // validateBendHierarchy; here only what the packing needs.
-        for (uint32_t i = 0; i < desc.branchCount; ++i) {
-          const MeshBranch& b = desc.branches[i];
-          v.branches.push_back(gpu::BendBranch{toGlm(b.origin), b.parent, toGlm(b.axis), b.level});
-        }
-        v.bend.resize(desc.vertexCount);
-        for (uint32_t i = 0; i < desc.vertexCount; ++i) {
-          uint32_t w = 0;
-          for (uint32_t k = 0; k < 4; ++k) {
-            const float x = desc.vertexW[4 * i + k];
-            if (!(x >= 0.0f && x <= 1.0f))
-              return Status::error(Result::InvalidModel, what + ": vertexW[" + std::to_string(4 * i + k) + "] = " +
-                                                             std::to_string(x) + " is outside [0, 1]");
-            w |= uint32_t(std::lround(x * 255.0f)) << (8 * k);
-          }
-          v.bend[i] = gpu::BendVertex{desc.vertexBranches[i] == kNoBranch ? BEND_LEAF_ONLY : desc.vertexBranches[i], w};
-        }
-      }
-    } catch (const std::bad_alloc&) {
-      return Status::error(Result::OutOfHostMemory, what + ": out of host memory");
-    }
-    v.boundsMin = v.boundsMax = v.positions[0];
-    for (const glm::vec3& p : v.positions) {
-      v.boundsMin = glm::min(v.boundsMin, p);
-      v.boundsMax = glm::max(v.boundsMax, p);
-    }
-    *out = m.release();
-    return Status();
-  });
-}
-
-void destroyModel(Model* model) { delete model; }
-
-uint64_t modelTriangleCount(const Model* model) { return model ? model->data.triangleCount() : 0; }
-
-void modelBounds(const Model* model, Float3* min, Float3* max) {
-  if (!model) return;
-  if (min) *min = toFloat3(model->data.boundsMin);
-  if (max) *max = toFloat3(model->data.boundsMax);
-}
 
 }  // namespace canopy

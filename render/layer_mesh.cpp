@@ -273,6 +273,8 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
   return Status();
 }
 
+void releaseLeafRootPositions(LayerMesh& mesh) { std::vector<glm::vec4>().swap(mesh.leafRootPositions); }
+
 void destroyLayerMesh(LayeredVegetation& lv) {
   Device& d = *lv.device;
   dropPreparedWork(d, lv.mesh.pendingUploads);  // uploads never recorded: nothing waits for them

@@ -45,7 +45,7 @@ struct LayerMesh {
   CompactMesh hostMesh;
   uint32_t leafCount = 0;                 // model leaves (LayerLeafRoot.leaf < leafCount)
   // With desc.keepBend: each leaf's root position (xyz), for the per-vertex baseline's wind field
-  // (render/per_vertex.cpp uploads it at creation and the context then drops it).
+  // (render/per_vertex.cpp uploads it at creation; releaseLeafRootPositions then drops it).
   std::vector<glm::vec4> leafRootPositions;
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
@@ -95,6 +95,9 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& model, Com
 Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes);
 Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart);
 void destroyLayerMesh(LayeredVegetation& lv);
+// Frees the leaves' root positions once the per-vertex baseline has uploaded them (or when it is
+// not created): host memory of 16 bytes a leaf that nothing reads after creation.
+void releaseLeafRootPositions(LayerMesh& mesh);
 
 // The pipeline description every draw of the compact mesh starts from (the layers, the background,
 // the impostor bake, the per-vertex baseline): shaders/layers_common.glsl's six bindings, the

@@ -30,25 +30,18 @@
 
 #include "host_vk.h"  // the host's own Vulkan helpers and box shaders (SPIR-V words, built by glslangValidator)
 
+namespace host {
+const char* const kProgram = "canopy-example-host";
+}  // namespace host
+
 namespace {
 
 constexpr uint32_t kW = 320, kH = 240;
 constexpr uint32_t kMaxFramesInFlight = 3;
-constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
 constexpr VkFormat kDepthFormat = VK_FORMAT_D32_SFLOAT;
-// The usage the host creates its targets with, declared to Canopy with them (CanopyImage).
-constexpr VkImageUsageFlags kColorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-constexpr VkImageUsageFlags kDepthUsage =
-    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-
-#define HOST_CHECK(call)                                                                  \
-  do {                                                                                    \
-    VkResult r_ = (call);                                                                 \
-    if (r_ != VK_SUCCESS) {                                                               \
-      std::fprintf(stderr, "canopy-example-host: %s failed: VkResult %d\n", #call, int(r_)); \
-      return false;                                                                       \
-    }                                                                                     \
-  } while (0)
+using host::kColorFormat;
+using host::kColorUsage;
+using host::kDepthUsage;
 
 using host::BoxPush;
 using host::barrier;
@@ -107,11 +100,7 @@ struct Frame {
 struct Host {
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
-  VkPhysicalDevice physical = VK_NULL_HANDLE;
-  VkDevice device = VK_NULL_HANDLE;
-  VkQueue queue = VK_NULL_HANDLE;
-  uint32_t family = 0;
-  std::string deviceName;
+  host::HostDevice dev;  // its physical device, device, queue family and queue
   HostMemory memory;
   host::Image color, depth;
   VkCommandPool pool = VK_NULL_HANDLE;
@@ -123,84 +112,24 @@ struct Host {
   int validationMessages = 0;
 };
 
-bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion, VkDeviceCreateInfo* usedInfo,
-                             std::vector<const char*>* extensions, VkPhysicalDeviceFeatures2* features) {
-  HOST_CHECK(host::createInstance("canopy-example-host", {}, validate, &h.validationMessages, apiVersion, &h.instance, &h.messenger));
-
-  // The host's device choice, among the devices Canopy can run on (it says why it cannot).
-  uint32_t n = 0;
-  vkEnumeratePhysicalDevices(h.instance, &n, nullptr);
-  std::vector<VkPhysicalDevice> pds(n);
-  vkEnumeratePhysicalDevices(h.instance, &n, pds.data());
-  canopy::DeviceRequirements req;
-  for (VkPhysicalDevice pd : pds) {
-    canopy::DeviceRequirements r;
-    canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, h.instance, *apiVersion, pd, &r);
-    VkPhysicalDeviceProperties p;
-    vkGetPhysicalDeviceProperties(pd, &p);
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-example-host: skipping %s: %s\n", p.deviceName, s.message().c_str());
-      continue;
-    }
-    if (!h.physical || p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) {
-      h.physical = pd;
-      h.deviceName = p.deviceName;
-      req = r;
-    }
-  }
-  if (!h.physical) {
-    std::fprintf(stderr, "canopy-example-host: no device can run Canopy\n");
-    return false;
-  }
-  uint32_t qn = 0;
-  vkGetPhysicalDeviceQueueFamilyProperties(h.physical, &qn, nullptr);
-  std::vector<VkQueueFamilyProperties> fams(qn);
-  vkGetPhysicalDeviceQueueFamilyProperties(h.physical, &qn, fams.data());
-  for (uint32_t i = 0; i < qn; ++i)
-    if ((fams[i].queueFlags & (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) == (VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT)) {
-      h.family = i;
-      break;
-    }
-  // The host's own feature chain; Canopy switches on what it needs in it.
-  // The device runs the lower of the instance's version and the physical device's.
-  VkPhysicalDeviceProperties props;
-  vkGetPhysicalDeviceProperties(h.physical, &props);
-  canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, h.instance, h.physical,
-                                                  std::min(*apiVersion, props.apiVersion), features);
-  if (!s.ok()) {
-    std::fprintf(stderr, "canopy-example-host: %s\n", s.message().c_str());
-    return false;
-  }
-  for (const std::string& e : req.deviceExtensions) extensions->push_back(strdup(e.c_str()));
-  static float priority = 1.0f;
-  static VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-  qci.queueFamilyIndex = h.family;
-  qci.queueCount = 1;
-  qci.pQueuePriorities = &priority;
-  *usedInfo = VkDeviceCreateInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, features};
-  usedInfo->queueCreateInfoCount = 1;
-  usedInfo->pQueueCreateInfos = &qci;
-  usedInfo->enabledExtensionCount = uint32_t(extensions->size());
-  usedInfo->ppEnabledExtensionNames = extensions->data();
-  HOST_CHECK(vkCreateDevice(h.physical, usedInfo, nullptr, &h.device));
-  vkGetDeviceQueue(h.device, h.family, 0, &h.queue);
-  h.memory.device = h.device;
-  vkGetPhysicalDeviceMemoryProperties(h.physical, &h.memory.props);
+bool createInstanceAndDevice(Host& h, bool validate, uint32_t* apiVersion) {
+  HOST_CHECK(host::createInstance(host::kProgram, {}, validate, &h.validationMessages, apiVersion, &h.instance, &h.messenger));
+  if (!host::createHostDevice(h.instance, *apiVersion, VK_NULL_HANDLE, {}, &h.dev)) return false;
+  h.memory.device = h.dev.device;
+  h.memory.props = h.dev.memory;
   return true;
 }
 
 bool createTarget(Host& h, VkFormat format, VkImageUsageFlags usage, VkImageAspectFlags aspect, host::Image* t) {
-  HOST_CHECK(host::createImage(h.device, h.memory.props, kW, kH, format, usage, aspect, t));
+  HOST_CHECK(host::createImage(h.dev.device, h.memory.props, kW, kH, format, usage, aspect, t));
   return true;
 }
 
 bool createPipeline(Host& h) {
-  HOST_CHECK(host::createBoxLayout(h.device, &h.layout));
+  HOST_CHECK(host::createBoxLayout(h.dev.device, &h.layout));
   // Reverse-Z: near = 1, cleared to 0, nearer fragments have greater depth.
-  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-  ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
-  ds.depthCompareOp = VK_COMPARE_OP_GREATER;
-  HOST_CHECK(host::createBoxPipeline(h.device, h.layout, kColorFormat, kDepthFormat, VK_FORMAT_UNDEFINED, ds, false, &h.boxes));
+  const VkPipelineDepthStencilStateCreateInfo ds = host::depthTested(VK_COMPARE_OP_GREATER);
+  HOST_CHECK(host::createBoxPipeline(h.dev.device, h.layout, kColorFormat, kDepthFormat, VK_FORMAT_UNDEFINED, ds, false, &h.boxes));
   return true;
 }
 
@@ -233,29 +162,8 @@ const VkPipelineStageFlags2 kDepthStage = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TES
 const VkAccessFlags2 kDepthAccess = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
 
 void drawBoxes(Host& h, VkCommandBuffer cmd, bool clear, const std::vector<BoxPush>& boxes) {
-  VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}, z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  c.imageView = h.color.view;
-  c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  c.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
-  c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  c.clearValue.color = {{0.45f, 0.6f, 0.8f, 1.0f}};
-  z.imageView = h.depth.view;
-  z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  z.loadOp = c.loadOp;
-  z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  z.clearValue.depthStencil = {0.0f, 0};  // reverse-Z: far
-  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, {kW, kH}};
-  ri.layerCount = 1;
-  ri.colorAttachmentCount = 1;
-  ri.pColorAttachments = &c;
-  ri.pDepthAttachment = &z;
-  vkCmdBeginRendering(cmd, &ri);
-  VkViewport v{0, 0, float(kW), float(kH), 0, 1};
-  VkRect2D sc{{0, 0}, {kW, kH}};
-  vkCmdSetViewport(cmd, 0, 1, &v);
-  vkCmdSetScissor(cmd, 0, 1, &sc);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, h.boxes);
+  // Reverse-Z: the depth is cleared to 0, far.
+  host::beginBoxPass(cmd, h.color.view, h.depth.view, false, clear, {{0.45f, 0.6f, 0.8f, 1.0f}}, 0.0f, kW, kH, h.boxes);
   for (const BoxPush& b : boxes) {
     vkCmdPushConstants(cmd, h.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof b, &b);
     vkCmdDraw(cmd, 36, 1, 0, 0);
@@ -387,7 +295,7 @@ bool recordFrame(Host& h, canopy::CanopyContext* ctx, Frame& f, uint64_t frameNu
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;
   si.pCommandBuffers = &f.cmd;
-  HOST_CHECK(vkQueueSubmit(h.queue, 1, &si, f.fence));
+  HOST_CHECK(vkQueueSubmit(h.dev.queue, 1, &si, f.fence));
   f.pending = true;
   return true;
 }
@@ -395,8 +303,8 @@ bool recordFrame(Host& h, canopy::CanopyContext* ctx, Frame& f, uint64_t frameNu
 // Waits for the frame slot's previous submission (the only wait of the frame loop).
 bool acquire(Host& h, Frame& f) {
   if (!f.pending) return true;
-  HOST_CHECK(vkWaitForFences(h.device, 1, &f.fence, VK_TRUE, UINT64_MAX));
-  HOST_CHECK(vkResetFences(h.device, 1, &f.fence));
+  HOST_CHECK(vkWaitForFences(h.dev.device, 1, &f.fence, VK_TRUE, UINT64_MAX));
+  HOST_CHECK(vkResetFences(h.dev.device, 1, &f.fence));
   f.pending = false;
   return true;
 }
@@ -409,13 +317,7 @@ void writePpm(const std::string& path, const uint8_t* rgba) {
 
 bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::Device** adopted, canopy::CanopyContext** ctx) {
   uint32_t api = 0;
-  VkDeviceCreateInfo dci{};
-  std::vector<const char*> exts;
-  VkPhysicalDeviceDynamicRenderingFeatures dynr{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dynr};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES, &sync2};
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-  if (!createInstanceAndDevice(h, validate, &api, &dci, &exts, &f2)) return false;
+  if (!createInstanceAndDevice(h, validate, &api)) return false;
   const bool ok = [&] {
     // The host's own objects.
     if (!createTarget(h, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &h.color))
@@ -424,30 +326,22 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     if (!createTarget(h, kDepthFormat, kDepthUsage, VK_IMAGE_ASPECT_DEPTH_BIT, &h.depth))
       return false;
     if (!createPipeline(h)) return false;
-    VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-    pci.queueFamilyIndex = h.family;
-    HOST_CHECK(vkCreateCommandPool(h.device, &pci, nullptr, &h.pool));
+    HOST_CHECK(host::createCommandPool(h.dev.device, h.dev.family, &h.pool));
     for (Frame& f : h.frames) {
-      VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-      ai.commandPool = h.pool;
-      ai.commandBufferCount = 1;
-      HOST_CHECK(vkAllocateCommandBuffers(h.device, &ai, &f.cmd));
-      VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-      HOST_CHECK(vkCreateFence(h.device, &fci, nullptr, &f.fence));
+      HOST_CHECK(host::createFrameSlot(h.dev.device, h.pool, &f.cmd, &f.fence));
       VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
       bci.size = VkDeviceSize(kW) * kH * 8;
       bci.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-      HOST_CHECK(vkCreateBuffer(h.device, &bci, nullptr, &f.readback));
+      HOST_CHECK(vkCreateBuffer(h.dev.device, &bci, nullptr, &f.readback));
       VkMemoryRequirements req;
-      vkGetBufferMemoryRequirements(h.device, f.readback, &req);
+      vkGetBufferMemoryRequirements(h.dev.device, f.readback, &req);
       canopy::DeviceMemoryRange r;
       HOST_CHECK(hostAllocate(&h.memory, req, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT, 0, &r));
       h.memory.live--;  // the host's own, not Canopy's
       h.memory.total--;
       f.readbackMemory = r.memory;
       f.mapped = r.mapped;
-      HOST_CHECK(vkBindBufferMemory(h.device, f.readback, f.readbackMemory, 0));
+      HOST_CHECK(vkBindBufferMemory(h.dev.device, f.readback, f.readbackMemory, 0));
     }
 
     // Canopy on the host's device, through the host's loader and allocator.
@@ -455,20 +349,9 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     alloc.user = &h.memory;
     alloc.allocate = hostAllocate;
     alloc.free = hostFree;
-    canopy::AdoptDeviceDesc ad;
-    ad.getInstanceProcAddr = vkGetInstanceProcAddr;
-    ad.instance = h.instance;
-    ad.instanceApiVersion = api;
-    ad.physicalDevice = h.physical;
-    ad.device = h.device;
-    ad.deviceCreateInfo = &dci;
-    ad.queue = h.queue;
-    ad.queueFamily = h.family;
-    ad.memoryAllocator = &alloc;
-    ad.framesInFlight = h.framesInFlight;
-    canopy::Status s = canopy::adoptDevice(ad, adopted);
-    canopy::Model* plant = s.ok() ? makePlant() : nullptr;
-    if (s.ok() && !plant) return false;
+    if (!host::adoptHostDevice(h.dev, h.instance, api, h.framesInFlight, &alloc, adopted)) return false;
+    canopy::Model* plant = makePlant();
+    if (!plant) return false;
     h.view = orbitView(25.0f);
     h.proj = reverseZPerspective(glm::radians(45.0f), float(kW) / float(kH), 0.1f, 100.0f);
     canopy::CanopyDesc desc;
@@ -478,7 +361,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     desc.depthFormat = kDepthFormat;
     desc.depthConvention = canopy::DepthConvention::Reverse;
     desc.params.simulation.wind.strength = 1.5f;
-    if (s.ok()) s = canopy::createCanopy(*adopted, plant, desc, ctx);
+    const canopy::Status s = canopy::createCanopy(*adopted, plant, desc, ctx);
     canopy::destroyModel(plant);  // Canopy keeps what it needs
     if (!s.ok()) {
       std::fprintf(stderr, "canopy-example-host: %s: %s\n", canopy::toString(s.code()), s.message().c_str());
@@ -530,7 +413,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     std::printf("canopy-example-host: own VkDevice '%s' (Canopy adopted it; %llu device allocations through the host's "
                 "allocator), %u frames in flight, reverse-Z depth (cleared to 0, GREATER), %ux%u, %d frames + 4 check "
                 "frames, layers re-sliced %llu times\n",
-                h.deviceName.c_str(), (unsigned long long)h.memory.total, h.framesInFlight, kW, kH, frames,
+                h.dev.name.c_str(), (unsigned long long)h.memory.total, h.framesInFlight, kW, kH, frames,
                 (unsigned long long)st.layers.rebuilds);
     std::printf("self-check: post-vegetation box %zu px behind vegetation (hidden), %zu px in front (shown), %zu px wrong: %s\n",
                 hidden, shown, wrong, (hidden && shown && wrong <= (hidden + shown) / 100) ? "PASS" : "FAIL");
@@ -544,28 +427,27 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     }
     return hidden > 0 && shown > 0 && wrong <= (hidden + shown) / 100;
   }();
-  for (const char* e : exts) std::free(const_cast<char*>(e));
   return ok;
 }
 
 void shutdown(Host& h, canopy::Device* adopted, canopy::CanopyContext* ctx) {
   // The host's own shutdown: its device idle, then Canopy's objects, then the host's.
-  if (h.device) vkDeviceWaitIdle(h.device);
+  if (h.dev.device) vkDeviceWaitIdle(h.dev.device);
   canopy::destroyCanopy(ctx);
   canopy::releaseDevice(adopted);
   if (h.memory.live) std::fprintf(stderr, "canopy-example-host: Canopy left %llu allocations\n", (unsigned long long)h.memory.live);
   for (Frame& f : h.frames) {
-    if (f.fence) vkDestroyFence(h.device, f.fence, nullptr);
-    if (f.readback) vkDestroyBuffer(h.device, f.readback, nullptr);
-    if (f.readbackMemory) vkFreeMemory(h.device, f.readbackMemory, nullptr);
+    if (f.fence) vkDestroyFence(h.dev.device, f.fence, nullptr);
+    if (f.readback) vkDestroyBuffer(h.dev.device, f.readback, nullptr);
+    if (f.readbackMemory) vkFreeMemory(h.dev.device, f.readbackMemory, nullptr);
   }
-  if (h.pool) vkDestroyCommandPool(h.device, h.pool, nullptr);
-  if (h.boxes) vkDestroyPipeline(h.device, h.boxes, nullptr);
-  if (h.layout) vkDestroyPipelineLayout(h.device, h.layout, nullptr);
-  if (h.device) {
-    host::destroyImage(h.device, h.color);
-    host::destroyImage(h.device, h.depth);
-    vkDestroyDevice(h.device, nullptr);
+  if (h.pool) vkDestroyCommandPool(h.dev.device, h.pool, nullptr);
+  if (h.boxes) vkDestroyPipeline(h.dev.device, h.boxes, nullptr);
+  if (h.layout) vkDestroyPipelineLayout(h.dev.device, h.layout, nullptr);
+  if (h.dev.device) {
+    host::destroyImage(h.dev.device, h.color);
+    host::destroyImage(h.dev.device, h.depth);
+    vkDestroyDevice(h.dev.device, nullptr);
   }
   host::destroyInstance(h.instance, h.messenger);
 }

@@ -33,23 +33,17 @@
 
 #include "host_vk.h"  // the example hosts' Vulkan helpers and box shaders
 
+namespace host {
+const char* const kProgram = "canopy-game-host";
+}  // namespace host
+
 namespace {
 
 constexpr uint32_t kW = 320, kH = 240, kFrames = 3;
-constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
-constexpr VkImageUsageFlags kColorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-constexpr VkImageUsageFlags kDepthUsage =
-    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+using host::kColorFormat;
+using host::kColorUsage;
+using host::kDepthUsage;
 constexpr uint8_t kOutlined = 1;  // the stencil value of the outlined box
-
-#define CHECK(call)                                                                         \
-  do {                                                                                      \
-    VkResult r_ = (call);                                                                   \
-    if (r_ != VK_SUCCESS) {                                                                 \
-      std::fprintf(stderr, "canopy-game-host: %s failed: VkResult %d\n", #call, int(r_)); \
-      return false;                                                                         \
-    }                                                                                       \
-  } while (0)
 
 using host::BoxPush;
 using host::barrier;
@@ -75,11 +69,7 @@ struct Game {
   VkInstance instance = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
   VkSurfaceKHR surface = VK_NULL_HANDLE;
-  VkPhysicalDevice physical = VK_NULL_HANDLE;
-  VkDevice device = VK_NULL_HANDLE;
-  VkQueue queue = VK_NULL_HANDLE;
-  uint32_t family = 0;
-  VkPhysicalDeviceMemoryProperties memory{};
+  host::HostDevice dev;  // its physical device, device, queue family, queue and memory types
   VkSwapchainKHR swapchain = VK_NULL_HANDLE;
   VkFormat swapFormat = VK_FORMAT_UNDEFINED;
   std::vector<VkImage> swapImages;
@@ -101,46 +91,15 @@ struct Game {
 bool createInstanceAndDevice(Game& g, bool validate) {
   uint32_t n = 0, api = 0;
   const char** glfwExts = glfwGetRequiredInstanceExtensions(&n);
-  CHECK(host::createInstance("canopy-game-host", std::vector<const char*>(glfwExts, glfwExts + n), validate, &g.validationMessages, &api,
+  HOST_CHECK(host::createInstance(host::kProgram, std::vector<const char*>(glfwExts, glfwExts + n), validate, &g.validationMessages, &api,
                              &g.instance, &g.messenger));
-  CHECK(glfwCreateWindowSurface(g.instance, g.window, nullptr, &g.surface));
+  HOST_CHECK(glfwCreateWindowSurface(g.instance, g.window, nullptr, &g.surface));
   // The first device Canopy can run on that presents to the window (queryDeviceRequirements says why not).
-  vkEnumeratePhysicalDevices(g.instance, &n, nullptr);
-  std::vector<VkPhysicalDevice> pds(n);
-  vkEnumeratePhysicalDevices(g.instance, &n, pds.data());
-  canopy::DeviceRequirements req;
-  for (VkPhysicalDevice pd : pds) {
-    canopy::DeviceRequirements r;
-    const canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, g.instance, api, pd, &r);
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-game-host: skipping a device: %s\n", s.message().c_str());
-      continue;
-    }
-    uint32_t qn = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, nullptr);
-    std::vector<VkQueueFamilyProperties> fams(qn);
-    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, fams.data());
-    for (uint32_t i = 0; i < qn && !g.physical; ++i) {
-      VkBool32 present = VK_FALSE;
-      vkGetPhysicalDeviceSurfaceSupportKHR(pd, i, g.surface, &present);
-      if (present && (fams[i].queueFlags & r.queueFlags) == r.queueFlags) {
-        g.physical = pd;
-        g.family = i;
-        req = r;
-      }
-    }
-  }
-  if (!g.physical) {
-    std::fprintf(stderr, "canopy-game-host: no device runs Canopy and presents to the window\n");
-    return false;
-  }
-  VkPhysicalDeviceProperties props;
-  vkGetPhysicalDeviceProperties(g.physical, &props);
-  vkGetPhysicalDeviceMemoryProperties(g.physical, &g.memory);
+  if (!host::createHostDevice(g.instance, api, g.surface, {VK_KHR_SWAPCHAIN_EXTENSION_NAME}, &g.dev)) return false;
   // Depth with a stencil the host uses: D32S8, else D24S8, as a sampled depth attachment.
   for (VkFormat f : {VK_FORMAT_D32_SFLOAT_S8_UINT, VK_FORMAT_D24_UNORM_S8_UINT}) {
     VkFormatProperties fp;
-    vkGetPhysicalDeviceFormatProperties(g.physical, f, &fp);
+    vkGetPhysicalDeviceFormatProperties(g.dev.physical, f, &fp);
     const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT |
                                       VK_FORMAT_FEATURE_TRANSFER_SRC_BIT;
     if (!g.depthFormat && (fp.optimalTilingFeatures & need) == need) g.depthFormat = f;
@@ -149,63 +108,23 @@ bool createInstanceAndDevice(Game& g, bool validate) {
     std::fprintf(stderr, "canopy-game-host: no sampled depth-stencil format\n");
     return false;
   }
-  // The chain for the device's version (DeviceRequirements::featureStructs), Canopy's features on.
-  const uint32_t deviceApi = std::min(api, props.apiVersion);
-  VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
-  VkPhysicalDeviceDynamicRenderingFeatures dyn{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
-  VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES, &dyn};
-  VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
-  f12.pNext = deviceApi >= VK_API_VERSION_1_3 ? static_cast<void*>(&f13) : static_cast<void*>(&sync2);
-  VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f12};
-  const canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, g.instance, g.physical, deviceApi, &f2);
-  if (!s.ok()) {
-    std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
-    return false;
-  }
-  std::vector<const char*> deviceExts = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
-  for (const std::string& e : req.deviceExtensions) deviceExts.push_back(e.c_str());
-  const float priority = 1.0f;
-  VkDeviceQueueCreateInfo qci{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
-  qci.queueFamilyIndex = g.family;
-  qci.queueCount = 1;
-  qci.pQueuePriorities = &priority;
-  VkDeviceCreateInfo dci{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, &f2};
-  dci.queueCreateInfoCount = 1;
-  dci.pQueueCreateInfos = &qci;
-  dci.enabledExtensionCount = uint32_t(deviceExts.size());
-  dci.ppEnabledExtensionNames = deviceExts.data();
-  CHECK(vkCreateDevice(g.physical, &dci, nullptr, &g.device));
-  vkGetDeviceQueue(g.device, g.family, 0, &g.queue);
-  canopy::AdoptDeviceDesc ad;
-  ad.getInstanceProcAddr = vkGetInstanceProcAddr;
-  ad.instance = g.instance;
-  ad.instanceApiVersion = api;
-  ad.physicalDevice = g.physical;
-  ad.device = g.device;
-  ad.deviceCreateInfo = &dci;  // copied during the call
-  ad.queue = g.queue;
-  ad.queueFamily = g.family;
-  ad.framesInFlight = kFrames;
-  const canopy::Status a = canopy::adoptDevice(ad, &g.adopted);
-  if (!a.ok()) {
-    std::fprintf(stderr, "canopy-game-host: %s\n", a.message().c_str());
-    return false;
-  }
-  std::printf("canopy-game-host: %s, Vulkan %u.%u, depth format %d, %u frames in flight\n", props.deviceName,
+  if (!host::adoptHostDevice(g.dev, g.instance, api, kFrames, nullptr, &g.adopted)) return false;
+  const uint32_t deviceApi = g.dev.apiVersion;
+  std::printf("canopy-game-host: %s, Vulkan %u.%u, depth format %d, %u frames in flight\n", g.dev.name.c_str(),
               VK_API_VERSION_MAJOR(deviceApi), VK_API_VERSION_MINOR(deviceApi), int(g.depthFormat), kFrames);
   return true;
 }
 
 bool createSwapchain(Game& g) {
   uint32_t n = 0;
-  vkGetPhysicalDeviceSurfaceFormatsKHR(g.physical, g.surface, &n, nullptr);
+  vkGetPhysicalDeviceSurfaceFormatsKHR(g.dev.physical, g.surface, &n, nullptr);
   std::vector<VkSurfaceFormatKHR> formats(n);
-  vkGetPhysicalDeviceSurfaceFormatsKHR(g.physical, g.surface, &n, formats.data());
+  vkGetPhysicalDeviceSurfaceFormatsKHR(g.dev.physical, g.surface, &n, formats.data());
   VkSurfaceFormatKHR chosen = formats.at(0);
   for (const VkSurfaceFormatKHR& f : formats)
     if (f.format == VK_FORMAT_B8G8R8A8_UNORM || f.format == VK_FORMAT_R8G8B8A8_UNORM) chosen = f;
   VkSurfaceCapabilitiesKHR caps;
-  CHECK(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(g.physical, g.surface, &caps));
+  HOST_CHECK(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(g.dev.physical, g.surface, &caps));
   VkSwapchainCreateInfoKHR sci{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
   sci.surface = g.surface;
   sci.minImageCount = std::max(caps.minImageCount, kFrames);
@@ -219,15 +138,15 @@ bool createSwapchain(Game& g) {
   sci.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
   sci.presentMode = VK_PRESENT_MODE_FIFO_KHR;
   sci.clipped = VK_TRUE;
-  CHECK(vkCreateSwapchainKHR(g.device, &sci, nullptr, &g.swapchain));
+  HOST_CHECK(vkCreateSwapchainKHR(g.dev.device, &sci, nullptr, &g.swapchain));
   g.swapFormat = chosen.format;
-  vkGetSwapchainImagesKHR(g.device, g.swapchain, &n, nullptr);
+  vkGetSwapchainImagesKHR(g.dev.device, g.swapchain, &n, nullptr);
   g.swapImages.resize(n);
-  vkGetSwapchainImagesKHR(g.device, g.swapchain, &n, g.swapImages.data());
+  vkGetSwapchainImagesKHR(g.dev.device, g.swapchain, &n, g.swapImages.data());
   g.presentReady.resize(n);
   for (VkSemaphore& s : g.presentReady) {
     VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-    CHECK(vkCreateSemaphore(g.device, &si, nullptr, &s));
+    HOST_CHECK(vkCreateSemaphore(g.dev.device, &si, nullptr, &s));
   }
   std::printf("swapchain %ux%u, %u images\n", sci.imageExtent.width, sci.imageExtent.height, n);
   return true;
@@ -236,50 +155,40 @@ bool createSwapchain(Game& g) {
 // The scene pipeline (depth LESS, the stencil written from a dynamic reference) and the outline
 // pipeline (no depth test, drawn where the stencil is not the outlined box's).
 bool createPipelines(Game& g) {
-  CHECK(host::createBoxLayout(g.device, &g.layout));
-  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
-  ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
-  ds.depthCompareOp = VK_COMPARE_OP_LESS;
+  HOST_CHECK(host::createBoxLayout(g.dev.device, &g.layout));
+  VkPipelineDepthStencilStateCreateInfo ds = host::depthTested(VK_COMPARE_OP_LESS);
   ds.stencilTestEnable = VK_TRUE;
   ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0xff, 0xff, 0};
   ds.back = ds.front;
-  CHECK(host::createBoxPipeline(g.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.scene));
+  HOST_CHECK(host::createBoxPipeline(g.dev.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.scene));
   ds.depthTestEnable = ds.depthWriteEnable = VK_FALSE;
   ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_NOT_EQUAL, 0xff, 0, 0};
   ds.back = ds.front;
-  CHECK(host::createBoxPipeline(g.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.outline));
+  HOST_CHECK(host::createBoxPipeline(g.dev.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.outline));
   return true;
 }
 
 bool createFrames(Game& g) {
-  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-  pci.queueFamilyIndex = g.family;
-  CHECK(vkCreateCommandPool(g.device, &pci, nullptr, &g.pool));
+  HOST_CHECK(host::createCommandPool(g.dev.device, g.dev.family, &g.pool));
   const VkDeviceSize bytes = VkDeviceSize(kW) * kH * (4 + 4 + 1 + 1 + 4);
   for (Slot& s : g.slots) {
-    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    ai.commandPool = g.pool;
-    ai.commandBufferCount = 1;
-    CHECK(vkAllocateCommandBuffers(g.device, &ai, &s.cmd));
-    VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    CHECK(vkCreateFence(g.device, &fci, nullptr, &s.fence));
+    HOST_CHECK(host::createFrameSlot(g.dev.device, g.pool, &s.cmd, &s.fence));
     VkSemaphoreCreateInfo si{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-    CHECK(vkCreateSemaphore(g.device, &si, nullptr, &s.acquired));
+    HOST_CHECK(vkCreateSemaphore(g.dev.device, &si, nullptr, &s.acquired));
     VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     bci.size = bytes;
     bci.usage = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    CHECK(vkCreateBuffer(g.device, &bci, nullptr, &s.readback.buffer));
+    HOST_CHECK(vkCreateBuffer(g.dev.device, &bci, nullptr, &s.readback.buffer));
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(g.device, s.readback.buffer, &req);
+    vkGetBufferMemoryRequirements(g.dev.device, s.readback.buffer, &req);
     VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     mai.allocationSize = req.size;
-    const int32_t type = host::memoryType(g.memory, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    const int32_t type = host::memoryType(g.dev.memory, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
     if (type < 0) return false;
     mai.memoryTypeIndex = uint32_t(type);
-    CHECK(vkAllocateMemory(g.device, &mai, nullptr, &s.readback.memory));
-    CHECK(vkBindBufferMemory(g.device, s.readback.buffer, s.readback.memory, 0));
-    CHECK(vkMapMemory(g.device, s.readback.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&s.readback.mapped)));
+    HOST_CHECK(vkAllocateMemory(g.dev.device, &mai, nullptr, &s.readback.memory));
+    HOST_CHECK(vkBindBufferMemory(g.dev.device, s.readback.buffer, s.readback.memory, 0));
+    HOST_CHECK(vkMapMemory(g.dev.device, s.readback.memory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&s.readback.mapped)));
   }
   return true;
 }
@@ -303,30 +212,7 @@ void copyDepthStencil(Game& g, VkCommandBuffer cmd, Slot& s, VkDeviceSize at, Vk
 }
 
 void drawBoxes(Game& g, VkCommandBuffer cmd, VkPipeline pipeline, bool clear, const std::vector<std::pair<BoxPush, uint32_t>>& boxes) {
-  VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}, z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-  c.imageView = g.color.view;
-  c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
-  c.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
-  c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-  c.clearValue.color = {{0.55f, 0.7f, 0.9f, 1.0f}};
-  z.imageView = g.depth.view;
-  z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-  z.loadOp = c.loadOp;
-  z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;  // Canopy reads the host's depth: stored
-  z.clearValue.depthStencil = {1.0f, 0};
-  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, {kW, kH}};
-  ri.layerCount = 1;
-  ri.colorAttachmentCount = 1;
-  ri.pColorAttachments = &c;
-  ri.pDepthAttachment = &z;
-  ri.pStencilAttachment = &z;
-  vkCmdBeginRendering(cmd, &ri);
-  const VkViewport v{0, 0, float(kW), float(kH), 0, 1};
-  const VkRect2D sc{{0, 0}, {kW, kH}};
-  vkCmdSetViewport(cmd, 0, 1, &v);
-  vkCmdSetScissor(cmd, 0, 1, &sc);
-  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+  host::beginBoxPass(cmd, g.color.view, g.depth.view, true, clear, {{0.55f, 0.7f, 0.9f, 1.0f}}, 1.0f, kW, kH, pipeline);
   for (const auto& [b, stencil] : boxes) {
     vkCmdSetStencilReference(cmd, VK_STENCIL_FACE_FRONT_AND_BACK, stencil);
     vkCmdPushConstants(cmd, g.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof b, &b);
@@ -397,8 +283,8 @@ void checkSlot(Game& g, Slot& s) {
 
 bool wait(Game& g, Slot& s) {
   if (!s.pending) return true;
-  CHECK(vkWaitForFences(g.device, 1, &s.fence, VK_TRUE, UINT64_MAX));
-  CHECK(vkResetFences(g.device, 1, &s.fence));
+  HOST_CHECK(vkWaitForFences(g.dev.device, 1, &s.fence, VK_TRUE, UINT64_MAX));
+  HOST_CHECK(vkResetFences(g.dev.device, 1, &s.fence));
   s.pending = false;
   checkSlot(g, s);
   return true;
@@ -408,7 +294,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   Slot& s = g.slots[number % kFrames];
   if (!wait(g, s)) return false;
   uint32_t image = 0;
-  CHECK(vkAcquireNextImageKHR(g.device, g.swapchain, UINT64_MAX, s.acquired, VK_NULL_HANDLE, &image));
+  HOST_CHECK(vkAcquireNextImageKHR(g.dev.device, g.swapchain, UINT64_MAX, s.acquired, VK_NULL_HANDLE, &image));
   s.frame = number;
   s.write = write;
   const glm::mat4 view = walkView(sc, index, frames);
@@ -418,7 +304,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   VkCommandBuffer cmd = s.cmd;
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  CHECK(vkBeginCommandBuffer(cmd, &bi));
+  HOST_CHECK(vkBeginCommandBuffer(cmd, &bi));
   const VkImageAspectFlags ds = VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT;
   // The previous frame's last uses (copies and the blit) before this frame overwrites the targets.
   barrier(cmd, g.color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, kCopy,
@@ -489,7 +375,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   di.memoryBarrierCount = 1;
   di.pMemoryBarriers = &hostRead;
   vkCmdPipelineBarrier2(cmd, &di);
-  CHECK(vkEndCommandBuffer(cmd));
+  HOST_CHECK(vkEndCommandBuffer(cmd));
   const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_TRANSFER_BIT;
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.waitSemaphoreCount = 1;
@@ -499,7 +385,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   si.pCommandBuffers = &cmd;
   si.signalSemaphoreCount = 1;
   si.pSignalSemaphores = &g.presentReady[image];
-  CHECK(vkQueueSubmit(g.queue, 1, &si, s.fence));
+  HOST_CHECK(vkQueueSubmit(g.dev.queue, 1, &si, s.fence));
   s.pending = true;
   VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
   pi.waitSemaphoreCount = 1;
@@ -507,8 +393,8 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   pi.swapchainCount = 1;
   pi.pSwapchains = &g.swapchain;
   pi.pImageIndices = &image;
-  const VkResult pr = vkQueuePresentKHR(g.queue, &pi);
-  if (pr != VK_SUCCESS && pr != VK_SUBOPTIMAL_KHR) CHECK(pr);
+  const VkResult pr = vkQueuePresentKHR(g.dev.queue, &pi);
+  if (pr != VK_SUCCESS && pr != VK_SUBOPTIMAL_KHR) HOST_CHECK(pr);
   return true;
 }
 
@@ -550,27 +436,27 @@ bool makeScene(const canopy::Model* model, uint32_t plants, canopy::CanopyDesc* 
 }
 
 void shutdown(Game& g) {
-  if (g.device) vkDeviceWaitIdle(g.device);
+  if (g.dev.device) vkDeviceWaitIdle(g.dev.device);
   for (Slot& s : g.slots)
     if (s.pending) checkSlot(g, s), s.pending = false;
   canopy::destroyCanopy(g.ctx);
   canopy::releaseDevice(g.adopted);
-  if (g.device) {
+  if (g.dev.device) {
     for (Slot& s : g.slots) {
-      vkDestroyFence(g.device, s.fence, nullptr);
-      vkDestroySemaphore(g.device, s.acquired, nullptr);
-      vkDestroyBuffer(g.device, s.readback.buffer, nullptr);
-      vkFreeMemory(g.device, s.readback.memory, nullptr);
+      vkDestroyFence(g.dev.device, s.fence, nullptr);
+      vkDestroySemaphore(g.dev.device, s.acquired, nullptr);
+      vkDestroyBuffer(g.dev.device, s.readback.buffer, nullptr);
+      vkFreeMemory(g.dev.device, s.readback.memory, nullptr);
     }
-    for (VkSemaphore s : g.presentReady) vkDestroySemaphore(g.device, s, nullptr);
-    vkDestroyCommandPool(g.device, g.pool, nullptr);
-    vkDestroyPipeline(g.device, g.scene, nullptr);
-    vkDestroyPipeline(g.device, g.outline, nullptr);
-    vkDestroyPipelineLayout(g.device, g.layout, nullptr);
-    host::destroyImage(g.device, g.color);
-    host::destroyImage(g.device, g.depth);
-    vkDestroySwapchainKHR(g.device, g.swapchain, nullptr);
-    vkDestroyDevice(g.device, nullptr);
+    for (VkSemaphore s : g.presentReady) vkDestroySemaphore(g.dev.device, s, nullptr);
+    vkDestroyCommandPool(g.dev.device, g.pool, nullptr);
+    vkDestroyPipeline(g.dev.device, g.scene, nullptr);
+    vkDestroyPipeline(g.dev.device, g.outline, nullptr);
+    vkDestroyPipelineLayout(g.dev.device, g.layout, nullptr);
+    host::destroyImage(g.dev.device, g.color);
+    host::destroyImage(g.dev.device, g.depth);
+    vkDestroySwapchainKHR(g.dev.device, g.swapchain, nullptr);
+    vkDestroyDevice(g.dev.device, nullptr);
   }
   if (g.surface) vkDestroySurfaceKHR(g.instance, g.surface, nullptr);
   host::destroyInstance(g.instance, g.messenger);
@@ -631,8 +517,8 @@ int main(int argc, char** argv) {
   canopy::Model* model = nullptr;
   Scene scene;
   bool ok = g.window && createInstanceAndDevice(g, validate) && createSwapchain(g) &&
-            host::createImage(g.device, g.memory, kW, kH, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) == VK_SUCCESS &&
-            host::createImage(g.device, g.memory, kW, kH, g.depthFormat, kDepthUsage,
+            host::createImage(g.dev.device, g.dev.memory, kW, kH, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) == VK_SUCCESS &&
+            host::createImage(g.dev.device, g.dev.memory, kW, kH, g.depthFormat, kDepthUsage,
                               VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) == VK_SUCCESS &&
             createPipelines(g) && createFrames(g);
   if (ok) {

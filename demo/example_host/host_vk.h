@@ -1,13 +1,19 @@
 #pragma once
 // The example hosts' own small Vulkan helpers (demo/example_host.cpp, demo/game_host.cpp): what an
-// engine has in its renderer already — its instance with validation, a memory-type search, a 2D
-// image with its memory and view, an image barrier, the box pipeline from host_box.vert/frag. Nothing of Canopy's: the hosts embed
-// Canopy through <canopy/canopy.h> only.
+// engine has in its renderer already — its instance with validation, its device made with what
+// Canopy asks for and adopted, a memory-type search, a 2D image with its memory and view, an image
+// barrier, the box pipeline from host_box.vert/frag. Canopy through <canopy/canopy.h> only, as a
+// host embeds it (docs/embedding.md).
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <memory>
+#include <string>
 #include <vector>
 #include <vulkan/vulkan.h>
+
+#include <canopy/canopy.h>
 
 #include <glm/glm.hpp>
 
@@ -15,6 +21,26 @@
 #include "host_box.vert.h"
 
 namespace host {
+
+// The program's name in messages (each host defines it).
+extern const char* const kProgram;
+
+// A Vulkan call in a function returning bool: on failure, says which call and its VkResult.
+#define HOST_CHECK(call)                                                                        \
+  do {                                                                                          \
+    VkResult r_ = (call);                                                                       \
+    if (r_ != VK_SUCCESS) {                                                                     \
+      std::fprintf(stderr, "%s: %s failed: VkResult %d\n", host::kProgram, #call, int(r_));     \
+      return false;                                                                             \
+    }                                                                                           \
+  } while (0)
+
+// The hosts' colour target and the usage both create their targets with, declared to Canopy with
+// them (CanopyImage); the depth is SAMPLED because Canopy reads it.
+constexpr VkFormat kColorFormat = VK_FORMAT_R8G8B8A8_UNORM;
+constexpr VkImageUsageFlags kColorUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+constexpr VkImageUsageFlags kDepthUsage =
+    VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
 
 // Counts (and prints) every validation message into the int the messenger was created with.
 inline VKAPI_ATTR VkBool32 VKAPI_CALL onValidation(VkDebugUtilsMessageSeverityFlagBitsEXT, VkDebugUtilsMessageTypeFlagsEXT,
@@ -165,6 +191,64 @@ inline void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspec
   vkCmdPipelineBarrier2(cmd, &di);
 }
 
+// A pool whose command buffers are reset one by one (a frame slot re-records its own).
+inline VkResult createCommandPool(VkDevice device, uint32_t family, VkCommandPool* out) {
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = family;
+  return vkCreateCommandPool(device, &pci, nullptr, out);
+}
+
+// A frame slot's command buffer and the fence its submission signals.
+inline VkResult createFrameSlot(VkDevice device, VkCommandPool pool, VkCommandBuffer* cmd, VkFence* fence) {
+  VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  ai.commandPool = pool;
+  ai.commandBufferCount = 1;
+  VkResult r = vkAllocateCommandBuffers(device, &ai, cmd);
+  if (r != VK_SUCCESS) return r;
+  VkFenceCreateInfo fci{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  return vkCreateFence(device, &fci, nullptr, fence);
+}
+
+// The hosts' box pass: dynamic rendering into `color` and `depth` (and its stencil with
+// `stencil`), cleared to `clearColor` / `clearDepth` or loaded, both stored (Canopy reads the host's
+// depth), viewport and scissor over `width` x `height`, `pipeline` bound. vkCmdEndRendering ends it.
+inline void beginBoxPass(VkCommandBuffer cmd, VkImageView color, VkImageView depth, bool stencil, bool clear,
+                         VkClearColorValue clearColor, float clearDepth, uint32_t width, uint32_t height, VkPipeline pipeline) {
+  VkRenderingAttachmentInfo c{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO}, z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+  c.imageView = color;
+  c.imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  c.loadOp = clear ? VK_ATTACHMENT_LOAD_OP_CLEAR : VK_ATTACHMENT_LOAD_OP_LOAD;
+  c.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  c.clearValue.color = clearColor;
+  z.imageView = depth;
+  z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  z.loadOp = c.loadOp;
+  z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  z.clearValue.depthStencil = {clearDepth, 0};
+  VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+  ri.renderArea = {{0, 0}, {width, height}};
+  ri.layerCount = 1;
+  ri.colorAttachmentCount = 1;
+  ri.pColorAttachments = &c;
+  ri.pDepthAttachment = &z;
+  ri.pStencilAttachment = stencil ? &z : nullptr;
+  vkCmdBeginRendering(cmd, &ri);
+  const VkViewport v{0, 0, float(width), float(height), 0, 1};
+  const VkRect2D sc{{0, 0}, {width, height}};
+  vkCmdSetViewport(cmd, 0, 1, &v);
+  vkCmdSetScissor(cmd, 0, 1, &sc);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
+}
+
+// Depth tested with `compare` and written, no stencil (a box pipeline's depth state to start from).
+inline VkPipelineDepthStencilStateCreateInfo depthTested(VkCompareOp compare) {
+  VkPipelineDepthStencilStateCreateInfo ds{VK_STRUCTURE_TYPE_PIPELINE_DEPTH_STENCIL_STATE_CREATE_INFO};
+  ds.depthTestEnable = ds.depthWriteEnable = VK_TRUE;
+  ds.depthCompareOp = compare;
+  return ds;
+}
+
 // The box pipeline layout (BoxPush as push constants).
 inline VkResult createBoxLayout(VkDevice device, VkPipelineLayout* out) {
   VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(BoxPush)};
@@ -238,6 +322,121 @@ inline VkResult createBoxPipeline(VkDevice device, VkPipelineLayout layout, VkFo
   for (VkShaderModule m : modules)
     if (m) vkDestroyShaderModule(device, m, nullptr);
   return r;
+}
+
+// The host's device, made as docs/embedding.md says: a physical device Canopy can run on
+// (queryDeviceRequirements says why one is skipped), a discrete GPU first, with a graphics +
+// compute family (that presents to `surface` when one is given), Canopy's extensions and features
+// switched on in the host's own chain for the device's API version.
+struct HostDevice {
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  uint32_t family = 0;
+  uint32_t apiVersion = 0;  // the device's: the lower of the instance's and the physical device's
+  std::string name;
+  VkPhysicalDeviceMemoryProperties memory{};
+  VkDevice device = VK_NULL_HANDLE;
+  VkQueue queue = VK_NULL_HANDLE;
+  // What the device was created with, for adoptDevice (which reads it during the call).
+  struct Created {
+    VkPhysicalDeviceDynamicRenderingFeatures dynamicRendering{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DYNAMIC_RENDERING_FEATURES};
+    VkPhysicalDeviceSynchronization2Features sync2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SYNCHRONIZATION_2_FEATURES};
+    VkPhysicalDeviceVulkan13Features f13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+    VkPhysicalDeviceVulkan12Features f12{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES};
+    VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+    std::vector<std::string> extensionNames;
+    std::vector<const char*> extensions;
+    float priority = 1.0f;
+    VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+    VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+  };
+  std::unique_ptr<Created> created;
+};
+
+inline bool createHostDevice(VkInstance instance, uint32_t instanceApi, VkSurfaceKHR surface,
+                             const std::vector<const char*>& extraExtensions, HostDevice* out) {
+  uint32_t n = 0;
+  vkEnumeratePhysicalDevices(instance, &n, nullptr);
+  std::vector<VkPhysicalDevice> pds(n);
+  vkEnumeratePhysicalDevices(instance, &n, pds.data());
+  canopy::DeviceRequirements req;
+  for (VkPhysicalDevice pd : pds) {
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(pd, &p);
+    canopy::DeviceRequirements r;
+    const canopy::Status s = canopy::queryDeviceRequirements(vkGetInstanceProcAddr, instance, instanceApi, pd, &r);
+    if (!s.ok()) {
+      std::fprintf(stderr, "%s: skipping %s: %s\n", kProgram, p.deviceName, s.message().c_str());
+      continue;
+    }
+    if (out->physical && p.deviceType != VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) continue;
+    uint32_t qn = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, nullptr);
+    std::vector<VkQueueFamilyProperties> fams(qn);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &qn, fams.data());
+    for (uint32_t i = 0; i < qn; ++i) {
+      VkBool32 present = VK_TRUE;
+      if (surface) vkGetPhysicalDeviceSurfaceSupportKHR(pd, i, surface, &present);
+      if (present && (fams[i].queueFlags & r.queueFlags) == r.queueFlags) {
+        out->physical = pd;
+        out->family = i;
+        out->name = p.deviceName;
+        out->apiVersion = std::min(instanceApi, p.apiVersion);
+        req = r;
+        break;
+      }
+    }
+  }
+  if (!out->physical) {
+    std::fprintf(stderr, "%s: no device runs Canopy%s\n", kProgram, surface ? " and presents to the window" : "");
+    return false;
+  }
+  vkGetPhysicalDeviceMemoryProperties(out->physical, &out->memory);
+  // The chain for the device's version (DeviceRequirements::featureStructs); Canopy switches its
+  // features on in it.
+  out->created = std::make_unique<HostDevice::Created>();
+  HostDevice::Created& c = *out->created;
+  const bool core13 = out->apiVersion >= VK_API_VERSION_1_3;
+  c.sync2.pNext = &c.dynamicRendering;
+  c.f12.pNext = core13 ? static_cast<void*>(&c.f13) : static_cast<void*>(&c.sync2);
+  c.features.pNext = &c.f12;
+  const canopy::Status s = canopy::enableDeviceFeatures(vkGetInstanceProcAddr, instance, out->physical, out->apiVersion, &c.features);
+  if (!s.ok()) {
+    std::fprintf(stderr, "%s: %s\n", kProgram, s.message().c_str());
+    return false;
+  }
+  c.extensionNames = req.deviceExtensions;
+  c.extensions = extraExtensions;
+  for (const std::string& e : c.extensionNames) c.extensions.push_back(e.c_str());
+  c.queueInfo.queueFamilyIndex = out->family;
+  c.queueInfo.queueCount = 1;
+  c.queueInfo.pQueuePriorities = &c.priority;
+  c.info.pNext = &c.features;
+  c.info.queueCreateInfoCount = 1;
+  c.info.pQueueCreateInfos = &c.queueInfo;
+  c.info.enabledExtensionCount = uint32_t(c.extensions.size());
+  c.info.ppEnabledExtensionNames = c.extensions.data();
+  HOST_CHECK(vkCreateDevice(out->physical, &c.info, nullptr, &out->device));
+  vkGetDeviceQueue(out->device, out->family, 0, &out->queue);
+  return true;
+}
+
+// Canopy on the host's device, through the host's loader (and its allocator, when given).
+inline bool adoptHostDevice(const HostDevice& d, VkInstance instance, uint32_t instanceApi, uint32_t framesInFlight,
+                            const canopy::DeviceMemoryAllocator* allocator, canopy::Device** adopted) {
+  canopy::AdoptDeviceDesc ad;
+  ad.getInstanceProcAddr = vkGetInstanceProcAddr;
+  ad.instance = instance;
+  ad.instanceApiVersion = instanceApi;
+  ad.physicalDevice = d.physical;
+  ad.device = d.device;
+  ad.deviceCreateInfo = &d.created->info;
+  ad.queue = d.queue;
+  ad.queueFamily = d.family;
+  ad.memoryAllocator = allocator;
+  ad.framesInFlight = framesInFlight;
+  const canopy::Status s = canopy::adoptDevice(ad, adopted);
+  if (!s.ok()) std::fprintf(stderr, "%s: %s\n", kProgram, s.message().c_str());
+  return s.ok();
 }
 
 }  // namespace host

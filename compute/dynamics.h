@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <vector>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/memory.h"
 #include "engine/pipeline.h"
@@ -18,12 +18,12 @@
 namespace canopy {
 struct Device;
 
-// DelayMode and SimulationPlane: <canopy/canopy.h> (world-space vectors as Float3).
+// DelayMode and SimulationPlane: <canopy/canopy_params.h> (world-space vectors as Float3).
 // The default plane: the camera's own right/up, one tile covering the visible region at depth
 // `centreDepth` (the larger of its width and height), origin at that region's lower-left corner.
 SimulationPlane simulationPlaneFromView(const LayerView& view, float centreDepth);
 
-// DynamicsParams: <canopy/canopy.h>.
+// DynamicsParams: <canopy/canopy_params.h>.
 Status validateDynamicsParams(const DynamicsParams& params);
 
 // One layer as the dynamics see it (from the layer placement).

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/memory.h"
 #include "engine/pipeline.h"
@@ -23,7 +23,7 @@ namespace canopy {
 struct Device;
 
 // WindParams, Motor, FluidParams, WaveParams, SimulationParams, SimulationDesc and SimulationStats
-// are the public API's (<canopy/canopy.h>); their enum values are the shader's constants.
+// are the public API's (<canopy/canopy_params.h>); their enum values are the shader's constants.
 static_assert(uint32_t(FluidScheme::MacMultigrid) == SIM_SCHEME_MAC_MULTIGRID && uint32_t(FluidScheme::Stam) == SIM_SCHEME_STAM);
 static_assert(uint32_t(FluidBoundary::WindTunnel) == SIM_BOUNDARY_TUNNEL && uint32_t(FluidBoundary::Walls) == SIM_BOUNDARY_WALLS);
 static_assert(kWindFromLeft == SIM_SIDE_LEFT && kWindFromRight == SIM_SIDE_RIGHT && kWindFromBottom == SIM_SIDE_BOTTOM &&

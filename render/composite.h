@@ -14,12 +14,14 @@
 #include <cstdint>
 #include <vulkan/vulkan.h>
 
+#include <canopy/canopy_params.h>
+
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"
 #include "engine/status.h"
-#include "render/layers.h"
+#include "render/layer_passes.h"
 #include "shared/anim.h"
 #include "shared/composite.h"
 

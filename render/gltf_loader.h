@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/status.h"
 #include "render/model.h"
 
 namespace canopy {
 
-// GltfLoadOptions: <canopy/canopy.h>; the model type: render/model.h.
+// GltfLoadOptions: <canopy/canopy_params.h>; the model type: render/model.h.
 // Loads `path` (.gltf or .glb, decided by the file's first bytes). On failure `out` is empty and
 // the Status names the file and the element ("meshes[2].primitives[0]: accessor 7 ...").
 // Never throws; a file that is not a regular file (FIFO, device, folder) is refused without

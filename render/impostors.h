@@ -18,7 +18,7 @@
 #include <glm/glm.hpp>
 #include <vulkan/vulkan.h>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"

@@ -7,14 +7,14 @@
 #include <string_view>
 #include <vector>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/status.h"
 #include "shared/layers.h"
 
 namespace canopy {
 
-static_assert(kMaxLayers == CANOPY_MAX_LAYERS);  // kMaxLayers, LayerLayout, RegionSplit: <canopy/canopy.h>
+static_assert(kMaxLayers == CANOPY_MAX_LAYERS);  // kMaxLayers, LayerLayout, RegionSplit: <canopy/canopy_params.h>
 
 // Parses "N(a-b-c)" (N must equal a+b+c) or a plain "N" (= N(N-0-0): N equal layers over the
 // whole range). 1 <= N <= kMaxLayers. Errors quote the text and say what is expected.

@@ -9,13 +9,13 @@
 
 #include <glm/glm.hpp>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "shared/bend.h"
 
 namespace canopy {
 
-// AlphaMode: <canopy/canopy.h>.
+// AlphaMode: <canopy/canopy_params.h>.
 struct ModelMaterial {
   std::string name;
   glm::vec4 baseColorFactor{1.0f};

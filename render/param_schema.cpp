@@ -1,5 +1,5 @@
 // The parameter schema's table and checks, both expanded from the field lists of
-// <canopy/canopy.h> (canopy_schema.h explains the list form; docs/design.md "Parameters").
+// <canopy/canopy_params.h> (canopy_schema.h explains the list form; docs/design.md "Parameters").
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 
 #include "engine/status.h"
 #include "render/param_schema.h"

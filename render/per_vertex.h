@@ -10,7 +10,7 @@
 #include "engine/pipeline.h"
 #include "engine/render_graph.h"
 #include "render/composite.h"
-#include <canopy/canopy.h>
+#include <canopy/canopy_params.h>
 #include "render/layers.h"
 #include "shared/bend.h"
 

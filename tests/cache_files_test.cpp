@@ -21,6 +21,8 @@
 #include <set>
 
 #include "engine/files.h"
+#include <canopy/canopy.h>
+
 #include "render/cache_file.h"
 #include "render/leaf_roots.h"
 

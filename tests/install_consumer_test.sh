@@ -14,6 +14,7 @@ inc="$work/prefix/include"
 test -f "$inc/canopy/canopy.h"
 test -f "$inc/canopy/canopy_graph.h"
 test -f "$inc/canopy/canopy_core.h"
+test -f "$inc/canopy/canopy_params.h"
 test -f "$work/prefix/lib/cmake/Canopy/CanopyConfig.cmake"
 extra=$(cd "$inc" && find . -type f ! -path './canopy/*' | head -5)
 if [ -n "$extra" ] || [ -d "$inc/canopy/engine" ] || [ -d "$inc/canopy/render" ] || [ -d "$inc/canopy/compute" ]; then
@@ -33,6 +34,9 @@ c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/graph_alone.c
 echo '#include <canopy/canopy_core.h>
 int main() { canopy::Status s; canopy::ResourceState r; (void)r; return s.ok() ? 0 : 1; }' > "$work/core_alone.cpp"
 c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/core_alone.cpp"
+echo '#include <canopy/canopy_params.h>
+int main() { canopy::CanopyDesc d; return canopy::checkParams(d).ok() ? 0 : 1; }' > "$work/params_alone.cpp"
+c++ -std=c++17 -Wall -Wextra -Werror -fsyntax-only -I"$inc" "$work/params_alone.cpp"
 echo "the public headers compile alone (C++17, -I$inc only)"
 # The version policy (docs/embedding.md "Versions"): below 1.0 a minor version breaks the API, so
 # a host asking for an older minor version (or a newer one) is refused at configure time.

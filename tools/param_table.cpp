@@ -50,7 +50,7 @@ std::string cell(const std::string& text) {
 std::string paramTableMarkdown() {
   std::string out =
       "# Parameters\n\n"
-      "Generated from the parameter schema (`<canopy/canopy_schema.h>`: each struct of `<canopy/canopy.h>` is\n"
+      "Generated from the parameter schema (`<canopy/canopy_schema.h>`: each struct of `<canopy/canopy_params.h>` is\n"
       "declared by one list line per field) by `canopy-demo --param-table > docs/parameters.md`; the unit\n"
       "test `ParamSchema.DocsTableMatchesTheSchema` fails when this file and the schema differ. The same\n"
       "lines give each struct its `operator==`, `checkParams()` (run by `createCanopy` and\n"

@@ -1,5 +1,5 @@
 #pragma once
-// The parameter schema: every public parameter struct of <canopy/canopy.h> is declared by a list
+// The parameter schema: every public parameter struct of <canopy/canopy_params.h> is declared by a list
 // of its fields, one line each,
 //
 //   X(type, name, default, check, min, max, unit, doc)

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 
 #include "demo/cli.h"
 #include "demo/progress.h"
@@ -200,7 +201,50 @@ const SwitchOption kSwitchOptions[] = {
     {"--light-sheet", &Options::lightSheet, true},
     {"--window", &Options::window, true},
     {"--validate", &Options::validate, true},
+    {"--no-mp4", &Options::mp4, false},
 };
+// Options that take one of a few words, each word setting Options its own way; `words` is what a
+// refusal lists (an alias such as "approximate" is accepted without being listed).
+struct ChoiceOption {
+  const char* name;
+  const char* words;
+  std::vector<std::pair<std::string, std::function<void(Options&)>>> choices;
+};
+const std::vector<ChoiceOption>& choiceOptions() {
+  static const std::vector<ChoiceOption> options = {
+      {"--delay", "exact or approx",
+       {{"exact", [](Options& o) { o.delay = DelayMode::Exact; }},
+        {"approx", [](Options& o) { o.delay = DelayMode::Approximate; }},
+        {"approximate", [](Options& o) { o.delay = DelayMode::Approximate; }}}},
+      {"--method", "2d or per-vertex",
+       {{"2d", [](Options& o) { o.method = AnimationMode::Layers2D; }},
+        {"per-vertex", [](Options& o) { o.method = AnimationMode::PerVertex; }}}},
+      {"--per-vertex-wind", "field or uniform",
+       {{"field", [](Options& o) { o.perVertexWind = PerVertexWind::KaimalField; }},
+        {"uniform", [](Options& o) { o.perVertexWind = PerVertexWind::UniformNoise; }}}},
+      {"--impostor-views", "6 or 12",
+       {{"6", [](Options& o) { o.impostorViews = ImpostorViews::Diagonal6; }},
+        {"12", [](Options& o) { o.impostorViews = ImpostorViews::FacesAndDiagonals12; }}}},
+      {"--impostor-shape", "crossed or facing",
+       {{"crossed", [](Options& o) { o.impostorShape = ImpostorShape::CrossedPolygons; }},
+        {"facing", [](Options& o) { o.impostorShape = ImpostorShape::FacingPolygon; }}}},
+      {"--impostors", "off, far or size",
+       {{"off", [](Options& o) { o.impostors = ImpostorMode::Off; }},
+        {"far", [](Options& o) { o.impostors = ImpostorMode::FarRegion; }},
+        {"size", [](Options& o) { o.impostors = ImpostorMode::ByProjectedSize; }}}},
+      {"--debug", "none, layers, velocity or grid",
+       {{"none", [](Options& o) { o.debug = CompositeDebugView::None; }},
+        {"layers", [](Options& o) { o.debug = CompositeDebugView::Layers; }},
+        {"velocity", [](Options& o) { o.debug = CompositeDebugView::Velocity; }},
+        {"grid", [](Options& o) { o.debug = CompositeDebugView::Grid; }}}},
+      {"--reslice", "auto or every-frame",
+       {{"auto", [](Options& o) { o.reslice = ReslicePolicy::OnViewChange; }},
+        {"every-frame", [](Options& o) { o.reslice = ReslicePolicy::EveryFrame; }}}},
+      {"--vsync", "on or off",
+       {{"on", [](Options& o) { o.vsync = true; }}, {"off", [](Options& o) { o.vsync = false; }}}},
+  };
+  return options;
+}
 
 int parseOptions(int argc, char** argv, Options* o, std::string* err) {
   bool framesGiven = false;
@@ -229,6 +273,9 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     const SwitchOption* sw = nullptr;
     for (const SwitchOption& n : kSwitchOptions)
       if (a == n.name) sw = &n;
+    const ChoiceOption* choice = nullptr;
+    for (const ChoiceOption& c : choiceOptions())
+      if (a == c.name) choice = &c;
     if (num) {
       if (const int rc = number(num->low(), num->high(), &(o->*(num->field)), num->what)) return rc;
       if (num->field == &Options::halfResolutionLayers && o->halfResolutionLayers != std::floor(o->halfResolutionLayers))
@@ -237,6 +284,11 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
         return bad("needs a whole number of samples");
     } else if (sw) {
       o->*(sw->field) = sw->value;
+    } else if (choice) {
+      if (!takes()) return bad(std::string("needs ") + choice->words);
+      auto word = std::find_if(choice->choices.begin(), choice->choices.end(), [&](const auto& w) { return w.first == v; });
+      if (word == choice->choices.end()) return bad(quoted(v) + " is not " + choice->words);
+      word->second(*o);
     } else if (a == "--help" || a == "-h" || a == "--param-table") {
       if (a == "--param-table") std::fputs(paramTableMarkdown().c_str(), stdout);  // docs/parameters.md
       else printHelp();
@@ -281,45 +333,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
           else return bad("side '" + side + "' is not left, right, top or bottom");
         }
       o->windSides = sides;
-    } else if (a == "--delay") {
-      if (!takes()) return bad("needs exact or approx");
-      if (std::string(v) == "exact") o->delay = DelayMode::Exact;
-      else if (std::string(v) == "approx" || std::string(v) == "approximate") o->delay = DelayMode::Approximate;
-      else return bad(quoted(v) + " is not exact or approx");
-    } else if (a == "--method") {
-      if (!takes()) return bad("needs 2d or per-vertex");
-      if (std::string(v) == "2d") o->method = AnimationMode::Layers2D;
-      else if (std::string(v) == "per-vertex") o->method = AnimationMode::PerVertex;
-      else return bad(quoted(v) + " is not 2d or per-vertex");
-    } else if (a == "--per-vertex-wind") {
-      if (!takes()) return bad("needs field or uniform");
-      if (std::string(v) == "field") o->perVertexWind = PerVertexWind::KaimalField;
-      else if (std::string(v) == "uniform") o->perVertexWind = PerVertexWind::UniformNoise;
-      else return bad(quoted(v) + " is not field or uniform");
-    } else if (a == "--impostor-views") {
-      if (!takes()) return bad("needs 6 or 12");
-      if (std::string(v) == "6") o->impostorViews = ImpostorViews::Diagonal6;
-      else if (std::string(v) == "12") o->impostorViews = ImpostorViews::FacesAndDiagonals12;
-      else return bad(quoted(v) + " is not 6 or 12");
-    } else if (a == "--impostor-shape") {
-      if (!takes()) return bad("needs crossed or facing");
-      if (std::string(v) == "crossed") o->impostorShape = ImpostorShape::CrossedPolygons;
-      else if (std::string(v) == "facing") o->impostorShape = ImpostorShape::FacingPolygon;
-      else return bad(quoted(v) + " is not crossed or facing");
-    } else if (a == "--impostors") {
-      if (!takes()) return bad("needs off, far or size");
-      if (std::string(v) == "off") o->impostors = ImpostorMode::Off;
-      else if (std::string(v) == "far") o->impostors = ImpostorMode::FarRegion;
-      else if (std::string(v) == "size") o->impostors = ImpostorMode::ByProjectedSize;
-      else return bad(quoted(v) + " is not off, far or size");
-    } else if (a == "--debug") {
-      if (!takes()) return bad("needs none, layers, velocity or grid");
-      const std::string d = v;
-      if (d == "none") o->debug = CompositeDebugView::None;
-      else if (d == "layers") o->debug = CompositeDebugView::Layers;
-      else if (d == "velocity") o->debug = CompositeDebugView::Velocity;
-      else if (d == "grid") o->debug = CompositeDebugView::Grid;
-      else return bad(quoted(d) + " is not none, layers, velocity or grid");
     } else if (a == "--light" || a == "--light-color") {
       const bool colour = a == "--light-color";
       const std::vector<std::string> parts = takes() ? cli::splitList(v) : std::vector<std::string>();
@@ -346,11 +359,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--degrees-per-frame") {
       if (const int rc = number(-90, 90, &o->degreesPerFrame)) return rc;
       o->degreesGiven = true;
-    } else if (a == "--reslice") {
-      if (!takes()) return bad("needs auto or every-frame");
-      if (std::string(v) == "auto") o->reslice = ReslicePolicy::OnViewChange;
-      else if (std::string(v) == "every-frame") o->reslice = ReslicePolicy::EveryFrame;
-      else return bad(quoted(v) + " is not auto or every-frame");
     } else if (a == "--compare-frames") {
       if (i + 2 >= argc || !*argv[i + 1] || !*argv[i + 2]) return bad("needs two folders");
       o->compareA = argv[++i];
@@ -358,11 +366,6 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;
-    } else if (a == "--no-mp4") {
-      o->mp4 = false;
-    } else if (a == "--vsync") {
-      if (!takes() || (std::string(v) != "on" && std::string(v) != "off")) return bad("needs on or off");
-      o->vsync = std::string(v) == "on";
     } else if (a == "--screenshot") {
       if (!takes() || !*v) return bad("needs a file");
       o->screenshot = v;

@@ -71,164 +71,218 @@ void placePlants(PlacementJob& job, const Plants& plants, float h, float w) {
       }
     }
 }
-}  // namespace
 
-// Runs the placement's stages (leaf-root depths, their range, the layer boundaries, each leaf's
-// layer, per-layer top and the root line over the vertices, triangles per layer) until it is done
-// or `deadline` (null: none) has passed; the clock is read every kBatch items.
-Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
-  // Items per clock reading, each item visited once per visible copy.
-  const size_t copies = job.depthRows.size(), kBatch = std::max<size_t>((size_t(1) << 14) / std::max<size_t>(copies, 1), 1);
-  const auto t0 = PlacementClock::now();
-  const LayerSettings& s = lv.settings;
-  gpu::LayerFrame& f = job.frame;
-  const bool geometric = s.slice == SliceMode::Geometry;
+// What every stage of one advancePlacement call reads: the mesh, the copies, the batch size, and
+// the helpers that walk the compact host mesh as the vertex shader decodes it.
+struct PlacementPass {
+  const LayeredVegetation& lv;
+  PlacementJob& job;
+  const LayerSettings& settings;
+  gpu::LayerFrame& frame;
+  const CompactMesh& hm;  // read chunk by chunk: foliage chunks first, vertices and indices contiguous
+  const Plants& plants;
+  size_t copies, batch, nLeaves, nVertices, nChunks, nPlants, foliageIndices = 0;
+  bool geometric, perPlant;
+  float height, width;
+
+  PlacementPass(const LayeredVegetation& v, PlacementJob& j)
+      : lv(v), job(j), settings(v.settings), frame(j.frame), hm(v.mesh.hostMesh), plants(v.mesh.plants) {
+    copies = job.depthRows.size();
+    // Items per clock reading, each item visited once per visible copy.
+    batch = std::max<size_t>((size_t(1) << 14) / std::max<size_t>(copies, 1), 1);
+    nLeaves = lv.mesh.leafCount;
+    nVertices = hm.vertices.size();
+    nChunks = lv.mesh.chunks.size();
+    nPlants = plants.count();
+    geometric = settings.slice == SliceMode::Geometry;
+    perPlant = nPlants * copies > 1 && plants.leafPlant.size() == nLeaves;
+    for (const MeshChunk& c : lv.mesh.chunks)
+      if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
+    height = float(lv.desc.height);
+    width = float(lv.desc.width);
+  }
   // View depth of model-space point p in copy k.
-  auto depthOf = [&](size_t k, const glm::vec3& p) { return glm::dot(job.depthRows[k], glm::vec4(p, 1.0f)); };
-  // Per vertex the placement reads the compact host mesh (decoded as the vertex shader decodes it),
-  // chunk by chunk: foliage chunks come first, each chunk's vertices and indices contiguous.
-  const CompactMesh& hm = lv.mesh.hostMesh;
-  const size_t nLeaves = lv.mesh.leafCount, nVertices = hm.vertices.size(), nChunks = lv.mesh.chunks.size();
-  const Plants& plants = lv.mesh.plants;
-  const size_t nPlants = plants.count();
-  const bool perPlant = nPlants * copies > 1 && plants.leafPlant.size() == nLeaves;
-  size_t foliageIndices = 0;
-  for (const MeshChunk& c : lv.mesh.chunks)
-    if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
-  auto chunkOf = [&](size_t item, bool index) -> const MeshChunk& {
+  float depthOf(size_t k, const glm::vec3& p) const { return glm::dot(job.depthRows[k], glm::vec4(p, 1.0f)); }
+  // The chunk holding vertex (or index) `item`, items visited in order.
+  const MeshChunk& chunkOf(size_t item, bool index) {
     for (;; ++job.chunk) {
       const MeshChunk& c = lv.mesh.chunks[job.chunk];
       if (job.chunk + 1 == lv.mesh.chunks.size() || item < (index ? c.firstIndex + 3ull * c.triangleCount : c.firstVertex + c.vertexCount))
         return c;
     }
-  };
-  auto leafOf = [&](const MeshChunk& c, const gpu::LayerVertex& v) {
+  }
+  uint32_t leafOf(const MeshChunk& c, const gpu::LayerVertex& v) const {
     const uint32_t l = chunkLeaf(v);
     return l == LAYER_CHUNK_NO_LEAF ? kNoLeaf : hm.roots[c.firstRoot + l].leaf;
-  };
-  const float h = float(lv.desc.height), wPx = float(lv.desc.width);
+  }
+  // Each stage handles items [job.next, its return value) and moves job.stage on when it reaches
+  // its last item (returning 0, so the next stage starts at its first).
+  size_t rootDepths();
+  size_t foliageVertexDepths();
+  Status layerBoundaries();
+  size_t leafLayers();
+  size_t rootLineAndTops();
+  size_t trianglesPerLayer();
+  void finish();
+};
+
+// The keys the layers are assigned by: leaf roots (or, with per-triangle slicing, every foliage
+// vertex), read from the chunks' root tables (a leaf in two chunks is written twice, alike).
+size_t PlacementPass::rootDepths() {
+  size_t roots = 0, end = job.next;
+  for (; end < nChunks && roots < batch; ++end) {
+    const MeshChunk& c = lv.mesh.chunks[end];
+    for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i)
+      for (size_t k = 0; k < copies; ++k) {
+        const float z = depthOf(k, hm.roots[i].position);
+        job.leafDepth[k * nLeaves + hm.roots[i].leaf] = z;
+        if (!geometric) {
+          job.zMin = std::min(job.zMin, z);
+          job.zMax = std::max(job.zMax, z);
+        }
+      }
+    roots += c.rootCount + 1;
+  }
+  if (end < nChunks) return end;
+  job.stage = geometric ? PlacementStage::FoliageVertexDepths : PlacementStage::LayerBoundaries;
+  return 0;
+}
+
+size_t PlacementPass::foliageVertexDepths() {
+  const size_t end = std::min(job.next + batch, nVertices);
+  for (size_t v = job.next; v < end; ++v)
+    if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
+      const glm::vec3 p = decodePosition(chunkOf(v, false), hm.vertices[v]);
+      for (size_t k = 0; k < copies; ++k) {
+        const float z = depthOf(k, p);
+        job.zMin = std::min(job.zMin, z);
+        job.zMax = std::max(job.zMax, z);
+      }
+    }
+  if (end < nVertices) return end;
+  job.stage = PlacementStage::LayerBoundaries;
+  return 0;
+}
+
+Status PlacementPass::layerBoundaries() {
+  if (!(job.zMin <= job.zMax)) job.zMin = job.zMax = 0.0f;  // no foliage: empty layers
+  std::vector<LayerSlab> slabs;
+  std::vector<float> bounds;
+  CANOPY_TRY(placeLayers(settings.layout, settings.regions, job.zMin, job.zMax, &slabs, &bounds));
+  for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) frame.boundaries[i] = bounds[std::min<size_t>(i, bounds.size() - 1)];
+  job.layers.assign(frame.layerCount, LayerInfo{});
+  for (uint32_t i = 0; i < frame.layerCount; ++i) {
+    job.layers[i].slab = slabs[i];
+    job.layers[i].top = INFINITY;
+  }
+  job.leafLayer.resize(nLeaves * copies);
+  if (perPlant) job.plantTop.assign(copies * nPlants * frame.layerCount, INFINITY);
+  job.stage = PlacementStage::LeafLayers;
+  return Status();
+}
+
+// Every copy's leaves: (copy, leaf) items.
+size_t PlacementPass::leafLayers() {
+  const size_t end = std::min(job.next + batch * std::max<size_t>(copies, 1), nLeaves * copies);
+  for (size_t i = job.next; i < end; ++i) {
+    job.leafLayer[i] = uint8_t(gpu::layerOfDepth(frame, job.leafDepth[i]));
+    job.layers[job.leafLayer[i]].leaves++;
+  }
+  if (end < nLeaves * copies) return end;
+  job.stage = PlacementStage::RootLineAndTops;
+  return 0;
+}
+
+// The screen-space root line and per-layer tops (eq. 7), the layers' and the rigid part's depths.
+size_t PlacementPass::rootLineAndTops() {
+  const size_t end = std::min(job.next + batch, nVertices);
+  for (size_t v = job.next; v < end; ++v) {
+    const MeshChunk& c = chunkOf(v, false);
+    const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
+    const uint32_t leaf = leafOf(c, hm.vertices[v]);
+    for (size_t k = 0; k < copies; ++k) {
+      const float w = glm::dot(job.rowsW[k], p);
+      if (w <= 1e-6f) {
+        job.behind = true;
+        continue;
+      }
+      const float y = (glm::dot(job.rowsY[k], p) / w * 0.5f + 0.5f) * height;
+      job.bottom = std::max(job.bottom, y);
+      const glm::vec2 px((glm::dot(job.rowsX[k], p) / w * 0.5f + 0.5f) * width, y);
+      job.pixelLo = glm::min(job.pixelLo, px);
+      job.pixelHi = glm::max(job.pixelHi, px);
+      const float z = glm::dot(job.depthRows[k], p);
+      if (leaf == kNoLeaf) {
+        job.rigidDepth = glm::vec2(std::min(job.rigidDepth.x, z), std::max(job.rigidDepth.y, z));
+        continue;
+      }
+      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, z) : job.leafLayer[k * nLeaves + leaf];
+      LayerInfo& li = job.layers[layer];
+      li.top = std::min(li.top, y);
+      li.drawnNear = std::min(li.drawnNear, z);
+      li.drawnFar = std::max(li.drawnFar, z);
+      if (perPlant) {
+        float& top = job.plantTop[(k * nPlants + plants.leafPlant[leaf]) * frame.layerCount + layer];
+        top = std::min(top, y);
+      }
+    }
+  }
+  if (end < nVertices) return end;
+  job.stage = PlacementStage::TrianglesPerLayer;
+  return 0;
+}
+
+// Foliage triangles come first in GPU order: indices [0, foliageIndices).
+size_t PlacementPass::trianglesPerLayer() {
+  const size_t end = std::min(job.next + 3 * batch, foliageIndices);
+  for (size_t k = job.next; k < end; k += 3) {
+    const MeshChunk& c = chunkOf(k, true);
+    const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
+    for (size_t j = 0; j < copies; ++j) {
+      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, depthOf(j, decodePosition(c, v))) : job.leafLayer[j * nLeaves + leafOf(c, v)];
+      job.layers[layer].triangles++;
+    }
+  }
+  if (end < foliageIndices) return end;
+  job.stage = PlacementStage::Finish;
+  return 0;
+}
+
+void PlacementPass::finish() {
+  float bottom = job.bottom;
+  if (!std::isfinite(bottom)) bottom = height;
+  for (LayerInfo& li : job.layers) {
+    li.rootLineY = bottom;
+    if (!std::isfinite(li.top)) li.top = bottom;
+    li.height = std::max(bottom - li.top, 1.0f);
+  }
+  if (perPlant) placePlants(job, plants, height, width);
+  job.plantTop = {};
+  job.leafDepth = {};
+  job.leafLayer = {};
+}
+
+}  // namespace
+
+// Runs the placement's stages (PlacementStage) until it is done or `deadline` (null: none) has
+// passed; the clock is read every batch of items.
+Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
+  const auto t0 = PlacementClock::now();
+  PlacementPass pass(lv, job);
   *done = false;
   while (!*done) {
     size_t end = 0;
     switch (job.stage) {
-      case 0: {  // the keys the layers are assigned by: leaf roots (or, below, every foliage vertex),
-                 // read from the chunks' root tables (a leaf in two chunks is written twice, alike)
-        size_t roots = 0;
-        for (end = job.next; end < nChunks && roots < kBatch; ++end) {
-          const MeshChunk& c = lv.mesh.chunks[end];
-          for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i)
-            for (size_t k = 0; k < copies; ++k) {
-              const float z = depthOf(k, hm.roots[i].position);
-              job.leafDepth[k * nLeaves + hm.roots[i].leaf] = z;
-              if (!geometric) {
-                job.zMin = std::min(job.zMin, z);
-                job.zMax = std::max(job.zMax, z);
-              }
-            }
-          roots += c.rootCount + 1;
-        }
-        if (end == nChunks) job.stage = geometric ? 1 : 2, end = 0;
-        break;
-      }
-      case 1:
-        end = std::min(job.next + kBatch, nVertices);
-        for (size_t v = job.next; v < end; ++v)
-          if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
-            const glm::vec3 p = decodePosition(chunkOf(v, false), hm.vertices[v]);
-            for (size_t k = 0; k < copies; ++k) {
-              const float z = depthOf(k, p);
-              job.zMin = std::min(job.zMin, z);
-              job.zMax = std::max(job.zMax, z);
-            }
-          }
-        if (end == nVertices) job.stage = 2, end = 0;
-        break;
-      case 2: {
-        if (!(job.zMin <= job.zMax)) job.zMin = job.zMax = 0.0f;  // no foliage: empty layers
-        std::vector<LayerSlab> slabs;
-        std::vector<float> bounds;
-        CANOPY_TRY(placeLayers(s.layout, s.regions, job.zMin, job.zMax, &slabs, &bounds));
-        for (uint32_t i = 0; i <= CANOPY_MAX_LAYERS; ++i) f.boundaries[i] = bounds[std::min<size_t>(i, bounds.size() - 1)];
-        job.layers.assign(f.layerCount, LayerInfo{});
-        for (uint32_t i = 0; i < f.layerCount; ++i) {
-          job.layers[i].slab = slabs[i];
-          job.layers[i].top = INFINITY;
-        }
-        job.leafLayer.resize(nLeaves * copies);
-        if (perPlant) job.plantTop.assign(copies * nPlants * f.layerCount, INFINITY);
-        job.stage = 3;
-        break;
-      }
-      case 3:  // every copy's leaves: (copy, leaf) items
-        end = std::min(job.next + kBatch * std::max<size_t>(copies, 1), nLeaves * copies);
-        for (size_t i = job.next; i < end; ++i) {
-          job.leafLayer[i] = uint8_t(gpu::layerOfDepth(f, job.leafDepth[i]));
-          job.layers[job.leafLayer[i]].leaves++;
-        }
-        if (end == nLeaves * copies) job.stage = 4, end = 0;
-        break;
-      case 4:  // the screen-space root line and per-layer tops (eq. 7)
-        end = std::min(job.next + kBatch, nVertices);
-        for (size_t v = job.next; v < end; ++v) {
-          const MeshChunk& c = chunkOf(v, false);
-          const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
-          const uint32_t leaf = leafOf(c, hm.vertices[v]);
-          for (size_t k = 0; k < copies; ++k) {
-            const float w = glm::dot(job.rowsW[k], p);
-            if (w <= 1e-6f) {
-              job.behind = true;
-              continue;
-            }
-            const float y = (glm::dot(job.rowsY[k], p) / w * 0.5f + 0.5f) * h;
-            job.bottom = std::max(job.bottom, y);
-            const glm::vec2 px((glm::dot(job.rowsX[k], p) / w * 0.5f + 0.5f) * wPx, y);
-            job.pixelLo = glm::min(job.pixelLo, px);
-            job.pixelHi = glm::max(job.pixelHi, px);
-            const float z = glm::dot(job.depthRows[k], p);
-            if (leaf == kNoLeaf) {
-              job.rigidDepth = glm::vec2(std::min(job.rigidDepth.x, z), std::max(job.rigidDepth.y, z));
-              continue;
-            }
-            const uint32_t layer = geometric ? gpu::layerOfDepth(f, z) : job.leafLayer[k * nLeaves + leaf];
-            LayerInfo& li = job.layers[layer];
-            li.top = std::min(li.top, y);
-            li.drawnNear = std::min(li.drawnNear, z);
-            li.drawnFar = std::max(li.drawnFar, z);
-            if (perPlant) {
-              float& top = job.plantTop[(k * nPlants + plants.leafPlant[leaf]) * f.layerCount + layer];
-              top = std::min(top, y);
-            }
-          }
-        }
-        if (end == nVertices) job.stage = 5, end = 0;
-        break;
-      case 5:  // foliage triangles come first in GPU order: indices [0, foliageIndices)
-        end = std::min(job.next + 3 * kBatch, foliageIndices);
-        for (size_t k = job.next; k < end; k += 3) {
-          const MeshChunk& c = chunkOf(k, true);
-          const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
-          for (size_t j = 0; j < copies; ++j) {
-            const uint32_t layer = geometric ? gpu::layerOfDepth(f, depthOf(j, decodePosition(c, v))) : job.leafLayer[j * nLeaves + leafOf(c, v)];
-            job.layers[layer].triangles++;
-          }
-        }
-        if (end == foliageIndices) job.stage = 6, end = 0;
-        break;
-      default: {
-        float bottom = job.bottom;
-        if (!std::isfinite(bottom)) bottom = h;
-        for (LayerInfo& li : job.layers) {
-          li.rootLineY = bottom;
-          if (!std::isfinite(li.top)) li.top = bottom;
-          li.height = std::max(bottom - li.top, 1.0f);
-        }
-        if (perPlant) placePlants(job, plants, h, wPx);
-        job.plantTop = {};
-        job.leafDepth = {};
-        job.leafLayer = {};
+      case PlacementStage::RootDepths: end = pass.rootDepths(); break;
+      case PlacementStage::FoliageVertexDepths: end = pass.foliageVertexDepths(); break;
+      case PlacementStage::LayerBoundaries: CANOPY_TRY(pass.layerBoundaries()); break;
+      case PlacementStage::LeafLayers: end = pass.leafLayers(); break;
+      case PlacementStage::RootLineAndTops: end = pass.rootLineAndTops(); break;
+      case PlacementStage::TrianglesPerLayer: end = pass.trianglesPerLayer(); break;
+      case PlacementStage::Finish:
+        pass.finish();
         *done = true;
         break;
-      }
     }
     job.next = end;
     if (end == 0) job.chunk = 0;  // a new stage starts at the first chunk

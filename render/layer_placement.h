@@ -42,6 +42,17 @@ struct LayerInfo {
   std::vector<uint32_t> plantKeys;
 };
 
+// The placement's stages, in order (advancePlacement runs them until a deadline and resumes).
+enum class PlacementStage : uint32_t {
+  RootDepths,           // every copy's leaf-root depths from the chunks' root tables, and their range
+  FoliageVertexDepths,  // per-triangle slicing (SliceMode::Geometry): the range over every foliage vertex
+  LayerBoundaries,      // the layers' slabs and boundaries over the range (placeLayers)
+  LeafLayers,           // each (copy, leaf)'s layer by its root's depth
+  RootLineAndTops,      // over the vertices: the root line, each layer's top and depth span (eq. 7)
+  TrianglesPerLayer,    // foliage triangles per layer
+  Finish,               // heights from the root line, the plants' rectangles; scratch freed
+};
+
 // The placement for one view (paper 3.2: depth range of the leaf roots, layer boundaries, per-layer
 // bounds and the eq. 7 root line), resumable so that a spread re-slice can run it a few ms a frame.
 struct PlacementJob {
@@ -59,7 +70,7 @@ struct PlacementJob {
   std::vector<uint8_t> leafLayer;
   std::vector<float> plantTop;  // (copy x plants + plant) x layers: the leaves' highest row, per-plant roots
   float zMin = 0, zMax = 0, bottom = 0;
-  uint32_t stage = 0;
+  PlacementStage stage = PlacementStage::RootDepths;
   size_t next = 0;       // the stage's next item (chunk, leaf, or vertex / index of the host mesh)
   uint32_t chunk = 0;    // the chunk holding item `next` (vertex and index stages)
   double ms = 0;  // CPU time spent so far

@@ -324,6 +324,21 @@ Status writeLightSheet(const Options& o, Host& host, const uint8_t clear[3],
   return Status();
 }
 
+// Writes `text` to `path` (best effort: the same text is printed too).
+void writeTextFile(const std::string& path, const std::string& text) {
+  if (FILE* f = std::fopen(path.c_str(), "w")) {
+    std::fputs(text.c_str(), f);
+    std::fclose(f);
+  }
+}
+
+// A headless frame in flight: whether its timing is kept, which written frame it is, when it went.
+struct InFlight {
+  bool keep = false;
+  int64_t index = -1;  // the written frame's number, -1 for a warm-up frame
+  double submitted = 0.0;
+};
+
 int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
   int messages = 0;
   Device dev;
@@ -360,11 +375,6 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       f.dt = 1.0f / o.fps;
       return f;
     };
-    struct InFlight {
-      bool pending = false, keep = false;
-      int64_t index = -1;  // the written frame's number, -1 for a warm-up frame
-      double submitted = 0.0;
-    };
     InFlight inFlight[Host::kFramesInFlight];
     uint64_t frameNumber = 0;
     CANOPY_TRY(createFrameRing(dev, &ring));
@@ -373,11 +383,10 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     std::function<Status(uint32_t, const std::vector<uint8_t>&)> written;  // set below
     double lastDone = -1.0;
     auto retire = [&](uint32_t slot) -> Status {
-      InFlight& p = inFlight[slot];
-      if (!p.pending) return Status();
-      CANOPY_VK(vkWaitForFences(dev.device, 1, &ring.fences[slot], VK_TRUE, UINT64_MAX));
-      CANOPY_VK(vkResetFences(dev.device, 1, &ring.fences[slot]));
-      p.pending = false;
+      const InFlight& p = inFlight[slot];
+      bool waited = false;
+      CANOPY_TRY(waitFrameSlot(dev, ring, slot, &waited));
+      if (!waited) return Status();
       const double done = nowMs();
       // Wall clock per frame: the interval between frame completions (with two frames in flight the
       // GPU never idles between them), or submit-to-fence for the very first frame.
@@ -400,19 +409,13 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
       CANOPY_TRY(retire(slot));
       f.frameNumber = ++frameNumber;
-      VkCommandBuffer cmd = ring.cmds[slot];
-      CANOPY_VK(vkResetCommandBuffer(cmd, 0));
-      VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-      bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-      CANOPY_VK(vkBeginCommandBuffer(cmd, &bi));
-      const Status rs = recordHostFrame(host, cmd, f, nullptr, slot);
-      CANOPY_VK(vkEndCommandBuffer(cmd));
-      CANOPY_TRY(rs);
+      CANOPY_TRY(recordFrameSlot(host, ring, slot, f, nullptr));
       VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
       si.commandBufferCount = 1;
-      si.pCommandBuffers = &cmd;
-      inFlight[slot] = {true, keep, index, nowMs()};
+      si.pCommandBuffers = &ring.cmds[slot];
+      inFlight[slot] = {keep, index, nowMs()};
       CANOPY_VK(vkQueueSubmit(dev.queue, 1, &si, ring.fences[slot]));
+      ring.pending[slot] = true;
       return Status();
     };
     // Waits for both slots, older frame first (the frames are written in order).
@@ -464,10 +467,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(writer.finish());
     const std::string text =
         timingReport(o, label, dev, st, warmup, first, steady, alone, writer.writeMs(), measureSway ? &sway : nullptr);
-    if (FILE* f = std::fopen((o.outDir + "/timing.txt").c_str(), "w")) {
-      std::fputs(text.c_str(), f);
-      std::fclose(f);
-    }
+    writeTextFile(o.outDir + "/timing.txt", text);
     std::printf("%s\n", text.c_str());
     printWrittenFiles(o, picked, crop);
     if (o.mp4) writeMp4(o);

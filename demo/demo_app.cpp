@@ -763,6 +763,26 @@ Status createFrameRing(Device& d, FrameRing* r) {
   return Status();
 }
 
+Status waitFrameSlot(Device& d, FrameRing& r, uint32_t slot, bool* waited) {
+  if (waited) *waited = r.pending[slot];
+  if (!r.pending[slot]) return Status();
+  CANOPY_VK(vkWaitForFences(d.device, 1, &r.fences[slot], VK_TRUE, UINT64_MAX));
+  CANOPY_VK(vkResetFences(d.device, 1, &r.fences[slot]));
+  r.pending[slot] = false;
+  return Status();
+}
+
+Status recordFrameSlot(Host& h, FrameRing& r, uint32_t slot, const CanopyFrame& frame, const Image* present) {
+  VkCommandBuffer cmd = r.cmds[slot];
+  CANOPY_VK(vkResetCommandBuffer(cmd, 0));
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  CANOPY_VK(vkBeginCommandBuffer(cmd, &bi));
+  const Status rs = recordHostFrame(h, cmd, frame, present, slot);
+  CANOPY_VK(vkEndCommandBuffer(cmd));
+  return rs;
+}
+
 void destroyFrameRing(Device& d, FrameRing& r) {
   if (!d.device) return;
   for (uint32_t i = 0; i < Host::kFramesInFlight; ++i) {

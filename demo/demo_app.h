@@ -161,10 +161,17 @@ struct FrameRing {
   VkCommandBuffer cmds[Host::kFramesInFlight] = {};
   VkFence fences[Host::kFramesInFlight] = {};
   VkSemaphore acquired[Host::kFramesInFlight] = {};
+  bool pending[Host::kFramesInFlight] = {};  // submitted, not yet waited for
 };
 Status createFrameRing(Device& device, FrameRing* out);
 // Destroys the ring; its submitted frames must have completed.
 void destroyFrameRing(Device& device, FrameRing& ring);
+// Waits for the frame submitted from `slot`, if any, and frees the slot (its fence reset);
+// *waited (optional) says whether there was one. The headless and the windowed demo retire alike.
+Status waitFrameSlot(Device& device, FrameRing& ring, uint32_t slot, bool* waited = nullptr);
+// Records the host's frame `frame` into the slot's command buffer: reset, begin (one submit),
+// recordHostFrame, end. The caller submits it (with its fence) and marks the slot pending.
+Status recordFrameSlot(Host& host, FrameRing& ring, uint32_t slot, const CanopyFrame& frame, const Image* present);
 
 // Per-pass timing: medians over the frames added.
 struct TimingLog {

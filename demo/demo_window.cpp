@@ -405,7 +405,6 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
   Swapchain sc;
   Host host;
   FrameRing ring;  // two frames in flight: the loop waits only for the slot's previous frame
-  bool pending[Host::kFramesInFlight] = {};
   uint64_t frameNumber = 0;
   Live live;
   live.options = &o;
@@ -469,11 +468,9 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       // acquire semaphore and read-back buffer are reused; the frame just before may still run.
       const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
       auto retire = [&](uint32_t k) -> Status {
-        if (!pending[k]) return Status();
-        CANOPY_VK(vkWaitForFences(dev.device, 1, &ring.fences[k], VK_TRUE, UINT64_MAX));
-        CANOPY_VK(vkResetFences(dev.device, 1, &ring.fences[k]));
-        pending[k] = false;
-        return host.timer[k].read(dev, &lastTimings);
+        bool waited = false;
+        CANOPY_TRY(waitFrameSlot(dev, ring, k, &waited));
+        return waited ? host.timer[k].read(dev, &lastTimings) : Status();
       };
       CANOPY_TRY(retire(slot));
       uint32_t index = 0;
@@ -487,16 +484,9 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
       f.camera = toCamera(cameraView(live.rig, model, sc.extent.width, sc.extent.height));
       f.dt = live.paused ? 0.0f : 1.0f / o.fps;
       f.frameNumber = ++frameNumber;
-      VkCommandBuffer cmd = ring.cmds[slot];
-      vkResetCommandBuffer(cmd, 0);
-      VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-      bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-      vkBeginCommandBuffer(cmd, &bi);
-      const Status rs = recordHostFrame(host, cmd, f, &sc.images[index], slot);
-      vkEndCommandBuffer(cmd);
-      CANOPY_TRY(rs);
+      CANOPY_TRY(recordFrameSlot(host, ring, slot, f, &sc.images[index]));
       CANOPY_TRY(submitAndPresent(dev, ring, sc, slot, index, &recreate));
-      pending[slot] = true;
+      ring.pending[slot] = true;
       // Frame interval, wall clock (with frames in flight a frame's own submit-to-fence overlaps the next).
       const auto frameEnd = std::chrono::steady_clock::now();
       if (frames > 0) recentWall.push_back(std::chrono::duration<double, std::milli>(frameEnd - lastFrameEnd).count());

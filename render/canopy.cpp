@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <memory>
 #include <new>
 #include <string>
@@ -61,11 +60,6 @@ Status validateParams(const CanopyContext& c, const CanopyParams& p) {
   return Status();
 }
 
-
-
-
-
-
 // The host's camera in Canopy's standard depth convention (0 = near): a reverse-Z projection is
 // mirrored in depth, z_clip' = w_clip - z_clip (docs/design.md, "Embedding contract"), so the
 // layers are rasterised and compared as always and only the composite's depth I/O converts.
@@ -79,7 +73,6 @@ LayerView standardView(const CanopyContext& c, const CanopyCamera& cam) {
   }
   return v;
 }
-
 
 // The size-dependent parts (compositor, dynamics) and the graphs recorded from them, freed once no
 // frame in flight reads them.
@@ -96,8 +89,6 @@ void retireSizeDependentParts(CanopyContext& c) {
     destroyLayerDynamics(*dyn);
   });
 }
-
-
 
 void destroyNow(CanopyContext* c) {
   if (c->device) {

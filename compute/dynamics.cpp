@@ -67,7 +67,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.time = d.time;
   // Eq. 5's s: the wave's propagation speed (the paper's meaning) unless the host gives one.
   f.propagation = p.propagationSpeed > 0.0f ? p.propagationSpeed : d.waveSpeed;
-  f.offsetMode = p.approximateOffset == Eq5Offset::Direction ? ANIM_OFFSET_DIRECTION : ANIM_OFFSET_VELOCITY;
+  f.offsetMode = p.approximateOffset == ApproximateOffset::Direction ? ANIM_OFFSET_DIRECTION : ANIM_OFFSET_VELOCITY;
   f.rigidity = p.rigidity;
   f.everyPartMoves = p.everyPartMoves ? 1u : 0u;
   f.delayMode = p.delay == DelayMode::Exact ? ANIM_DELAY_EXACT : ANIM_DELAY_APPROXIMATE;

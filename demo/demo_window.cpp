@@ -123,8 +123,8 @@ Status createSwapchain(Device& d, VkSurfaceKHR surface, GLFWwindow* win, bool vs
   return Status();
 }
 
-// What the user changes live.
-struct Live {
+// What the user changes while the window runs (keys, mouse, screenshot requests).
+struct UserControls {
   const Options* options = nullptr;
   CanopyParams params;
   bool paramsChanged = false;
@@ -141,7 +141,7 @@ const char* kDebugNames[] = {"none", "layers (false colour)", "velocity field", 
 
 void onKey(GLFWwindow* win, int key, int, int action, int) {
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-  Live& l = *static_cast<Live*>(glfwGetWindowUserPointer(win));
+  UserControls& l = *static_cast<UserControls*>(glfwGetWindowUserPointer(win));
   WindParams& wind = l.params.simulation.wind;
   bool changed = true;
   switch (key) {
@@ -217,7 +217,7 @@ void onKey(GLFWwindow* win, int key, int, int action, int) {
 }
 
 void onScroll(GLFWwindow* win, double, double dy) {
-  Live& l = *static_cast<Live*>(glfwGetWindowUserPointer(win));
+  UserControls& l = *static_cast<UserControls*>(glfwGetWindowUserPointer(win));
   l.rig.distance = std::clamp(l.rig.distance * std::pow(0.9f, float(dy)), 0.1f, 10.0f);
 }
 
@@ -246,7 +246,7 @@ bool notBlank(const std::vector<uint8_t>& rgba) {
   return false;
 }
 
-std::string titleOf(const std::string& label, double fps, const std::vector<PassTiming>& t, const Live& l) {
+std::string titleOf(const std::string& label, double fps, const std::vector<PassTiming>& t, const UserControls& l) {
   std::map<std::string, double> groups;  // by the pass name's prefix: "sim", "layers", "dynamics", "composite"
   for (const PassTiming& p : t) groups[p.name.substr(0, p.name.find(':'))] += p.milliseconds;
   char b[512];
@@ -293,7 +293,7 @@ GLFWwindow* openWindow(const Options& o) {
 
 // Input: orbit with the left button (and the auto-orbit over `elapsed` seconds), a motor under the
 // cursor with the right one; changed parameters applied.
-void applyInput(GLFWwindow* win, Live& live, Host& host, VkExtent2D extent, double elapsed) {
+void applyInput(GLFWwindow* win, UserControls& live, Host& host, VkExtent2D extent, double elapsed) {
   double cx = 0, cy = 0;
   glfwGetCursorPos(win, &cx, &cy);
   int ww = 1, wh = 1;
@@ -358,7 +358,7 @@ Status submitAndPresent(Device& dev, FrameRing& ring, Swapchain& sc, uint32_t sl
 
 // The slot's presented frame (already finished) read back and written as PNG: at --screenshot's path
 // for the last frame, else outDir/screenshot_N.png; a blank one is an error.
-Status saveScreenshot(const Options& o, Host& host, uint32_t slot, Live& live, uint32_t* screenshots) {
+Status saveScreenshot(const Options& o, Host& host, uint32_t slot, UserControls& live, uint32_t* screenshots) {
   std::vector<uint8_t> rgba;
   readPixels(host, slot, &rgba);
   std::string path = o.screenshot;
@@ -406,7 +406,7 @@ int runWindow(const Options& o, const VegetationModel& model, const std::string&
   Host host;
   FrameRing ring;  // two frames in flight: the loop waits only for the slot's previous frame
   uint64_t frameNumber = 0;
-  Live live;
+  UserControls live;
   live.options = &o;
   live.rig = defaultRig(o);
   uint64_t frames = 0;

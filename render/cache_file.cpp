@@ -14,7 +14,7 @@
 #include <cstring>
 #include <ctime>
 
-#include <canopy/canopy.h>
+#include <canopy/canopy_core.h>
 
 #include "engine/files.h"
 #include "engine/hash.h"

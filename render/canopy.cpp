@@ -327,7 +327,7 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
       if (p.animation == AnimationMode::Layers2D) {
         // Back to the layers: they are as old as the last 2D frame; re-slice at once, and no
         // motion vectors against a displacement from before the switch.
-        requestReslice(c->layers, "animation mode", true);
+        requestReslice(c->layers.reslice, "animation mode", true);
         c->previousAnimFrame = gpu::AnimFrame{};
       } else {
         // To the baseline: its last frame's camera and time are from before the switch, so its
@@ -454,7 +454,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     if (f.dt > 0.0f) CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
   }
   const LayerView view = standardView(*c, f.camera);
-  if (f.cameraCut) requestReslice(c->layers, "camera cut", true);
+  if (f.cameraCut) requestReslice(c->layers.reslice, "camera cut", true);
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
   chooseSimulationPlane(*c, view);
@@ -527,7 +527,7 @@ Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTarg
 Status requestCanopyRebuild(CanopyContext* c, bool immediate) {
   return guardApi("requestCanopyRebuild", [&]() -> Status {
     if (!c) return Status::error("requestCanopyRebuild: null context");
-    requestReslice(c->layers, immediate ? "requested at once" : "requested", immediate);
+    requestReslice(c->layers.reslice, immediate ? "requested at once" : "requested", immediate);
     return Status();
   });
 }

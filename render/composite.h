@@ -29,7 +29,7 @@ namespace canopy {
 struct Device;
 struct LayerDynamics;
 
-// CompositeDebugView and CompositeParams: <canopy/canopy.h> (values = the shader's constants).
+// CompositeDebugView and CompositeParams: <canopy/canopy_params.h> (values = the shader's constants).
 static_assert(uint32_t(CompositeDebugView::None) == COMPOSITE_DEBUG_NONE && uint32_t(CompositeDebugView::Layers) == COMPOSITE_DEBUG_LAYERS &&
               uint32_t(CompositeDebugView::Velocity) == COMPOSITE_DEBUG_VELOCITY && uint32_t(CompositeDebugView::Grid) == COMPOSITE_DEBUG_GRID);
 Status validateCompositeParams(const CompositeParams& params);

@@ -12,7 +12,8 @@
 #include "engine/shader_registry.h"
 #include "engine/transfer.h"
 #include "render/cache_file.h"
-#include "render/layers.h"
+#include "render/layer_placement.h"
+#include "render/layer_targets.h"
 
 namespace canopy {
 namespace {
@@ -29,12 +30,10 @@ constexpr const char* kBakeFragmentShader = "layers.frag";
 
 uint64_t roundUpTo(uint64_t x, uint64_t a) { return (x + a - 1) / a * a; }
 
-Status createDrawPipelines(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  Impostors& imp = lv.impostors;
+Status createDrawPipelines(Device& d, VkFormat colorFormat, Impostors& imp) {
   GraphicsPipelineDesc p;
   p.pushConstantSize = sizeof(gpu::ImpostorPush);
-  p.colorFormats = {lv.desc.colorFormat};
+  p.colorFormats = {colorFormat};
   p.depthFormat = VK_FORMAT_D32_SFLOAT;
   p.blend = BlendMode::PremultipliedOver;
   p.fragmentShader = "layers_impostor.frag";
@@ -63,10 +62,9 @@ Status createDrawPipelines(LayeredVegetation& lv) {
 }
 
 // The bake's frame block of each tile: the layers' lighting, the view's orthographic camera.
-std::vector<uint8_t> bakeFrames(const LayeredVegetation& lv, uint64_t stride) {
-  const Impostors& imp = lv.impostors;
+std::vector<uint8_t> bakeFrames(const Impostors& imp, const LayerSettings& settings, uint64_t stride) {
   std::vector<uint8_t> bytes(size_t(imp.tiles) * stride, 0);
-  gpu::LayerFrame base = cameraFrame(lv.settings, LayerView{});
+  gpu::LayerFrame base = cameraFrame(settings, LayerView{});
   base.halfResolution = 0;  // the atlas tiles are drawn whole
   for (const ImpostorNode& n : imp.nodes) {
     if (n.firstTile == kNoTile) continue;
@@ -122,13 +120,11 @@ Status writeCache(Device& d, const Impostors& imp, uint64_t key, std::string* no
   return writeCacheFile(imp.cachePath, CacheKind::ImpostorViews, key, payload.data(), payload.size(), imp.cacheMaxBytes, note);
 }
 
-Status bake(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  Impostors& imp = lv.impostors;
+Status bake(Device& d, const ImpostorSources& src, Impostors& imp) {
   const auto t0 = std::chrono::steady_clock::now();
   const uint64_t align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 16);
   const uint64_t stride = roundUpTo(sizeof(gpu::LayerFrame), align);
-  const std::vector<uint8_t> frames = bakeFrames(lv, stride);
+  const std::vector<uint8_t> frames = bakeFrames(imp, *src.settings, stride);
   // The file cache (like the leaf roots'): the key adds the bake's cameras and lighting.
   const uint64_t key = hashBytes(imp.cacheKey ^ bakeShaderKey(), frames.data(), frames.size());
   if (!imp.cachePath.empty()) {
@@ -155,12 +151,23 @@ Status bake(LayeredVegetation& lv) {
   const auto depth = g.importImage("impostors: depth atlas", descOf(imp.depth), {}, sampled);
   const auto frameId = g.importBuffer("impostors: bake frames", frameBuf.size, kImpostorRead, kImpostorRead);
   MeshResources mesh;
-  CANOPY_TRY(importMesh(lv, g, &mesh));
-  LayeredVegetation* p = &lv;
+  CANOPY_TRY(importMesh(*src.mesh, g, &mesh));
+  // The draw is recorded when the work is (a host's first frame): the mesh, the copies' table and
+  // the atlas are read then, from the vegetation that owns them (their addresses are stable).
+  const Impostors* ip = &imp;
+  const LayerMesh* meshPart = src.mesh;
+  const LayerInstances* copies = src.instances;
+  const float transmission = src.settings->leafTransmission, opticalDepth = src.settings->leafOpticalDepth;
   const VkBuffer frameHandle = frameBuf.buffer;
-  auto pass = g.addPass("impostors: bake", [p, frameHandle, stride](rg::PassContext& c) -> Status {
-     Impostors& im = p->impostors;
+  auto pass = g.addPass("impostors: bake", [ip, meshPart, copies, transmission, opticalDepth, frameHandle, stride](rg::PassContext& c) -> Status {
+     const Impostors& im = *ip;
      const Device& dev = *c.device;
+     MeshDraw md;
+     md.device = c.device;
+     md.mesh = meshPart;
+     md.instances = copies->buffer.buffer;
+     md.leafTransmission = transmission;
+     md.leafOpticalDepth = opticalDepth;
      const uint32_t T = im.tileSize, perLayer = im.tilesPerLayer();
      std::vector<std::vector<ChunkPart>> parts(im.nodes.size());
      for (uint32_t layer = 0; layer < im.atlasLayers; ++layer) {
@@ -189,7 +196,7 @@ Status bake(LayeredVegetation& lv) {
            if (tile / perLayer != layer) continue;
            if (parts[i].empty())
              for (uint32_t m = 0; m < im.materials; ++m)
-               appendRunParts(*p, im.ownFirst(i, m), im.subtreeEnd(i, m) - im.ownFirst(i, m), 1.0f, n.level, &parts[i]);
+               appendRunParts(meshPart->chunks, im.ownFirst(i, m), im.subtreeEnd(i, m) - im.ownFirst(i, m), 1.0f, n.level, &parts[i]);
            const uint32_t x = (tile % perLayer) % im.tilesPerRow, y = (tile % perLayer) / im.tilesPerRow;
            const VkViewport vp{float(x * T), float(y * T), float(T), float(T), 0.0f, 1.0f};
            const VkRect2D sc{{int32_t(x * T), int32_t(y * T)}, {T, T}};
@@ -199,7 +206,7 @@ Status bake(LayeredVegetation& lv) {
            o.frame = frameHandle;
            o.frameOffset = uint64_t(tile) * stride;
            o.keepViewport = true;
-           s = drawMeshParts(*p, c.cmd, im.bake, LAYER_PASS_BACKGROUND, 0, parts[i], o);
+           s = drawMeshParts(md, c.cmd, im.bake, LAYER_PASS_BACKGROUND, 0, parts[i], o);
          }
        }
        dev.cmdEndRendering(c.cmd);
@@ -232,9 +239,7 @@ Status bake(LayeredVegetation& lv) {
 
 }  // namespace
 
-Status createImpostors(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  Impostors& imp = lv.impostors;
+Status createImpostors(Device& d, const ImpostorSources& src, Impostors& imp) {
   if (!d.shaderClipDistance)
     return Status::error("impostors: the bake needs shaderClipDistance (the layers' background path)");
   ImageDesc c;
@@ -283,14 +288,11 @@ Status createImpostors(LayeredVegetation& lv) {
   CANOPY_TRY(createBuffer(d, imp.instanceCapacity * sizeof(gpu::ImpostorInstance),
                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
                           &imp.instances, "impostors: instances"));
-  CANOPY_TRY(createDrawPipelines(lv));
-  return imp.baked ? bake(lv) : Status();
+  CANOPY_TRY(createDrawPipelines(d, src.colorFormat, imp));
+  return imp.baked ? bake(d, src, imp) : Status();
 }
 
-void destroyImpostors(LayeredVegetation& lv) {
-  if (!lv.device) return;
-  Device& d = *lv.device;
-  Impostors& imp = lv.impostors;
+void destroyImpostors(Device& d, Impostors& imp) {
   dropPreparedWork(d, imp.pendingUploads);
   for (VkImageView v : imp.colorLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
   for (VkImageView v : imp.depthLayerViews) d.vk.DestroyImageView(d.device, v, d.allocationCallbacks);
@@ -307,30 +309,30 @@ void destroyImpostors(LayeredVegetation& lv) {
   imp = Impostors{};
 }
 
-Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer) {
-  const Impostors& imp = lv.impostors;
+Status recordImpostors(const MeshDraw& target, const Impostors& imp, const LayerSettings& settings, bool singlePass,
+                       VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer) {
   const uint32_t total = uint32_t(draws.instances.size());
   const uint32_t first = fading ? draws.opaque : 0, count = fading ? total - draws.opaque : draws.opaque;
   if (!count) return Status();
-  const bool half = lv.settings.halfResolutionLayers > 0;  // the single pass's clip-distance variant
-  const GraphicsPipeline& pipe = lv.pipelines.singlePass
+  const bool half = settings.halfResolutionLayers > 0;  // the single pass's clip-distance variant
+  const GraphicsPipeline& pipe = singlePass
                                      ? (half ? (fading ? imp.layeredHalfFade : imp.layeredHalf) : (fading ? imp.layeredFade : imp.layered))
                                      : (fading ? imp.perLayerFade : imp.perLayer);
-  const Device& d = *lv.device;
-  setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+  const Device& d = *target.device;
+  setViewportScissor(d, cmd, target.width, target.height);
   gpu::ImpostorPush push{};
-  push.passKind = lv.pipelines.singlePass ? LAYER_PASS_LAYERED : LAYER_PASS_ONE_LAYER;
+  push.passKind = singlePass ? LAYER_PASS_LAYERED : LAYER_PASS_ONE_LAYER;
   push.targetLayer = layer;
   push.tileSize = imp.tileSize;
   push.tilesPerRow = imp.tilesPerRow;
   push.rowsPerLayer = imp.rowsPerLayer;
   push.fading = fading ? 1u : 0u;
-  push.debugLevels = lv.settings.impostors.debugView ? 1u : 0u;
+  push.debugLevels = settings.impostors.debugView ? 1u : 0u;
   push.firstView = imp.firstView;
-  push.shape = lv.settings.impostors.shape == ImpostorShape::CrossedPolygons ? IMPOSTOR_SHAPE_CROSSED : IMPOSTOR_SHAPE_FACING;
+  push.shape = settings.impostors.shape == ImpostorShape::CrossedPolygons ? IMPOSTOR_SHAPE_CROSSED : IMPOSTOR_SHAPE_FACING;
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
-  CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
-                          {bindBuffer(lv.visible.frameBuffer.buffer), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
+  CANOPY_TRY(bindGraphics(*target.device, cmd, pipe,
+                          {bindBuffer(target.frame), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
                            bindImage(imp.color.view, ro, imp.linearSampler), bindImage(imp.depth.view, ro, imp.nearestSampler)},
                           push));
   d.vk.CmdDraw(cmd, 6, count, 0, first);

@@ -1,23 +1,42 @@
 #pragma once
 // The impostors' GPU side (render/impostor_gpu.cpp; docs/design.md "Impostors"): the atlas, its
-// pipelines and the bake of each baked box's twelve views (lv.imp planned by render/impostors.h,
+// pipelines and the bake of each baked box's twelve views (planned by render/impostors.h,
 // read from or written to the views' cache file), and the draw of a re-slice's cut.
 #include <cstdint>
 #include <vulkan/vulkan.h>
 
+#include <canopy/canopy_params.h>
+
 #include "engine/status.h"
+#include "render/impostors.h"
+#include "render/layer_instances.h"
+#include "render/layer_mesh.h"
 
 namespace canopy {
 
-struct LayeredVegetation;
+struct Device;
 struct ImpostorDraws;
 
-// Creates the atlas and pipelines and bakes (or reads) the views; stats in lv.imp.
-Status createImpostors(LayeredVegetation& lv);
-void destroyImpostors(LayeredVegetation& lv);
+// What the impostors' creation reads of the vegetation: the mesh the bake draws and the placed
+// copies' table that draw binds (both must stay where they are until the bake is recorded: on a
+// host's device, in its first frame), the settings the views are shaded with, the layers' colour
+// format.
+struct ImpostorSources {
+  const LayerMesh* mesh = nullptr;
+  const LayerInstances* instances = nullptr;
+  const LayerSettings* settings = nullptr;
+  VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
+};
+
+// Creates the atlas and pipelines of `imp` (planned by render/impostors.h) and bakes (or reads) the
+// views; the bake's figures in `imp`.
+Status createImpostors(Device& device, const ImpostorSources& sources, Impostors& imp);
+void destroyImpostors(Device& device, Impostors& imp);
 // Draws a cut's opaque (fading = false) or fading impostors inside the caller's rendering of the
-// layers (`layer`: the per-layer path's layer, ignored by the single pass); the list `draws` holds
-// is the one uploaded to Impostors.instances for this draw.
-Status recordImpostors(LayeredVegetation& lv, VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer);
+// layers `target` names (its frame block and size), by the single pass or per layer (`layer`: the
+// per-layer path's layer, ignored by the single pass); the list `draws` holds is the one uploaded
+// to Impostors.instances for this draw.
+Status recordImpostors(const MeshDraw& target, const Impostors& imp, const LayerSettings& settings, bool singlePass,
+                       VkCommandBuffer cmd, const ImpostorDraws& draws, bool fading, uint32_t layer);
 
 }  // namespace canopy

@@ -8,7 +8,6 @@
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
-#include "render/layers.h"
 #include <glm/gtc/packing.hpp>
 
 namespace canopy {
@@ -42,9 +41,17 @@ GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthF
 namespace {
 
 // The GPU triangle order and the compact chunked mesh, in host memory.
-Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vector<uint8_t>& foliage,
-                 const LeafRoots& roots, CompactMesh* mesh) {
-  Device& d = *lv.device;
+struct MeshBuild {
+  Device& d;
+  const LayerMeshDesc& desc;
+  LayerMesh& mesh;
+  Impostors& impostors;
+  LayerStats& stats;
+};
+
+Status buildMesh(const MeshBuild& b, const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                 CompactMesh* mesh) {
+  Device& d = b.d;
   const size_t nt = m.triangleCount();
   // GPU triangle order: foliage grouped by material, then rigid by material (one draw each).
   const size_t nm = m.materials.size();
@@ -58,10 +65,10 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   for (size_t t = 0; t < nt; ++t) order[cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++] = uint32_t(t);
   // With impostors the foliage of each material is laid out box by box, depth first
   // (render/impostors.h), so a box's subtree is one run per material.
-  if (lv.desc.impostors.enable) {
-    CANOPY_TRY(buildImpostorOrder(m, foliage, roots, lv.desc.impostors, start, &lv.impostors, &order));
-    CANOPY_TRY(planImpostorAtlas(lv.desc.impostors, d.properties.limits.maxImageDimension2D,
-                                 d.properties.limits.maxImageArrayLayers, &lv.impostors));
+  if (b.desc.impostors.enable) {
+    CANOPY_TRY(buildImpostorOrder(m, foliage, roots, b.desc.impostors, start, &b.impostors, &order));
+    CANOPY_TRY(planImpostorAtlas(b.desc.impostors, d.properties.limits.maxImageDimension2D,
+                                 d.properties.limits.maxImageArrayLayers, &b.impostors));
   }
   // The compact chunked mesh (render/mesh_chunks.h): 16-byte vertices, 16-bit indices and a
   // leaf-root table per chunk, so no buffer is indexed past the device's storage range; one
@@ -69,28 +76,25 @@ Status buildMesh(LayeredVegetation& lv, const VegetationModel& m, const std::vec
   std::vector<TriangleRange> ranges;
   for (size_t k = 0; k < 2 * nm; ++k)
     if (start[k + 1] > start[k]) ranges.push_back({uint32_t(k % nm), k < nm, start[k], start[k + 1] - start[k]});
-  lv.mesh.hasRigid = start[2 * nm] > start[nm];
+  b.mesh.hasRigid = start[2 * nm] > start[nm];
   CompactMeshOptions co;
-  co.maxChunkVertices = lv.desc.maxChunkVertices;
-  co.bend = lv.desc.keepBend && !m.bend.empty();
+  co.maxChunkVertices = b.desc.maxChunkVertices;
+  co.bend = b.desc.keepBend && !m.bend.empty();
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
     return Status::error("layers: minStorageBufferOffsetAlignment " + std::to_string(align) + " is not a power of two");
-  lv.mesh.ring.rootAlignment = co.rootAlignment;
-  CANOPY_TRY(buildCompactMesh(m, order, ranges, roots, co, mesh, lv.desc.progress));
-  if (lv.desc.writeIds) lv.mesh.gpuToModelTriangle = std::move(order);
-  lv.stats.meshChunks = uint32_t(mesh->chunks.size());
-  lv.stats.meshBytes = mesh->bytes();
-  lv.mesh.chunks = std::move(mesh->chunks);  // the one chunk list (the host mesh keeps none)
+  b.mesh.ring.rootAlignment = co.rootAlignment;
+  CANOPY_TRY(buildCompactMesh(m, order, ranges, roots, co, mesh, b.desc.progress));
+  if (b.desc.writeIds) b.mesh.gpuToModelTriangle = std::move(order);
+  b.stats.meshChunks = uint32_t(mesh->chunks.size());
+  b.stats.meshBytes = mesh->bytes();
+  b.mesh.chunks = std::move(mesh->chunks);  // the one chunk list (the host mesh keeps none)
   return Status();
 }
 
-// The frame block, the material textures and their sampler.
-Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
-  Device& d = *lv.device;
-  CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
-                          MemoryUsage::DeviceLocal, &lv.visible.frameBuffer, "layers: frame"));
+// The material textures and their sampler.
+Status uploadTextures(Device& d, LayerMesh& mesh, const VegetationModel& m) {
   // Textures: sRGB base colour, so the shader reads linear values; a white texel for untextured materials.
   const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
   for (size_t i = 0; i <= m.images.size(); ++i) {
@@ -103,8 +107,8 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
     t.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     Image img;
     CANOPY_TRY(createImage(d, t, &img, isWhite ? "white texel" : m.images[i].name.c_str()));
-    lv.mesh.textures.push_back(img);
-    CANOPY_TRY(uploadImage(d, &lv.mesh.pendingUploads, img, isWhite ? white : m.images[i].rgba.data(),
+    mesh.textures.push_back(img);
+    CANOPY_TRY(uploadImage(d, &mesh.pendingUploads, img, isWhite ? white : m.images[i].rgba.data(),
                            isWhite ? 4 : m.images[i].rgba.size(), sampled));
   }
   VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
@@ -112,7 +116,7 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
   si.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
   si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_REPEAT;
   si.maxLod = 0.0f;
-  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &lv.mesh.sampler));
+  CANOPY_VK(d.vk.CreateSampler(d.device, &si, d.allocationCallbacks, &mesh.sampler));
   return Status();
 }
 
@@ -125,42 +129,40 @@ Status uploadTextures(LayeredVegetation& lv, const VegetationModel& m) {
 // layer set (a spread re-slice needs it, and settings may ask for it later); else in host memory,
 // streamed through rings sized from desc.stagingRingBytes, which needs the second set now. Called
 // after the textures, frame block and targets, so the bytes are the allocator's, not estimates.
-Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes) {
-  const uint64_t budget = lv.desc.deviceMemoryBudget;
-  lv.mesh.streamed = false;
+Status chooseLayerMeshResidency(const Device& d, const LayerMeshDesc& desc, LayerMesh& mesh, uint64_t liveAtStart,
+                                uint64_t meshBytes, uint64_t nextSet) {
+  const uint64_t budget = desc.deviceMemoryBudget;
+  mesh.streamed = false;
   if (budget == 0) return Status();
-  const uint64_t used = lv.device->allocator->liveBytes - liveAtStart;
-  uint64_t nextSet = 0;  // the second set is the visible one's twin
-  if (!lv.targets.next.color.image)
-    for (const Image* img : {&lv.targets.color, &lv.targets.depth, &lv.targets.backgroundColor, &lv.targets.backgroundDepth}) nextSet += img->allocation.size;
+  const uint64_t used = d.allocator->liveBytes - liveAtStart;
   if (used + nextSet + meshBytes + 3 * 256 <= budget) return Status();
-  if (lv.desc.keepBend)
+  if (desc.keepBend)
     return Status::error("layers: the per-vertex wind baseline (CanopyDesc.allowPerVertex) draws the whole mesh every "
                          "frame and needs it resident: the compact mesh with its branch hierarchy (" + mib(meshBytes) +
                          ") with the layer images and textures (" + mib(used + nextSet) + ") is over deviceMemoryBudget " +
                          mib(budget) + "; raise it (or 0: no limit)");
-  if (lv.desc.writeIds)
+  if (desc.writeIds)
     return Status::error("layers: the id output draws the mesh at once and needs it resident: the compact mesh (" +
                          mib(meshBytes) + ") with the layer images and textures (" + mib(used + nextSet) +
                          ") is over deviceMemoryBudget " + mib(budget));
-  lv.mesh.streamed = true;
+  mesh.streamed = true;
   return Status();
 }
 
-// Creates the resident buffers and fills them, or the staging rings; the mesh stays in lv.mesh.hostMesh.
-Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liveAtStart) {
-  Device& d = *lv.device;
-  lv.mesh.hostMesh = std::move(compact);
-  const CompactMesh& mesh = lv.mesh.hostMesh;
-  const uint64_t budget = lv.desc.deviceMemoryBudget;
-  if (lv.mesh.streamed) {
+// Creates the resident buffers and fills them, or the staging rings; the mesh stays in lm.hostMesh.
+Status placeLayerMesh(Device& d, const LayerMeshDesc& desc, LayerMesh& lm, LayerStats& stats, CompactMesh&& compact,
+                      uint64_t liveAtStart) {
+  lm.hostMesh = std::move(compact);
+  const CompactMesh& mesh = lm.hostMesh;
+  const uint64_t budget = desc.deviceMemoryBudget;
+  if (lm.streamed) {
     // Per segment each ring holds at least the largest chunk (its vertices, its root block, and
     // 1024 of its triangles), so every frame's slice makes progress; the rest of the ring's bytes
     // are shared in the proportions of the whole mesh.
-    MeshRing& r = lv.mesh.ring;
+    MeshRing& r = lm.ring;
     r.segments = std::max<uint32_t>(d.framesInFlight, 1);
     uint64_t minV = 0, minR = 0, minI = 3;
-    for (const MeshChunk& c : lv.mesh.chunks) {
+    for (const MeshChunk& c : lm.chunks) {
       minV = std::max<uint64_t>(minV, c.vertexCount);
       minR = std::max<uint64_t>(minR, roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment));
       minI = std::max<uint64_t>(minI, 3ull * std::min<uint32_t>(c.triangleCount, 1024));
@@ -168,7 +170,7 @@ Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liv
     const uint64_t vb = mesh.vertices.size() * sizeof(gpu::LayerVertex), ib = mesh.indices.size() * 2,
                    rb = mesh.roots.size() * sizeof(gpu::LayerLeafRoot);
     const uint64_t total = std::max<uint64_t>(vb + ib + rb, 1);
-    const double share = double(lv.desc.stagingRingBytes) / double(r.segments) / double(total);
+    const double share = double(desc.stagingRingBytes) / double(r.segments) / double(total);
     r.vertexCapacity = std::min<uint64_t>(std::max<uint64_t>(minV, uint64_t(share * vb) / sizeof(gpu::LayerVertex)), mesh.vertices.size());
     r.indexCapacity = std::min<uint64_t>(std::max<uint64_t>(minI, uint64_t(share * ib) / 2), mesh.indices.size());
     r.rootCapacity = roundUp(std::max<uint64_t>(minR, uint64_t(share * rb) / sizeof(gpu::LayerLeafRoot)), r.rootAlignment);
@@ -179,22 +181,22 @@ Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liv
       return Status::error("layers: deviceMemoryBudget " + mib(budget) + ": the layer images and textures take " + mib(used) +
                            ", the mesh (" + mib(mesh.bytes()) + ") does not fit and its staging ring needs " + mib(r.bytes) +
                            " (" + std::to_string(r.segments) + " segments, each at least the largest chunk; stagingRingBytes " +
-                           mib(lv.desc.stagingRingBytes) + "); raise the budget");
+                           mib(desc.stagingRingBytes) + "); raise the budget");
     CANOPY_TRY(createBuffer(d, r.segments * r.vertexCapacity * sizeof(gpu::LayerVertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT,
-                            MemoryUsage::Upload, &lv.mesh.vertices, "layers: vertex ring"));
+                            MemoryUsage::Upload, &lm.vertices, "layers: vertex ring"));
     CANOPY_TRY(createBuffer(d, r.segments * roundUp(r.indexCapacity * 2, 4), VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
-                            MemoryUsage::Upload, &lv.mesh.indexBuffer, "layers: index ring"));
+                            MemoryUsage::Upload, &lm.indexBuffer, "layers: index ring"));
     CANOPY_TRY(createBuffer(d, r.segments * r.rootCapacity * sizeof(gpu::LayerLeafRoot), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
-                            MemoryUsage::Upload, &lv.mesh.leafRoots, "layers: leaf-root ring"));
-    for (const Buffer* b : {&lv.mesh.vertices, &lv.mesh.indexBuffer, &lv.mesh.leafRoots})
+                            MemoryUsage::Upload, &lm.leafRoots, "layers: leaf-root ring"));
+    for (const Buffer* b : {&lm.vertices, &lm.indexBuffer, &lm.leafRoots})
       if (!hostCoherentPointer(d, b->allocation))
         return Status::error("layers: the staging ring's memory is not host-visible and coherent");
-    lv.stats.meshResident = false;
-    lv.stats.meshRingBytes = r.bytes;
+    stats.meshResident = false;
+    stats.meshRingBytes = r.bytes;
     return Status();
   }
-  lv.stats.meshResident = true;
-  lv.stats.meshRingBytes = 0;
+  stats.meshResident = true;
+  stats.meshRingBytes = 0;
   auto upload = [&](Buffer& buf, const void* data, VkDeviceSize bytes, VkBufferUsageFlags usage, rg::Use use,
                     const char* name) -> Status {
     CANOPY_TRY(createBuffer(d, std::max<VkDeviceSize>(bytes, 16), usage | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
@@ -207,29 +209,29 @@ Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& compact, uint64_t liv
       std::memcpy(direct, data, bytes);
       return Status();
     }
-    return uploadBuffer(d, &lv.mesh.pendingUploads, buf, data, bytes, rg::stateOf(use));
+    return uploadBuffer(d, &lm.pendingUploads, buf, data, bytes, rg::stateOf(use));
   };
-  CANOPY_TRY(upload(lv.mesh.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
+  CANOPY_TRY(upload(lm.vertices, mesh.vertices.data(), mesh.vertices.size() * sizeof(gpu::LayerVertex),
                     VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, rg::Use::VertexBuffer, "layers: vertices"));
-  CANOPY_TRY(upload(lv.mesh.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
+  CANOPY_TRY(upload(lm.indexBuffer, mesh.indices.data(), mesh.indices.size() * 2, VK_BUFFER_USAGE_INDEX_BUFFER_BIT,
                     rg::Use::IndexBuffer, "layers: indices"));
   if (!mesh.bend.empty())
-    CANOPY_TRY(upload(lv.mesh.bendVertices, mesh.bend.data(), mesh.bend.size() * sizeof(gpu::BendVertex),
+    CANOPY_TRY(upload(lm.bendVertices, mesh.bend.data(), mesh.bend.size() * sizeof(gpu::BendVertex),
                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "per-vertex: branch and w per vertex"));
-  return upload(lv.mesh.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
+  return upload(lm.leafRoots, mesh.roots.data(), mesh.roots.size() * sizeof(gpu::LayerLeafRoot),
                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, rg::Use::VertexStorageRead, "layers: leaf roots");
 }
 
 
-Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, CompactMesh* out, uint64_t* rootKey) {
-  const LayeredVegetationDesc& desc = lv.desc;
+Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const VegetationModel& m, LayerMesh& mesh, Impostors& impostors,
+                        LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
   *rootKey = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  CANOPY_TRY(splitMaterials(m, desc.split, &lv.mesh.split));
-  lv.stats.foliageTriangles = lv.mesh.split.foliageTriangles;
-  lv.stats.rigidTriangles = lv.mesh.split.rigidTriangles;
+  CANOPY_TRY(splitMaterials(m, desc.split, &mesh.split));
+  stats.foliageTriangles = mesh.split.foliageTriangles;
+  stats.rigidTriangles = mesh.split.rigidTriangles;
   std::vector<uint8_t> foliage(m.triangleCount());
-  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = lv.mesh.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
+  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = mesh.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
   LeafRoots roots;
   bool cached = false;
   const bool cacheOn = !desc.rootCacheDir.empty() && !m.path.empty();
@@ -238,76 +240,76 @@ Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& m, Compact
     *rootKey = leafRootKey(m, foliage, desc.roots);
     std::string why;
     cached = readLeafRootCache(cachePath, *rootKey, m.positions.size(), &roots, &why);
-    lv.stats.rootCacheNote = cached ? "read " + cachePath : cachePath + ": " + why;
+    stats.rootCacheNote = cached ? "read " + cachePath : cachePath + ": " + why;
   } else {
-    lv.stats.rootCacheNote = "cache off";
+    stats.rootCacheNote = "cache off";
   }
   if (!cached) {
     CANOPY_TRY(computeLeafRoots(m, foliage, desc.roots, &roots, desc.progress));
     if (cacheOn) {
       std::string evicted;
       Status w = writeLeafRootCache(cachePath, *rootKey, roots, desc.cacheMaxBytes, &evicted);
-      lv.stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
-      if (!evicted.empty()) lv.stats.rootCacheNote += "; " + evicted;
+      stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
+      if (!evicted.empty()) stats.rootCacheNote += "; " + evicted;
     }
   }
   // Only the per-vertex leaf and the per-leaf root are used from here on, by the compaction; the
   // per-vertex root goes now and the rest after it (the placement reads the compact mesh).
   std::vector<uint32_t>().swap(roots.rootOfVertex);
-  lv.stats.rootCacheHit = cached;
-  lv.stats.leafCount = roots.leafCount();
-  CANOPY_TRY(findPlants(m, roots, &lv.mesh.plants));
-  lv.stats.plants = lv.mesh.plants.count();
-  lv.stats.preprocessMs = msSince(t0);
-  lv.mesh.materials = m.materials;
-  lv.mesh.boundsMin = m.boundsMin;
-  lv.mesh.boundsMax = m.boundsMax;
-  lv.mesh.leafCount = roots.leafCount();
-  if (lv.desc.keepBend) {
-    lv.mesh.leafRootPositions.resize(roots.leafCount());
-    for (uint32_t l = 0; l < roots.leafCount(); ++l) lv.mesh.leafRootPositions[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
+  stats.rootCacheHit = cached;
+  stats.leafCount = roots.leafCount();
+  CANOPY_TRY(findPlants(m, roots, &mesh.plants));
+  stats.plants = mesh.plants.count();
+  stats.preprocessMs = msSince(t0);
+  mesh.materials = m.materials;
+  mesh.boundsMin = m.boundsMin;
+  mesh.boundsMax = m.boundsMax;
+  mesh.leafCount = roots.leafCount();
+  if (desc.keepBend) {
+    mesh.leafRootPositions.resize(roots.leafCount());
+    for (uint32_t l = 0; l < roots.leafCount(); ++l) mesh.leafRootPositions[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
   }
-  CANOPY_TRY(buildMesh(lv, m, foliage, roots, out));
+  CANOPY_TRY(buildMesh(MeshBuild{d, desc, mesh, impostors, stats}, m, foliage, roots, out));
   roots = LeafRoots{};
-  CANOPY_TRY(uploadTextures(lv, m));
+  CANOPY_TRY(uploadTextures(d, mesh, m));
   return Status();
 }
 
 void releaseLeafRootPositions(LayerMesh& mesh) { std::vector<glm::vec4>().swap(mesh.leafRootPositions); }
 
-void destroyLayerMesh(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  dropPreparedWork(d, lv.mesh.pendingUploads);  // uploads never recorded: nothing waits for them
-  for (Image& t : lv.mesh.textures) destroyImage(d, t);
-  if (lv.mesh.sampler) d.vk.DestroySampler(d.device, lv.mesh.sampler, d.allocationCallbacks);
-  for (Buffer* b : {&lv.mesh.vertices, &lv.mesh.indexBuffer, &lv.mesh.leafRoots, &lv.mesh.bendVertices}) destroyBuffer(d, *b);
-  lv.mesh = LayerMesh{};
+void destroyLayerMesh(Device& d, LayerMesh& mesh) {
+  dropPreparedWork(d, mesh.pendingUploads);  // uploads never recorded: nothing waits for them
+  for (Image& t : mesh.textures) destroyImage(d, t);
+  if (mesh.sampler) d.vk.DestroySampler(d.device, mesh.sampler, d.allocationCallbacks);
+  for (Buffer* b : {&mesh.vertices, &mesh.indexBuffer, &mesh.leafRoots, &mesh.bendVertices}) destroyBuffer(d, *b);
+  mesh = LayerMesh{};
 }
 
 // Binds the mesh and draws its foliage or rigid chunks with `pipe` (`parts`: only those parts of
 // chunks; null: every chunk whole); the push constants say how the vertex shader routes triangles
 // (passKind, targetLayer). `perVertex`: the per-vertex baseline's own frame block in place of the
 // layers' and its bend buffers after the layers' own (shaders/per_vertex_common.glsl).
-Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
+Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
                      uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
                      const PerVertexBindings* perVertex, const MeshDrawOptions* options) {
-  const Device& d = *lv.device;
+  const Device& d = *md.device;
+  const LayerMesh& mesh = *md.mesh;
   const MeshDrawOptions plain;
   const MeshDrawOptions& o = options ? *options : plain;
-  const VkBuffer streams[2] = {lv.mesh.vertices.buffer, lv.instances.buffer.buffer};
+  const VkBuffer streams[2] = {mesh.vertices.buffer, md.instances};
   const VkDeviceSize offsets[2] = {0, 0};
   d.vk.CmdBindVertexBuffers(cmd, 0, 2, streams, offsets);
-  d.vk.CmdBindIndexBuffer(cmd, lv.mesh.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
-  if (!o.keepViewport) setViewportScissor(d, cmd, lv.desc.width, lv.desc.height);
+  d.vk.CmdBindIndexBuffer(cmd, mesh.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
+  if (!o.keepViewport) setViewportScissor(d, cmd, md.width, md.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
   // is bound at its own offset (render/mesh_chunks.h).
   auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
-    const ModelMaterial& mat = lv.mesh.materials[c.material];
+    const ModelMaterial& mat = mesh.materials[c.material];
     if (o.subset != MeshDrawOptions::Subset::All) {
       const bool prepassed = mat.alphaMode != AlphaMode::Blend && (!part || part->weight >= 1.0f);
       if (prepassed != (o.subset == MeshDrawOptions::Subset::DepthPrepassed)) return Status();
     }
-    auto textureOf = [&](int32_t image) -> const Image& { return image >= 0 ? lv.mesh.textures[size_t(image)] : lv.mesh.textures.back(); };
+    auto textureOf = [&](int32_t image) -> const Image& { return image >= 0 ? mesh.textures[size_t(image)] : mesh.textures.back(); };
     const Image& tex = textureOf(mat.baseColorImage);
     gpu::LayerDrawPush push{};
     push.baseColor = mat.baseColorFactor;
@@ -322,13 +324,13 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     const bool fileTransmission = mat.transmissionFactor >= 0.0f;
     push.transmission = !c.foliage ? glm::vec4(0.0f)
                         : fileTransmission ? glm::vec4(mat.transmissionColor, mat.transmissionFactor)
-                                           : glm::vec4(1.0f, 1.0f, 1.0f, lv.settings.leafTransmission);
+                                           : glm::vec4(1.0f, 1.0f, 1.0f, md.leafTransmission);
     push.shadingFlags = (c.foliage && !fileTransmission ? LAYER_SHADE_TINT_FROM_BASE : 0u) |
                         (mat.transmissionImage >= 0 ? LAYER_SHADE_TRANSMISSION_TEXTURE : 0u) |
                         (mat.transmissionColorImage >= 0 ? LAYER_SHADE_TRANSMISSION_COLOR_TEXTURE : 0u);
     push.normalScale = mat.normalImage >= 0 ? mat.normalScale : 0.0f;
     // Habel's translucency: optical depth through the leaf (KHR_materials_volume, else the setting).
-    glm::vec3 tau(lv.settings.leafOpticalDepth);
+    glm::vec3 tau(md.leafOpticalDepth);
     if (mat.thicknessFactor >= 0.0f) {
       tau = glm::vec3(0.0f);
       if (std::isfinite(mat.attenuationDistance) && mat.attenuationDistance > 0.0f)
@@ -341,25 +343,25 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
     push.triangleBase = uint32_t(c.firstTriangle);
     const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
     // A streamed mesh's part sits in this frame's ring segment (planSlice copied it there).
-    const bool ring = lv.mesh.streamed;
+    const bool ring = mesh.streamed;
     const uint64_t rootAt = ring ? part->ringRoot : c.firstRoot;
     const uint64_t indexAt = ring ? part->ringIndex : c.firstIndex + 3ull * first;
     const uint64_t vertexAt = ring ? part->ringVertex : c.firstVertex;
     const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     const Binding frame = o.frame ? bindBuffer(o.frame, o.frameOffset, sizeof(gpu::LayerFrame))
-                                  : bindBuffer(perVertex ? perVertex->frame : lv.visible.frameBuffer.buffer);
-    const Binding roots = bindBuffer(lv.mesh.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes);
-    const Binding base = bindImage(tex.view, ro, lv.mesh.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, lv.mesh.sampler),
-                  trans = bindImage(textureOf(mat.transmissionImage).view, ro, lv.mesh.sampler),
-                  transColor = bindImage(textureOf(mat.transmissionColorImage).view, ro, lv.mesh.sampler);
+                                  : bindBuffer(perVertex ? perVertex->frame : md.frame);
+    const Binding roots = bindBuffer(mesh.leafRoots.buffer, rootAt * sizeof(gpu::LayerLeafRoot), rootBytes);
+    const Binding base = bindImage(tex.view, ro, mesh.sampler), normal = bindImage(textureOf(mat.normalImage).view, ro, mesh.sampler),
+                  trans = bindImage(textureOf(mat.transmissionImage).view, ro, mesh.sampler),
+                  transColor = bindImage(textureOf(mat.transmissionColorImage).view, ro, mesh.sampler);
     if (perVertex)
-      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe,
+      CANOPY_TRY(bindGraphics(*md.device, cmd, pipe,
                               {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
                                bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
                                bindBuffer(perVertex->tips)},
                               push));
     else
-      CANOPY_TRY(bindGraphics(*lv.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
+      CANOPY_TRY(bindGraphics(*md.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts. One instanced draw per run of visible copies
     // (gl_InstanceIndex, firstInstance included, indexes the instance table).
@@ -370,29 +372,29 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
   };
   if (parts) {
     for (const ChunkPart& p : *parts)
-      if (lv.mesh.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(lv.mesh.chunks[p.chunk], &p, p.firstTriangle, p.triangleCount));
+      if (mesh.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(mesh.chunks[p.chunk], &p, p.firstTriangle, p.triangleCount));
     return Status();
   }
-  if (lv.mesh.streamed) return Status::error("layers: a streamed mesh is drawn in slices only");  // updateLayerView never asks
-  for (const MeshChunk& c : lv.mesh.chunks)
+  if (mesh.streamed) return Status::error("layers: a streamed mesh is drawn in slices only");  // updateLayerView never asks
+  for (const MeshChunk& c : mesh.chunks)
     if (c.foliage == foliage) CANOPY_TRY(draw(c, nullptr, 0, c.triangleCount));
   return Status();
 }
 
 
-Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
+Status drawMeshParts(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
                      uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options) {
-  return drawMaterials(lv, cmd, pipe, true, passKind, target, &parts, nullptr, &options);
+  return drawMaterials(draw, cmd, pipe, true, passKind, target, &parts, nullptr, &options);
 }
 
-void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
+void appendRunParts(const std::vector<MeshChunk>& chunks, uint64_t first, uint64_t count, float weight, uint32_t level,
                     std::vector<ChunkPart>* out) {
   // Chunks are in GPU triangle order and never span materials: find the one holding `first`.
-  auto it = std::upper_bound(lv.mesh.chunks.begin(), lv.mesh.chunks.end(), first,
+  auto it = std::upper_bound(chunks.begin(), chunks.end(), first,
                              [](uint64_t t, const MeshChunk& c) { return t < c.firstTriangle; });
-  if (it == lv.mesh.chunks.begin()) return;
-  for (size_t c = size_t(it - lv.mesh.chunks.begin()) - 1; count > 0 && c < lv.mesh.chunks.size(); ++c) {
-    const MeshChunk& ch = lv.mesh.chunks[c];
+  if (it == chunks.begin()) return;
+  for (size_t c = size_t(it - chunks.begin()) - 1; count > 0 && c < chunks.size(); ++c) {
+    const MeshChunk& ch = chunks[c];
     const uint64_t local = first - ch.firstTriangle;
     if (local >= ch.triangleCount) continue;
     const uint64_t take = std::min<uint64_t>(count, ch.triangleCount - local);
@@ -409,27 +411,27 @@ void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count,
 }
 
 
-Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+Status drawWholeMesh(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
                      const PerVertexBindings& bindings, const std::vector<InstanceRun>& runs) {
   // The host's targets, whose viewport beginHostRendering set (the layers' images are larger by
   // the guard band).
   MeshDrawOptions options;
   options.keepViewport = true;
   options.runs = &runs;
-  CANOPY_TRY(drawMaterials(lv, cmd, pipe, true, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options));
-  return lv.mesh.hasRigid ? drawMaterials(lv, cmd, pipe, false, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options) : Status();
+  CANOPY_TRY(drawMaterials(draw, cmd, pipe, true, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options));
+  return draw.mesh->hasRigid ? drawMaterials(draw, cmd, pipe, false, LAYER_PASS_BACKGROUND, 0, nullptr, &bindings, &options) : Status();
 }
 
 
-Status importMesh(const LayeredVegetation& lv, rg::RenderGraph& g, MeshResources* out) {
+Status importMesh(const LayerMesh& mesh, rg::RenderGraph& g, MeshResources* out) {
   const rg::State vb = rg::stateOf(rg::Use::VertexBuffer), ib = rg::stateOf(rg::Use::IndexBuffer),
                   roots = rg::stateOf(rg::Use::VertexStorageRead);
-  out->vertices = g.importBuffer("layers: vertices", lv.mesh.vertices.size, vb, vb);
-  out->indices = g.importBuffer("layers: indices", lv.mesh.indexBuffer.size, ib, ib);
-  out->roots = g.importBuffer("layers: leaf roots", lv.mesh.leafRoots.size, roots, roots);
-  CANOPY_TRY(g.bindBuffer(out->vertices, lv.mesh.vertices.buffer));
-  CANOPY_TRY(g.bindBuffer(out->indices, lv.mesh.indexBuffer.buffer));
-  return g.bindBuffer(out->roots, lv.mesh.leafRoots.buffer);
+  out->vertices = g.importBuffer("layers: vertices", mesh.vertices.size, vb, vb);
+  out->indices = g.importBuffer("layers: indices", mesh.indexBuffer.size, ib, ib);
+  out->roots = g.importBuffer("layers: leaf roots", mesh.leafRoots.size, roots, roots);
+  CANOPY_TRY(g.bindBuffer(out->vertices, mesh.vertices.buffer));
+  CANOPY_TRY(g.bindBuffer(out->indices, mesh.indexBuffer.buffer));
+  return g.bindBuffer(out->roots, mesh.leafRoots.buffer);
 }
 
 rg::RenderGraph::PassBuilder& readsMesh(rg::RenderGraph::PassBuilder& pass, const MeshResources& mesh) {

@@ -4,14 +4,19 @@
 // staging ring, the materials' textures, and every draw of it (the layers, the background, the
 // impostor bake, the per-vertex baseline).
 #include <cstdint>
+#include <string>
 #include <vector>
 #include <vulkan/vulkan.h>
+
+#include <canopy/canopy_params.h>
 
 #include "engine/graphics_pipeline.h"
 #include "engine/memory.h"
 #include "engine/render_graph.h"
 #include "engine/transfer.h"
 #include "engine/status.h"
+#include "render/impostors.h"
+#include "render/leaf_roots.h"
 #include "render/material_split.h"
 #include "render/layer_instances.h"
 #include "render/mesh_chunks.h"
@@ -20,10 +25,35 @@
 
 namespace canopy {
 struct Device;
-struct LayeredVegetation;
+
+// What the mesh is built from besides the model (the vegetation's description derives from it,
+// so these are its fields too).
+struct LayerMeshDesc {
+  MaterialSplitOptions split;
+  LeafRootOptions roots;
+  // The leaf-root cache folder: leafRootCachePath(model.path, rootCacheDir) is read and written
+  // there. Empty (the default), or a model without a path: no file is touched.
+  std::string rootCacheDir;
+  uint64_t cacheMaxBytes = 0;  // CanopyDesc.cacheMaxBytes (0: no cap)
+  bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
+  uint32_t maxChunkVertices = kMaxChunkVertices;  // distinct vertices per mesh chunk, 3..65535 (tests cut small chunks)
+  // Device memory (issue 16; docs/design.md "Layers: mesh budget and staging ring"): the bytes of
+  // buffers and images the vegetation may allocate; 0: no limit (the mesh is resident). When the
+  // compact mesh does not fit beside the textures and both layer sets, it stays in host memory and
+  // every re-slice streams it through a host-visible ring of about `stagingRingBytes` (one segment
+  // per frame in flight), a slice per frame.
+  uint64_t deviceMemoryBudget = 0;
+  uint64_t stagingRingBytes = 64ull << 20;
+  // Keep the model's branch hierarchy with the compact mesh (CompactMesh::bend) for the per-vertex
+  // wind baseline; the mesh must then be resident (refused, naming the budget, otherwise).
+  bool keepBend = false;
+  // The foliage's box hierarchy and its baked views (render/impostors.h; needs a resident mesh).
+  ImpostorDesc impostors;
+  Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
+};
 
 // The staging ring of a streamed mesh (docs/design.md "Layers: mesh budget and staging ring"):
-// lv.vertices, lv.indexBuffer and lv.leafRoots are host-visible rings of `segments` segments of
+// LayerMesh's vertices, indexBuffer and leafRoots are host-visible rings of `segments` segments of
 // these capacities (elements); frame F writes segment F mod segments, which the embedding contract
 // (frames <= F - framesInFlight completed) leaves free.
 struct MeshRing {
@@ -69,6 +99,20 @@ struct ChunkPart {
   uint32_t level = 0;   // the part's foliage box level (the debug view)
 };
 
+// What a draw of the mesh binds besides the mesh (meshDraw() of the vegetation, layers.cpp, fills
+// it): the placed copies' instance table (the second vertex stream), the frame block
+// (layers_common.glsl FrameBuf) unless the options or the per-vertex bindings name another, the
+// viewport unless the options keep the caller's, and the settings' leaf optics for materials
+// without their own.
+struct MeshDraw {
+  Device* device = nullptr;
+  const LayerMesh* mesh = nullptr;
+  VkBuffer instances = VK_NULL_HANDLE;
+  VkBuffer frame = VK_NULL_HANDLE;
+  uint32_t width = 0, height = 0;
+  float leafTransmission = 0.0f, leafOpticalDepth = 0.0f;  // LayerSettings'
+};
+
 // How drawMaterials differs from a layer draw (the impostor bake, the debug view).
 struct MeshDrawOptions {
   VkBuffer frame = VK_NULL_HANDLE;  // another frame block (layers_common.glsl FrameBuf) at frameOffset; null: the layers'
@@ -85,16 +129,21 @@ struct MeshDrawOptions {
 };
 
 // Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh
-// into *out and uploads the textures; *rootKey: the leaf roots' cache key (0: no cache).
-Status prepareLayerMesh(LayeredVegetation& lv, const VegetationModel& model, CompactMesh* out, uint64_t* rootKey);
-// After the layer images exist: sets lv.mesh.streamed when the compact mesh (`meshBytes`) does not
-// fit the memory budget beside them and the second layer set (`liveAtStart`: the allocator's bytes
-// before this object), refusing what needs it resident; a streamed mesh then needs the second set
-// before placeLayerMesh. placeLayerMesh creates and fills the resident buffers, or the staging ring
-// (the mesh stays in host memory).
-Status chooseLayerMeshResidency(LayeredVegetation& lv, uint64_t liveAtStart, uint64_t meshBytes);
-Status placeLayerMesh(LayeredVegetation& lv, CompactMesh&& mesh, uint64_t liveAtStart);
-void destroyLayerMesh(LayeredVegetation& lv);
+// into *out (with impostors, the box hierarchy and atlas plan into `impostors`) and uploads the
+// textures into `mesh`; *rootKey: the leaf roots' cache key (0: no cache). Statistics: `stats`'
+// mesh and leaf-root fields.
+Status prepareLayerMesh(Device& device, const LayerMeshDesc& desc, const VegetationModel& model, LayerMesh& mesh,
+                        Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey);
+// After the layer images exist: sets mesh.streamed when the compact mesh (`meshBytes`) does not
+// fit the memory budget beside them (`liveAtStart`: the allocator's bytes before the vegetation) and
+// the second layer set still to be made (`nextSetBytes`), refusing what needs it resident; a
+// streamed mesh then needs the second set before placeLayerMesh. placeLayerMesh creates and fills
+// the resident buffers, or the staging ring (the mesh stays in host memory).
+Status chooseLayerMeshResidency(const Device& device, const LayerMeshDesc& desc, LayerMesh& mesh, uint64_t liveAtStart,
+                                uint64_t meshBytes, uint64_t nextSetBytes);
+Status placeLayerMesh(Device& device, const LayerMeshDesc& desc, LayerMesh& mesh, LayerStats& stats, CompactMesh&& compact,
+                      uint64_t liveAtStart);
+void destroyLayerMesh(Device& device, LayerMesh& mesh);
 // Frees the leaves' root positions once the per-vertex baseline has uploaded them (or when it is
 // not created): host memory of 16 bytes a leaf that nothing reads after creation.
 void releaseLeafRootPositions(LayerMesh& mesh);
@@ -115,20 +164,20 @@ struct PerVertexBindings {
 };
 // Draws every chunk of the (resident) mesh, foliage then rigid, for the placed copies in `runs`,
 // with `pipe` inside the caller's rendering: the per-vertex baseline's frame.
-Status drawWholeMesh(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
+Status drawWholeMesh(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe,
                      const PerVertexBindings& bindings, const std::vector<InstanceRun>& runs);
 
 // The mesh draw with chunk parts (the layer passes' slices and cut, the impostor bake); a
 // GPU-order foliage triangle run cut at chunk borders into parts.
-Status drawMeshParts(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
+Status drawMeshParts(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
                      uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options);
-void appendRunParts(const LayeredVegetation& lv, uint64_t first, uint64_t count, float weight, uint32_t level,
+void appendRunParts(const std::vector<MeshChunk>& chunks, uint64_t first, uint64_t count, float weight, uint32_t level,
                     std::vector<ChunkPart>* out);
 
 // Draws one material group of the chunk parts (`foliage`: the foliage's parts, else the rigid
 // chunks) with `pipe` inside the caller's rendering; `perVertex`/`options` as drawWholeMesh and
 // drawMeshParts.
-Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
+Status drawMaterials(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe, bool foliage,
                      uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts,
                      const PerVertexBindings* perVertex = nullptr, const MeshDrawOptions* options = nullptr);
 
@@ -138,7 +187,7 @@ Status drawMaterials(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsP
 struct MeshResources {
   rg::ResourceId vertices = rg::kInvalidResource, indices = rg::kInvalidResource, roots = rg::kInvalidResource;
 };
-Status importMesh(const LayeredVegetation& lv, rg::RenderGraph& graph, MeshResources* out);
+Status importMesh(const LayerMesh& mesh, rg::RenderGraph& graph, MeshResources* out);
 rg::RenderGraph::PassBuilder& readsMesh(rg::RenderGraph::PassBuilder& pass, const MeshResources& mesh);
 
 }  // namespace canopy

@@ -65,12 +65,13 @@ DrawTargets nextTargets(const LayeredVegetation& lv) {
 // impostors) the plain way, depth-tested against it.
 Status drawShaded(LayeredVegetation& lv, VkCommandBuffer cmd, const GraphicsPipeline& plain, const LayerShadingPipelines::ShadeOnce& once,
                   bool foliage, uint32_t passKind, uint32_t target, const std::vector<ChunkPart>* parts, MeshDrawOptions o) {
-  if (!lv.settings.shadeOnce || !once.depth.pipeline) return drawMaterials(lv, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
+  const MeshDraw md = meshDraw(lv);
+  if (!lv.settings.shadeOnce || !once.depth.pipeline) return drawMaterials(md, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
   o.subset = MeshDrawOptions::Subset::DepthPrepassed;
-  CANOPY_TRY(drawMaterials(lv, cmd, once.depth, foliage, passKind, target, parts, nullptr, &o));
-  CANOPY_TRY(drawMaterials(lv, cmd, once.shade, foliage, passKind, target, parts, nullptr, &o));
+  CANOPY_TRY(drawMaterials(md, cmd, once.depth, foliage, passKind, target, parts, nullptr, &o));
+  CANOPY_TRY(drawMaterials(md, cmd, once.shade, foliage, passKind, target, parts, nullptr, &o));
   o.subset = MeshDrawOptions::Subset::Rest;
-  return drawMaterials(lv, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
+  return drawMaterials(md, cmd, plain, foliage, passKind, target, parts, nullptr, &o);
 }
 
 Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTargets& t, bool clear,
@@ -97,13 +98,13 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     o.debugLevels = cut && lv.settings.impostors.debugView;
     o.runs = t.runs;
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
-      if (opaque) CANOPY_TRY(recordImpostors(lv, cmd, *imp, false, i));
+      if (opaque) CANOPY_TRY(recordImpostors(meshDraw(lv), lv.impostors, lv.settings, lv.pipelines.singlePass, cmd, *imp, false, i));
       const std::vector<ChunkPart>* drawn = parts ? parts : cut ? &imp->parts : nullptr;
       if (!drawn || !drawn->empty())
         CANOPY_TRY(lv.pipelines.singlePass
                        ? drawShaded(lv, cmd, layered, layeredOnce, true, LAYER_PASS_LAYERED, 0, drawn, o)
                        : drawShaded(lv, cmd, lv.pipelines.shaded.perLayer, lv.pipelines.shaded.perLayerOnce, true, LAYER_PASS_ONE_LAYER, i, drawn, o));
-      return fading ? recordImpostors(lv, cmd, *imp, true, i) : Status();
+      return fading ? recordImpostors(meshDraw(lv), lv.impostors, lv.settings, lv.pipelines.singlePass, cmd, *imp, true, i) : Status();
     }));
   }
   return Status();
@@ -232,7 +233,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   r.backgroundColor = g.importImage("background: colour", descOf(lv.targets.backgroundColor), rest, rest);
   r.backgroundDepth = g.importImage("background: depth", descOf(lv.targets.backgroundDepth), rest, rest);
   MeshResources mesh;
-  CANOPY_TRY(importMesh(lv, g, &mesh));
+  CANOPY_TRY(importMesh(lv.mesh, g, &mesh));
   const auto frame = g.importBuffer("layers: frame", lv.visible.frameBuffer.size, kFrameRead, kFrameRead);
   // Impostors (render/impostor_gpu.cpp): the re-slice's list, the box table and the baked atlas.
   rg::ResourceId impostorList = rg::kInvalidResource, impostorBoxes = rg::kInvalidResource,

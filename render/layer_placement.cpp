@@ -8,15 +8,14 @@
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
-#include "render/layers.h"
 
 namespace canopy {
 
 // Starts the placement for `view`: the frame constants the layer draws read.
-void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job) {
+void beginPlacement(const PlacementInputs& in, const LayerView& view, PlacementJob& job) {
   job = PlacementJob{};
   job.view = view;
-  const LayerSettings& s = lv.settings;
+  const LayerSettings& s = *in.settings;
   gpu::LayerFrame& f = job.frame;
   f = cameraFrame(s, view);
   f.layerCount = s.layout.count();
@@ -26,16 +25,16 @@ void beginPlacement(const LayeredVegetation& lv, const LayerView& view, Placemen
   job.bottom = -INFINITY;
   // The copies this camera sees (docs/design.md "Instances"); per copy, the frame's rows composed
   // with its transform, so the stages below read model-space vertices.
-  job.runs = visibleInstanceRuns(lv.instances, lv.mesh.boundsMin, lv.mesh.boundsMax, f.viewProj);
+  job.runs = visibleInstanceRuns(*in.instances, in.mesh->boundsMin, in.mesh->boundsMax, f.viewProj);
   for (const InstanceRun& r : job.runs)
     for (uint32_t i = r.first; i < r.first + r.count; ++i) {
-      const glm::mat4 m = lv.instances.models[i], vp = f.viewProj * m;
+      const glm::mat4 m = in.instances->models[i], vp = f.viewProj * m;
       job.depthRows.push_back(glm::vec4(f.depthRow) * m);
       job.rowsX.push_back(glm::vec4(vp[0][0], vp[1][0], vp[2][0], vp[3][0]));
       job.rowsY.push_back(glm::vec4(vp[0][1], vp[1][1], vp[2][1], vp[3][1]));
       job.rowsW.push_back(glm::vec4(vp[0][3], vp[1][3], vp[2][3], vp[3][3]));
     }
-  job.leafDepth.resize(size_t(lv.mesh.leafCount) * job.depthRows.size());
+  job.leafDepth.resize(size_t(in.mesh->leafCount) * job.depthRows.size());
 }
 
 namespace {
@@ -75,7 +74,7 @@ void placePlants(PlacementJob& job, const Plants& plants, float h, float w) {
 // What every stage of one advancePlacement call reads: the mesh, the copies, the batch size, and
 // the helpers that walk the compact host mesh as the vertex shader decodes it.
 struct PlacementPass {
-  const LayeredVegetation& lv;
+  const LayerMesh& mesh;
   PlacementJob& job;
   const LayerSettings& settings;
   gpu::LayerFrame& frame;
@@ -85,29 +84,29 @@ struct PlacementPass {
   bool geometric, perPlant;
   float height, width;
 
-  PlacementPass(const LayeredVegetation& v, PlacementJob& j)
-      : lv(v), job(j), settings(v.settings), frame(j.frame), hm(v.mesh.hostMesh), plants(v.mesh.plants) {
+  PlacementPass(const PlacementInputs& in, PlacementJob& j)
+      : mesh(*in.mesh), job(j), settings(*in.settings), frame(j.frame), hm(in.mesh->hostMesh), plants(in.mesh->plants) {
     copies = job.depthRows.size();
     // Items per clock reading, each item visited once per visible copy.
     batch = std::max<size_t>((size_t(1) << 14) / std::max<size_t>(copies, 1), 1);
-    nLeaves = lv.mesh.leafCount;
+    nLeaves = mesh.leafCount;
     nVertices = hm.vertices.size();
-    nChunks = lv.mesh.chunks.size();
+    nChunks = mesh.chunks.size();
     nPlants = plants.count();
     geometric = settings.slice == SliceMode::Geometry;
     perPlant = nPlants * copies > 1 && plants.leafPlant.size() == nLeaves;
-    for (const MeshChunk& c : lv.mesh.chunks)
+    for (const MeshChunk& c : mesh.chunks)
       if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
-    height = float(lv.desc.height);
-    width = float(lv.desc.width);
+    height = float(in.height);
+    width = float(in.width);
   }
   // View depth of model-space point p in copy k.
   float depthOf(size_t k, const glm::vec3& p) const { return glm::dot(job.depthRows[k], glm::vec4(p, 1.0f)); }
   // The chunk holding vertex (or index) `item`, items visited in order.
   const MeshChunk& chunkOf(size_t item, bool index) {
     for (;; ++job.chunk) {
-      const MeshChunk& c = lv.mesh.chunks[job.chunk];
-      if (job.chunk + 1 == lv.mesh.chunks.size() || item < (index ? c.firstIndex + 3ull * c.triangleCount : c.firstVertex + c.vertexCount))
+      const MeshChunk& c = mesh.chunks[job.chunk];
+      if (job.chunk + 1 == mesh.chunks.size() || item < (index ? c.firstIndex + 3ull * c.triangleCount : c.firstVertex + c.vertexCount))
         return c;
     }
   }
@@ -131,7 +130,7 @@ struct PlacementPass {
 size_t PlacementPass::rootDepths() {
   size_t roots = 0, end = job.next;
   for (; end < nChunks && roots < batch; ++end) {
-    const MeshChunk& c = lv.mesh.chunks[end];
+    const MeshChunk& c = mesh.chunks[end];
     for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i)
       for (size_t k = 0; k < copies; ++k) {
         const float z = depthOf(k, hm.roots[i].position);
@@ -266,9 +265,9 @@ void PlacementPass::finish() {
 
 // Runs the placement's stages (PlacementStage) until it is done or `deadline` (null: none) has
 // passed; the clock is read every batch of items.
-Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
+Status advancePlacement(const PlacementInputs& in, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done) {
   const auto t0 = PlacementClock::now();
-  PlacementPass pass(lv, job);
+  PlacementPass pass(in, job);
   *done = false;
   while (!*done) {
     size_t end = 0;
@@ -294,31 +293,32 @@ Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const Pl
 
 // The impostor cut of the visible placement (LayerSettings.impostors; render/impostors.h): which
 // boxes are drawn as impostors, with which weight, and the remaining foliage as chunk parts.
-void planImpostorCut(LayeredVegetation& lv, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out) {
+void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out,
+                     LayerStats& stats) {
   const auto t0 = PlacementClock::now();
   *out = ImpostorDraws{};
-  const LayerSettings& s = lv.settings;
-  if ((s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) || !lv.impostors.enabled) return;
+  const LayerSettings& s = *pin.settings;
+  if ((s.impostors.mode == ImpostorMode::Off && !s.impostors.debugView) || !pin.impostors->enabled) return;
   ImpostorCutInput in;
   in.settings = s.impostors;
   in.depthRow = frame.depthRow;
   in.perspective = view.proj[2][3] != 0.0f;
-  in.pixelScale = std::abs(view.proj[1][1]) * 0.5f * float(lv.desc.height);
+  in.pixelScale = std::abs(view.proj[1][1]) * 0.5f * float(pin.height);
   // The far region begins at the first far layer's near boundary (none: no far region); boxes ramp
   // in over band x the mean layer thickness before it.
   const LayerLayout& l = s.layout;
   const uint32_t n = l.count();
   in.farStart = l.region[2] ? frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
   in.farBand = s.impostors.band * (frame.boundaries[n] - frame.boundaries[0]) / float(n);
-  impostorCut(lv.impostors, in, &out->cut);
-  for (const ImpostorCut::Run& r : out->cut.geometry) appendRunParts(lv, r.first, r.count, r.weight, r.level, &out->parts);
+  impostorCut(*pin.impostors, in, &out->cut);
+  for (const ImpostorCut::Run& r : out->cut.geometry) appendRunParts(pin.mesh->chunks, r.first, r.count, r.weight, r.level, &out->parts);
   out->instances = out->cut.opaque;
   out->opaque = uint32_t(out->cut.opaque.size());
   out->instances.insert(out->instances.end(), out->cut.fading.begin(), out->cut.fading.end());
-  lv.stats.lastImpostors = uint32_t(out->instances.size());
-  lv.stats.lastFadingBoxes = uint32_t(out->cut.fading.size());
-  lv.stats.lastDrawnTriangles = out->cut.triangles;
-  lv.stats.lastPlacementMs += msSince(t0);
+  stats.lastImpostors = uint32_t(out->instances.size());
+  stats.lastFadingBoxes = uint32_t(out->cut.fading.size());
+  stats.lastDrawnTriangles = out->cut.triangles;
+  stats.lastPlacementMs += msSince(t0);
 }
 
 void takeVertexBounds(VisibleLayers& v, const PlacementJob& job) {
@@ -327,19 +327,19 @@ void takeVertexBounds(VisibleLayers& v, const PlacementJob& job) {
 }
 
 // The whole placement for `view` at once, made the visible one.
-Status placeForView(LayeredVegetation& lv, const LayerView& view) {
+Status placeForView(const PlacementInputs& in, const LayerView& view, VisibleLayers& visible, LayerStats& stats) {
   PlacementJob job;
-  beginPlacement(lv, view, job);
+  beginPlacement(in, view, job);
   bool done = false;
-  CANOPY_TRY(advancePlacement(lv, job, nullptr, &done));
-  lv.visible.view = job.view;
-  lv.visible.runs = job.runs;
-  lv.stats.lastVisibleInstances = uint32_t(job.depthRows.size());
-  takeVertexBounds(lv.visible, job);
-  lv.visible.frame = job.frame;
-  lv.visible.layers = std::move(job.layers);
-  lv.stats.lastPlacementMs = job.ms;
-  planImpostorCut(lv, lv.visible.frame, view, &lv.visible.impostors);
+  CANOPY_TRY(advancePlacement(in, job, nullptr, &done));
+  visible.view = job.view;
+  visible.runs = job.runs;
+  stats.lastVisibleInstances = uint32_t(job.depthRows.size());
+  takeVertexBounds(visible, job);
+  visible.frame = job.frame;
+  visible.layers = std::move(job.layers);
+  stats.lastPlacementMs = job.ms;
+  planImpostorCut(in, visible.frame, view, &visible.impostors, stats);
   return Status();
 }
 
@@ -371,18 +371,15 @@ gpu::LayerFrame cameraFrame(const LayerSettings& s, const LayerView& view) {
 }
 
 
-VkRect2D layerFootprint(const LayeredVegetation& lv) {
-  const float w = float(lv.desc.width), h = float(lv.desc.height);
-  const VkRect2D all{{0, 0}, {lv.desc.width, lv.desc.height}};
+VkRect2D projectedFootprint(const std::vector<glm::mat4>& viewProjs, const glm::vec3& bmin, const glm::vec3& bmax,
+                            uint32_t width, uint32_t height) {
+  const float w = float(width), h = float(height);
+  const VkRect2D all{{0, 0}, {width, height}};
   glm::vec2 lo(INFINITY), hi(-INFINITY);
-  std::vector<const glm::mat4*> views{&lv.visible.frame.viewProj};
-  if (lv.reslice.spread.phase == SpreadPhase::Drawing || lv.reslice.spread.phase == SpreadPhase::CrossFading)
-    views.push_back(&lv.reslice.spread.job.frame.viewProj);
-  for (const glm::mat4* vp : views)
+  for (const glm::mat4& vp : viewProjs)
     for (int c = 0; c < 8; ++c) {
-      const glm::vec3 &bmin = lv.instances.boundsMin, &bmax = lv.instances.boundsMax;  // world: every copy
       const glm::vec3 p((c & 1) ? bmax.x : bmin.x, (c & 2) ? bmax.y : bmin.y, (c & 4) ? bmax.z : bmin.z);
-      const glm::vec4 q = *vp * glm::vec4(p, 1.0f);
+      const glm::vec4 q = vp * glm::vec4(p, 1.0f);
       if (!(q.w > 1e-6f)) return all;  // a corner behind the camera (or no view yet)
       const glm::vec2 px((q.x / q.w * 0.5f + 0.5f) * w, (q.y / q.w * 0.5f + 0.5f) * h);
       lo = glm::min(lo, px);

@@ -21,7 +21,17 @@
 
 namespace canopy {
 struct Device;
-struct LayeredVegetation;
+
+// What a placement reads of the vegetation (placementInputs() of layers.cpp fills it): the mesh's
+// host copy, chunks, plants and bounds; the placed copies; the impostors' hierarchy; the settings;
+// the layer images' size, pixels.
+struct PlacementInputs {
+  const LayerMesh* mesh = nullptr;
+  const LayerInstances* instances = nullptr;
+  const Impostors* impostors = nullptr;
+  const LayerSettings* settings = nullptr;
+  uint32_t width = 0, height = 0;
+};
 
 struct LayerInfo {
   LayerSlab slab;             // view-depth range, representative depth, L_i
@@ -102,22 +112,23 @@ struct VisibleLayers {
 
 using PlacementClock = std::chrono::steady_clock;
 // Starts a placement for `view`; advancePlacement runs it until done or past `deadline` (null: to
-// the end); placeForView runs one to the end into lv.visible.
-void beginPlacement(const LayeredVegetation& lv, const LayerView& view, PlacementJob& job);
+// the end); placeForView runs one to the end into `visible`.
+void beginPlacement(const PlacementInputs& in, const LayerView& view, PlacementJob& job);
 // What a finished placement measured of its vertices, for the reprojection: their pixel extent
 // and the rigid ones' depths.
 void takeVertexBounds(VisibleLayers& v, const PlacementJob& job);
-Status advancePlacement(const LayeredVegetation& lv, PlacementJob& job, const PlacementClock::time_point* deadline,
-                        bool* done);
-Status placeForView(LayeredVegetation& lv, const LayerView& view);
+Status advancePlacement(const PlacementInputs& in, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done);
+Status placeForView(const PlacementInputs& in, const LayerView& view, VisibleLayers& visible, LayerStats& stats);
 // The impostor cut of the placement `frame` for `view` (nothing when impostors are off): the visible
 // set's at a re-slice at once, a spread re-slice's when its placement is done.
-void planImpostorCut(LayeredVegetation& lv, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out);
+void planImpostorCut(const PlacementInputs& in, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out,
+                     LayerStats& stats);
 
-// The pixels the visible layers (and, during a spread re-slice, the next set) can cover: the
-// model's bounding box projected by the placements' views, 2 pixels of margin; the whole target
-// when a corner is behind a camera.
-VkRect2D layerFootprint(const LayeredVegetation& lv);
+// The pixels of a `width` x `height` target the world box [boundsMin, boundsMax] can cover seen
+// through each of `viewProjs` (the visible placement's, and a spread re-slice's next set), 2 pixels
+// of margin; the whole target when a corner is behind a camera.
+VkRect2D projectedFootprint(const std::vector<glm::mat4>& viewProjs, const glm::vec3& boundsMin, const glm::vec3& boundsMax,
+                            uint32_t width, uint32_t height);
 
 // The frame block's camera and lighting for `view` (no placement): the layers' start and the
 // per-vertex baseline's every frame.

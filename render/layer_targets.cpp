@@ -8,27 +8,23 @@
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
-#include "render/layers.h"
 
 namespace canopy {
 
-bool spreadEnabled(const LayeredVegetation& lv) { return lv.settings.rebuildBudgetMs > 0 && !lv.desc.writeIds; }
-bool usesNextSet(const LayeredVegetation& lv) { return spreadEnabled(lv) || lv.mesh.streamed; }
-
 // Frees the layer images once no host frame in flight can read them (deferRelease), so a new
 // layer count or size never waits for the device; `now`: at once (images no frame has used).
-void destroyLayerTargets(LayeredVegetation& lv, bool now) {
-  Device* d = lv.device;
-  dropPreparedWork(*d, lv.targets.pendingClear);  // a clear of these images never recorded: nothing to wait for
+void destroyLayerTargets(Device& device, LayerTargets& targets, bool now) {
+  Device* d = &device;
+  dropPreparedWork(*d, targets.pendingClear);  // a clear of these images never recorded: nothing to wait for
   std::vector<VkImageView> views;
-  for (auto* v : {&lv.targets.colorLayerViews, &lv.targets.depthLayerViews, &lv.targets.idsLayerViews, &lv.targets.next.colorLayerViews,
-                  &lv.targets.next.depthLayerViews}) {
+  for (auto* v : {&targets.colorLayerViews, &targets.depthLayerViews, &targets.idsLayerViews, &targets.next.colorLayerViews,
+                  &targets.next.depthLayerViews}) {
     views.insert(views.end(), v->begin(), v->end());
     v->clear();
   }
   std::vector<Image> images;
-  for (Image* img : {&lv.targets.color, &lv.targets.depth, &lv.targets.ids, &lv.targets.backgroundColor, &lv.targets.backgroundDepth, &lv.targets.next.color,
-                     &lv.targets.next.depth, &lv.targets.next.backgroundColor, &lv.targets.next.backgroundDepth}) {
+  for (Image* img : {&targets.color, &targets.depth, &targets.ids, &targets.backgroundColor, &targets.backgroundDepth, &targets.next.color,
+                     &targets.next.depth, &targets.next.backgroundColor, &targets.next.backgroundDepth}) {
     if (img->image) images.push_back(*img);
     *img = Image{};
   }
@@ -56,71 +52,71 @@ Status layerView(Device& d, const Image& img, uint32_t layer, VkImageView* out) 
 
 // Creates the layer arrays and the background for the current layer count, cleared and left in
 // the rest state so that every later graph can import them with a fixed initial state.
-Status createLayerTargets(LayeredVegetation& lv) {
-  Device& d = *lv.device;
-  const uint32_t n = lv.settings.layout.count();
+Status createLayerTargets(Device& d, const LayerTargetsDesc& desc, LayerTargets& targets) {
+  const uint32_t n = desc.layers;
+  targets.restUse = desc.restUse;
   ImageDesc c;
-  c.format = lv.desc.colorFormat;
-  c.width = lv.desc.width;
-  c.height = lv.desc.height;
+  c.format = desc.colorFormat;
+  c.width = desc.width;
+  c.height = desc.height;
   c.layers = n;
   c.arrayView = true;
   c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
             VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  CANOPY_TRY(createImage(d, c, &lv.targets.color, "layers: colour"));
+  CANOPY_TRY(createImage(d, c, &targets.color, "layers: colour"));
   ImageDesc z = c;
   z.format = kLayerDepthFormat;
   z.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
             VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-  CANOPY_TRY(createImage(d, z, &lv.targets.depth, "layers: depth"));
-  if (lv.desc.writeIds) {
+  CANOPY_TRY(createImage(d, z, &targets.depth, "layers: depth"));
+  if (desc.ids) {
     ImageDesc i = c;
     i.format = kLayerIdsFormat;
-    CANOPY_TRY(createImage(d, i, &lv.targets.ids, "layers: ids"));
+    CANOPY_TRY(createImage(d, i, &targets.ids, "layers: ids"));
   }
   ImageDesc bc = c;
   bc.layers = 1;
   bc.arrayView = false;
-  CANOPY_TRY(createImage(d, bc, &lv.targets.backgroundColor, "background: colour"));
+  CANOPY_TRY(createImage(d, bc, &targets.backgroundColor, "background: colour"));
   ImageDesc bz = z;
   bz.layers = 1;
   bz.arrayView = false;
-  CANOPY_TRY(createImage(d, bz, &lv.targets.backgroundDepth, "background: depth"));
-  if (usesNextSet(lv)) {
-    CANOPY_TRY(createImage(d, c, &lv.targets.next.color, "layers (next set): colour"));
-    CANOPY_TRY(createImage(d, z, &lv.targets.next.depth, "layers (next set): depth"));
-    CANOPY_TRY(createImage(d, bc, &lv.targets.next.backgroundColor, "background (next set): colour"));
-    CANOPY_TRY(createImage(d, bz, &lv.targets.next.backgroundDepth, "background (next set): depth"));
+  CANOPY_TRY(createImage(d, bz, &targets.backgroundDepth, "background: depth"));
+  if (desc.nextSet) {
+    CANOPY_TRY(createImage(d, c, &targets.next.color, "layers (next set): colour"));
+    CANOPY_TRY(createImage(d, z, &targets.next.depth, "layers (next set): depth"));
+    CANOPY_TRY(createImage(d, bc, &targets.next.backgroundColor, "background (next set): colour"));
+    CANOPY_TRY(createImage(d, bz, &targets.next.backgroundDepth, "background (next set): depth"));
     for (uint32_t l = 0; l < n; ++l) {
       VkImageView v;
-      CANOPY_TRY(layerView(d, lv.targets.next.color, l, &v));
-      lv.targets.next.colorLayerViews.push_back(v);
-      CANOPY_TRY(layerView(d, lv.targets.next.depth, l, &v));
-      lv.targets.next.depthLayerViews.push_back(v);
+      CANOPY_TRY(layerView(d, targets.next.color, l, &v));
+      targets.next.colorLayerViews.push_back(v);
+      CANOPY_TRY(layerView(d, targets.next.depth, l, &v));
+      targets.next.depthLayerViews.push_back(v);
     }
   }
   for (uint32_t l = 0; l < n; ++l) {
     VkImageView v;
-    CANOPY_TRY(layerView(d, lv.targets.color, l, &v));
-    lv.targets.colorLayerViews.push_back(v);
-    CANOPY_TRY(layerView(d, lv.targets.depth, l, &v));
-    lv.targets.depthLayerViews.push_back(v);
-    if (lv.desc.writeIds) {
-      CANOPY_TRY(layerView(d, lv.targets.ids, l, &v));
-      lv.targets.idsLayerViews.push_back(v);
+    CANOPY_TRY(layerView(d, targets.color, l, &v));
+    targets.colorLayerViews.push_back(v);
+    CANOPY_TRY(layerView(d, targets.depth, l, &v));
+    targets.depthLayerViews.push_back(v);
+    if (desc.ids) {
+      CANOPY_TRY(layerView(d, targets.ids, l, &v));
+      targets.idsLayerViews.push_back(v);
     }
   }
   // Clear once (empty layers until the first rebuild) into the rest state.
   PreparedWork work;
   work.graph = std::make_shared<rg::RenderGraph>();
   rg::RenderGraph& g = *work.graph;
-  const rg::State rest = rg::stateOf(lv.desc.restUse);
+  const rg::State rest = rg::stateOf(desc.restUse);
   std::vector<std::pair<rg::ResourceId, const Image*>> imgs;
-  for (const Image* img : {&lv.targets.color, &lv.targets.depth, &lv.targets.ids, &lv.targets.backgroundColor, &lv.targets.backgroundDepth}) {
+  for (const Image* img : {&targets.color, &targets.depth, &targets.ids, &targets.backgroundColor, &targets.backgroundDepth}) {
     if (!img->image) continue;
     imgs.push_back({g.importImage("layer target", descOf(*img), {}, rest), img});
   }
-  for (const Image* img : {&lv.targets.next.color, &lv.targets.next.depth, &lv.targets.next.backgroundColor, &lv.targets.next.backgroundDepth}) {
+  for (const Image* img : {&targets.next.color, &targets.next.depth, &targets.next.backgroundColor, &targets.next.backgroundDepth}) {
     if (!img->image) continue;
     imgs.push_back({g.importImage("layer target (next set)", descOf(*img), {}, kNextRest), img});
   }
@@ -145,8 +141,8 @@ Status createLayerTargets(LayeredVegetation& lv) {
     pass.write(id, rg::Use::TransferDst);
     CANOPY_TRY(g.bindImage(id, *img));
   }
-  // On a host's device the clear is recorded into its next frame (lv.targets.pendingClear), else now.
-  return submitOrDefer(d, std::move(work), &lv.targets.pendingClear);
+  // On a host's device the clear is recorded into its next frame (LayerTargets::pendingClear), else now.
+  return submitOrDefer(d, std::move(work), &targets.pendingClear);
 }
 
 
@@ -156,44 +152,46 @@ Status imageLayerView(Device& device, const Image& image, uint32_t layer, VkImag
 
 
 namespace {
-Status readColorImage(LayeredVegetation& lv, const Image& img, uint32_t layer, std::vector<glm::vec4>* rgba) {
+Status readColorImage(Device& d, const LayerTargets& t, const Image& img, uint32_t layer, std::vector<glm::vec4>* rgba) {
   const size_t n = size_t(img.extent.width) * img.extent.height;
   rgba->assign(n, glm::vec4(0));
   if (img.format == VK_FORMAT_R16G16B16A16_SFLOAT) {
     std::vector<uint64_t> raw(n);
-    CANOPY_TRY(readbackImage(*lv.device, img, layer, 8, raw.data(), rg::stateOf(lv.desc.restUse)));
+    CANOPY_TRY(readbackImage(d, img, layer, 8, raw.data(), rg::stateOf(t.restUse)));
     for (size_t i = 0; i < n; ++i) {
       const glm::uvec2 halves(uint32_t(raw[i]), uint32_t(raw[i] >> 32));
       (*rgba)[i] = glm::vec4(glm::unpackHalf2x16(halves.x), glm::unpackHalf2x16(halves.y));
     }
   } else {
     std::vector<uint32_t> raw(n);
-    CANOPY_TRY(readbackImage(*lv.device, img, layer, 4, raw.data(), rg::stateOf(lv.desc.restUse)));
+    CANOPY_TRY(readbackImage(d, img, layer, 4, raw.data(), rg::stateOf(t.restUse)));
     for (size_t i = 0; i < n; ++i) (*rgba)[i] = glm::unpackUnorm4x8(raw[i]);
   }
   return Status();
 }
+
+size_t pixelsOf(const Image& img) { return size_t(img.extent.width) * img.extent.height; }
 }  // namespace
 
-Status readLayerColor(LayeredVegetation& lv, uint32_t layer, std::vector<glm::vec4>* rgba) {
-  return readColorImage(lv, lv.targets.color, layer, rgba);
+Status readLayerColor(Device& d, const LayerTargets& t, uint32_t layer, std::vector<glm::vec4>* rgba) {
+  return readColorImage(d, t, t.color, layer, rgba);
 }
 
-Status readLayerDepth(LayeredVegetation& lv, uint32_t layer, std::vector<float>* depth) {
-  depth->assign(size_t(lv.desc.width) * lv.desc.height, 0.0f);
-  return readbackImage(*lv.device, lv.targets.depth, layer, 4, depth->data(), rg::stateOf(lv.desc.restUse));
+Status readLayerDepth(Device& d, const LayerTargets& t, uint32_t layer, std::vector<float>* depth) {
+  depth->assign(pixelsOf(t.depth), 0.0f);
+  return readbackImage(d, t.depth, layer, 4, depth->data(), rg::stateOf(t.restUse));
 }
 
-Status readLayerIds(LayeredVegetation& lv, uint32_t layer, std::vector<glm::uvec2>* ids) {
-  if (!lv.desc.writeIds) return Status::error("readLayerIds: created without writeIds");
-  ids->assign(size_t(lv.desc.width) * lv.desc.height, glm::uvec2(0));
-  return readbackImage(*lv.device, lv.targets.ids, layer, 8, ids->data(), rg::stateOf(lv.desc.restUse));
+Status readLayerIds(Device& d, const LayerTargets& t, uint32_t layer, std::vector<glm::uvec2>* ids) {
+  if (!t.ids.image) return Status::error("readLayerIds: created without writeIds");
+  ids->assign(pixelsOf(t.ids), glm::uvec2(0));
+  return readbackImage(d, t.ids, layer, 8, ids->data(), rg::stateOf(t.restUse));
 }
 
-Status readBackground(LayeredVegetation& lv, std::vector<glm::vec4>* rgba, std::vector<float>* depth) {
-  CANOPY_TRY(readColorImage(lv, lv.targets.backgroundColor, 0, rgba));
-  depth->assign(size_t(lv.desc.width) * lv.desc.height, 0.0f);
-  return readbackImage(*lv.device, lv.targets.backgroundDepth, 0, 4, depth->data(), rg::stateOf(lv.desc.restUse));
+Status readBackground(Device& d, const LayerTargets& t, std::vector<glm::vec4>* rgba, std::vector<float>* depth) {
+  CANOPY_TRY(readColorImage(d, t, t.backgroundColor, 0, rgba));
+  depth->assign(pixelsOf(t.backgroundDepth), 0.0f);
+  return readbackImage(d, t.backgroundDepth, 0, 4, depth->data(), rg::stateOf(t.restUse));
 }
 
 }  // namespace canopy

@@ -77,11 +77,39 @@ Status createFadePipelines(LayeredVegetation& lv) {
 
 
 
-// The layer images, and the cross-fade's pipelines where re-slices go through the next set.
+// The layer images for the settings in force, and the cross-fade's pipelines where re-slices go
+// through the next set.
 Status createTargets(LayeredVegetation& lv) {
-  if (usesNextSet(lv)) CANOPY_TRY(createFadePipelines(lv));
-  return createLayerTargets(lv);
+  const bool nextSet = usesNextSet(lv);
+  if (nextSet) CANOPY_TRY(createFadePipelines(lv));
+  LayerTargetsDesc t;
+  t.width = lv.desc.width;
+  t.height = lv.desc.height;
+  t.layers = lv.settings.layout.count();
+  t.colorFormat = lv.desc.colorFormat;
+  t.ids = lv.desc.writeIds;
+  t.nextSet = nextSet;
+  t.restUse = lv.desc.restUse;
+  return createLayerTargets(*lv.device, t, lv.targets);
 }
+
+// The bytes of the second layer set still to be made: the visible set's twin (none when it exists).
+uint64_t nextSetBytesToCome(const LayerTargets& t) {
+  uint64_t bytes = 0;
+  if (!t.next.color.image)
+    for (const Image* img : {&t.color, &t.depth, &t.backgroundColor, &t.backgroundDepth}) bytes += img->allocation.size;
+  return bytes;
+}
+
+// The scheduler's view of the vegetation (render/reslice_scheduler.h).
+struct ReslicePartsOf {
+  PlacementInputs placement;
+  ResliceParts parts;
+  explicit ReslicePartsOf(LayeredVegetation& lv)
+      : placement(placementInputs(lv)),
+        parts{placement, lv.settings, lv.mesh, lv.visible, lv.stats, lv.device, layerOutputSize(lv),
+              spreadEnabled(lv.settings, lv.desc.writeIds), lv.desc.fixedSliceTriangles} {}
+};
 
 // Shading once's pair for a draw path (docs/design.md "Layers: shading once"); `p`: the path's
 // plain pipeline. The same vertex shader in both, so the shading pass meets the pre-pass's depth
@@ -233,17 +261,19 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     CompactMesh mesh;
     uint64_t key = 0;
     CANOPY_TRY(chooseDrawPath(lv, lv.settings, &lv.pipelines.singlePass));
-    CANOPY_TRY(prepareLayerMesh(lv, m, &mesh, &key));
+    CANOPY_TRY(prepareLayerMesh(d, desc, m, lv.mesh, lv.impostors, lv.stats, &mesh, &key));
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                            MemoryUsage::DeviceLocal, &lv.visible.frameBuffer, "layers: frame"));
     CANOPY_TRY(createTargets(lv));
-    CANOPY_TRY(chooseLayerMeshResidency(lv, liveAtStart, mesh.bytes()));
+    CANOPY_TRY(chooseLayerMeshResidency(d, desc, lv.mesh, liveAtStart, mesh.bytes(), nextSetBytesToCome(lv.targets)));
     if (lv.mesh.streamed && !lv.targets.next.color.image) {
       // Streamed re-slices draw into the second set. The images were never used by a frame (their
       // clear was submitted and waited for, or is dropped): freed now, so the allocator's count is
       // exact for the ring that follows.
-      destroyLayerTargets(lv, true);
+      destroyLayerTargets(d, lv.targets, true);
       CANOPY_TRY(createTargets(lv));
     }
-    CANOPY_TRY(placeLayerMesh(lv, std::move(mesh), liveAtStart));
+    CANOPY_TRY(placeLayerMesh(d, desc, lv.mesh, lv.stats, std::move(mesh), liveAtStart));
     CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, desc.instances.empty() ? std::vector<glm::mat4>{glm::mat4(1.0f)} : desc.instances,
                             desc.tints, desc.windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
     CANOPY_TRY(useShadingFor(lv, lv.settings));
@@ -266,7 +296,12 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
         lv.impostors.cacheKey = impostorModelKey(lv.impostors, m, meshHashes);
         lv.impostors.cacheMaxBytes = desc.cacheMaxBytes;
       }
-      CANOPY_TRY(createImpostors(lv));
+      ImpostorSources sources;
+      sources.mesh = &lv.mesh;
+      sources.instances = &lv.instances;
+      sources.settings = &lv.settings;
+      sources.colorFormat = desc.colorFormat;
+      CANOPY_TRY(createImpostors(d, sources, lv.impostors));
       lv.stats.impostorBoxes = uint32_t(lv.impostors.nodes.size());
       lv.stats.impostorBakedBoxes = lv.impostors.baked;
       lv.stats.impostorTilePixels = lv.impostors.tileSize;
@@ -291,14 +326,14 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
 void destroyLayeredVegetation(LayeredVegetation& lv) {
   if (!lv.device) return;
   Device& d = *lv.device;
-  destroyLayerTargets(lv);
-  destroyImpostors(lv);
+  destroyLayerTargets(d, lv.targets);
+  destroyImpostors(d, lv.impostors);
   destroyShading(d, lv.pipelines.shaded);
   for (LayerShadingPipelines& o : lv.pipelines.otherShading) destroyShading(d, o);
   for (GraphicsPipeline* p : {&lv.pipelines.fade, &lv.pipelines.fadeBackground, &lv.pipelines.fadeDepth, &lv.pipelines.fadeOver,
                              &lv.pipelines.fadeOverBackground})
     destroyGraphicsPipeline(d, *p);
-  destroyLayerMesh(lv);
+  destroyLayerMesh(d, lv.mesh);
   destroyInstances(d, lv.instances);
   if (lv.pipelines.nearestSampler) d.vk.DestroySampler(d.device, lv.pipelines.nearestSampler, d.allocationCallbacks);
   destroyBuffer(d, lv.visible.frameBuffer);
@@ -337,11 +372,11 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   lv.stats.singlePass = single;
   const bool recreate = countChanged || usesNextSet(lv) != nextSetBefore;
   if (recreate) {
-    destroyLayerTargets(lv);
+    destroyLayerTargets(*lv.device, lv.targets);
     CANOPY_TRY(createTargets(lv));
     if (targetsRecreated) *targetsRecreated = true;
   }
-  rescheduleAfterChange(lv, contentChanged, recreate, budgetChanged);
+  rescheduleAfterChange(lv.reslice, contentChanged, recreate, budgetChanged);
   return Status();
 }
 
@@ -353,12 +388,12 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
     return Status::error("layers: a guard band of " + std::to_string(guardX) + "x" + std::to_string(guardY) +
                          " px leaves no output in " + std::to_string(width) + "x" + std::to_string(height));
   if (width == lv.desc.width && height == lv.desc.height && guardX == lv.desc.guardX && guardY == lv.desc.guardY) return Status();
-  destroyLayerTargets(lv);
+  destroyLayerTargets(*lv.device, lv.targets);
   lv.desc.width = width;
   lv.desc.height = height;
   lv.desc.guardX = guardX;
   lv.desc.guardY = guardY;
-  rescheduleAfterChange(lv, true, true, false);  // the placement is in pixels of the old size
+  rescheduleAfterChange(lv.reslice, true, true, false);  // the placement is in pixels of the old size
   return createTargets(lv);
 }
 
@@ -373,12 +408,51 @@ Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& mo
   }
   destroyBufferLater(*lv.device, lv.instances.buffer);  // frames in flight read the old table
   lv.instances = std::move(next);
-  requestReslice(lv, "instances changed", true);
+  requestReslice(lv.reslice, "instances changed", true);
   return Status();
 }
 
 LayerView sliceCameraFor(const LayeredVegetation& lv, const LayerView& view) {
   return guardedView(view, layerOutputSize(lv), layerGuard(lv));
+}
+
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
+  const ReslicePartsOf of(lv);
+  return advanceReslice(lv.reslice, of.parts, view, sliceCameraFor(lv, view), changed);
+}
+
+bool usesNextSet(const LayeredVegetation& lv) { return spreadEnabled(lv.settings, lv.desc.writeIds) || lv.mesh.streamed; }
+
+MeshDraw meshDraw(const LayeredVegetation& lv) {
+  MeshDraw md;
+  md.device = lv.device;
+  md.mesh = &lv.mesh;
+  md.instances = lv.instances.buffer.buffer;
+  md.frame = lv.visible.frameBuffer.buffer;
+  md.width = lv.desc.width;
+  md.height = lv.desc.height;
+  md.leafTransmission = lv.settings.leafTransmission;
+  md.leafOpticalDepth = lv.settings.leafOpticalDepth;
+  return md;
+}
+
+PlacementInputs placementInputs(const LayeredVegetation& lv) {
+  PlacementInputs in;
+  in.mesh = &lv.mesh;
+  in.instances = &lv.instances;
+  in.impostors = &lv.impostors;
+  in.settings = &lv.settings;
+  in.width = lv.desc.width;
+  in.height = lv.desc.height;
+  return in;
+}
+
+VkRect2D layerFootprint(const LayeredVegetation& lv) {
+  std::vector<glm::mat4> views{lv.visible.frame.viewProj};
+  const SpreadPhase phase = lv.reslice.spread.phase;
+  if (phase == SpreadPhase::Drawing || phase == SpreadPhase::CrossFading) views.push_back(lv.reslice.spread.job.frame.viewProj);
+  // World bounds: every copy.
+  return projectedFootprint(views, lv.instances.boundsMin, lv.instances.boundsMax, lv.desc.width, lv.desc.height);
 }
 
 }  // namespace canopy

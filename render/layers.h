@@ -34,47 +34,28 @@
 namespace canopy {
 struct Device;
 
-// SliceMode, LayerDrawMode, ReslicePolicy, LayerSettings and LayerStats: <canopy/canopy.h>.
+// SliceMode, LayerDrawMode, ReslicePolicy, LayerSettings and LayerStats: <canopy/canopy_params.h>.
 Status validateLayerSettings(const LayerSettings& settings);
 
-struct LayeredVegetationDesc {
+// The vegetation's description: the mesh's (LayerMeshDesc, render/layer_mesh.h: material split,
+// leaf roots and their cache, chunks, memory budget, per-vertex hierarchy, impostors) and the rest.
+struct LayeredVegetationDesc : LayerMeshDesc {
   uint32_t width = 1024, height = 768;   // layer resolution, 1..16384 each (the guard band included)
   // The guard band (docs/design.md "Layers: guard band"): the layers show the output's view widened
   // by guardX / guardY pixels on each side (output = width - 2 guardX by height - 2 guardY); the
   // slice camera is guardedView(view) of the camera each update asks for.
   uint32_t guardX = 0, guardY = 0;
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;  // or VK_FORMAT_R8G8B8A8_UNORM
-  MaterialSplitOptions split;
-  LeafRootOptions roots;
-  // The leaf-root cache folder: leafRootCachePath(model.path, rootCacheDir) is read and written
-  // there. Empty (the default), or a model without a path: no file is touched.
-  std::string rootCacheDir;
-  uint64_t cacheMaxBytes = 0;  // CanopyDesc.cacheMaxBytes (0: no cap)
-  bool writeIds = false;      // also an R32G32_UINT array per layer: (leaf + 1, triangle + 1), 0 = none
-  uint32_t maxChunkVertices = kMaxChunkVertices;  // distinct vertices per mesh chunk, 3..65535 (tests cut small chunks)
   // Spread re-slicing: every drawing frame draws this many triangles instead of what the budget and
   // the measured drawing rate give (tests: a deterministic number of slices). 0: measured.
   uint32_t fixedSliceTriangles = 0;
-  // Device memory (issue 16; docs/design.md "Layers: mesh budget and staging ring"): the bytes of
-  // buffers and images this object may allocate; 0: no limit (the mesh is resident). When the
-  // compact mesh does not fit beside the textures and both layer sets, it stays in host memory and
-  // every re-slice streams it through a host-visible ring of about `stagingRingBytes` (one segment
-  // per frame in flight), a slice per frame.
-  uint64_t deviceMemoryBudget = 0;
-  uint64_t stagingRingBytes = 64ull << 20;
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
-  // Keep the model's branch hierarchy with the compact mesh (CompactMesh::bend) for the per-vertex
-  // wind baseline; the mesh must then be resident (refused, naming the budget, otherwise).
-  bool keepBend = false;
-  // The foliage's box hierarchy and its baked views (render/impostors.h; needs a resident mesh).
-  ImpostorDesc impostors;
   // The placed copies (docs/design.md "Instances"): model -> world transforms and tints; empty:
   // one copy at the model's origin.
   std::vector<glm::mat4> instances;
   std::vector<glm::vec3> tints;
   std::vector<float> windPhases;  // s, the per-vertex baseline's; empty: none
   LayerSettings settings;
-  Progress progress;          // optional: "leaf roots" and "vertices" while creating (big meshes)
 };
 
 // The layer and background draws' pipelines (single pass with gl_Layer, or one draw per layer),
@@ -142,6 +123,11 @@ void destroyLayeredVegetation(LayeredVegetation& lv);
 bool layerWorkPending(const LayeredVegetation& lv);
 Status flushLayerWork(LayeredVegetation& lv, VkCommandBuffer cmd);
 
+// Applies the re-slicing policy for the new camera `view` and advances a spread re-slice
+// (render/reslice_scheduler.h advanceReslice over the vegetation's parts): *changed tells whether
+// the next recorded layer passes change the visible layers; lv.visible is then the placement they show.
+Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed);
+
 // Changes settings at run time; a different layer count recreates the layer images (a graph
 // holding them must be rebuilt), anything else only marks the layers for a rebuild.
 // *targetsRecreated (optional) tells whether the layer images were recreated.
@@ -163,5 +149,32 @@ inline glm::uvec2 layerOutputSize(const LayeredVegetation& lv) {
 inline glm::uvec2 layerGuard(const LayeredVegetation& lv) { return {lv.desc.guardX, lv.desc.guardY}; }
 // The slice camera for the camera `view` (the guard band's widened projection).
 LayerView sliceCameraFor(const LayeredVegetation& lv, const LayerView& view);
+
+// The parts' inputs as the vegetation holds them: what a mesh draw binds (the visible frame block),
+// what a placement reads.
+MeshDraw meshDraw(const LayeredVegetation& lv);
+PlacementInputs placementInputs(const LayeredVegetation& lv);
+
+// The pixels the visible layers (and, during a spread re-slice, the next set) can cover: the
+// placed copies' bounding box projected by the placements' views (projectedFootprint).
+VkRect2D layerFootprint(const LayeredVegetation& lv);
+
+// Whether re-slices go through the next layer set: spread re-slicing or a streamed mesh.
+bool usesNextSet(const LayeredVegetation& lv);
+
+// The layer images read back (tests and tools; render/layer_targets.h): premultiplied linear RGBA
+// as float, depth, ids.
+inline Status readLayerColor(LayeredVegetation& lv, uint32_t layer, std::vector<glm::vec4>* rgba) {
+  return readLayerColor(*lv.device, lv.targets, layer, rgba);
+}
+inline Status readLayerDepth(LayeredVegetation& lv, uint32_t layer, std::vector<float>* depth) {
+  return readLayerDepth(*lv.device, lv.targets, layer, depth);
+}
+inline Status readLayerIds(LayeredVegetation& lv, uint32_t layer, std::vector<glm::uvec2>* ids) {
+  return readLayerIds(*lv.device, lv.targets, layer, ids);
+}
+inline Status readBackground(LayeredVegetation& lv, std::vector<glm::vec4>* rgba, std::vector<float>* depth) {
+  return readBackground(*lv.device, lv.targets, rgba, depth);
+}
 
 }  // namespace canopy

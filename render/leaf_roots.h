@@ -22,7 +22,7 @@ namespace canopy {
 
 inline constexpr uint32_t kNoLeaf = 0xffffffffu;
 
-// LeafRootOptions: <canopy/canopy.h>.
+// LeafRootOptions: <canopy/canopy_params.h>.
 struct LeafRoots {
   std::vector<uint32_t> rootOfVertex;  // per vertex: its leaf's root vertex; kNoLeaf if no foliage triangle uses it
   std::vector<uint32_t> leafOfVertex;  // per vertex: compact leaf index 0..leafCount-1, or kNoLeaf

@@ -13,7 +13,7 @@ namespace canopy {
 
 enum class MaterialRole : uint8_t { Foliage = 0, Rigid = 1 };
 
-// MaterialSplitOptions: <canopy/canopy.h>.
+// MaterialSplitOptions: <canopy/canopy_params.h>.
 struct MaterialSplit {
   std::vector<MaterialRole> role;   // per material of the model (the default material included)
   std::vector<std::string> reason;  // per material: why (for logs and the tools' reports)

@@ -221,7 +221,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
   const rg::State tipRest = rg::stateOf(rg::Use::VertexStorageRead);
   const auto tips = g.importBuffer("per-vertex: motion table", pv.tips.size, tipRest, tipRest);
   MeshResources mesh;
-  CANOPY_TRY(importMesh(lv, g, &mesh));
+  CANOPY_TRY(importMesh(lv.mesh, g, &mesh));
   PerVertexAnimation* p = &pv;
   g.addPass("per-vertex: constants", [p](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::LayerFrame), &p->layerFrame);
@@ -252,7 +252,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
     b.branches = p->branches.buffer;
     b.bendVertices = p->hierarchy ? l->mesh.bendVertices.buffer : p->dummy.buffer;
     b.tips = p->tips.buffer;
-    Status s = drawWholeMesh(*l, x.cmd, p->pipeline, b, p->runs);
+    Status s = drawWholeMesh(meshDraw(*l), x.cmd, p->pipeline, b, p->runs);
     x.device->cmdEndRendering(x.cmd);
     return s;
   });

@@ -9,7 +9,6 @@
 #include "engine/timing.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
-#include "render/layers.h"
 #include "render/reprojection.h"
 
 namespace canopy {
@@ -22,16 +21,16 @@ using Clock = std::chrono::steady_clock;
 // output by the guard band, so content beyond the output is there until the view leaves the guard band.
 // `ratio` (optional): the largest of the error's parts over its threshold (parallax and content
 // beyond the layers over errorThresholdPixels, the turn over turnThresholdDegrees).
-std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& slice, const LayerView& view, float scale = 1.0f,
+std::string reprojectionReason(const ResliceParts& p, const LayerView& slice, const LayerView& view, float scale = 1.0f,
                                double* ratio = nullptr) {
-  const LayerSettings& s = lv.settings;
+  const LayerSettings& s = p.settings;
   const float pixels = s.errorThresholdPixels * scale, degrees = s.turnThresholdDegrees * scale;
   std::vector<SlabRange> slabs;
-  for (const LayerInfo& l : lv.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
-  const glm::dvec2 size(lv.targets.color.extent.width, lv.targets.color.extent.height);
-  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, lv.instances.boundsMin, lv.instances.boundsMax, size,
-                                                        glm::dvec2(layerOutputSize(lv)),
-                                                        lv.visible.extent.known ? &lv.visible.extent : nullptr);
+  for (const LayerInfo& l : p.visible.layers) slabs.push_back({l.slab.zNear, l.slab.zFar, l.slab.depth});
+  const glm::dvec2 size(p.placement.width, p.placement.height);
+  const ReprojectionError e = estimateReprojectionError(slice, view, slabs, p.placement.instances->boundsMin,
+                                                        p.placement.instances->boundsMax, size, glm::dvec2(p.outputSize),
+                                                        p.visible.extent.known ? &p.visible.extent : nullptr);
   if (ratio)
     *ratio = std::max({e.parallaxPx / std::max(s.errorThresholdPixels, 1e-6f), e.outsidePx / std::max(s.errorThresholdPixels, 1e-6f),
                        e.turnDegrees / std::max(s.turnThresholdDegrees, 1e-6f)});
@@ -52,24 +51,24 @@ std::string reprojectionReason(const LayeredVegetation& lv, const LayerView& sli
 
 // Triangles a spread slice draws: as many as the budget and the measured rate allow (at least 1024,
 // so a re-slice always ends), or the fixed size a test asks for.
-uint64_t sliceTriangles(const LayeredVegetation& lv) {
-  return lv.desc.fixedSliceTriangles ? lv.desc.fixedSliceTriangles
-                                     : std::max<uint64_t>(1024, uint64_t(lv.settings.rebuildBudgetMs * lv.reslice.rate.trianglesPerMs));
+uint64_t sliceTriangles(const ResliceScheduler& r, const ResliceParts& p) {
+  return p.fixedSliceTriangles ? p.fixedSliceTriangles
+                                     : std::max<uint64_t>(1024, uint64_t(p.settings.rebuildBudgetMs * r.rate.trianglesPerMs));
 }
 
 // Frames a spread re-slice of the whole mesh would take at the measured drawing rate: its placement,
 // its slices, the frame that unites the occupancy and the copy (a set from another camera).
-double spreadFrames(const LayeredVegetation& lv) {
+double spreadFrames(const ResliceScheduler& r, const ResliceParts& p) {
   uint64_t triangles = 0;
-  for (const MeshChunk& c : lv.mesh.chunks) triangles += c.triangleCount;
-  return 3.0 + std::ceil(double(triangles) / double(sliceTriangles(lv)));
+  for (const MeshChunk& c : p.mesh.chunks) triangles += c.triangleCount;
+  return 3.0 + std::ceil(double(triangles) / double(sliceTriangles(r, p)));
 }
 
 // The interval since the last view update tells what the last frame's layer work cost
 // (SliceRateControl); a drawing frame's triangles over its cost above the still baseline update
 // the rate (frame times are noisy: see below).
-void updateSliceRate(LayeredVegetation& lv) {
-  SliceRateControl& r = lv.reslice.rate;
+void updateSliceRate(ResliceScheduler& rs, const LayerSettings& settings) {
+  SliceRateControl& r = rs.rate;
   const auto now = Clock::now();
   if (r.haveLast) {
     const double ms = std::chrono::duration<double, std::milli>(now - r.lastUpdate).count();
@@ -85,7 +84,7 @@ void updateSliceRate(LayeredVegetation& lv) {
       // (a lucky fast frame would otherwise ask for a huge next slice), the estimate follows the
       // median of the last five slices by at most x1.2 up / x0.5 down a frame, and a slice that
       // cost over twice the budget halves it at once.
-      const double budget = std::max<double>(lv.settings.rebuildBudgetMs, 1e-3);
+      const double budget = std::max<double>(settings.rebuildBudgetMs, 1e-3);
       const double raw = ms - median(r.stillMs);
       const double measured = double(r.lastTriangles) / std::max(raw, 0.25 * budget);
       constexpr size_t kSamples = 5;
@@ -105,38 +104,38 @@ void updateSliceRate(LayeredVegetation& lv) {
 // and the measured rate allow (at least 1024, so it always ends); a streamed mesh also stops at
 // what this frame's ring segment holds, and its parts are copied there now (the frame that reads
 // them is the one being recorded: docs/design.md "Layers: mesh budget and staging ring").
-void planSlice(LayeredVegetation& lv) {
-  SpreadRebuild& sp = lv.reslice.spread;
-  const uint64_t want = sp.immediate ? UINT64_MAX : sliceTriangles(lv);
+void planSlice(ResliceScheduler& r, const ResliceParts& p) {
+  SpreadRebuild& sp = r.spread;
+  const uint64_t want = sp.immediate ? UINT64_MAX : sliceTriangles(r, p);
   sp.slice.clear();
   sp.sliceClears = sp.cursorItem == 0 && sp.cursorTriangle == 0;
-  MeshRing& r = lv.mesh.ring;
+  MeshRing& ring = p.mesh.ring;
   uint64_t segment = 0, usedV = 0, usedI = 0, usedR = 0;
-  if (lv.mesh.streamed) {
-    const Device& d = *lv.device;
-    segment = (d.anyFrame ? d.frameNumber : r.counter++) % r.segments;
+  if (p.mesh.streamed) {
+    const Device& d = *p.device;
+    segment = (d.anyFrame ? d.frameNumber : ring.counter++) % ring.segments;
   }
   uint64_t drawn = 0;
   while (sp.cursorItem < sp.items.size() && drawn < want) {
     const ChunkPart& item = sp.items[sp.cursorItem];
-    const MeshChunk& c = lv.mesh.chunks[item.chunk];
+    const MeshChunk& c = p.mesh.chunks[item.chunk];
     uint32_t count = uint32_t(std::min<uint64_t>(item.triangleCount - sp.cursorTriangle, want - drawn));
     ChunkPart part = item;  // its weight and level (a part of the impostor cut)
     part.firstTriangle = item.firstTriangle + sp.cursorTriangle;
     part.triangleCount = count;
-    if (lv.mesh.streamed && count) {
-      const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment);
-      if (usedV + c.vertexCount > r.vertexCapacity || usedR + roots > r.rootCapacity || usedI + 3 > r.indexCapacity) break;
-      part.triangleCount = count = uint32_t(std::min<uint64_t>(count, (r.indexCapacity - usedI) / 3));
-      part.ringVertex = segment * r.vertexCapacity + usedV;
-      part.ringIndex = segment * roundUp(r.indexCapacity * 2, 4) / 2 + usedI;
-      part.ringRoot = segment * r.rootCapacity + usedR;
-      auto* v = static_cast<gpu::LayerVertex*>(lv.mesh.vertices.allocation.mapped);
-      auto* ix = static_cast<uint16_t*>(lv.mesh.indexBuffer.allocation.mapped);
-      auto* rt = static_cast<gpu::LayerLeafRoot*>(lv.mesh.leafRoots.allocation.mapped);
-      std::memcpy(v + part.ringVertex, lv.mesh.hostMesh.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
-      std::memcpy(ix + part.ringIndex, lv.mesh.hostMesh.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
-      std::memcpy(rt + part.ringRoot, lv.mesh.hostMesh.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
+    if (p.mesh.streamed && count) {
+      const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), ring.rootAlignment);
+      if (usedV + c.vertexCount > ring.vertexCapacity || usedR + roots > ring.rootCapacity || usedI + 3 > ring.indexCapacity) break;
+      part.triangleCount = count = uint32_t(std::min<uint64_t>(count, (ring.indexCapacity - usedI) / 3));
+      part.ringVertex = segment * ring.vertexCapacity + usedV;
+      part.ringIndex = segment * roundUp(ring.indexCapacity * 2, 4) / 2 + usedI;
+      part.ringRoot = segment * ring.rootCapacity + usedR;
+      auto* v = static_cast<gpu::LayerVertex*>(p.mesh.vertices.allocation.mapped);
+      auto* ix = static_cast<uint16_t*>(p.mesh.indexBuffer.allocation.mapped);
+      auto* rt = static_cast<gpu::LayerLeafRoot*>(p.mesh.leafRoots.allocation.mapped);
+      std::memcpy(v + part.ringVertex, p.mesh.hostMesh.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
+      std::memcpy(ix + part.ringIndex, p.mesh.hostMesh.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
+      std::memcpy(rt + part.ringRoot, p.mesh.hostMesh.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
       usedV += c.vertexCount;
       usedI += 3ull * count;
       usedR += roots;
@@ -150,12 +149,12 @@ void planSlice(LayeredVegetation& lv) {
     }
   }
   sp.sliceLast = sp.cursorItem >= sp.items.size();
-  lv.reslice.slicePending = true;
+  r.slicePending = true;
   // A slice sized by the ring alone says nothing about the drawing rate the budget sizes.
-  lv.reslice.rate.lastWork = sp.immediate ? SliceRateControl::Work::Other : SliceRateControl::Work::Slice;
-  lv.reslice.rate.lastTriangles = drawn;
-  lv.stats.lastSliceTriangles = drawn;
-  lv.stats.maxSliceTriangles = std::max(lv.stats.maxSliceTriangles, drawn);
+  r.rate.lastWork = sp.immediate ? SliceRateControl::Work::Other : SliceRateControl::Work::Slice;
+  r.rate.lastTriangles = drawn;
+  p.stats.lastSliceTriangles = drawn;
+  p.stats.maxSliceTriangles = std::max(p.stats.maxSliceTriangles, drawn);
 }
 
 LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
@@ -173,67 +172,67 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
 // What a spread re-slice draws once its placement is done (SpreadRebuild.items): the impostor cut of
 // its placement (docs/design.md "Impostors") — the cut's foliage parts, the impostors drawn with the
 // first and last slices — or every foliage chunk, then the rigid chunks, each whole.
-void planSpreadItems(LayeredVegetation& lv) {
-  SpreadRebuild& sp = lv.reslice.spread;
-  planImpostorCut(lv, sp.job.frame, sp.job.view, &sp.impostors);
+void planSpreadItems(ResliceScheduler& r, const ResliceParts& p) {
+  SpreadRebuild& sp = r.spread;
+  planImpostorCut(p.placement, sp.job.frame, sp.job.view, &sp.impostors, p.stats);
   const bool cut = sp.impostors.cut.active;
   sp.items = cut ? sp.impostors.parts : std::vector<ChunkPart>{};
-  for (uint32_t c = 0; c < lv.mesh.chunks.size(); ++c) {
-    const MeshChunk& mc = lv.mesh.chunks[c];
+  for (uint32_t c = 0; c < p.mesh.chunks.size(); ++c) {
+    const MeshChunk& mc = p.mesh.chunks[c];
     if ((!cut || !mc.foliage) && mc.triangleCount) sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
   }
 }
 
 // The frame of the last step (the copy of the next set): its placement becomes the visible one.
-void finishSpread(LayeredVegetation& lv) {
-  SpreadRebuild& sp = lv.reslice.spread;
-  lv.stats.lastVisibleInstances = uint32_t(sp.job.depthRows.size());
-  lv.visible.view = sp.job.view;
-  lv.visible.runs = sp.job.runs;
-  takeVertexBounds(lv.visible, sp.job);
-  lv.visible.frame = sp.job.frame;
-  lv.visible.layers = std::move(sp.job.layers);
-  lv.visible.impostors = std::move(sp.impostors);
-  lv.stats.spreadRebuilds++;
-  lv.stats.lastSpreadFrames = sp.frames;
-  lv.stats.crossFade = 1.0f;
+void finishSpread(ResliceScheduler& r, const ResliceParts& p) {
+  SpreadRebuild& sp = r.spread;
+  p.stats.lastVisibleInstances = uint32_t(sp.job.depthRows.size());
+  p.visible.view = sp.job.view;
+  p.visible.runs = sp.job.runs;
+  takeVertexBounds(p.visible, sp.job);
+  p.visible.frame = sp.job.frame;
+  p.visible.layers = std::move(sp.job.layers);
+  p.visible.impostors = std::move(sp.impostors);
+  p.stats.spreadRebuilds++;
+  p.stats.lastSpreadFrames = sp.frames;
+  p.stats.crossFade = 1.0f;
   sp.phase = SpreadPhase::Idle;
   sp.job = PlacementJob{};
   sp.fadeFrom.clear();
 }
 
 // One frame of a spread re-slice: placement for up to the budget, then slices, then the fade.
-Status advanceSpread(LayeredVegetation& lv) {
-  SpreadRebuild& sp = lv.reslice.spread;
+Status advanceSpread(ResliceScheduler& r, const ResliceParts& p) {
+  SpreadRebuild& sp = r.spread;
   sp.frames++;
   switch (sp.phase) {
     case SpreadPhase::Placing: {
-      const auto deadline = Clock::now() + std::chrono::duration<double, std::milli>(lv.settings.rebuildBudgetMs);
+      const auto deadline = Clock::now() + std::chrono::duration<double, std::milli>(p.settings.rebuildBudgetMs);
       const auto deadlineTp = std::chrono::time_point_cast<Clock::duration>(deadline);
       bool done = false;
       const double before = sp.job.ms;
-      CANOPY_TRY(advancePlacement(lv, sp.job, sp.immediate ? nullptr : &deadlineTp, &done));
-      lv.reslice.rate.lastWork = SliceRateControl::Work::Placement;
-      lv.reslice.rate.lastPlacementMs = sp.job.ms - before;
+      CANOPY_TRY(advancePlacement(p.placement, sp.job, sp.immediate ? nullptr : &deadlineTp, &done));
+      r.rate.lastWork = SliceRateControl::Work::Placement;
+      r.rate.lastPlacementMs = sp.job.ms - before;
       if (done) {
-        lv.stats.lastPlacementMs = sp.job.ms;
-        planSpreadItems(lv);
+        p.stats.lastPlacementMs = sp.job.ms;
+        planSpreadItems(r, p);
         sp.phase = SpreadPhase::Drawing;
         // No visible placement of this layer count yet (the first view, or new layer images, of a
         // streamed mesh): the new one describes the visible images, still empty, until the copy.
-        if (lv.visible.layers.size() != sp.job.layers.size()) {
-          lv.visible.layers = sp.job.layers;
-          lv.visible.view = sp.job.view;
-          lv.visible.runs = sp.job.runs;
-          takeVertexBounds(lv.visible, sp.job);
-          lv.visible.frame = sp.job.frame;
+        if (p.visible.layers.size() != sp.job.layers.size()) {
+          p.visible.layers = sp.job.layers;
+          p.visible.view = sp.job.view;
+          p.visible.runs = sp.job.runs;
+          takeVertexBounds(p.visible, sp.job);
+          p.visible.frame = sp.job.frame;
         }
       }
       if (!done || !sp.immediate) break;
       [[fallthrough]];  // asked at once: the first slice in the placement's frame
     }
     case SpreadPhase::Drawing:
-      planSlice(lv);
+      planSlice(r, p);
       if (!sp.sliceLast) break;
       if (!sp.immediate) {
         sp.phase = SpreadPhase::CrossFading;  // from the next frame
@@ -242,15 +241,15 @@ Status advanceSpread(LayeredVegetation& lv) {
       // Asked at once: the next set is copied in behind the last slice (the copy pass follows the
       // slice pass), without a fade, and the occupancy recomputed in this frame.
       sp.fadeCopy = true;
-      lv.reslice.fadePending = true;
-      lv.reslice.occupancyRecomputeNow = true;
-      finishSpread(lv);
+      r.fadePending = true;
+      r.occupancyRecomputeNow = true;
+      finishSpread(r, p);
       break;
     case SpreadPhase::CrossFading: {
-      lv.reslice.rate.lastWork = SliceRateControl::Work::Other;
+      r.rate.lastWork = SliceRateControl::Work::Other;
       if (!sp.united) {  // the composite unites the next set's occupancy in; no blend this frame
         sp.united = true;
-        lv.reslice.occupancyUniteNext = true;
+        r.occupancyUniteNext = true;
         break;
       }
       // F frames: F - 1 blend frames, then a copy of the next set (depth included). Each frame blends
@@ -263,8 +262,8 @@ Status advanceSpread(LayeredVegetation& lv) {
       // Sets drawn from two cameras are not blended texel by texel (their texels hold different
       // points): the composite shows the visible set reprojected to the current camera, and the next
       // set replaces it in one copy (docs/design.md "Layers: reprojection", the refresh).
-      const uint32_t f = sameCamera(sp.job.view, lv.visible.view) ? lv.settings.crossFadeFrames : 1u, n = lv.settings.layout.count(), blends = f - 1;
-      if (sp.fadeStep == 0) sp.fadeFrom = lv.visible.layers;
+      const uint32_t f = sameCamera(sp.job.view, p.visible.view) ? p.settings.crossFadeFrames : 1u, n = p.settings.layout.count(), blends = f - 1;
+      if (sp.fadeStep == 0) sp.fadeFrom = p.visible.layers;
       sp.fadeStep++;
       sp.fadeCopy = sp.fadeStep >= f;
       sp.fadeWeights.assign(n + 1, 0.0f);
@@ -284,13 +283,13 @@ Status advanceSpread(LayeredVegetation& lv) {
         }
       }
       const float share = float(sp.fadeStep) / float(f);
-      lv.reslice.fadePending = true;
-      lv.stats.crossFade = share;
+      r.fadePending = true;
+      p.stats.crossFade = share;
       if (sp.fadeCopy) {
-        lv.reslice.occupancyRecomputeNext = true;
-        finishSpread(lv);
+        r.occupancyRecomputeNext = true;
+        finishSpread(r, p);
       } else {
-        for (size_t i = 0; i < lv.visible.layers.size(); ++i) lv.visible.layers[i] = mixLayerInfo(sp.fadeFrom[i], sp.job.layers[i], share);
+        for (size_t i = 0; i < p.visible.layers.size(); ++i) p.visible.layers[i] = mixLayerInfo(sp.fadeFrom[i], sp.job.layers[i], share);
       }
       break;
     }
@@ -301,8 +300,7 @@ Status advanceSpread(LayeredVegetation& lv) {
 
 }  // namespace
 
-void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targetsRecreated, bool budgetChanged) {
-  ResliceScheduler& r = lv.reslice;
+void rescheduleAfterChange(ResliceScheduler& r, bool contentChanged, bool targetsRecreated, bool budgetChanged) {
   if (budgetChanged) {
     r.rate.trianglesPerMs = SliceRateControl{}.trianglesPerMs;
     r.rate.rateSamples.clear();
@@ -316,32 +314,28 @@ void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targ
   }
 }
 
-void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immediate) {
-  lv.reslice.forcedReason = reason;
-  lv.reslice.forceImmediate = lv.reslice.forceImmediate || immediate;
+void requestReslice(ResliceScheduler& r, const std::string& reason, bool immediate) {
+  r.forcedReason = reason;
+  r.forceImmediate = r.forceImmediate || immediate;
 }
 
-Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed) {
-  lv.stats.viewUpdates++;
-  updateSliceRate(lv);
-  lv.reslice.rebuildPending = lv.reslice.slicePending = lv.reslice.fadePending = lv.reslice.occupancyUniteNext = lv.reslice.occupancyRecomputeNow = false;
-  const bool recomputeOccupancy = lv.reslice.occupancyRecomputeNext;
-  lv.reslice.occupancyRecomputeNext = false;
+bool spreadEnabled(const LayerSettings& settings, bool writeIds) { return settings.rebuildBudgetMs > 0 && !writeIds; }
+
+ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const LayerView& view, const LayerView& slice) {
+  ResliceDecision d;
   std::string reason;
-  const LayerSettings& s = lv.settings;
+  const LayerSettings& s = p.settings;
   bool forced = false, outrun = false, byCamera = false;
-  // The layers are drawn from the slice camera: `view` widened by the guard band.
-  const LayerView slice = sliceCameraFor(lv, view);
-  const bool stillFrame = !lv.reslice.haveView || sameCamera(view, lv.reslice.lastFrameView);  // the first view counts as still
-  lv.reslice.movingFrames = stillFrame ? 0 : lv.reslice.movingFrames + 1;
-  if (stillFrame) lv.reslice.outrun = false;
-  lv.reslice.lastFrameView = view;
-  if (!lv.reslice.haveView) {
+  const bool stillFrame = !r.haveView || sameCamera(view, r.lastFrameView);  // the first view counts as still
+  r.movingFrames = stillFrame ? 0 : r.movingFrames + 1;
+  if (stillFrame) r.outrun = false;
+  r.lastFrameView = view;
+  if (!r.haveView) {
     reason = "first view";
-  } else if (!lv.reslice.forcedReason.empty()) {
-    reason = lv.reslice.forcedReason;
+  } else if (!r.forcedReason.empty()) {
+    reason = r.forcedReason;
     forced = true;
-  } else if (lv.reslice.settingsChanged) {
+  } else if (r.settingsChanged) {
     reason = "settings changed";
     forced = true;
   } else if (s.policy == ReslicePolicy::EveryFrame) {
@@ -350,16 +344,16 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     // Error-driven: the visible layers are shown reprojected until that shows (the newest set's
     // camera, which the visible set has once a spread re-slice ends).
     double ratio = 0.0;
-    if (!sameCamera(slice, lv.reslice.lastRebuildView)) reason = reprojectionReason(lv, lv.reslice.lastRebuildView, view, 1.0f, &ratio);
+    if (!sameCamera(slice, r.lastRebuildView)) reason = reprojectionReason(p, r.lastRebuildView, view, 1.0f, &ratio);
     byCamera = !reason.empty();
     // A spread re-slice that would be outrun is not started: for a camera moving for more than a
     // frame (a single jump is not a pace), at the pace the error grew since the last frame (in
     // thresholds), would it pass kSpreadBehind before the new set is in?
     // (An unbounded error, a camera inside the vegetation's bounds, is outrun at once.)
-    const double perFrame = std::isfinite(ratio) && std::isfinite(lv.reslice.lastErrorRatio) ? std::max(ratio - lv.reslice.lastErrorRatio, 0.0) : 0.0;
-    lv.reslice.lastErrorRatio = ratio;
-    if (byCamera && spreadEnabled(lv) && lv.reslice.spread.phase == SpreadPhase::Idle && lv.reslice.movingFrames >= 2) {
-      if (!std::isfinite(ratio) || ratio + perFrame * spreadFrames(lv) > kSpreadBehind) {
+    const double perFrame = std::isfinite(ratio) && std::isfinite(r.lastErrorRatio) ? std::max(ratio - r.lastErrorRatio, 0.0) : 0.0;
+    r.lastErrorRatio = ratio;
+    if (byCamera && p.spreadEnabled && r.spread.phase == SpreadPhase::Idle && r.movingFrames >= 2) {
+      if (!std::isfinite(ratio) || ratio + perFrame * spreadFrames(r, p) > kSpreadBehind) {
         reason = "a spread re-slice would fall behind the camera: " + reason;
         outrun = true;
       }
@@ -367,8 +361,8 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
     // A spread re-slice shows the visible set, reprojected, until its copy. When a moving camera
     // outruns it (the visible set's error past kSpreadBehind x the thresholds) it is dropped for a
     // re-slice at once at this view: the error stays bounded (docs/design.md "Layers: spread re-slicing").
-    if (lv.reslice.spread.phase != SpreadPhase::Idle && !sameCamera(slice, lv.visible.view)) {
-      const std::string behind = reprojectionReason(lv, lv.visible.view, view, kSpreadBehind);
+    if (r.spread.phase != SpreadPhase::Idle && !sameCamera(slice, p.visible.view)) {
+      const std::string behind = reprojectionReason(p, p.visible.view, view, kSpreadBehind);
       if (!behind.empty()) {
         reason = "a spread re-slice fell behind the camera: " + behind;
         outrun = true;
@@ -377,51 +371,67 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   }
   // Once outrun, the camera's re-slices are at once while it keeps moving (a spread one would be
   // outrun again: each frame of a steady move adds to the error its slices take frames to remove).
-  if (outrun) lv.reslice.outrun = true;
-  const bool wantAtOnce = !lv.reslice.haveView || lv.reslice.forceImmediate || !spreadEnabled(lv) ||
-                          s.policy == ReslicePolicy::EveryFrame || outrun || (byCamera && lv.reslice.outrun);
+  if (outrun) r.outrun = true;
+  const bool wantAtOnce = !r.haveView || r.forceImmediate || !p.spreadEnabled || s.policy == ReslicePolicy::EveryFrame || outrun ||
+                          (byCamera && r.outrun);
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
   // allows, copied in without a fade (SpreadRebuild.immediate).
-  const bool atOnce = wantAtOnce && !lv.mesh.streamed;
-  const bool spreading = lv.reslice.spread.phase != SpreadPhase::Idle;
+  d.atOnce = wantAtOnce && !p.mesh.streamed;
+  d.immediate = wantAtOnce;
+  d.outrun = outrun;
   // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
   // re-slice or new settings restart it).
-  if (!reason.empty() && (atOnce || !spreading || forced)) {
-    if (outrun) lv.stats.outrunSpreads++;
-    lv.reslice.lastErrorRatio = 0.0;
-    lv.reslice.haveView = true;
-    lv.reslice.settingsChanged = false;
-    lv.reslice.forcedReason.clear();
-    lv.reslice.forceImmediate = false;
-    lv.reslice.lastRebuildView = slice;
-    lv.stats.rebuilds++;
-    lv.stats.lastRebuildReason = reason;
-    if (atOnce) {
-      lv.reslice.spread = SpreadRebuild{};
-      CANOPY_TRY(placeForView(lv, slice));
-      lv.reslice.rebuildPending = true;
-      lv.reslice.rate.lastWork = SliceRateControl::Work::Other;
-      lv.stats.crossFade = 1.0f;
+  const bool spreading = r.spread.phase != SpreadPhase::Idle;
+  if (!reason.empty() && (d.atOnce || !spreading || forced)) d.reason = std::move(reason);
+  return d;
+}
+
+void acceptReslice(ResliceScheduler& r, const LayerView& slice) {
+  r.lastErrorRatio = 0.0;
+  r.haveView = true;
+  r.settingsChanged = false;
+  r.forcedReason.clear();
+  r.forceImmediate = false;
+  r.lastRebuildView = slice;
+}
+
+Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerView& view, const LayerView& slice, bool* changed) {
+  p.stats.viewUpdates++;
+  updateSliceRate(r, p.settings);
+  r.rebuildPending = r.slicePending = r.fadePending = r.occupancyUniteNext = r.occupancyRecomputeNow = false;
+  const bool recomputeOccupancy = r.occupancyRecomputeNext;
+  r.occupancyRecomputeNext = false;
+  const ResliceDecision d = decideReslice(r, p, view, slice);
+  if (!d.reason.empty()) {
+    if (d.outrun) p.stats.outrunSpreads++;
+    acceptReslice(r, slice);
+    p.stats.rebuilds++;
+    p.stats.lastRebuildReason = d.reason;
+    r.spread = SpreadRebuild{};
+    if (d.atOnce) {
+      CANOPY_TRY(placeForView(p.placement, slice, p.visible, p.stats));
+      r.rebuildPending = true;
+      r.rate.lastWork = SliceRateControl::Work::Other;
+      p.stats.crossFade = 1.0f;
     } else {
-      lv.reslice.spread = SpreadRebuild{};
-      lv.reslice.spread.phase = SpreadPhase::Placing;
-      lv.reslice.spread.immediate = wantAtOnce;
-      lv.stats.maxSliceTriangles = 0;
-      beginPlacement(lv, slice, lv.reslice.spread.job);
-      lv.stats.crossFade = 0.0f;
+      r.spread.phase = SpreadPhase::Placing;
+      r.spread.immediate = d.immediate;
+      p.stats.maxSliceTriangles = 0;
+      beginPlacement(p.placement, slice, r.spread.job);
+      p.stats.crossFade = 0.0f;
     }
   }
-  if (lv.reslice.spread.phase != SpreadPhase::Idle) CANOPY_TRY(advanceSpread(lv));
-  lv.stats.spreadPhase = uint32_t(lv.reslice.spread.phase);
-  lv.stats.trianglesPerMs = lv.reslice.rate.trianglesPerMs;
-  *changed = lv.reslice.rebuildPending || lv.reslice.fadePending;
+  if (r.spread.phase != SpreadPhase::Idle) CANOPY_TRY(advanceSpread(r, p));
+  p.stats.spreadPhase = uint32_t(r.spread.phase);
+  p.stats.trianglesPerMs = r.rate.trianglesPerMs;
+  *changed = r.rebuildPending || r.fadePending;
   // The composite's occupancy: recomputed after a re-slice at once and in the frame after a
   // cross-fade's copy; the frame after the last slice unites the next set's tiles in
   // (occupancyUniteNext), which covers every fade step (old and new both partly visible) without
   // a recompute in a fade frame. (Marking the views' whole footprint occupied instead was tried:
   // the composite then works through every footprint tile of every layer, 60-70 ms a fade frame
   // more at 80K faces on lavapipe.)
-  lv.reslice.occupancyDirty = lv.reslice.rebuildPending || recomputeOccupancy || lv.reslice.occupancyRecomputeNow;
+  r.occupancyDirty = r.rebuildPending || recomputeOccupancy || r.occupancyRecomputeNow;
   return Status();
 }
 

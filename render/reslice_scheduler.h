@@ -15,7 +15,6 @@
 
 namespace canopy {
 struct Device;
-struct LayeredVegetation;
 
 enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFading = 3 };  // = LayerStats.spreadPhase
 
@@ -91,21 +90,57 @@ struct ResliceScheduler {
   double lastErrorRatio = 0;  // the last frame's estimated error over its threshold (its growth a frame)
 };
 
-// Asks for a re-slice at the next updateLayerView, for `reason` (LayerStats.lastRebuildReason);
+// What the scheduler reads and writes besides its own state (render/layers.cpp fills it from the
+// vegetation): what a placement reads, the settings in force, the mesh (its chunks; a streamed
+// mesh's ring, which the slices fill), the visible set a re-slice replaces, the statistics, the
+// device (a streamed mesh's ring segment is its frame number's; null without a streamed mesh), the
+// output the layers are for (their size less the guard band), whether re-slices may be spread, and
+// a fixed slice size (tests; 0: measured).
+struct ResliceParts {
+  const PlacementInputs& placement;
+  const LayerSettings& settings;
+  LayerMesh& mesh;
+  VisibleLayers& visible;
+  LayerStats& stats;
+  const Device* device;
+  glm::uvec2 outputSize;
+  bool spreadEnabled;
+  uint32_t fixedSliceTriangles;
+};
+
+// Whether re-slices may be spread over frames: a rebuild budget, and not with the id output
+// (whose triangle ids need every draw whole).
+bool spreadEnabled(const LayerSettings& settings, bool writeIds);
+
+// Asks for a re-slice at the next view update, for `reason` (LayerStats.lastRebuildReason);
 // `immediate`: at once rather than spread (an earlier request at once stays at once).
-void requestReslice(LayeredVegetation& lv, const std::string& reason, bool immediate);
+void requestReslice(ResliceScheduler& scheduler, const std::string& reason, bool immediate);
 
 // The settings or the target size changed: `contentChanged`, what the layers hold differs (re-slice;
 // a spread re-slice drawn with the old settings starts again); `targetsRecreated`, the images are
 // new and empty (re-slice at once: nothing to fade from); `budgetChanged`, the slice rate measured
 // for other slice sizes is dropped (a slice's cost is not linear in its triangles; the still
 // baseline carries over).
-void rescheduleAfterChange(LayeredVegetation& lv, bool contentChanged, bool targetsRecreated, bool budgetChanged);
+void rescheduleAfterChange(ResliceScheduler& scheduler, bool contentChanged, bool targetsRecreated, bool budgetChanged);
 
-// Applies the re-slicing policy for the new view and advances a spread re-slice: *changed tells
-// whether the next recorded layer passes change the visible layers (a re-slice at once, whose
-// placement has been recomputed for `view`, or a cross-fade step); lv.layers is then the placement
-// they show.
-Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* changed);
+// The re-slicing policy's verdict for a frame's camera `view` (whose slice camera is `slice`): why
+// the layers are re-sliced now ("": they are not), and how. It tracks the camera's motion in the
+// scheduler (moving frames, the error's growth, an outrun spread re-slice) but starts nothing.
+struct ResliceDecision {
+  std::string reason;
+  bool atOnce = false;     // placed and drawn in this frame; else a spread re-slice starts
+  bool immediate = false;  // asked at once: a spread re-slice (streamed mesh) then draws slices as large as the ring, no fade
+  bool outrun = false;     // a spread re-slice fell, or would fall, behind the camera
+};
+ResliceDecision decideReslice(ResliceScheduler& scheduler, const ResliceParts& parts, const LayerView& view, const LayerView& slice);
+// A re-slice for the slice camera `slice` starts (a decision's): the requests and changes it
+// answers are settled, and the camera's error is measured from `slice` from now on.
+void acceptReslice(ResliceScheduler& scheduler, const LayerView& slice);
+
+// Applies the policy for the new view and advances a spread re-slice: *changed tells whether the
+// next recorded layer passes change the visible layers (a re-slice at once, whose placement has
+// been recomputed for `slice` into parts.visible, or a cross-fade step).
+Status advanceReslice(ResliceScheduler& scheduler, const ResliceParts& parts, const LayerView& view, const LayerView& slice,
+                      bool* changed);
 
 }  // namespace canopy

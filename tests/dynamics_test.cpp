@@ -223,7 +223,7 @@ TEST_F(DynamicsTest, ApproximateDelayLooksUpB) {
   for (float vd : {2.0f, -2.0f}) {
     DynamicsParams p = identityParams(DelayMode::Approximate, vd);
     p.propagationSpeed = 0.5f;
-    p.approximateOffset = Eq5Offset::Velocity;  // before 0.7: B = A + gamma s V
+    p.approximateOffset = ApproximateOffset::Velocity;  // before 0.7: B = A + gamma s V
     gpu::AnimFrame f;
     ASSERT_TRUE(makeAnimFrame(p, frameDesc(n, 1, 1.0f, {0, 0.4f}), &f).ok());
     const std::vector<glm::vec2> d = run(f, tiled, ring, times);

@@ -303,7 +303,8 @@ enum class DelayDistanceUnits { Domain, World };
 enum class LambdaUnits { Cells, Pixels };
 // Eq. 5's offset: gamma s V/|V| (the paper: "the distance the movement travels during gamma", V
 // taken as the direction and s the wave's propagation speed), or gamma s V as before 0.7.
-enum class Eq5Offset { Direction, Velocity };
+enum class ApproximateOffset { Direction, Velocity };
+using Eq5Offset [[deprecated("renamed ApproximateOffset in 0.7")]] = ApproximateOffset;
 // Eq. 7's root: the bottom of each plant's bounding box (every generated plant, glTF scene root,
 // or copy; beyond the paper: docs/design.md "Per-plant roots"), or of the whole vegetation's as the
 // paper says (before 0.7: every plant of a field bends about the field's lowest point).
@@ -327,7 +328,7 @@ enum class RootMode { PerPlant, Vegetation };
   X(LambdaUnits, lambdaUnits, LambdaUnits::Cells, Enum, 0, 1, "Cells | Pixels", "units of lambda (Pixels: before 0.7)")  \
   X(float, vdJitter, 0.0f, Closed, 0, 1000, "domain units/s", "per-layer random part of V_D, uniform in [-vdJitter, vdJitter]") \
   X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
-  X(Eq5Offset, approximateOffset, Eq5Offset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
+  X(ApproximateOffset, approximateOffset, ApproximateOffset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
   X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)")
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 

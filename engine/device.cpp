@@ -375,7 +375,7 @@ void deferRelease(Device& d, std::function<void()> release) {
     release();  // nothing was ever recorded: no frame can be using it
     return;
   }
-  d.pending.push_back({d.frameNumber, std::move(release)});
+  d.pendingReleases.push_back({d.frameNumber, std::move(release)});
 }
 
 Status beginDeviceFrame(Device& d, uint64_t frameNumber) {
@@ -387,17 +387,17 @@ Status beginDeviceFrame(Device& d, uint64_t frameNumber) {
   // A frame tagged T was last used by host frame T; recording F promises F - framesInFlight done.
   std::vector<Device::PendingRelease> keep;
   std::vector<Device::PendingRelease> now;
-  for (auto& p : d.pending) (p.frame + d.framesInFlight <= frameNumber ? now : keep).push_back(std::move(p));
-  d.pending = std::move(keep);
+  for (auto& p : d.pendingReleases) (p.frame + d.framesInFlight <= frameNumber ? now : keep).push_back(std::move(p));
+  d.pendingReleases = std::move(keep);
   for (auto& p : now) p.release();
   return Status();
 }
 
 void releaseAllPending(Device& d) {
   // Releases can queue further releases (a context freeing its parts): drain until empty.
-  while (!d.pending.empty()) {
-    std::vector<Device::PendingRelease> now = std::move(d.pending);
-    d.pending.clear();
+  while (!d.pendingReleases.empty()) {
+    std::vector<Device::PendingRelease> now = std::move(d.pendingReleases);
+    d.pendingReleases.clear();
     for (auto& p : now) p.release();
   }
 }

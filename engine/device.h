@@ -62,7 +62,7 @@ struct Device {
   uint32_t framesInFlight = 2;
   uint64_t frameNumber = 0;     // the newest host frame number recorded
   bool anyFrame = false;        // a frame was recorded on this device
-  std::vector<PendingRelease> pending;
+  std::vector<PendingRelease> pendingReleases;
   // Work prepared outside a frame is recorded into the host's next command buffer instead of being
   // submitted (engine/transfer.h, submitOrDefer: into the list its caller passes).
   bool deferUploads = false;

@@ -256,7 +256,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       c->shared = desc.shareSimulationWith->shared;
     } else {
       c->shared = std::make_shared<SharedSimulation>();
-      CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim, &c->shared->pending));
+      CANOPY_TRY(createSimulation(d, desc.simulation, &c->shared->sim, &c->shared->firstClear));
     }
     CANOPY_TRY(createLayerDynamics(d, ld.width, ld.height, desc.minCellSize, desc.maxLayers, &c->dynamics));
     // The layers last: what the budget leaves after the compositor, simulation and dynamics decides
@@ -518,7 +518,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
-  if (!c->perVertexUploads.empty() || !c->shared->pending.empty() || layerWorkPending(c->layers))
+  if (!c->perVertexUploads.empty() || !c->shared->firstClear.empty() || layerWorkPending(c->layers))
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
   return declarePasses(*c, g, targets);
@@ -544,7 +544,7 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
     if (!graph) CANOPY_TRY(checkFrameInputs(c->desc, in));
     CANOPY_TRY(beginCanopyFrame(c, in.frame));
     // Uploads and clears prepared since the last frame, before anything reads them.
-    CANOPY_TRY(flushPreparedWork(*c->device, c->shared->pending, cmd));
+    CANOPY_TRY(flushPreparedWork(*c->device, c->shared->firstClear, cmd));
     CANOPY_TRY(flushLayerWork(c->layers, cmd));
     CANOPY_TRY(flushPreparedWork(*c->device, c->perVertexUploads, cmd));
     if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
@@ -581,7 +581,7 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.layersRebuilt = c->layersRebuilt;
   s.resourceGeneration = c->generation;
   s.internalGraphBuilds = c->recordGraphBuilds;
-  s.pendingReleases = c->device->pending.size();
+  s.pendingReleases = c->device->pendingReleases.size();
   s.deviceBytes = c->device->allocator->liveBytes;
   s.peakDeviceBytes = c->device->allocator->peakLiveBytes;
   s.deviceBlockBytes = c->device->allocator->blockBytes;

@@ -18,11 +18,11 @@ namespace canopy {
 // last context that follows it.
 struct SharedSimulation {
   Simulation sim;
-  PreparedList pending;  // its first clear, recorded by whichever context records first
+  PreparedList firstClear;  // its first clear, recorded by whichever context records first
   uint64_t lastStepFrame = 0;
   bool everStepped = false;
   ~SharedSimulation() {
-    if (sim.device) dropPreparedWork(*sim.device, pending);
+    if (sim.device) dropPreparedWork(*sim.device, firstClear);
     destroySimulation(sim);
   }
 };

@@ -77,6 +77,14 @@ class JsonCheck {
     each(doc, "nodes", [&](const nlohmann::json& n) {
       field(n, "mesh", kIndex);
       elements(n, "children", kIndex);
+      // EXT_mesh_gpu_instancing's attributes are accessor indices like a primitive's.
+      const nlohmann::json* ext = child(n, "extensions");
+      const nlohmann::json* inst = ext ? child(*ext, "EXT_mesh_gpu_instancing") : nullptr;
+      if (const nlohmann::json* attrs = inst ? child(*inst, "attributes") : nullptr; attrs && attrs->is_object()) {
+        path_.push_back(".extensions.EXT_mesh_gpu_instancing.attributes");
+        for (auto it = attrs->begin(); it != attrs->end(); ++it) field(*attrs, it.key().c_str(), kIndex);
+        path_.pop_back();
+      }
     });
     each(doc, "scenes", [&](const nlohmann::json& sc) { elements(sc, "nodes", kIndex); });
     field(doc, "scene", kIndex);

@@ -13,6 +13,7 @@
 #include <memory>
 
 #include <glm/gtc/matrix_inverse.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
@@ -328,6 +329,7 @@ struct Load {
   const ImageContext& images;
   VegetationModel* out;
   Reader reader;
+  uint32_t nextPlant = 0;  // the next plant ordinal past the scene roots' (each instance of EXT_mesh_gpu_instancing)
 };
 
 // The file through Canopy's checks of its framing and JSON, then tinygltf (external files through
@@ -377,7 +379,12 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
   return Status();
 }
 
-// The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded.
+// The extensions the loader reads (a file may require these and no others).
+constexpr const char* kImplementedExtensions[] = {"EXT_mesh_gpu_instancing", "KHR_materials_diffuse_transmission",
+                                                  "KHR_materials_transmission", "KHR_materials_volume"};
+
+// The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded, no
+// required extension the loader lacks.
 Status checkDocument(const tinygltf::Model& m, const FsContext& fs) {
   // asset.version (and minVersion) must be 2.x.
   {
@@ -422,6 +429,13 @@ Status checkDocument(const tinygltf::Model& m, const FsContext& fs) {
   }
   if (m.defaultScene >= 0 && size_t(m.defaultScene) >= m.scenes.size())
     return Status::error("scene " + std::to_string(m.defaultScene) + " (the default scene) does not exist");
+  // glTF 2.0 (3.12): a loader must refuse a file that requires an extension it does not implement.
+  for (const std::string& e : m.extensionsRequired)
+    if (std::find(std::begin(kImplementedExtensions), std::end(kImplementedExtensions), e) == std::end(kImplementedExtensions)) {
+      std::string known;
+      for (const char* k : kImplementedExtensions) known += std::string(known.empty() ? "" : ", ") + k;
+      return Status::error("extensionsRequired names '" + e + "', which Canopy does not implement (it implements " + known + ")");
+    }
 
   // Buffers must hold what they declare (external files may be short).
   for (size_t i = 0; i < m.buffers.size(); ++i)
@@ -563,6 +577,72 @@ Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world
   return Status();
 }
 
+// EXT_mesh_gpu_instancing on a node: its mesh drawn once per instance, each at the node's world
+// transform times the instance's TRANSLATION x ROTATION x SCALE (the extension's order; an absent
+// attribute is the identity). Empty `out`: the node has no such extension. The accessors are
+// checked like every other (types, component types, counts, byte ranges, finite values), the
+// attributes' counts must agree, and the count is bounded by the triangle budget (each instance
+// of a mesh costs at least one triangle) before anything is allocated.
+Status readInstancing(Load& L, const tinygltf::Node& node, const std::string& what, std::vector<glm::mat4>* out) {
+  out->clear();
+  auto ext = node.extensions.find("EXT_mesh_gpu_instancing");
+  if (ext == node.extensions.end()) return Status();
+  const std::string w = what + ".extensions.EXT_mesh_gpu_instancing";
+  if (!ext->second.IsObject() || !ext->second.Has("attributes") || !ext->second.Get("attributes").IsObject())
+    return Status::error(w + ": 'attributes' must be an object");
+  if (node.mesh < 0) {
+    L.out->warnings.push_back(w + ": the node has no mesh (the extension instances nothing)");
+    return Status();
+  }
+  const tinygltf::Value& attrs = ext->second.Get("attributes");
+  struct Attribute {
+    const char* name;
+    int type;
+    std::vector<uint32_t> componentTypes;
+    std::vector<double> values;
+    bool present = false;
+  };
+  Attribute a[3] = {{"TRANSLATION", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, {}},
+                    {"ROTATION", TINYGLTF_TYPE_VEC4, {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_BYTE, TINYGLTF_COMPONENT_TYPE_SHORT}, {}},
+                    {"SCALE", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT}, {}}};
+  uint64_t count = 0;
+  for (Attribute& at : a) {
+    if (!attrs.Has(at.name)) continue;
+    const tinygltf::Value& v = attrs.Get(at.name);
+    // An accessor index (the JSON check bounded it to [0, 2^31 - 1]).
+    if (!v.IsInt()) return Status::error(w + ".attributes." + at.name + ": not an accessor index");
+    uint32_t nc = 0;
+    uint64_t n = 0;
+    CANOPY_TRY(L.reader.read(v.GetNumberAsInt(), {at.type}, at.componentTypes, L.opt.maxTriangles, &at.values, &nc, &n)
+                   .context(w + ".attributes." + at.name));
+    if (count && n != count)
+      return Status::error(w + ".attributes." + at.name + ": " + std::to_string(n) + " values where the other attributes have " +
+                           std::to_string(count));
+    count = n;
+    at.present = true;
+  }
+  if (count == 0) return Status::error(w + ": none of TRANSLATION, ROTATION, SCALE");
+  if (count > L.opt.maxTriangles)
+    return Status::error(w + ": " + std::to_string(count) + " instances exceed the model's limit of " + std::to_string(L.opt.maxTriangles) +
+                         " triangles (GltfLoadOptions.maxTriangles)");
+  out->resize(size_t(count), glm::mat4(1.0f));
+  for (uint64_t i = 0; i < count; ++i) {
+    glm::vec3 t(0.0f), sc(1.0f);
+    glm::quat q(1.0f, 0.0f, 0.0f, 0.0f);
+    if (a[0].present) t = glm::vec3(a[0].values[3 * i], a[0].values[3 * i + 1], a[0].values[3 * i + 2]);
+    if (a[1].present) {
+      const double* r = &a[1].values[4 * i];
+      const double len = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2] + r[3] * r[3]);
+      if (!(len > 1e-6))
+        return Status::error(w + ".attributes.ROTATION[" + std::to_string(i) + "]: not a unit quaternion (length " + std::to_string(len) + ")");
+      q = glm::quat(float(r[3] / len), float(r[0] / len), float(r[1] / len), float(r[2] / len));  // glTF: x, y, z, w
+    }
+    if (a[2].present) sc = glm::vec3(a[2].values[3 * i], a[2].values[3 * i + 1], a[2].values[3 * i + 2]);
+    (*out)[i] = glm::translate(glm::mat4(1.0f), t) * glm::mat4_cast(q) * glm::scale(glm::mat4(1.0f), sc);
+  }
+  return Status();
+}
+
 // The scene's hierarchy from `roots`, each node's meshes appended. Walked with an explicit stack:
 // a chain of a million nodes is a valid tree and must not exhaust the call stack.
 Status walkNodes(Load& L, const std::vector<int>& roots) {
@@ -586,14 +666,25 @@ Status walkNodes(Load& L, const std::vector<int>& roots) {
       if (!std::isfinite(glm::value_ptr(world)[k])) return Status::error(what + ": transform is not finite");
     if (node.mesh >= 0) {
       if (size_t(node.mesh) >= m.meshes.size()) return Status::error(what + ": mesh " + std::to_string(node.mesh) + " does not exist");
-      const glm::mat3 normalMatrix = glm::inverseTranspose(glm::mat3(world));
-      for (size_t pi = 0; pi < m.meshes[size_t(node.mesh)].primitives.size(); ++pi)
-        CANOPY_TRY(appendPrimitive(L, node.mesh, pi, world, normalMatrix));
-      L.out->trianglePlant.resize(L.out->triangleMaterial.size(), plant);
+      std::vector<glm::mat4> instances;
+      CANOPY_TRY(readInstancing(L, node, what, &instances));
+      // Each instance a copy in world space and a plant of its own (per-plant roots).
+      const size_t copies = std::max<size_t>(instances.size(), 1);
+      for (size_t k = 0; k < copies; ++k) {
+        const glm::mat4 placed = instances.empty() ? world : world * instances[k];
+        for (int e = 0; e < 16; ++e)
+          if (!std::isfinite(glm::value_ptr(placed)[e]))
+            return Status::error(what + ".extensions.EXT_mesh_gpu_instancing: instance " + std::to_string(k) + "'s transform is not finite");
+        const glm::mat3 normalMatrix = glm::inverseTranspose(glm::mat3(placed));
+        for (size_t pi = 0; pi < m.meshes[size_t(node.mesh)].primitives.size(); ++pi)
+          CANOPY_TRY(appendPrimitive(L, node.mesh, pi, placed, normalMatrix));
+        L.out->trianglePlant.resize(L.out->triangleMaterial.size(), instances.empty() ? plant : L.nextPlant++);
+      }
     }
     for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) pending.push_back({*c, world, plant});
     return Status();
   };
+  L.nextPlant = uint32_t(roots.size());
   for (size_t r = roots.size(); r-- > 0;) pending.push_back({roots[r], glm::mat4(1.0f), uint32_t(r)});
   while (!pending.empty()) {
     const Pending p = pending.back();

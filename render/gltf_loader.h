@@ -1,7 +1,9 @@
 #pragma once
 // Vegetation input: glTF 2.0 (.gltf with external or embedded buffers, and .glb) flattened into
 // one triangle list in world space (node transforms applied) with positions, normals, texcoord 0,
-// per-triangle materials, base-colour textures and factors, alphaMode and alphaCutoff.
+// per-triangle materials, base-colour textures and factors, alphaMode and alphaCutoff; the
+// instances of EXT_mesh_gpu_instancing as copies; a required extension it does not implement
+// refused by name (docs/design.md "Instances", "Errors and hostile input").
 //
 // Every file is treated as hostile: tinygltf 2.7.0 parses the JSON, but success is decided by
 // Canopy's own checks (buffer views inside their buffers, accessors inside their views, index

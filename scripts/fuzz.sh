@@ -7,8 +7,12 @@
 #                                  FUZZ_MAX_LEN longest input, default 65536)
 # Prints executions, coverage and crashes, appends them to tests/fuzz/runs.tsv, and copies every
 # crashing input into tests/fuzz/regressions/ (ctest FuzzRegressions replays them all).
+#   scripts/fuzz.sh scene [SECONDS] the scene-file parser instead (canopy_scene_fuzz; seeds: demo/scenes
+#                                  and tests/fuzz/scenes; runs in tests/fuzz/runs_scene.tsv)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+target=gltf
+if [ "${1:-}" = scene ]; then target=scene; shift; fi
 seconds=${1:-300}
 jobs=${FUZZ_JOBS:-$(nproc)}
 if ! command -v clang++ >/dev/null; then
@@ -19,7 +23,16 @@ cmake --build build/fuzz >/dev/null
 out=build/fuzz
 rm -rf "$out/seeds" "$out/crashes"
 mkdir -p "$out/corpus" "$out/crashes"
-if [ -d ../shared/assets ]; then
+runs=tests/fuzz/runs.tsv
+binary=canopy_gltf_fuzz
+dict=gltf.dict
+if [ "$target" = scene ]; then
+  runs=tests/fuzz/runs_scene.tsv
+  binary=canopy_scene_fuzz
+  dict=scene.dict
+  mkdir -p "$out/seeds" "$out/corpus_scene"
+  cp demo/scenes/*.json tests/fuzz/scenes/* "$out/seeds/" 2>/dev/null || true
+elif [ -d ../shared/assets ]; then
   python3 scripts/fuzz_seeds.py ../shared/assets "$out/seeds" tests/fuzz/regressions
 else
   echo "../shared/assets absent: seeding from tests/fuzz/regressions only"
@@ -29,9 +42,11 @@ fi
 # seconds and costs half the executions); each stops at the first report.
 rm -f "$out"/fuzz-*.log
 set +e
-(cd "$out" && ./canopy_gltf_fuzz -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len="${FUZZ_MAX_LEN:-65536}" -timeout=20 \
-  -rss_limit_mb=2048 -dict=../../tests/fuzz/gltf.dict -artifact_prefix=crashes/ -print_final_stats=1 \
-  corpus seeds > last_run.log 2>&1)
+corpus=corpus
+[ "$target" = scene ] && corpus=corpus_scene
+(cd "$out" && ./$binary -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len="${FUZZ_MAX_LEN:-65536}" -timeout=20 \
+  -rss_limit_mb=2048 -dict=../../tests/fuzz/$dict -artifact_prefix=crashes/ -print_final_stats=1 \
+  $corpus seeds > last_run.log 2>&1)
 rc=$?
 set -e
 execs=0 cov=0
@@ -42,14 +57,16 @@ for l in "$out"/fuzz-*.log; do
   c=$(grep -aoE 'cov: [0-9]+' "$l" | tail -1 | awk '{print $2}')
   [ "${c:-0}" -gt "$cov" ] && cov=$c
 done
-corp=$(find "$out/corpus" -type f | wc -l)
+corp=$(find "$out/$corpus" -type f | wc -l)
 crashes=$(find "$out/crashes" -type f | wc -l)
+keep=tests/fuzz/regressions
+[ "$target" = scene ] && keep=tests/fuzz/scenes
 for f in "$out"/crashes/*; do
-  [ -f "$f" ] && cp "$f" tests/fuzz/regressions/ && echo "kept $(basename "$f") in tests/fuzz/regressions/"
+  [ -f "$f" ] && cp "$f" $keep/ && echo "kept $(basename "$f") in $keep/"
 done
-[ -f tests/fuzz/runs.tsv ] || printf 'date\tseconds\tjobs\texecutions\tcoverage\tcorpus\tcrashes\tcommit\n' > tests/fuzz/runs.tsv
+[ -f $runs ] || printf 'date\tseconds\tjobs\texecutions\tcoverage\tcorpus\tcrashes\tcommit\n' > $runs
 printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$seconds" "$jobs" "${execs:-0}" "${cov:-0}" "${corp:-0}" \
-  "$crashes" "$(git rev-parse --short HEAD 2>/dev/null || echo -)" >> tests/fuzz/runs.tsv
-total=$(awk -F'\t' 'NR > 1 { s += $4 } END { print s + 0 }' tests/fuzz/runs.tsv)
-echo "fuzz: ${execs:-0} executions in ${seconds} s on $jobs workers, coverage ${cov:-?}, corpus ${corp:-?}, crashes $crashes (libFuzzer exit $rc); all runs in tests/fuzz/runs.tsv: $total executions"
+  "$crashes" "$(git rev-parse --short HEAD 2>/dev/null || echo -)" >> $runs
+total=$(awk -F'\t' 'NR > 1 { s += $4 } END { print s + 0 }' $runs)
+echo "fuzz $target: ${execs:-0} executions in ${seconds} s on $jobs workers, coverage ${cov:-?}, corpus ${corp:-?}, crashes $crashes (libFuzzer exit $rc); all runs in $runs: $total executions"
 [ "$crashes" -eq 0 ] || { grep -ahE -A30 'ERROR|runtime error|deadly signal' "$out"/fuzz-*.log | head -60; exit 1; }

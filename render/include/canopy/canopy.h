@@ -43,6 +43,15 @@ uint64_t modelTriangleCount(const Model* model);
 // Axis-aligned bounds of the model, world units.
 void modelBounds(const Model* model, Float3* min, Float3* max);
 
+// Reads a scene file (JSON; docs/scene-files.md): species, explicit copies and seeded scatters
+// (expanded here, the same copies on every machine). Every key, type, range and cap is checked and
+// a refusal names the file and the JSON pointer ("/instances/3/scale: ..."); a species' glTF path
+// must name a regular file (it is loaded by loadModel, not here). Never throws.
+Status readCanopyScene(const std::string& path, CanopyScene* out);
+// The same from the file's text (`name` for messages; relative glTF paths resolve against
+// `folder`, and are not opened): the fuzz target's and a host's embedded scenes.
+Status parseCanopyScene(const std::string& name, const std::string& text, const std::string& folder, CanopyScene* out);
+
 // ---------------------------------------------------------------------------------------------
 // Contexts
 

@@ -90,6 +90,36 @@ struct CanopyInstance {
   float windPhase = 0.0f;
 };
 
+// A scene file (docs/scene-files.md; readCanopyScene in <canopy/canopy.h>): species and their
+// placed copies. Caps on what a file may ask for (each a refusal naming the JSON pointer).
+constexpr uint32_t kMaxSceneSpecies = 256;
+constexpr uint32_t kMaxSceneInstances = 100000;     // explicit and scattered together
+constexpr uint64_t kMaxSceneFileBytes = 16ull << 20;
+
+// One species: its model — a glTF file, or one of the generated plants (the demo's generator:
+// "shrub", "tree", "grass", "kelp", "field") — and its wind response.
+struct CanopySceneSpecies {
+  std::string name;            // unique in the file, 1..64 characters
+  std::string gltf;            // the model's path, resolved against the scene file's folder; empty: generated
+  std::string generated;       // a generated plant's kind; empty: gltf
+  uint64_t faces = 0;          // generated: triangles, 2000..200M (0: the generator's default)
+  uint32_t seed = 1;           // generated: the generator's seed
+  float flexibility = 1.0f;    // [0, 4]: how far it bends for the same wind, relative to the method's
+  float responseSpeed = 1.0f;  // [0.25, 4]: how fast it follows the wind, relative to the method's
+};
+
+// One placed copy of a species (CanopyInstance: its world transform, tint and wind phase).
+struct CanopySceneInstance {
+  uint32_t species = 0;  // index into CanopyScene::species
+  CanopyInstance placement;
+};
+
+struct CanopyScene {
+  std::string path;  // the file read
+  std::vector<CanopySceneSpecies> species;
+  std::vector<CanopySceneInstance> instances;  // the explicit ones in file order, then each scatter's
+};
+
 // Rigid vs foliage: explicit material names ("#N" for materials[N]) win over the default rule
 // (names with bark/trunk/branch/... are rigid, leaf/grass/... and MASK/BLEND are foliage).
 struct MaterialSplitOptions {

@@ -123,7 +123,14 @@ class FaultInjectionTest : public GpuTest {
   }
 };
 
-TEST_F(FaultInjectionTest, EveryAllocationFailureIsReportedAndLeavesNothingBehind) {
+// Every failure point, dealt round-robin to kFaultShards shards that ctest runs side by side (each
+// scenario recreates the context's pipelines, seconds each under the sanitizers: one test of every
+// point was the suite's longest by far).
+constexpr int kFaultShards = 4;
+class FaultInjectionShard : public FaultInjectionTest, public ::testing::WithParamInterface<int> {};
+
+TEST_P(FaultInjectionShard, EveryAllocationFailureIsReportedAndLeavesNothingBehind) {
+  const int shard = GetParam();
   const int64_t live0 = fault::liveObjects();
   fault::arm(fault::Mode::Off, 0);
   Outcome clean = scenario(3);
@@ -131,10 +138,11 @@ TEST_F(FaultInjectionTest, EveryAllocationFailureIsReportedAndLeavesNothingBehin
   const int64_t points = fault::calls();
   EXPECT_EQ(fault::liveObjects(), live0) << "a clean run leaked Vulkan objects";
   ASSERT_GT(points, 10);
-  // Every failure point (up to 400; beyond that 400 spread over them, first and last included).
+  // Every failure point (up to 400; beyond that 400 spread over them, first and last included),
+  // this shard's share of them.
   std::vector<int64_t> at;
   const int64_t n = std::min<int64_t>(points, 400);
-  for (int64_t i = 0; i < n; ++i) at.push_back(n == points ? i : i * (points - 1) / (n - 1));
+  for (int64_t i = shard; i < n; i += kFaultShards) at.push_back(n == points ? i : i * (points - 1) / (n - 1));
   int byCall[4] = {0, 0, 0, 0};
   for (int64_t k : at) {
     SCOPED_TRACE("allocation " + std::to_string(k) + " of " + std::to_string(points) + " fails");
@@ -150,10 +158,11 @@ TEST_F(FaultInjectionTest, EveryAllocationFailureIsReportedAndLeavesNothingBehin
     const std::string w = o.where;
     byCall[w == "adoptDevice" ? 0 : w == "createCanopy" ? 1 : w == "resizeCanopy" ? 2 : 3]++;
   }
-  std::printf("  %lld allocation points in adopt + create + 3 frames + resize; %zu injected: %d refused by adoptDevice, %d by "
-              "createCanopy, %d by resizeCanopy, %d by recordCanopy; no leak\n",
-              (long long)points, at.size(), byCall[0], byCall[1], byCall[2], byCall[3]);
+  std::printf("  %lld allocation points in adopt + create + 3 frames + resize; shard %d of %d injected %zu: %d refused by "
+              "adoptDevice, %d by createCanopy, %d by resizeCanopy, %d by recordCanopy; no leak\n",
+              (long long)points, shard + 1, kFaultShards, at.size(), byCall[0], byCall[1], byCall[2], byCall[3]);
 }
+INSTANTIATE_TEST_SUITE_P(FaultInjection, FaultInjectionShard, ::testing::Range(0, kFaultShards));
 
 TEST_F(FaultInjectionTest, ADeviceLossIsReportedAsDeviceLost) {
   const int64_t live0 = fault::liveObjects();

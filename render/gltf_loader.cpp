@@ -590,10 +590,6 @@ Status readInstancing(Load& L, const tinygltf::Node& node, const std::string& wh
   const std::string w = what + ".extensions.EXT_mesh_gpu_instancing";
   if (!ext->second.IsObject() || !ext->second.Has("attributes") || !ext->second.Get("attributes").IsObject())
     return Status::error(w + ": 'attributes' must be an object");
-  if (node.mesh < 0) {
-    L.out->warnings.push_back(w + ": the node has no mesh (the extension instances nothing)");
-    return Status();
-  }
   const tinygltf::Value& attrs = ext->second.Get("attributes");
   struct Attribute {
     const char* name;
@@ -664,6 +660,8 @@ Status walkNodes(Load& L, const std::vector<int>& roots) {
     const glm::mat4 world = parent * nodeMatrix(node);
     for (int k = 0; k < 16; ++k)
       if (!std::isfinite(glm::value_ptr(world)[k])) return Status::error(what + ": transform is not finite");
+    if (node.mesh < 0 && node.extensions.count("EXT_mesh_gpu_instancing"))
+      L.out->warnings.push_back(what + ".extensions.EXT_mesh_gpu_instancing: the node has no mesh (the extension instances nothing)");
     if (node.mesh >= 0) {
       if (size_t(node.mesh) >= m.meshes.size()) return Status::error(what + ": mesh " + std::to_string(node.mesh) + " does not exist");
       std::vector<glm::mat4> instances;

@@ -1,5 +1,6 @@
 #include "compute/dynamics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -104,11 +105,22 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     plantRects->clear();
     size_t total = 0;
     for (const DynamicsLayer& dl : d.layers) total += dl.plants.size();
-    if (p.roots == RootMode::PerPlant && total <= ANIM_MAX_PLANT_RECTS)
+    // The rects carry the species' wind response too: kept without per-plant roots when a
+    // response differs from the method's, the layer's root line then standing.
+    bool response = false;
+    for (const DynamicsLayer& dl : d.layers)
+      for (const glm::vec2& r : dl.plantResponse) response = response || r != glm::vec2(1.0f);
+    const float ownRoot = p.roots == RootMode::PerPlant ? 1.0f : 0.0f;
+    if ((p.roots == RootMode::PerPlant || response) && total <= ANIM_MAX_PLANT_RECTS)
       for (uint32_t i = 0; i < n; ++i) {
-        f.layers[i].firstPlant = uint32_t(plantRects->size());
-        f.layers[i].plantCount = uint32_t(d.layers[i].plants.size());
-        plantRects->insert(plantRects->end(), d.layers[i].plants.begin(), d.layers[i].plants.end());
+        const DynamicsLayer& dl = d.layers[i];
+        f.layers[i].firstPlant = uint32_t(plantRects->size() / 2);
+        f.layers[i].plantCount = uint32_t(dl.plants.size());
+        for (size_t j = 0; j < dl.plants.size(); ++j) {
+          const glm::vec2 r = j < dl.plantResponse.size() ? dl.plantResponse[j] : glm::vec2(1.0f);
+          plantRects->push_back(dl.plants[j]);
+          plantRects->push_back(glm::vec4(r, ownRoot, 0.0f));
+        }
       }
   }
   *out = f;
@@ -127,9 +139,9 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
     ComputePipelineDesc pd;
     pd.shader = "anim_displace.comp";
     CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
-    static_assert(sizeof(gpu::AnimFrame) % 4 == 0 && sizeof(gpu::AnimFrame) + ANIM_MAX_PLANT_RECTS * 16 <= 65536,
-                  "the frame block and its plant table are written with vkCmdUpdateBuffer");
-    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
+    static_assert(sizeof(gpu::AnimFrame) % 4 == 0 && sizeof(gpu::AnimFrame) <= 65536,
+                  "the frame block is written with one vkCmdUpdateBuffer");
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + 2 * ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));
     CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(glm::vec2),
@@ -162,9 +174,11 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   LayerDynamics* p = &x;
   g.addPass("dynamics: frame", [p](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
-     if (!p->plantRects.empty())
-       c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, sizeof(gpu::AnimFrame), p->plantRects.size() * sizeof(glm::vec4),
-                                    p->plantRects.data());
+     // vkCmdUpdateBuffer takes at most 65536 bytes a call.
+     const size_t bytes = p->plantRects.size() * sizeof(glm::vec4);
+     for (size_t at = 0; at < bytes; at += 65536)
+       c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, sizeof(gpu::AnimFrame) + at, std::min<size_t>(bytes - at, 65536),
+                                    reinterpret_cast<const uint8_t*>(p->plantRects.data()) + at);
      return Status();
    }).write(frame, rg::Use::TransferDst);
   using rg::Use;

@@ -33,6 +33,7 @@ struct DynamicsLayer {
   float rootLineY = 0;  // pixels, y down
   float height = 1;     // pixels
   std::vector<glm::vec4> plants;  // per-plant roots: rects (x lo, x hi, top, root row), LayerInfo::plants
+  std::vector<glm::vec2> plantResponse;  // per rect: its species' flexibility and response speed; empty: 1, 1
 };
 
 struct DynamicsFrameDesc {
@@ -49,8 +50,9 @@ struct DynamicsFrameDesc {
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize);
-// `plantRects` (null: none) receives the frame block's plant table when DynamicsParams.roots is
-// PerPlant and the layers have plant rects (at most ANIM_MAX_PLANT_RECTS; more: the layers' roots).
+// `plantRects` (null: none) receives the frame block's plant table (two vec4 a rect: shared/anim.h)
+// when the layers have plant rects and DynamicsParams.roots is PerPlant or a rect's species responds
+// otherwise than the method (at most ANIM_MAX_PLANT_RECTS; more: the layers' roots, no response).
 Status makeAnimFrame(const DynamicsParams& params, const DynamicsFrameDesc& desc, gpu::AnimFrame* out,
                      std::vector<glm::vec4>* plantRects = nullptr);
 

@@ -52,23 +52,26 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
       const glm::vec2 a = cornerSimCoord(f, layer, gx, gy);
       const glm::vec2 vs = sampleTiledReference(tiled.data(), f.n, a);
       const glm::vec3 v0 = gpu::simToView(f, vs);
-      glm::vec3 vi = v0;
-      if (layer > 0) {
-        const float gamma = gpu::layerDelay(f.maxDelay, f.layers[layer], v0.z);
-        vi = f.delayMode == ANIM_DELAY_EXACT ? gpu::simToView(f, history(a, f.time - gamma))
-                                             : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, gpu::approximateLookup(f, a, gamma, vs)));
-      }
       gpu::AnimLayer rooted = f.layers[layer];
+      glm::vec2 response(1.0f);
       float bestD = 3.0e38f, bestA = 3.0e38f;
-      for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && j < plantRects.size(); ++j) {
-        const glm::vec4 r = plantRects[j];
+      for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && 2 * j + 1 < plantRects.size(); ++j) {
+        const glm::vec4 r = plantRects[2 * j];
         if (gpu::plantRectBetter(r, pixel, bestD, bestA)) {
           bestD = gpu::plantRectDistance2(r, pixel);
           bestA = (r.y - r.x) * (r.w - r.z);
-          rooted = gpu::withPlantRoot(f.layers[layer], r);
+          const glm::vec4 species = plantRects[2 * j + 1];
+          rooted = species.z > 0.0f ? gpu::withPlantRoot(f.layers[layer], r) : f.layers[layer];
+          response = glm::vec2(species);
         }
       }
-      out[size_t(layer) * corners + id] = gpu::displacementPixels(f, rooted, pixel.y, vi);
+      glm::vec3 vi = v0;
+      if (layer > 0) {
+        const float gamma = gpu::speciesDelay(f.maxDelay, gpu::layerDelay(f.maxDelay, f.layers[layer], v0.z), response.y);
+        vi = f.delayMode == ANIM_DELAY_EXACT ? gpu::simToView(f, history(a, f.time - gamma))
+                                             : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, gpu::approximateLookup(f, a, gamma, vs)));
+      }
+      out[size_t(layer) * corners + id] = response.x * gpu::displacementPixels(f, rooted, pixel.y, vi);
     }
   return out;
 }

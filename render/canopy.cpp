@@ -173,6 +173,10 @@ Status checkVersion(uint32_t header) {
 }  // namespace
 
 Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& desc, CanopyContext** out) {
+  return createCanopy(d, std::vector<SpeciesModel>{SpeciesModel{&model}}, desc, out);
+}
+
+Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const CanopyDesc& desc, CanopyContext** out) {
   if (!out) return Status::error("createCanopy: out is null");
   *out = nullptr;
   CANOPY_TRY(checkVersion(desc.headerVersion));
@@ -184,12 +188,20 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   if (desc.impostors.enable) CANOPY_TRY(checkParams(desc.impostors, "CanopyDesc.impostors."));
   if (desc.shareSimulationWith && desc.shareSimulationWith->device != &d)
     return Status::error("CanopyDesc.shareSimulationWith belongs to another Device");
+  CANOPY_TRY(checkSpecies(species).context("createCanopy"));
   // Nothing to animate is a mistake in the input (a glTF whose scene reaches no triangle mesh),
   // not an empty frame to draw silently.
-  const std::string what = model.path.empty() ? std::string("the model") : "'" + model.path + "'";
-  if (model.triangleCount() == 0)
-    return Status::error(Result::InvalidModel,
-                         "createCanopy: " + what + " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
+  auto nameOf = [&](size_t i) {
+    const VegetationModel& m = *species[i].model;
+    const std::string name = m.path.empty() ? std::string("the model") : "'" + m.path + "'";
+    return species.size() > 1 ? "species #" + std::to_string(i) + " (" + name + ")" : name;
+  };
+  for (size_t i = 0; i < species.size(); ++i)
+    if (species[i].model->triangleCount() == 0)
+      return Status::error(Result::InvalidModel, "createCanopy: " + nameOf(i) +
+                                                     " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
+  const VegetationModel& model = *species[0].model;  // the per-vertex baseline's (one species)
+  const std::string what = nameOf(0);
   auto* c = new (std::nothrow) CanopyContext();
   if (!c) return Status::error(Result::OutOfHostMemory, "createCanopy: out of host memory");
   c->device = &d;
@@ -231,27 +243,34 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
       ld.instances.push_back(toGlm(i.transform));
       ld.tints.push_back(toGlm(i.tint));
       ld.windPhases.push_back(i.windPhase);
+      ld.instanceSpecies.push_back(i.species);
     }
     if (desc.allowPerVertex) {
       CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
       ld.keepBend = true;
     }
     // The split is cheap; knowing there is nothing to animate before leaf roots and the mesh
-    // upload saves a big model's preparation.
-    MaterialSplit split;
-    CANOPY_TRY(splitMaterials(model, desc.split, &split));
-    if (split.foliageTriangles == 0) {
-      std::string names;
-      for (size_t i = 0; i < model.materials.size(); ++i) {  // appends: GCC 12's -Wrestrict misfires on "#" + ...
-        names += i ? ", #" : "#";
+    // upload saves a big model's preparation. A species without foliage (a rock) is drawn with the
+    // trunks; a vegetation without any is refused.
+    uint64_t foliage = 0;
+    std::string names;
+    for (size_t s = 0; s < species.size(); ++s) {
+      const VegetationModel& m = *species[s].model;
+      MaterialSplit split;
+      CANOPY_TRY(splitMaterials(m, desc.split, &split));
+      foliage += split.foliageTriangles;
+      for (size_t i = 0; i < m.materials.size(); ++i) {  // appends: GCC 12's -Wrestrict misfires on "#" + ...
+        names += names.empty() ? "#" : ", #";
         names += std::to_string(i);
         names += " '";
-        names += model.materials[i].name;
+        names += m.materials[i].name;
         names += "'";
       }
-      return Status::error(Result::InvalidModel, what + " has no foliage: every material is rigid (" + names +
-                                                     "); name the leaf materials in CanopyDesc.split.foliage");
     }
+    if (foliage == 0)
+      return Status::error(Result::InvalidModel, (species.size() > 1 ? std::string("the species have") : what + " has") +
+                                                     " no foliage: every material is rigid (" + names +
+                                                     "); name the leaf materials in CanopyDesc.split.foliage");
     if (desc.shareSimulationWith) {
       c->shared = desc.shareSimulationWith->shared;
     } else {
@@ -271,7 +290,7 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
     }
     ld.stagingRingBytes = desc.meshStagingRingBytes;
     // The layers' parts keep their own uploads (flushLayerWork); the baseline's go to the context's list.
-    CANOPY_TRY(createLayeredVegetation(d, model, ld, &c->layers));
+    CANOPY_TRY(createLayeredVegetation(d, species, ld, &c->layers));
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
       CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
@@ -299,6 +318,20 @@ Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, 
       return Status::error("createCanopy: device and model are required");
     }
     return createCanopy(*device, model->data, desc, out);
+  });
+}
+
+Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out) {
+  return guardApi("createCanopy", [&]() -> Status {
+    if (out) *out = nullptr;
+    if (!device) return Status::error("createCanopy: device is required");
+    std::vector<SpeciesModel> models;
+    for (size_t i = 0; i < species.size(); ++i) {
+      if (!species[i].model)
+        return Status::error(Result::InvalidArgument, "createCanopy: species #" + std::to_string(i) + " has no model");
+      models.push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
+    }
+    return createCanopy(*device, models, desc, out);
   });
 }
 
@@ -354,12 +387,14 @@ Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& i
     std::vector<glm::mat4> models;
     std::vector<glm::vec3> tints;
     std::vector<float> phases;
+    std::vector<uint32_t> species;
     for (const CanopyInstance& i : instances) {
       models.push_back(toGlm(i.transform));
       tints.push_back(toGlm(i.tint));
       phases.push_back(i.windPhase);
+      species.push_back(i.species);
     }
-    CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases).context("setCanopyInstances"));
+    CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases, species).context("setCanopyInstances"));
     // The default simulation plane stands at the vegetation's depth and its tile spans the view
     // there (eq. 4's domain units): taken again from the next frame for the copies' new bounds.
     if (!c->params.customPlane) c->planeChosen = false;
@@ -464,7 +499,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   DynamicsFrameDesc fd;
   fd.view = slice;
   fd.plane = c->plane;
-  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants});
+  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants, l.plantResponse});
   fd.width = c->layers.desc.width;  // the layer images: the output and the guard band
   fd.height = c->layers.desc.height;
   fd.simSize = sim.n;

@@ -23,6 +23,8 @@ struct Model {
 
 // createCanopy from a VegetationModel held by the caller (no copy into a Model).
 Status createCanopy(Device& device, const VegetationModel& model, const CanopyDesc& desc, CanopyContext** out);
+// The same for several species held by the caller (render/species.h).
+Status createCanopy(Device& device, const std::vector<SpeciesModel>& species, const CanopyDesc& desc, CanopyContext** out);
 
 // Canopy's own render-graph path (the demo, the benchmark; a host's graph uses
 // <canopy/canopy_graph.h>): prepares the next recorded frame (CPU work only), then adds Canopy's

@@ -18,18 +18,38 @@ void corners(const glm::mat4& m, const glm::vec3& lo, const glm::vec3& hi, glm::
 
 }  // namespace
 
-Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                    const std::vector<float>& windPhases, const glm::vec3& meshMin, const glm::vec3& meshMax, LayerInstances* out) {
+Status setInstances(Device& d, PreparedList* uploads, const InstanceInputs& in, const std::vector<MeshSpecies>& species,
+                    LayerInstances* out) {
+  const std::vector<glm::mat4>& models = in.models;
+  const std::vector<glm::vec3>& tints = in.tints;
+  const std::vector<float>& windPhases = in.windPhases;
   if (models.empty()) return Status::error(Result::InvalidArgument, "instances: at least one instance is needed");
-  if (!tints.empty() && tints.size() != models.size())
-    return Status::error(Result::InvalidArgument, "instances: " + std::to_string(tints.size()) + " tints for " +
+  if (species.empty()) return Status::error("instances: no species");
+  auto sizeOf = [&](size_t n, const char* what) -> Status {
+    if (n == 0 || n == models.size()) return Status();
+    return Status::error(Result::InvalidArgument, "instances: " + std::to_string(n) + " " + what + " for " +
                                                       std::to_string(models.size()) + " instances");
-  if (!windPhases.empty() && windPhases.size() != models.size())
-    return Status::error(Result::InvalidArgument, "instances: " + std::to_string(windPhases.size()) + " wind phases for " +
-                                                      std::to_string(models.size()) + " instances");
+  };
+  CANOPY_TRY(sizeOf(tints.size(), "tints"));
+  CANOPY_TRY(sizeOf(windPhases.size(), "wind phases"));
+  CANOPY_TRY(sizeOf(in.species.size(), "species indices"));
+  // Grouped by species, each group in the host's order (a stable counting sort).
+  std::vector<uint32_t> first(species.size() + 1, 0);
+  for (size_t i = 0; i < in.species.size(); ++i) {
+    if (in.species[i] >= species.size())
+      return Status::error(Result::InvalidArgument, "CanopyInstance #" + std::to_string(i) + ".species = " +
+                                                        std::to_string(in.species[i]) + " names no species (0.." +
+                                                        std::to_string(species.size() - 1) + ")");
+    first[in.species[i] + 1]++;
+  }
+  if (in.species.empty()) first[1] = uint32_t(models.size());
+  for (size_t s = 1; s < first.size(); ++s) first[s] += first[s - 1];
   LayerInstances next;
-  next.models = models;
+  next.models.resize(models.size());
   next.table.resize(models.size());
+  next.species.resize(models.size());
+  next.hostIndex.resize(models.size());
+  for (size_t s = 0; s < species.size(); ++s) next.speciesCopies.push_back({first[s], first[s + 1] - first[s]});
   next.boundsMin = glm::vec3(INFINITY);
   next.boundsMax = glm::vec3(-INFINITY);
   for (size_t i = 0; i < models.size(); ++i) {
@@ -50,15 +70,20 @@ Status setInstances(Device& d, PreparedList* uploads, const std::vector<glm::mat
     if (!std::isfinite(phase) || std::abs(phase) > 3600.0f)
       return Status::error(Result::InvalidArgument, "CanopyInstance #" + std::to_string(i) + ".windPhase = " + std::to_string(phase) +
                                                         " s is outside [-3600, 3600]");
+    const uint32_t sp = in.species.empty() ? 0u : in.species[i];
+    const uint32_t at = first[sp]++;
     const glm::mat3 normal = glm::transpose(glm::inverse(glm::mat3(m)));
-    gpu::LayerInstance& t = next.table[i];
+    gpu::LayerInstance& t = next.table[at];
+    next.models[at] = m;
+    next.species[at] = sp;
+    next.hostIndex[at] = uint32_t(i);
     t.model = m;
     t.normalColumn0 = glm::vec4(normal[0], 0.0f);
     t.normalColumn1 = glm::vec4(normal[1], 0.0f);
     t.normalColumn2 = glm::vec4(normal[2], 0.0f);
     t.tint = glm::vec4(tint, phase);
     glm::vec4 c[8];
-    corners(m, meshMin, meshMax, c);
+    corners(m, species[sp].boundsMin, species[sp].boundsMax, c);
     for (const glm::vec4& p : c) {
       next.boundsMin = glm::min(next.boundsMin, glm::vec3(p));
       next.boundsMax = glm::max(next.boundsMax, glm::vec3(p));
@@ -91,12 +116,13 @@ void destroyInstances(Device& d, LayerInstances& instances) {
   instances = LayerInstances{};
 }
 
-std::vector<InstanceRun> visibleInstanceRuns(const LayerInstances& in, const glm::vec3& meshMin, const glm::vec3& meshMax,
+std::vector<InstanceRun> visibleInstanceRuns(const LayerInstances& in, const std::vector<MeshSpecies>& species,
                                              const glm::mat4& viewProj) {
   std::vector<InstanceRun> runs;
   for (uint32_t i = 0; i < in.models.size(); ++i) {
+    const uint32_t sp = i < in.species.size() ? in.species[i] : 0u;
     glm::vec4 c[8];
-    corners(viewProj * in.models[i], meshMin, meshMax, c);
+    corners(viewProj * in.models[i], species[sp].boundsMin, species[sp].boundsMax, c);
     // Outside when every corner is beyond one of the planes -w <= x, y <= w, 0 <= z <= w.
     bool outside = false;
     for (int plane = 0; plane < 6 && !outside; ++plane) {
@@ -109,10 +135,20 @@ std::vector<InstanceRun> visibleInstanceRuns(const LayerInstances& in, const glm
       outside = all;
     }
     if (outside) continue;
-    if (!runs.empty() && runs.back().first + runs.back().count == i) runs.back().count++;
+    const bool sameSpecies = i == 0 || (i - 1 < in.species.size() ? in.species[i - 1] : 0u) == sp;
+    if (!runs.empty() && runs.back().first + runs.back().count == i && sameSpecies) runs.back().count++;
     else runs.push_back({i, 1});
   }
   return runs;
+}
+
+void clipRuns(const std::vector<InstanceRun>& runs, const InstanceRun& range, std::vector<InstanceRun>* out) {
+  out->clear();
+  const uint64_t lo = range.first, hi = uint64_t(range.first) + range.count;
+  for (const InstanceRun& r : runs) {
+    const uint64_t a = std::max<uint64_t>(r.first, lo), b = std::min<uint64_t>(uint64_t(r.first) + r.count, hi);
+    if (a < b) out->push_back({uint32_t(a), uint32_t(b - a)});
+  }
 }
 
 }  // namespace canopy

@@ -223,43 +223,84 @@ Status placeLayerMesh(Device& d, const LayerMeshDesc& desc, LayerMesh& lm, Layer
 }
 
 
-Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const VegetationModel& m, LayerMesh& mesh, Impostors& impostors,
-                        LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
+namespace {
+// One species' material split, leaf roots (read from or written to its cache file) and plants;
+// *rootKey: its cache key (0: no cache); `note`: what the cache did.
+Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, SpeciesParts& p, uint64_t* rootKey, bool* cached,
+                      std::string* note) {
   *rootKey = 0;
-  const auto t0 = std::chrono::steady_clock::now();
-  CANOPY_TRY(splitMaterials(m, desc.split, &mesh.split));
-  stats.foliageTriangles = mesh.split.foliageTriangles;
-  stats.rigidTriangles = mesh.split.rigidTriangles;
-  std::vector<uint8_t> foliage(m.triangleCount());
-  for (size_t t = 0; t < foliage.size(); ++t) foliage[t] = mesh.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
-  LeafRoots roots;
-  bool cached = false;
+  *cached = false;
+  CANOPY_TRY(splitMaterials(m, desc.split, &p.split));
+  p.foliage.resize(m.triangleCount());
+  for (size_t t = 0; t < p.foliage.size(); ++t) p.foliage[t] = p.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
   const bool cacheOn = !desc.rootCacheDir.empty() && !m.path.empty();
   const std::string cachePath = cacheOn ? leafRootCachePath(m.path, desc.rootCacheDir) : std::string();
   if (cacheOn) {
-    *rootKey = leafRootKey(m, foliage, desc.roots);
+    *rootKey = leafRootKey(m, p.foliage, desc.roots);
     std::string why;
-    cached = readLeafRootCache(cachePath, *rootKey, m.positions.size(), &roots, &why);
-    stats.rootCacheNote = cached ? "read " + cachePath : cachePath + ": " + why;
+    *cached = readLeafRootCache(cachePath, *rootKey, m.positions.size(), &p.roots, &why);
+    *note = *cached ? "read " + cachePath : cachePath + ": " + why;
   } else {
-    stats.rootCacheNote = "cache off";
+    *note = "cache off";
   }
-  if (!cached) {
-    CANOPY_TRY(computeLeafRoots(m, foliage, desc.roots, &roots, desc.progress));
+  if (!*cached) {
+    CANOPY_TRY(computeLeafRoots(m, p.foliage, desc.roots, &p.roots, desc.progress));
     if (cacheOn) {
       std::string evicted;
-      Status w = writeLeafRootCache(cachePath, *rootKey, roots, desc.cacheMaxBytes, &evicted);
-      stats.rootCacheNote += w.ok() ? "; wrote it" : "; not written: " + w.message();
-      if (!evicted.empty()) stats.rootCacheNote += "; " + evicted;
+      Status w = writeLeafRootCache(cachePath, *rootKey, p.roots, desc.cacheMaxBytes, &evicted);
+      *note += w.ok() ? "; wrote it" : "; not written: " + w.message();
+      if (!evicted.empty()) *note += "; " + evicted;
     }
   }
   // Only the per-vertex leaf and the per-leaf root are used from here on, by the compaction; the
   // per-vertex root goes now and the rest after it (the placement reads the compact mesh).
-  std::vector<uint32_t>().swap(roots.rootOfVertex);
-  stats.rootCacheHit = cached;
+  std::vector<uint32_t>().swap(p.roots.rootOfVertex);
+  return findPlants(m, p.roots, &p.plants);
+}
+}  // namespace
+
+Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const VegetationModel& m, LayerMesh& mesh, Impostors& impostors,
+                        LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
+  return prepareLayerMesh(d, desc, std::vector<SpeciesModel>{SpeciesModel{&m}}, mesh, impostors, stats, out, rootKey);
+}
+
+Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<SpeciesModel>& species, LayerMesh& mesh,
+                        Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
+  *rootKey = 0;
+  CANOPY_TRY(checkSpecies(species));
+  if (species.size() > 1 && desc.impostors.enable)
+    return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked from one model: not yet with " +
+                                                      std::to_string(species.size()) + " species");
+  if (species.size() > 1 && desc.keepBend)
+    return Status::error(Result::InvalidArgument, "the per-vertex wind baseline (CanopyDesc.allowPerVertex) reads one model's "
+                                                  "branch hierarchy: not yet with " + std::to_string(species.size()) + " species");
+  const auto t0 = std::chrono::steady_clock::now();
+  // Each species on its own (its split rule reads its own materials, its leaf roots have its own
+  // cache file), then laid end to end (render/species.h).
+  std::vector<SpeciesParts> parts(species.size());
+  stats.rootCacheHit = true;
+  stats.rootCacheNote.clear();
+  for (size_t s = 0; s < species.size(); ++s) {
+    uint64_t key = 0;
+    bool cached = false;
+    std::string note;
+    CANOPY_TRY(prepareSpecies(desc, *species[s].model, parts[s], &key, &cached, &note));
+    if (s == 0) *rootKey = key;  // the impostor views' cache key (impostors take one species)
+    stats.rootCacheHit = stats.rootCacheHit && cached;
+    stats.rootCacheNote += (s ? "; " : "") + note;
+  }
+  VegetationModel merged;
+  SpeciesParts all;
+  CANOPY_TRY(mergeSpecies(species, parts, &merged, &all, &mesh.species));
+  const VegetationModel& m = species.size() == 1 ? *species[0].model : merged;
+  mesh.split = std::move(all.split);
+  mesh.plants = std::move(all.plants);
+  LeafRoots& roots = all.roots;
+  stats.foliageTriangles = mesh.split.foliageTriangles;
+  stats.rigidTriangles = mesh.split.rigidTriangles;
   stats.leafCount = roots.leafCount();
-  CANOPY_TRY(findPlants(m, roots, &mesh.plants));
   stats.plants = mesh.plants.count();
+  stats.species = uint32_t(species.size());
   stats.preprocessMs = msSince(t0);
   mesh.materials = m.materials;
   mesh.boundsMin = m.boundsMin;
@@ -269,7 +310,10 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const VegetationMo
     mesh.leafRootPositions.resize(roots.leafCount());
     for (uint32_t l = 0; l < roots.leafCount(); ++l) mesh.leafRootPositions[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
   }
-  CANOPY_TRY(buildMesh(MeshBuild{d, desc, mesh, impostors, stats}, m, foliage, roots, out));
+  CANOPY_TRY(buildMesh(MeshBuild{d, desc, mesh, impostors, stats}, m, all.foliage, roots, out));
+  // A chunk holds one material, and materials are numbered species after species.
+  const std::vector<uint32_t> speciesOf = materialSpecies(mesh.species);
+  for (MeshChunk& c : mesh.chunks) c.species = speciesOf[c.material];
   roots = LeafRoots{};
   CANOPY_TRY(uploadTextures(d, mesh, m));
   return Status();
@@ -300,10 +344,21 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
   const VkDeviceSize offsets[2] = {0, 0};
   d.vk.CmdBindVertexBuffers(cmd, 0, 2, streams, offsets);
   d.vk.CmdBindIndexBuffer(cmd, mesh.indexBuffer.buffer, 0, VK_INDEX_TYPE_UINT16);
+  std::vector<InstanceRun> speciesRuns;
   if (!o.keepViewport) setViewportScissor(d, cmd, md.width, md.height);
   // One draw per mesh chunk: its bounds decode the quantised positions, its block of the root table
   // is bound at its own offset (render/mesh_chunks.h).
   auto draw = [&](const MeshChunk& c, const ChunkPart* part, uint32_t first, uint32_t count) -> Status {
+    // A chunk belongs to one species: only the runs of that species' copies (render/species.h).
+    static const std::vector<InstanceRun> firstCopy = {{0, 1}};
+    const std::vector<InstanceRun>* runs = o.runs ? o.runs : &firstCopy;
+    if (md.speciesCopies && md.speciesCopies->size() > 1) {
+      const InstanceRun own = (*md.speciesCopies)[c.species];
+      if (o.runs) clipRuns(*o.runs, own, &speciesRuns);
+      else speciesRuns.assign(own.count ? 1 : 0, InstanceRun{own.first, 1});
+      runs = &speciesRuns;
+    }
+    if (runs->empty()) return Status();
     const ModelMaterial& mat = mesh.materials[c.material];
     if (o.subset != MeshDrawOptions::Subset::All) {
       const bool prepassed = mat.alphaMode != AlphaMode::Blend && (!part || part->weight >= 1.0f);
@@ -365,8 +420,7 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts. One instanced draw per run of visible copies
     // (gl_InstanceIndex, firstInstance included, indexes the instance table).
-    static const std::vector<InstanceRun> firstCopy = {{0, 1}};
-    for (const InstanceRun& r : o.runs ? *o.runs : firstCopy)
+    for (const InstanceRun& r : *runs)
       d.vk.CmdDrawIndexed(cmd, count * 3, r.count, uint32_t(indexAt), int32_t(vertexAt), r.first);
     return Status();
   };

@@ -22,6 +22,7 @@
 #include "render/mesh_chunks.h"
 #include "render/model.h"
 #include "render/plants.h"
+#include "render/species.h"
 
 namespace canopy {
 struct Device;
@@ -69,6 +70,9 @@ struct LayerMesh {
   std::vector<ModelMaterial> materials;
   glm::vec3 boundsMin{0}, boundsMax{0};
   Plants plants;  // each leaf's plant and each plant's bounds (eq. 7 per plant)
+  // The species laid end to end (render/species.h): each one's materials, leaves and plants as
+  // ranges, its bounds and wind response; one entry for a vegetation of one model.
+  std::vector<MeshSpecies> species;
   // The compact mesh in host memory (its chunks: `chunks`): the placement reads its decoded
   // positions and leaves (so the CPU places what the GPU draws, and no per-vertex copy of the
   // model is kept), and a streamed mesh's re-slices copy from it into the ring.
@@ -108,6 +112,9 @@ struct MeshDraw {
   Device* device = nullptr;
   const LayerMesh* mesh = nullptr;
   VkBuffer instances = VK_NULL_HANDLE;
+  // Per species, its copies in the instance table (LayerInstances::speciesCopies): a chunk draws
+  // only the runs inside its species'. Null: every chunk draws every run (one species).
+  const std::vector<InstanceRun>* speciesCopies = nullptr;
   VkBuffer frame = VK_NULL_HANDLE;
   uint32_t width = 0, height = 0;
   float leafTransmission = 0.0f, leafOpticalDepth = 0.0f;  // LayerSettings'
@@ -133,6 +140,10 @@ struct MeshDrawOptions {
 // textures into `mesh`; *rootKey: the leaf roots' cache key (0: no cache). Statistics: `stats`'
 // mesh and leaf-root fields.
 Status prepareLayerMesh(Device& device, const LayerMeshDesc& desc, const VegetationModel& model, LayerMesh& mesh,
+                        Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey);
+// The same for several species (render/species.h): each prepared on its own (its split, its leaf
+// roots' cache file), then laid end to end into one mesh; *rootKey: the first species'.
+Status prepareLayerMesh(Device& device, const LayerMeshDesc& desc, const std::vector<SpeciesModel>& species, LayerMesh& mesh,
                         Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey);
 // After the layer images exist: sets mesh.streamed when the compact mesh (`meshBytes`) does not
 // fit the memory budget beside them (`liveAtStart`: the allocator's bytes before the vegetation) and

@@ -25,16 +25,27 @@ void beginPlacement(const PlacementInputs& in, const LayerView& view, PlacementJ
   job.bottom = -INFINITY;
   // The copies this camera sees (docs/design.md "Instances"); per copy, the frame's rows composed
   // with its transform, so the stages below read model-space vertices.
-  job.runs = visibleInstanceRuns(*in.instances, in.mesh->boundsMin, in.mesh->boundsMax, f.viewProj);
+  job.runs = visibleInstanceRuns(*in.instances, in.mesh->species, f.viewProj);
+  const std::vector<MeshSpecies>& species = in.mesh->species;
+  job.speciesVisible.assign(species.size(), InstanceRun{});
+  job.leafBase.assign(1, 0);
+  job.plantBase.assign(1, 0);
   for (const InstanceRun& r : job.runs)
     for (uint32_t i = r.first; i < r.first + r.count; ++i) {
+      const uint32_t s = i < in.instances->species.size() ? in.instances->species[i] : 0u;
+      InstanceRun& visible = job.speciesVisible[s];
+      if (visible.count == 0) visible.first = uint32_t(job.copySpecies.size());
+      visible.count++;
+      job.copySpecies.push_back(s);
+      job.leafBase.push_back(job.leafBase.back() + species[s].leafCount);
+      job.plantBase.push_back(job.plantBase.back() + species[s].plantCount);
       const glm::mat4 m = in.instances->models[i], vp = f.viewProj * m;
       job.depthRows.push_back(glm::vec4(f.depthRow) * m);
       job.rowsX.push_back(glm::vec4(vp[0][0], vp[1][0], vp[2][0], vp[3][0]));
       job.rowsY.push_back(glm::vec4(vp[0][1], vp[1][1], vp[2][1], vp[3][1]));
       job.rowsW.push_back(glm::vec4(vp[0][3], vp[1][3], vp[2][3], vp[3][3]));
     }
-  job.leafDepth.resize(size_t(in.mesh->leafCount) * job.depthRows.size());
+  job.leafDepth.resize(job.leafBase.back());
 }
 
 namespace {
@@ -42,10 +53,12 @@ namespace {
 // row: eq. 7's "bottom of the bounding box", per plant) and, per layer it has leaves in, its rect.
 // A plant with a box corner behind the camera has no rect (its layers' corners take the nearest
 // other plant's root).
-void placePlants(PlacementJob& job, const Plants& plants, float h, float w) {
-  const uint32_t layers = job.frame.layerCount, n = plants.count();
-  for (size_t k = 0; k < job.rowsW.size(); ++k)
-    for (uint32_t p = 0; p < n; ++p) {
+void placePlants(PlacementJob& job, const Plants& plants, const std::vector<MeshSpecies>& species, float h, float w) {
+  const uint32_t layers = job.frame.layerCount;
+  for (size_t k = 0; k < job.rowsW.size(); ++k) {
+    const MeshSpecies& sp = species[job.copySpecies[k]];
+    for (uint32_t p = sp.firstPlant; p < sp.firstPlant + sp.plantCount; ++p) {
+      const size_t slot = job.plantBase[k] + (p - sp.firstPlant);
       float xlo = INFINITY, xhi = -INFINITY, bottom = -INFINITY;
       bool behind = false;
       for (int c = 0; c < 8; ++c) {
@@ -63,12 +76,14 @@ void placePlants(PlacementJob& job, const Plants& plants, float h, float w) {
       }
       if (behind) continue;
       for (uint32_t i = 0; i < layers; ++i) {
-        const float top = job.plantTop[(k * n + p) * layers + i];
+        const float top = job.plantTop[slot * layers + i];
         if (!std::isfinite(top)) continue;
         job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
-        job.layers[i].plantKeys.push_back(uint32_t(k * n + p));
+        job.layers[i].plantKeys.push_back(uint32_t(slot));
+        job.layers[i].plantResponse.push_back(glm::vec2(sp.flexibility, sp.responseSpeed));
       }
     }
+  }
 }
 
 // What every stage of one advancePlacement call reads: the mesh, the copies, the batch size, and
@@ -80,21 +95,25 @@ struct PlacementPass {
   gpu::LayerFrame& frame;
   const CompactMesh& hm;  // read chunk by chunk: foliage chunks first, vertices and indices contiguous
   const Plants& plants;
-  size_t copies, batch, nLeaves, nVertices, nChunks, nPlants, foliageIndices = 0;
+  const std::vector<MeshSpecies>& species;
+  size_t copies, batch, nVertices, nChunks, foliageIndices = 0;
   bool geometric, perPlant;
   float height, width;
 
   PlacementPass(const PlacementInputs& in, PlacementJob& j)
-      : mesh(*in.mesh), job(j), settings(*in.settings), frame(j.frame), hm(in.mesh->hostMesh), plants(in.mesh->plants) {
+      : mesh(*in.mesh), job(j), settings(*in.settings), frame(j.frame), hm(in.mesh->hostMesh), plants(in.mesh->plants),
+        species(in.mesh->species) {
     copies = job.depthRows.size();
     // Items per clock reading, each item visited once per visible copy.
     batch = std::max<size_t>((size_t(1) << 14) / std::max<size_t>(copies, 1), 1);
-    nLeaves = mesh.leafCount;
     nVertices = hm.vertices.size();
     nChunks = mesh.chunks.size();
-    nPlants = plants.count();
     geometric = settings.slice == SliceMode::Geometry;
-    perPlant = nPlants * copies > 1 && plants.leafPlant.size() == nLeaves;
+    // Per-plant roots with more than one (copy, plant), or a species whose wind response differs
+    // from the method's (its rects carry it to the warp).
+    bool response = false;
+    for (const MeshSpecies& s : species) response = response || s.flexibility != 1.0f || s.responseSpeed != 1.0f;
+    perPlant = (job.plantBase.back() > 1 || response) && plants.leafPlant.size() == mesh.leafCount;
     for (const MeshChunk& c : mesh.chunks)
       if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
     height = float(in.height);
@@ -102,6 +121,10 @@ struct PlacementPass {
   }
   // View depth of model-space point p in copy k.
   float depthOf(size_t k, const glm::vec3& p) const { return glm::dot(job.depthRows[k], glm::vec4(p, 1.0f)); }
+  // The visible copies of chunk c's species ([first, first + count) of the rows).
+  const InstanceRun& copiesOf(const MeshChunk& c) const { return job.speciesVisible[c.species]; }
+  // Copy k's entry for (model-wide) leaf `leaf` of chunk c's species in leafDepth and leafLayer.
+  size_t leafSlot(size_t k, const MeshChunk& c, uint32_t leaf) const { return job.leafBase[k] + (leaf - species[c.species].firstLeaf); }
   // The chunk holding vertex (or index) `item`, items visited in order.
   const MeshChunk& chunkOf(size_t item, bool index) {
     for (;; ++job.chunk) {
@@ -131,16 +154,17 @@ size_t PlacementPass::rootDepths() {
   size_t roots = 0, end = job.next;
   for (; end < nChunks && roots < batch; ++end) {
     const MeshChunk& c = mesh.chunks[end];
+    const InstanceRun own = copiesOf(c);
     for (uint64_t i = c.firstRoot; i < c.firstRoot + c.rootCount; ++i)
-      for (size_t k = 0; k < copies; ++k) {
+      for (size_t k = own.first; k < own.first + own.count; ++k) {
         const float z = depthOf(k, hm.roots[i].position);
-        job.leafDepth[k * nLeaves + hm.roots[i].leaf] = z;
+        job.leafDepth[leafSlot(k, c, hm.roots[i].leaf)] = z;
         if (!geometric) {
           job.zMin = std::min(job.zMin, z);
           job.zMax = std::max(job.zMax, z);
         }
       }
-    roots += c.rootCount + 1;
+    roots += size_t(c.rootCount) * std::max<size_t>(own.count, 1) / std::max<size_t>(copies, 1) + 1;
   }
   if (end < nChunks) return end;
   job.stage = geometric ? PlacementStage::FoliageVertexDepths : PlacementStage::LayerBoundaries;
@@ -151,8 +175,10 @@ size_t PlacementPass::foliageVertexDepths() {
   const size_t end = std::min(job.next + batch, nVertices);
   for (size_t v = job.next; v < end; ++v)
     if (chunkLeaf(hm.vertices[v]) != LAYER_CHUNK_NO_LEAF) {
-      const glm::vec3 p = decodePosition(chunkOf(v, false), hm.vertices[v]);
-      for (size_t k = 0; k < copies; ++k) {
+      const MeshChunk& c = chunkOf(v, false);
+      const glm::vec3 p = decodePosition(c, hm.vertices[v]);
+      const InstanceRun own = copiesOf(c);
+      for (size_t k = own.first; k < own.first + own.count; ++k) {
         const float z = depthOf(k, p);
         job.zMin = std::min(job.zMin, z);
         job.zMax = std::max(job.zMax, z);
@@ -174,20 +200,20 @@ Status PlacementPass::layerBoundaries() {
     job.layers[i].slab = slabs[i];
     job.layers[i].top = INFINITY;
   }
-  job.leafLayer.resize(nLeaves * copies);
-  if (perPlant) job.plantTop.assign(copies * nPlants * frame.layerCount, INFINITY);
+  job.leafLayer.resize(job.leafDepth.size());
+  if (perPlant) job.plantTop.assign(job.plantBase.back() * frame.layerCount, INFINITY);
   job.stage = PlacementStage::LeafLayers;
   return Status();
 }
 
 // Every copy's leaves: (copy, leaf) items.
 size_t PlacementPass::leafLayers() {
-  const size_t end = std::min(job.next + batch * std::max<size_t>(copies, 1), nLeaves * copies);
+  const size_t total = job.leafDepth.size(), end = std::min(job.next + batch * std::max<size_t>(copies, 1), total);
   for (size_t i = job.next; i < end; ++i) {
     job.leafLayer[i] = uint8_t(gpu::layerOfDepth(frame, job.leafDepth[i]));
     job.layers[job.leafLayer[i]].leaves++;
   }
-  if (end < nLeaves * copies) return end;
+  if (end < total) return end;
   job.stage = PlacementStage::RootLineAndTops;
   return 0;
 }
@@ -199,7 +225,8 @@ size_t PlacementPass::rootLineAndTops() {
     const MeshChunk& c = chunkOf(v, false);
     const glm::vec4 p(decodePosition(c, hm.vertices[v]), 1.0f);
     const uint32_t leaf = leafOf(c, hm.vertices[v]);
-    for (size_t k = 0; k < copies; ++k) {
+    const InstanceRun own = copiesOf(c);
+    for (size_t k = own.first; k < own.first + own.count; ++k) {
       const float w = glm::dot(job.rowsW[k], p);
       if (w <= 1e-6f) {
         job.behind = true;
@@ -215,13 +242,14 @@ size_t PlacementPass::rootLineAndTops() {
         job.rigidDepth = glm::vec2(std::min(job.rigidDepth.x, z), std::max(job.rigidDepth.y, z));
         continue;
       }
-      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, z) : job.leafLayer[k * nLeaves + leaf];
+      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, z) : job.leafLayer[leafSlot(k, c, leaf)];
       LayerInfo& li = job.layers[layer];
       li.top = std::min(li.top, y);
       li.drawnNear = std::min(li.drawnNear, z);
       li.drawnFar = std::max(li.drawnFar, z);
       if (perPlant) {
-        float& top = job.plantTop[(k * nPlants + plants.leafPlant[leaf]) * frame.layerCount + layer];
+        const size_t slot = job.plantBase[k] + (plants.leafPlant[leaf] - species[c.species].firstPlant);
+        float& top = job.plantTop[slot * frame.layerCount + layer];
         top = std::min(top, y);
       }
     }
@@ -237,8 +265,9 @@ size_t PlacementPass::trianglesPerLayer() {
   for (size_t k = job.next; k < end; k += 3) {
     const MeshChunk& c = chunkOf(k, true);
     const gpu::LayerVertex& v = hm.vertices[c.firstVertex + hm.indices[k]];
-    for (size_t j = 0; j < copies; ++j) {
-      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, depthOf(j, decodePosition(c, v))) : job.leafLayer[j * nLeaves + leafOf(c, v)];
+    const InstanceRun own = copiesOf(c);
+    for (size_t j = own.first; j < own.first + own.count; ++j) {
+      const uint32_t layer = geometric ? gpu::layerOfDepth(frame, depthOf(j, decodePosition(c, v))) : job.leafLayer[leafSlot(j, c, leafOf(c, v))];
       job.layers[layer].triangles++;
     }
   }
@@ -255,7 +284,7 @@ void PlacementPass::finish() {
     if (!std::isfinite(li.top)) li.top = bottom;
     li.height = std::max(bottom - li.top, 1.0f);
   }
-  if (perPlant) placePlants(job, plants, height, width);
+  if (perPlant) placePlants(job, plants, species, height, width);
   job.plantTop = {};
   job.leafDepth = {};
   job.leafLayer = {};

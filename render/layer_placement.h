@@ -50,6 +50,9 @@ struct LayerInfo {
   // and the plant's key (visible copy x plants + plant).
   std::vector<glm::vec4> plants;
   std::vector<uint32_t> plantKeys;
+  // Per plant rect, its species' wind response (docs/design.md "Species: wind response"):
+  // flexibility, response speed.
+  std::vector<glm::vec2> plantResponse;
 };
 
 // The placement's stages, in order (advancePlacement runs them until a deadline and resumes).
@@ -71,6 +74,12 @@ struct PlacementJob {
   // Per visible copy (in runs' order): the frame's view-depth row and clip rows x, y, w composed with
   // its transform (they take model-space points).
   std::vector<glm::vec4> depthRows, rowsX, rowsY, rowsW;
+  // Per visible copy its species, and where its leaves' and plants' entries start in leafDepth /
+  // leafLayer and plantTop (one past the last copy: the totals); per species, its visible copies
+  // (indices into the rows above). A copy visits only its own species' leaves and vertices.
+  std::vector<uint32_t> copySpecies;
+  std::vector<size_t> leafBase, plantBase;
+  std::vector<InstanceRun> speciesVisible;
   glm::vec2 pixelLo{INFINITY}, pixelHi{-INFINITY};  // the vertices' projected extent, pixels (unclipped)
   bool behind = false;                               // a vertex is behind the camera (no extent)
   glm::vec2 rigidDepth{INFINITY, -INFINITY};         // view depths of the rigid vertices (near, far)
@@ -78,7 +87,7 @@ struct PlacementJob {
   std::vector<LayerInfo> layers;
   std::vector<float> leafDepth;
   std::vector<uint8_t> leafLayer;
-  std::vector<float> plantTop;  // (copy x plants + plant) x layers: the leaves' highest row, per-plant roots
+  std::vector<float> plantTop;  // (plantBase[copy] + plant of its species) x layers: the leaves' highest row, per-plant roots
   float zMin = 0, zMax = 0, bottom = 0;
   PlacementStage stage = PlacementStage::RootDepths;
   size_t next = 0;       // the stage's next item (chunk, leaf, or vertex / index of the host mesh)

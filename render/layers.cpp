@@ -229,6 +229,11 @@ Status validateLayerSettings(const LayerSettings& s) {
 
 Status createLayeredVegetation(Device& d, const VegetationModel& m, const LayeredVegetationDesc& desc,
                                LayeredVegetation* out) {
+  return createLayeredVegetation(d, std::vector<SpeciesModel>{SpeciesModel{&m}}, desc, out);
+}
+
+Status createLayeredVegetation(Device& d, const std::vector<SpeciesModel>& species, const LayeredVegetationDesc& desc,
+                               LayeredVegetation* out) {
   *out = LayeredVegetation{};
   LayeredVegetation& lv = *out;
   lv.device = &d;
@@ -245,15 +250,20 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
   if (desc.writeIds && (!d.fragmentPrimitiveId || !d.independentBlend))
     return Status::error("layers: the id output needs gl_PrimitiveID in fragment shaders (geometryShader) and independentBlend");
   CANOPY_TRY(validateLayerSettings(desc.settings));
-  if (m.uvs.size() != m.positions.size() || m.indices.size() % 3 || m.triangleMaterial.size() != m.triangleCount())
-    return Status::error("layers: inconsistent model arrays in " + m.path);
-  for (size_t i = 0; i < m.materials.size(); ++i) {
-    const ModelMaterial& mm = m.materials[i];
-    for (int32_t image : {mm.baseColorImage, mm.normalImage, mm.transmissionImage, mm.transmissionColorImage})
-      if (image < -1 || image >= int32_t(m.images.size()))
-        return Status::error("layers: material " + std::to_string(i) + " ('" + mm.name + "') names image " +
-                             std::to_string(image) + " of " + std::to_string(m.images.size()));
+  CANOPY_TRY(checkSpecies(species));
+  for (const SpeciesModel& sm : species) {
+    const VegetationModel& m = *sm.model;
+    if (m.uvs.size() != m.positions.size() || m.indices.size() % 3 || m.triangleMaterial.size() != m.triangleCount())
+      return Status::error("layers: inconsistent model arrays in " + m.path);
+    for (size_t i = 0; i < m.materials.size(); ++i) {
+      const ModelMaterial& mm = m.materials[i];
+      for (int32_t image : {mm.baseColorImage, mm.normalImage, mm.transmissionImage, mm.transmissionColorImage})
+        if (image < -1 || image >= int32_t(m.images.size()))
+          return Status::error("layers: material " + std::to_string(i) + " ('" + mm.name + "') names image " +
+                               std::to_string(image) + " of " + std::to_string(m.images.size()));
+    }
   }
+  const VegetationModel& m = *species[0].model;  // the impostors' (one species)
   if (desc.stagingRingBytes < 1 || desc.stagingRingBytes > (4ull << 30))
     return Status::error("layers: stagingRingBytes " + std::to_string(desc.stagingRingBytes) + " is outside [1, 4 GiB]");
   const uint64_t liveAtStart = d.allocator->liveBytes;
@@ -261,7 +271,7 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
     CompactMesh mesh;
     uint64_t key = 0;
     CANOPY_TRY(chooseDrawPath(lv, lv.settings, &lv.pipelines.singlePass));
-    CANOPY_TRY(prepareLayerMesh(d, desc, m, lv.mesh, lv.impostors, lv.stats, &mesh, &key));
+    CANOPY_TRY(prepareLayerMesh(d, desc, species, lv.mesh, lv.impostors, lv.stats, &mesh, &key));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::LayerFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &lv.visible.frameBuffer, "layers: frame"));
     CANOPY_TRY(createTargets(lv));
@@ -274,8 +284,9 @@ Status createLayeredVegetation(Device& d, const VegetationModel& m, const Layere
       CANOPY_TRY(createTargets(lv));
     }
     CANOPY_TRY(placeLayerMesh(d, desc, lv.mesh, lv.stats, std::move(mesh), liveAtStart));
-    CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, desc.instances.empty() ? std::vector<glm::mat4>{glm::mat4(1.0f)} : desc.instances,
-                            desc.tints, desc.windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &lv.instances));
+    InstanceInputs copies{desc.instances, desc.tints, desc.windPhases, desc.instanceSpecies};
+    if (copies.models.empty()) copies.models = {glm::mat4(1.0f)};
+    CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, copies, lv.mesh.species, &lv.instances));
     CANOPY_TRY(useShadingFor(lv, lv.settings));
     if (lv.impostors.enabled && !lv.instances.identity)
       return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
@@ -398,9 +409,10 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
 }
 
 Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                         const std::vector<float>& windPhases) {
+                         const std::vector<float>& windPhases, const std::vector<uint32_t>& species) {
   LayerInstances next;
-  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, models, tints, windPhases, lv.mesh.boundsMin, lv.mesh.boundsMax, &next));
+  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, InstanceInputs{models, tints, windPhases, species}, lv.mesh.species,
+                          &next));
   if (lv.impostors.enabled && !next.identity) {
     destroyInstances(*lv.device, next);
     return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
@@ -428,6 +440,7 @@ MeshDraw meshDraw(const LayeredVegetation& lv) {
   md.device = lv.device;
   md.mesh = &lv.mesh;
   md.instances = lv.instances.buffer.buffer;
+  md.speciesCopies = &lv.instances.speciesCopies;
   md.frame = lv.visible.frameBuffer.buffer;
   md.width = lv.desc.width;
   md.height = lv.desc.height;

@@ -55,6 +55,7 @@ struct LayeredVegetationDesc : LayerMeshDesc {
   std::vector<glm::mat4> instances;
   std::vector<glm::vec3> tints;
   std::vector<float> windPhases;  // s, the per-vertex baseline's; empty: none
+  std::vector<uint32_t> instanceSpecies;  // per copy: its species (render/species.h); empty: all species 0
   LayerSettings settings;
 };
 
@@ -114,6 +115,10 @@ uint32_t layerShadingFeatures(const LayeredVegetation& lv, const LayerSettings& 
 // textures, creates the targets and pipelines. `model` can be released afterwards.
 Status createLayeredVegetation(Device& device, const VegetationModel& model, const LayeredVegetationDesc& desc,
                                LayeredVegetation* out);
+// The same for several species in one set of layers (render/species.h; desc.instanceSpecies names
+// each copy's): each species' mesh and textures stored once however many copies.
+Status createLayeredVegetation(Device& device, const std::vector<SpeciesModel>& species, const LayeredVegetationDesc& desc,
+                               LayeredVegetation* out);
 void destroyLayeredVegetation(LayeredVegetation& lv);
 
 // Work the parts prepared on a device that defers it (engine/transfer.h, submitOrDefer): the
@@ -135,7 +140,7 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bo
 
 // Replaces the placed copies (transforms and tints; empty tints: none) and re-slices at once.
 Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                         const std::vector<float>& windPhases = {});
+                         const std::vector<float>& windPhases = {}, const std::vector<uint32_t>& species = {});
 
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;

@@ -28,6 +28,7 @@ constexpr uint32_t kMaxChunkLeaves = 65535;    // chunk-local leaf 0xffff = none
 
 struct MeshChunk {
   uint32_t material = 0;
+  uint32_t species = 0;        // the material's species (render/species.h; materials never span species)
   bool foliage = true;
   uint64_t firstTriangle = 0;  // GPU-order triangle index of the chunk's first (the id output's base)
   uint32_t triangleCount = 0;

@@ -209,7 +209,7 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.current.tipCount = pv.branchCount + pv.leafCount;
   pv.current.copyCount = pv.copies;
   // The copies in view (drawn every frame: culled every frame).
-  pv.runs = visibleInstanceRuns(lv.instances, lv.mesh.boundsMin, lv.mesh.boundsMax, viewProj);
+  pv.runs = visibleInstanceRuns(lv.instances, lv.mesh.species, viewProj);
   pv.frames++;
   return Status();
 }

@@ -111,9 +111,24 @@ void main() {
   vec2 a = vec2(dot(rel, f.simRight.xyz), dot(rel, f.simUp.xyz)) / f.simOrigin.w;
   vec2 vs = sampleTiled(false, 0u, a);
   vec3 v0 = simToView(f, vs);
+  // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's;
+  // the plant's species' wind response with it (flexibility, response speed).
+  AnimLayer rooted = f.layers[layer];
+  vec2 response = vec2(1.0);
+  float bestD = 3.0e38, bestA = 3.0e38;
+  for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
+    vec4 r = plantRects[2u * j];
+    if (plantRectBetter(r, pixel, bestD, bestA)) {
+      bestD = plantRectDistance2(r, pixel);
+      bestA = (r.y - r.x) * (r.w - r.z);
+      vec4 species = plantRects[2u * j + 1u];
+      rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r) : f.layers[layer];
+      response = species.xy;
+    }
+  }
   vec3 vi = v0;
   if (layer > 0u) {
-    float gamma = layerDelay(f.maxDelay, f.layers[layer], v0.z);
+    float gamma = speciesDelay(f.maxDelay, layerDelay(f.maxDelay, f.layers[layer], v0.z), response.y);
     if (f.delayMode == ANIM_DELAY_EXACT) {
       vi = simToView(f, sampleHistory(a, f.time - gamma));
     } else {
@@ -123,16 +138,5 @@ void main() {
   }
   uint at = layer * corners + id;
   prevDisp[at] = disp[at];
-  // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's.
-  AnimLayer rooted = f.layers[layer];
-  float bestD = 3.0e38, bestA = 3.0e38;
-  for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
-    vec4 r = plantRects[j];
-    if (plantRectBetter(r, pixel, bestD, bestA)) {
-      bestD = plantRectDistance2(r, pixel);
-      bestA = (r.y - r.x) * (r.w - r.z);
-      rooted = withPlantRoot(f.layers[layer], r);
-    }
-  }
-  disp[at] = displacementPixels(f, rooted, pixel.y, vi);
+  disp[at] = response.x * displacementPixels(f, rooted, pixel.y, vi);
 }

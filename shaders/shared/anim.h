@@ -30,8 +30,11 @@ struct AnimLayer {
   uint plantCount;
 };
 CANOPY_SIZE_CHECK(AnimLayer, 32)
-// Plant rects the frame block holds after the AnimFrame (all layers together): vec4 (x lo, x hi,
-// top, root row), pixels, y down.
+// Plant rects the frame block holds after the AnimFrame (all layers together), two vec4 each: the
+// rect (x lo, x hi, top, root row; pixels, y down) at 2j, its species' wind response at 2j + 1
+// (flexibility, response speed; docs/design.md "Species: wind response"), and in its z 1 when the
+// rect's root line is eq. 7's (per-plant roots), 0 when the layer's is (the rects then only carry
+// the response).
 #define ANIM_MAX_PLANT_RECTS 3072u
 
 struct AnimFrame {
@@ -120,6 +123,12 @@ CANOPY_INLINE AnimLayer withPlantRoot(AnimLayer layer, vec4 r) {
   layer.rootLineY = r.w;
   layer.height = max(r.w - r.z, 1.0f);
   return layer;
+}
+
+// A species' response speed (docs/design.md "Species: wind response") divides eq. 4's delay: a
+// slow species lags the nearest layer's wind further, a fast one follows it sooner.
+CANOPY_INLINE float speciesDelay(float maxDelay, float gamma, float responseSpeed) {
+  return clamp(gamma / max(responseSpeed, 0.25f), -maxDelay, maxDelay);
 }
 
 // Eq. 6 (docs/design.md's reading) in pixels, y pointing down the image (view y points up).

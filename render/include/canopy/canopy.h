@@ -68,6 +68,19 @@ Status clearCacheFolder(const std::string& folder, uint64_t* removedFiles, uint6
 // and textures. Submits nothing: the uploads are recorded at the start of the context's first
 // recordCanopy(). Refuses models with nothing to animate.
 Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out);
+
+// One species of a vegetation of several (docs/design.md "Species"): its model (may be destroyed
+// after createCanopy) and its wind response, relative to the method's.
+struct CanopySpecies {
+  const Model* model = nullptr;
+  float flexibility = 1.0f;    // [0, 4]: scales how far its plants bend for the same wind (eq. 6)
+  float responseSpeed = 1.0f;  // [0.25, 4]: divides its layers' delay behind the nearest (eq. 4)
+};
+// A context animating copies of several species in one set of layers, one simulation and one
+// composite (CanopyInstance.species picks each copy's): each species' mesh, leaf roots, materials
+// and textures are stored once however many copies. 1..256 species (kMaxSceneSpecies). Not yet
+// with CanopyDesc.impostors or allowPerVertex when there is more than one species.
+Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out);
 // Releases the context. Its GPU objects are freed framesInFlight host frames later (or at
 // releaseDevice), so the host may destroy it while frames that used it still execute.
 void destroyCanopy(CanopyContext* context);
@@ -83,7 +96,8 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 // objects are freed once no frame in flight uses them. Width and height in [1, 16384].
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
 
-// Replaces the placed copies (CanopyDesc.instances; at least one): the next recorded frame re-slices
+// Replaces the placed copies (CanopyDesc.instances; at least one; CanopyInstance.species must name
+// one of the context's species): the next recorded frame re-slices
 // at once, and the default simulation plane (no CanopyParams.customPlane) is taken again from its
 // camera for the copies' bounds. A transform that is not a finite invertible affine matrix, or a
 // tint outside [0, 16], is refused naming the instance. Waits for nothing.

@@ -12,7 +12,7 @@
 // an older minor version, naming both; below 1.0 a minor version breaks the API, so 0.x needs the
 // library's own minor version (docs/embedding.md "Versions").
 #define CANOPY_VERSION_MAJOR 0
-#define CANOPY_VERSION_MINOR 7
+#define CANOPY_VERSION_MINOR 8
 #define CANOPY_VERSION_PATCH 0
 #define CANOPY_MAKE_VERSION(major, minor, patch) ((uint32_t(major) << 22) | (uint32_t(minor) << 12) | uint32_t(patch))
 #define CANOPY_HEADER_VERSION CANOPY_MAKE_VERSION(CANOPY_VERSION_MAJOR, CANOPY_VERSION_MINOR, CANOPY_VERSION_PATCH)

@@ -88,6 +88,9 @@ struct CanopyInstance {
   // of copies does not sway in lockstep. The 2D method's copies sway with the simulated field at
   // their place, which already differs between them (docs/design.md "Instances").
   float windPhase = 0.0f;
+  // The copy's species: an index into the species the context was created with (createCanopy with
+  // a CanopySpecies list; 0 with one model).
+  uint32_t species = 0;
 };
 
 // A scene file (docs/scene-files.md; readCanopyScene in <canopy/canopy.h>): species and their
@@ -555,6 +558,7 @@ struct LayerStats {
   std::string rootCacheNote;  // why the cache was not used, or where it was written
   uint32_t leafCount = 0;
   uint32_t plants = 1;        // plants of the model (eq. 7 per plant: DynamicsParams.roots; each copy is one more)
+  uint32_t species = 1;       // models in the vegetation (CanopySpecies), each stored once
   uint64_t foliageTriangles = 0, rigidTriangles = 0;
   bool singlePass = false;    // the draw mode in use
   // The layer images' size, pixels: the targets' plus the guard band on each side (CanopyDesc.guardBand).

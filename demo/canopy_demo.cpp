@@ -199,6 +199,13 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
                 st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles, uint32_t(st.layers.outrunSpreads),
                 st.layers.lastRebuildReason.c_str());
   std::string text = head;
+  if (st.layers.species > 1 || st.layers.instances > 1) {
+    char copies[256];
+    std::snprintf(copies, sizeof copies, "species: %u, copies: %u; in the last re-slice's view: %u copies of %u species\n",
+                  st.layers.species, st.layers.instances, st.layers.lastVisibleInstances,
+                  st.layers.lastVisibleSpecies);
+    text += copies;
+  }
   text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
   if (!steady.wallMs.empty())
     text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +
@@ -549,17 +556,19 @@ int main(int argc, char** argv) {
   }
   if (!o.compareA.empty()) return compareFolders(o);
   if (o.cache.clear) return cli::clearCacheCommand("canopy-demo", o.cache, o.gltf);
-  if (!o.gltf.empty()) {
-    const Status where = cli::resolveCacheFolder(o.cache, o.gltf, &o.cacheFolder);
+  if (!o.gltf.empty() || !o.sceneFile.empty()) {
+    const Status where = cli::resolveCacheFolder(o.cache, o.gltf.empty() ? o.sceneFile : o.gltf, &o.cacheFolder);
     if (!where.ok()) std::printf("cache: none: %s\n", where.message().c_str());
   }
   VegetationModel model;
   std::string label;
-  const Status s = loadScene(o, &model, &label);
+  auto copies = std::make_shared<SceneCopies>();
+  const Status s = loadScene(o, &model, &label, copies.get());
   if (!s.ok()) {
     std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
     return 1;
   }
+  if (!o.sceneFile.empty()) o.copies = copies;
   if (o.window) {
     const int w = runWindow(o, model, label);
     if (w >= 0) return w;

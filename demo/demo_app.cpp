@@ -42,6 +42,8 @@ void printHelp() {
       "  --faces N           generated scene's triangles, %llu..%llu, K/M suffixes (default %lluK)\n"
       "  --seed S            generated scene's seed, 0..4294967295 (default %u)\n"
       "  --gltf FILE         load a .gltf/.glb instead of generating a scene\n"
+      "  --scene-file FILE   a scene file (docs/scene-files.md): several species, placed copies and\n"
+      "                      scatters, in one vegetation (instead of --scene / --gltf)\n"
       "  --rigid M1,M2       materials (names or #index) forced to be rigid background (trunk, branches)\n"
       "  --foliage M1,M2     materials forced to be foliage (default rule: render/material_split.h)\n"
       "Method:\n"
@@ -305,6 +307,9 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     } else if (a == "--gltf") {
       if (!takes()) return bad("needs a file");
       o->gltf = v;
+    } else if (a == "--scene-file") {
+      if (!takes()) return bad("needs a file");
+      o->sceneFile = v;
     } else if (a == "--rigid" || a == "--foliage") {
       if (!takes() || !*v) return bad("needs material names or #indices, comma-separated");
       (a == "--rigid" ? o->split.rigid : o->split.foliage) = cli::splitList(v);
@@ -390,7 +395,75 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
 
 // ---- scene and camera -------------------------------------------------------------------------
 
-Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
+namespace {
+// A scene file's species (each loaded or generated once) and copies; `model` gets the copies'
+// world bounds for the camera.
+Status loadSceneFile(const Options& o, VegetationModel* model, std::string* label, SceneCopies* out) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CanopyScene scene;
+  CANOPY_TRY(readCanopyScene(o.sceneFile, &scene));
+  *out = SceneCopies{};
+  out->models.resize(scene.species.size());
+  uint64_t triangles = 0;
+  for (size_t i = 0; i < scene.species.size(); ++i) {
+    const CanopySceneSpecies& sp = scene.species[i];
+    VegetationModel& m = out->models[i];
+    if (!sp.gltf.empty()) {
+      CANOPY_TRY(loadGltf(sp.gltf, {}, &m).context(o.sceneFile + ": species '" + sp.name + "'"));
+      for (const std::string& w : m.warnings) std::fprintf(stderr, "  warning: %s: %s\n", sp.name.c_str(), w.c_str());
+    } else {
+      SceneDesc d;
+      CANOPY_TRY(parseSceneKind(sp.generated, &d.kind).context(o.sceneFile + ": species '" + sp.name + "'"));
+      if (sp.faces) d.faces = sp.faces;
+      d.seed = sp.seed;
+      SceneStats st;
+      CANOPY_TRY(generateScene(d, &m, &st).context(o.sceneFile + ": species '" + sp.name + "'"));
+    }
+    triangles += m.triangleCount();
+    const glm::vec3 size = m.boundsMax - m.boundsMin;
+    std::fprintf(stderr, "  species '%s': %zu triangles, %.2f x %.2f x %.2f (x y z) from %.2f %.2f %.2f, flexibility %.2f, "
+                         "response speed %.2f\n",
+                 sp.name.c_str(), m.triangleCount(), size.x, size.y, size.z, m.boundsMin.x, m.boundsMin.y, m.boundsMin.z,
+                 sp.flexibility, sp.responseSpeed);
+  }
+  for (size_t i = 0; i < scene.species.size(); ++i)
+    out->species.push_back({&out->models[i], scene.species[i].flexibility, scene.species[i].responseSpeed});
+  *model = VegetationModel{};
+  model->path = o.sceneFile;
+  model->boundsMin = glm::vec3(INFINITY);
+  model->boundsMax = glm::vec3(-INFINITY);
+  std::vector<Float3> lo, hi;
+  for (const VegetationModel& m : out->models) {
+    lo.push_back(toFloat3(m.boundsMin));
+    hi.push_back(toFloat3(m.boundsMax));
+  }
+  CANOPY_TRY(sceneCopies(scene, lo, hi, &out->instances));
+  uint64_t placed = 0;
+  for (const CanopyInstance& c : out->instances) {
+    const VegetationModel& m = out->models[c.species];
+    placed += m.triangleCount();
+    const glm::mat4 t = toGlm(c.transform);
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec3 p((k & 1) ? m.boundsMax.x : m.boundsMin.x, (k & 2) ? m.boundsMax.y : m.boundsMin.y,
+                        (k & 4) ? m.boundsMax.z : m.boundsMin.z);
+      const glm::vec3 w(t * glm::vec4(p, 1.0f));
+      model->boundsMin = glm::min(model->boundsMin, w);
+      model->boundsMax = glm::max(model->boundsMax, w);
+    }
+  }
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::fprintf(stderr, "scene %s: %zu species (%llu triangles stored), %zu copies (%llu triangles placed, world bounds %.1f %.1f %.1f .. "
+                       "%.1f %.1f %.1f) in %.2f s\n",
+               o.sceneFile.c_str(), scene.species.size(), (unsigned long long)triangles, out->instances.size(),
+               (unsigned long long)placed, model->boundsMin.x, model->boundsMin.y, model->boundsMin.z, model->boundsMax.x,
+               model->boundsMax.y, model->boundsMax.z, s);
+  *label = o.sceneFile;
+  return Status();
+}
+}  // namespace
+
+Status loadScene(const Options& o, VegetationModel* model, std::string* label, SceneCopies* copies) {
+  if (!o.sceneFile.empty()) return loadSceneFile(o, model, label, copies);
   const auto t0 = std::chrono::steady_clock::now();
   auto seconds = [&]() { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   if (!o.gltf.empty()) {
@@ -431,7 +504,10 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label) {
 
 CameraRig defaultRig(const Options& o) {
   CameraRig r;
-  if (o.gltf.empty()) {
+  if (!o.sceneFile.empty()) {
+    r.pitch = 14.0f;
+    r.distance = 0.7f;
+  } else if (o.gltf.empty()) {
     switch (o.scene) {
       case SceneKind::GrassField: r.pitch = 28.0f; r.distance = 0.75f; break;
       case SceneKind::Field: r.pitch = 22.0f; r.distance = 0.8f; break;
@@ -462,7 +538,7 @@ CameraPath cameraPathOf(const Options& o, const CameraRig& rig) {
 }
 
 glm::vec3 skySrgb(const Options& o) {
-  return o.gltf.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
+  return o.gltf.empty() && o.sceneFile.empty() && o.scene == SceneKind::Kelp ? glm::vec3(0.12f, 0.32f, 0.45f)  // water
                                                       : glm::vec3(0.62f, 0.75f, 0.88f);
 }
 
@@ -676,12 +752,20 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
     std::fprintf(stderr, "preparing %zu triangles (material split, leaf roots, GPU upload) ...\n", model.triangleCount());
     desc.progress = std::ref(progress);
   }
-  Status made = createCanopy(d, model, desc, &host.canopy);
+  // A scene file's species in one vegetation, its copies placed (docs/scene-files.md).
+  const SceneCopies* copies = o.copies.get();
+  if (copies) desc.instances = copies->instances;
+  if (copies && copies->species.size() > 1 && desc.impostors.enable && o.impostors == ImpostorMode::Off && !o.impostorDebug)
+    desc.impostors.enable = false;  // the window's offer; impostors take one species for now
+  auto create = [&]() {
+    return copies ? createCanopy(d, copies->species, desc, &host.canopy) : createCanopy(d, model, desc, &host.canopy);
+  };
+  Status made = create();
   if (!made.ok() && desc.allowPerVertex && o.method != AnimationMode::PerVertex) {
     // The window offers both methods; a mesh the baseline cannot keep resident runs 2D only.
     std::fprintf(stderr, "canopy-demo: the per-vertex baseline is off for this scene (%s)\n", made.message().c_str());
     desc.allowPerVertex = false;
-    made = createCanopy(d, model, desc, &host.canopy);
+    made = create();
   }
   if (!made.ok())
     return made.context(std::to_string(w) + "x" + std::to_string(h) + " frame, " + std::to_string(desc.maxLayers) + " layers at most");

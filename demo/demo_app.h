@@ -5,6 +5,7 @@
 // all ordered by one rg::RenderGraph (no hand-placed barriers).
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -20,9 +21,18 @@
 
 namespace canopy::demo {
 
+// A scene file's species and copies (--scene-file; docs/scene-files.md), loaded by loadScene.
+struct SceneCopies {
+  std::vector<VegetationModel> models;  // per species
+  std::vector<SpeciesModel> species;    // the models with their wind response (pointing into `models`)
+  std::vector<CanopyInstance> instances;
+};
+
 struct Options {
   // Scene
   std::string gltf;                    // a glTF/GLB file instead of a generated scene
+  std::string sceneFile;               // a scene file (species and copies) instead of one model
+  std::shared_ptr<const SceneCopies> copies;  // what loadScene read from sceneFile (main sets it)
   MaterialSplitOptions split;          // --rigid / --foliage overrides of the default material rule
   cli::CacheOptions cache;             // where the caches of a --gltf model go (demo/cache_cli.h)
   std::string cacheFolder;             // resolved by main(); empty: no cache
@@ -102,8 +112,9 @@ inline bool withImpostors(const Options& o) { return o.window || o.impostors != 
 int parseOptions(int argc, char** argv, Options* out, std::string* error);
 void printHelp();
 
-// The scene the options name (generated or loaded), with a progress line for big ones.
-Status loadScene(const Options& o, VegetationModel* model, std::string* label);
+// The scene the options name (generated or loaded), with a progress line for big ones. With a
+// scene file, *copies gets its species and copies and *model only their world bounds (the camera's).
+Status loadScene(const Options& o, VegetationModel* model, std::string* label, SceneCopies* copies);
 
 // Camera: orbit around the model's bounds.
 struct CameraRig {

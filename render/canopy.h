@@ -23,6 +23,9 @@ struct Model {
 
 // createCanopy from a VegetationModel held by the caller (no copy into a Model).
 Status createCanopy(Device& device, const VegetationModel& model, const CanopyDesc& desc, CanopyContext** out);
+// canopySceneInstances from the species' bounds (the demo and tools hold VegetationModels).
+Status sceneCopies(const CanopyScene& scene, const std::vector<Float3>& boundsMin, const std::vector<Float3>& boundsMax,
+                   std::vector<CanopyInstance>* out);
 // The same for several species held by the caller (render/species.h).
 Status createCanopy(Device& device, const std::vector<SpeciesModel>& species, const CanopyDesc& desc, CanopyContext** out);
 

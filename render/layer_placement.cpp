@@ -350,6 +350,12 @@ void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, c
   stats.lastPlacementMs += msSince(t0);
 }
 
+uint32_t visibleSpecies(const PlacementJob& job) {
+  uint32_t n = 0;
+  for (const InstanceRun& r : job.speciesVisible) n += r.count > 0;
+  return n;
+}
+
 void takeVertexBounds(VisibleLayers& v, const PlacementJob& job) {
   v.extent = job.behind ? PixelExtent{} : PixelExtent{job.pixelLo, job.pixelHi, true};
   v.rigidDepth = job.rigidDepth;
@@ -364,6 +370,7 @@ Status placeForView(const PlacementInputs& in, const LayerView& view, VisibleLay
   visible.view = job.view;
   visible.runs = job.runs;
   stats.lastVisibleInstances = uint32_t(job.depthRows.size());
+  stats.lastVisibleSpecies = visibleSpecies(job);
   takeVertexBounds(visible, job);
   visible.frame = job.frame;
   visible.layers = std::move(job.layers);

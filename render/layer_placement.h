@@ -123,6 +123,8 @@ using PlacementClock = std::chrono::steady_clock;
 // Starts a placement for `view`; advancePlacement runs it until done or past `deadline` (null: to
 // the end); placeForView runs one to the end into `visible`.
 void beginPlacement(const PlacementInputs& in, const LayerView& view, PlacementJob& job);
+// How many species have a visible copy in the placement.
+uint32_t visibleSpecies(const PlacementJob& job);
 // What a finished placement measured of its vertices, for the reprojection: their pixel extent
 // and the rigid ones' depths.
 void takeVertexBounds(VisibleLayers& v, const PlacementJob& job);

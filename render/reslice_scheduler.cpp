@@ -187,6 +187,7 @@ void planSpreadItems(ResliceScheduler& r, const ResliceParts& p) {
 void finishSpread(ResliceScheduler& r, const ResliceParts& p) {
   SpreadRebuild& sp = r.spread;
   p.stats.lastVisibleInstances = uint32_t(sp.job.depthRows.size());
+  p.stats.lastVisibleSpecies = visibleSpecies(sp.job);
   p.visible.view = sp.job.view;
   p.visible.runs = sp.job.runs;
   takeVertexBounds(p.visible, sp.job);

@@ -185,7 +185,8 @@ bool readSpecies(SceneReader& r, const json& doc, const std::string& folder, Can
   for (size_t i = 0; i < list->size(); ++i) {
     const json& s = (*list)[i];
     const std::string at = "/species/" + std::to_string(i);
-    if (!r.object(s, at, {"name", "gltf", "generated", "faces", "seed", "flexibility", "responseSpeed"}, {"name"})) return false;
+    if (!r.object(s, at, {"name", "gltf", "generated", "faces", "seed", "flexibility", "responseSpeed", "anchor"}, {"name"}))
+      return false;
     CanopySceneSpecies sp;
     double flexibility = 1.0, speed = 1.0;
     uint64_t faces = 0, seed = 1;
@@ -194,6 +195,10 @@ bool readSpecies(SceneReader& r, const json& doc, const std::string& folder, Can
         !r.integer(s, at, "seed", 0, UINT32_MAX, &seed) || !r.number(s, at, "flexibility", 0.0, 4.0, false, &flexibility) ||
         !r.number(s, at, "responseSpeed", 0.25, 4.0, false, &speed))
       return false;
+    std::string anchor = "file";
+    if (!r.string(s, at, "anchor", kMaxNameLength, &anchor)) return false;
+    if (anchor != "file" && anchor != "base") return r.fail(at + "/anchor", "expected \"file\" or \"base\", got '" + anchor + "'");
+    sp.anchorBase = anchor == "base";
     if (sp.gltf.empty() == sp.generated.empty())
       return r.fail(at, "needs exactly one of \"gltf\" (a file) and \"generated\" (a generated plant)");
     if (!sp.gltf.empty() && (s.contains("faces") || s.contains("seed")))
@@ -338,6 +343,39 @@ Status readCanopyScene(const std::string& path, CanopyScene* out) {
   });
   if (!s.ok()) *out = CanopyScene{};
   return s;
+}
+
+Status sceneCopies(const CanopyScene& scene, const std::vector<Float3>& boundsMin, const std::vector<Float3>& boundsMax,
+                   std::vector<CanopyInstance>* out) {
+  out->clear();
+  if (boundsMin.size() != scene.species.size() || boundsMax.size() != scene.species.size())
+    return Status::error(Result::InvalidArgument, scene.path + ": " + std::to_string(boundsMin.size()) + " models for " +
+                                                      std::to_string(scene.species.size()) + " species");
+  out->reserve(scene.instances.size());
+  for (const CanopySceneInstance& si : scene.instances) {
+    if (si.species >= scene.species.size())
+      return Status::error(Result::InvalidArgument, scene.path + ": a copy names species " + std::to_string(si.species));
+    CanopyInstance c = si.placement;
+    c.species = si.species;
+    if (scene.species[si.species].anchorBase) {
+      // The base's centre to the origin first: x and z the bounds' middle, y their bottom.
+      const glm::vec3 lo = toGlm(boundsMin[si.species]), hi = toGlm(boundsMax[si.species]);
+      const glm::vec3 base(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
+      c.transform = toFloat4x4(toGlm(c.transform) * glm::translate(glm::mat4(1.0f), -base));
+    }
+    out->push_back(c);
+  }
+  return Status();
+}
+
+Status canopySceneInstances(const CanopyScene& scene, const std::vector<const Model*>& models, std::vector<CanopyInstance>* out) {
+  if (!out) return Status::error(Result::InvalidArgument, "canopySceneInstances: out is null");
+  std::vector<Float3> lo(models.size()), hi(models.size());
+  for (size_t i = 0; i < models.size(); ++i) {
+    if (!models[i]) return Status::error(Result::InvalidArgument, "canopySceneInstances: model #" + std::to_string(i) + " is null");
+    modelBounds(models[i], &lo[i], &hi[i]);
+  }
+  return sceneCopies(scene, lo, hi, out);
 }
 
 }  // namespace canopy

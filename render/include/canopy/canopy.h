@@ -51,6 +51,10 @@ Status readCanopyScene(const std::string& path, CanopyScene* out);
 // The same from the file's text (`name` for messages; relative glTF paths resolve against
 // `folder`, and are not opened): the fuzz target's and a host's embedded scenes.
 Status parseCanopyScene(const std::string& name, const std::string& text, const std::string& folder, CanopyScene* out);
+// The scene's copies for createCanopy with the species' models loaded (`models[i]` for
+// scene.species[i], in the CanopySpecies list given to createCanopy in the same order): each copy's
+// species index set and its species' anchor applied.
+Status canopySceneInstances(const CanopyScene& scene, const std::vector<const Model*>& models, std::vector<CanopyInstance>* out);
 
 // ---------------------------------------------------------------------------------------------
 // Contexts

@@ -109,6 +109,10 @@ struct CanopySceneSpecies {
   uint32_t seed = 1;           // generated: the generator's seed
   float flexibility = 1.0f;    // [0, 4]: how far it bends for the same wind, relative to the method's
   float responseSpeed = 1.0f;  // [0.25, 4]: how fast it follows the wind, relative to the method's
+  // "anchor": "base": a copy's position is where the centre of the model's base (its bounds' lowest
+  // face) stands, for a file modelled away from its origin; "file" (false, the default): the model's
+  // own origin. The reader of the file applies it (canopySceneAnchor).
+  bool anchorBase = false;
 };
 
 // One placed copy of a species (CanopyInstance: its world transform, tint and wind phase).
@@ -599,6 +603,7 @@ struct LayerStats {
   uint64_t lastDrawnTriangles = 0;   // foliage triangles the last re-slice drew
   // Instances (CanopyDesc.instances): how many, and how many the last placement found in view.
   uint32_t instances = 0, lastVisibleInstances = 0;
+  uint32_t lastVisibleSpecies = 0;  // species with a copy in the last placement's view
 };
 struct SimulationStats {
   uint64_t steps = 0;

@@ -102,5 +102,8 @@ int runLeafSheet(Device& dev, const std::string& outPath);
 
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& scene, int rebuilds,
                      uint32_t width, uint32_t height, const std::string& imageDir);
+// Species (issue 53): six species against one at equal placed faces, mesh memory against copies,
+// the first frame with and without recordCanopyLoad.
+int runSpeciesBench(Device& dev, uint64_t facesPerSpecies, uint32_t copiesPerSpecies, int frames, uint32_t width, uint32_t height);
 }
 }  // namespace canopy

@@ -12,6 +12,7 @@
 //   canopy-bench camera [--faces 80000] [--scene shrub] [--paths orbit,dolly,...] [--frames N] [--size WxH]
 //                [--degrees-per-frame D] [--radii-per-frame R] [--swing D] [--budget MS] [--reslice-error PX]
 //                [--csv FILE] [--no-cross-fade] [--half-res N] [--depth-search N]
+//   canopy-bench species [--faces 8000] [--copies N] [--frames N] [--size WxH]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -58,6 +59,10 @@ static int usage(const char* why) {
                "                 too, --frames default 90, --size default 512x384, --csv FILE)\n"
                "  leafsheet      the translucency light sheet: a leaf's unlit side, light behind it from steep to grazing,\n"
                "                 Habel's translucency above the diffuse BTDF (--out FILE, default translucency_sheet.png)\n"
+               "  species        six species in one vegetation against one at equal placed faces: still, reprojected\n"
+               "                 and re-slice frames, mesh memory against copies, the first frame with recordCanopyLoad\n"
+               "                 (--faces per species, default 8000; --copies per species, default 10; --frames 20;\n"
+               "                 --size default 640x480)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"
@@ -125,6 +130,8 @@ int main(int argc, char** argv) {
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
   std::string scene;
+  bool runSpecies = false;
+  uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
   desc.applicationName = "canopy-bench";
   for (int i = 1; i < argc; ++i) {
@@ -142,6 +149,10 @@ int main(int argc, char** argv) {
     else if (a == "camera") runCamera = true;
     else if (a == "layercount") runLayerCount = true;
     else if (a == "leafsheet") runLeafSheetSection = true;
+    else if (a == "species") runSpecies = true;
+    else if (a == "--copies") {
+      if (!cli::parseUint(next(), 1, 10000, &copiesPerSpecies)) return usage("--copies needs copies per species in [1, 10000]");
+    }
     else if (a == "--out") {
       const char* v = next();
       if (!v) return usage("--out needs a file");
@@ -300,7 +311,7 @@ int main(int argc, char** argv) {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount && !runLeafSheetSection)
+      !runLayerCount && !runLeafSheetSection && !runSpecies)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -342,6 +353,9 @@ int main(int argc, char** argv) {
     rc = bench::runLayerCountBench(dev, layerCount);
   }
   if (rc == 0 && runLeafSheetSection) rc = bench::runLeafSheet(dev, sheetPath);
+  if (rc == 0 && runSpecies)
+    rc = bench::runSpeciesBench(dev, facesGiven ? faces.front() : 8000, copiesPerSpecies, frames ? frames : 20,
+                                sizeGiven ? t1.width : 640u, sizeGiven ? t1.height : 480u);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

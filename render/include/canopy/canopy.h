@@ -158,6 +158,13 @@ struct CanopyFrameInputs {
 // `final` states.
 Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
+// Loading without a hitch (a loading screen): records into the host's `cmd` the uploads createCanopy
+// staged (mesh, textures, the simulation's first clear) and the first re-slice of the layers for
+// `camera`, so the first recordCanopy at that camera (bit for bit) costs what any frame costs. The
+// host submits `cmd` before its first frame's. A mesh streamed under deviceMemoryBudget is sliced
+// over the first frames as before (its uploads only are recorded here). Optional.
+Status recordCanopyLoad(CanopyContext* context, VkCommandBuffer cmd, const CanopyCamera& camera);
+
 // Re-slices the layers at the next recorded frame whatever the camera did: `immediate` draws the
 // new layers in that frame; otherwise the re-slice is spread over frames like a view change
 // (LayerSettings.rebuildBudgetMs; at once when that is 0). A spread re-slice already running is

@@ -341,7 +341,7 @@ enum class LambdaUnits { Cells, Pixels };
 // Eq. 5's offset: gamma s V/|V| (the paper: "the distance the movement travels during gamma", V
 // taken as the direction and s the wave's propagation speed), or gamma s V as before 0.7.
 enum class ApproximateOffset { Direction, Velocity };
-using Eq5Offset [[deprecated("renamed ApproximateOffset in 0.7")]] = ApproximateOffset;
+using Eq5Offset [[deprecated("renamed ApproximateOffset in 0.7; removed in 0.9")]] = ApproximateOffset;
 // Eq. 7's root: the bottom of each plant's bounding box (every generated plant, glTF scene root,
 // or copy; beyond the paper: docs/design.md "Per-plant roots"), or of the whole vegetation's as the
 // paper says (before 0.7: every plant of a field bends about the field's lowest point).

@@ -2,15 +2,18 @@
 // small engine would (docs/embedding.md): its own instance, device and GLFW window with a
 // swapchain, three frames in flight, a D32S8 (else D24S8) depth whose stencil it uses itself (one
 // box is outlined through the stencil after Canopy's passes), a ground and boxes, N copies of a
-// real glTF plant standing on the ground (CanopyDesc.instances, one vegetation), and a first-person
-// camera that walks and looks around along a scripted path.
+// real glTF plant standing on the ground (CanopyDesc.instances, one vegetation) — or a scene file's
+// species and copies in one vegetation (--scene-file: by default the six species of
+// ../shared/assets, demo/scenes/six_species.json) — and a first-person camera that walks and looks
+// around along a scripted path. The layers are sliced at load time (recordCanopyLoad), as behind a
+// loading screen.
 //
 // Every frame checks itself when its slot comes round again: the host's depth before and after
 // Canopy's passes (read back) — no pixel farther after them (Canopy never hides the host's
 // geometry behind the vegetation) and the vegetation in front somewhere — and the stencil byte for
 // byte unchanged; with --validate, validation and synchronization validation must stay silent.
 //
-//   canopy-game-host [--frames N] [--plants N] [--gltf FILE] [--out DIR] [--write-every K] [--validate]
+//   canopy-game-host [--frames N] [--plants N] [--gltf FILE | --scene-file FILE] [--out DIR] [--write-every K] [--validate]
 // Exit 0 when every check passes, 1 on a failure, 2 on bad arguments, 77 without a display.
 #include <canopy/canopy.h>
 
@@ -234,6 +237,12 @@ struct Scene {
   std::vector<glm::mat4> boxes;  // model matrices (unit cube of side 1); [0] is outlined
 };
 
+// The camera's projection: 60 degrees vertical, Vulkan clip (y down).
+glm::mat4 walkProjection() {
+  return glm::perspectiveRH_ZO(glm::radians(60.0f), float(kW) / float(kH), 0.05f, 200.0f) *
+         glm::mat4(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1);
+}
+
 // The walking camera: along the corridor between two rows, at eye height, looking around.
 glm::mat4 walkView(const Scene& s, uint32_t frame, uint32_t frames) {
   const float t = frames > 1 ? float(frame) / float(frames - 1) : 0.0f;
@@ -298,8 +307,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   s.frame = number;
   s.write = write;
   const glm::mat4 view = walkView(sc, index, frames);
-  const glm::mat4 proj = glm::perspectiveRH_ZO(glm::radians(60.0f), float(kW) / float(kH), 0.05f, 200.0f) *
-                         glm::mat4(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1);  // Vulkan clip: y down
+  const glm::mat4 proj = walkProjection();
   const glm::mat4 vp = proj * view;
   VkCommandBuffer cmd = s.cmd;
   VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
@@ -435,6 +443,90 @@ bool makeScene(const canopy::Model* model, uint32_t plants, canopy::CanopyDesc* 
   return true;
 }
 
+// A scene file's species (glTF files; a generated species needs canopy-demo's generator) and copies,
+// centred on the origin for the walk; the walk's lanes and the boxes from the copies' extent.
+bool makeSceneFromFile(const std::string& path, std::vector<canopy::Model*>* models, std::vector<canopy::CanopySpecies>* species,
+                       canopy::CanopyDesc* desc, Scene* s) {
+  canopy::CanopyScene file;
+  canopy::Status st = canopy::readCanopyScene(path, &file);
+  for (size_t i = 0; st.ok() && i < file.species.size(); ++i) {
+    const canopy::CanopySceneSpecies& sp = file.species[i];
+    if (sp.gltf.empty()) {
+      st = canopy::Status::error(path + ": species '" + sp.name + "' is generated; this host loads glTF files only (canopy-demo "
+                                 "--scene-file makes generated plants)");
+      break;
+    }
+    canopy::Model* m = nullptr;
+    st = canopy::loadModel(sp.gltf, {}, &m);
+    if (!st.ok()) break;
+    models->push_back(m);
+    species->push_back({m, sp.flexibility, sp.responseSpeed});
+  }
+  if (st.ok()) st = canopy::canopySceneInstances(file, {models->begin(), models->end()}, &desc->instances);
+  if (!st.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", st.message().c_str());
+    return false;
+  }
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  float tallest = 0.0f;
+  for (const canopy::CanopyInstance& c : desc->instances) {
+    canopy::Float3 a, b;
+    canopy::modelBounds((*models)[c.species], &a, &b);
+    glm::mat4 t;
+    std::memcpy(&t, c.transform.m, sizeof t);
+    for (int k = 0; k < 8; ++k) {
+      const glm::vec3 p(t * glm::vec4((k & 1) ? b.x : a.x, (k & 2) ? b.y : a.y, (k & 4) ? b.z : a.z, 1.0f));
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    tallest = std::max(tallest, (t * glm::vec4(0, b.y, 0, 1)).y - (t * glm::vec4(0, a.y, 0, 1)).y);
+  }
+  const glm::vec3 centre(0.5f * (lo.x + hi.x), 0.0f, 0.5f * (lo.z + hi.z));
+  for (canopy::CanopyInstance& c : desc->instances) {
+    glm::mat4 t;
+    std::memcpy(&t, c.transform.m, sizeof t);
+    c.transform = toCanopy(glm::translate(glm::mat4(1.0f), -centre) * t);
+  }
+  const float extent = std::max(hi.x - lo.x, hi.z - lo.z);
+  s->plantMin = glm::vec3(0.0f);
+  s->plantMax = glm::vec3(1.0f, std::min(tallest, 4.0f), 1.0f);  // eye height 0.45 of it
+  s->spacing = extent / 6.0f;
+  s->half = 0.5f * extent;
+  s->corridor = glm::vec2(-0.5f * s->spacing, 0.0f);
+  const float b = 0.1f * s->spacing;
+  const int dx[6] = {1, -1, 2, 1, -1, 2}, dz[6] = {-1, -1, -1, 1, 1, 1};
+  for (int k = 0; k < 6; ++k) {
+    const glm::vec3 at(s->corridor.x + float(dx[k]) * 0.5f * s->spacing, 0.5f * b, s->corridor.y + float(dz[k]) * s->spacing);
+    s->boxes.push_back(glm::scale(glm::translate(glm::mat4(1.0f), at), glm::vec3(b)));
+  }
+  return true;
+}
+
+// The loading screen: the uploads and the first re-slice at the walk's first camera, submitted
+// and waited for before the first frame.
+bool loadVegetation(Game& g, const Scene& sc, uint32_t frames) {
+  VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  ai.commandPool = g.pool;
+  ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  ai.commandBufferCount = 1;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  HOST_CHECK(vkAllocateCommandBuffers(g.dev.device, &ai, &cmd));
+  VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  bi.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  HOST_CHECK(vkBeginCommandBuffer(cmd, &bi));
+  const canopy::Status st = canopy::recordCanopyLoad(g.ctx, cmd, {toCanopy(walkView(sc, 0, frames)), toCanopy(walkProjection())});
+  HOST_CHECK(vkEndCommandBuffer(cmd));
+  bool ok = st.ok();
+  if (!ok) std::fprintf(stderr, "canopy-game-host: %s\n", st.message().c_str());
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd;
+  HOST_CHECK(vkQueueSubmit(g.dev.queue, 1, &si, VK_NULL_HANDLE));
+  HOST_CHECK(vkQueueWaitIdle(g.dev.queue));
+  vkFreeCommandBuffers(g.dev.device, g.pool, 1, &cmd);
+  return ok;
+}
+
 void shutdown(Game& g) {
   if (g.dev.device) vkDeviceWaitIdle(g.dev.device);
   for (Slot& s : g.slots)
@@ -469,7 +561,7 @@ void shutdown(Game& g) {
 int main(int argc, char** argv) {
   uint32_t frames = 48, plants = 64, writeEvery = 1;
   bool validate = false;
-  std::string gltf = CANOPY_DEFAULT_PLANT;
+  std::string gltf = CANOPY_DEFAULT_PLANT, sceneFile;
   Game g;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -483,6 +575,7 @@ int main(int argc, char** argv) {
     };
     if (a == "--help" || a == "-h") {
       std::printf("usage: canopy-game-host [--frames N (1..10000, default 48)] [--plants N (1..4096, default 64)] [--gltf FILE]\n"
+                  "                        [--scene-file FILE (a scene of glTF species instead of --gltf's copies)]\n"
                   "                        [--out DIR] [--write-every K (default 1)] [--validate]\n");
       return 0;
     } else if (a == "--frames") {
@@ -493,6 +586,8 @@ int main(int argc, char** argv) {
       if (!number(1, 10000, &writeEvery)) return std::fprintf(stderr, "canopy-game-host: --write-every needs an integer in [1, 10000]\n"), 2;
     } else if (a == "--gltf" && i + 1 < argc) {
       gltf = argv[++i];
+    } else if (a == "--scene-file" && i + 1 < argc) {
+      sceneFile = argv[++i];
     } else if (a == "--out" && i + 1 < argc) {
       g.outDir = argv[++i];
     } else if (a == "--validate") {
@@ -502,7 +597,7 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (!std::filesystem::exists(gltf)) {
+  if (!std::filesystem::exists(gltf) && sceneFile.empty()) {
     std::printf("canopy-game-host: %s is absent (../shared/assets not present): skipped\n", gltf.c_str());
     return 77;
   }
@@ -521,7 +616,7 @@ int main(int argc, char** argv) {
             host::createImage(g.dev.device, g.dev.memory, kW, kH, g.depthFormat, kDepthUsage,
                               VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) == VK_SUCCESS &&
             createPipelines(g) && createFrames(g);
-  if (ok) {
+  if (ok && sceneFile.empty()) {
     const canopy::Status s = canopy::loadModel(gltf, {}, &model);
     if (!s.ok()) std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
     ok = s.ok();
@@ -532,13 +627,18 @@ int main(int argc, char** argv) {
   desc.colorFormat = kColorFormat;
   desc.depthFormat = g.depthFormat;
   desc.params.simulation.wind.strength = 1.5f;
-  if (ok) ok = makeScene(model, plants, &desc, &scene);
+  std::vector<canopy::Model*> models;
+  std::vector<canopy::CanopySpecies> species;
+  if (ok) ok = sceneFile.empty() ? makeScene(model, plants, &desc, &scene) : makeSceneFromFile(sceneFile, &models, &species, &desc, &scene);
   if (ok) {
-    const canopy::Status s = canopy::createCanopy(g.adopted, model, desc, &g.ctx);
+    const canopy::Status s = sceneFile.empty() ? canopy::createCanopy(g.adopted, model, desc, &g.ctx)
+                                               : canopy::createCanopy(g.adopted, species, desc, &g.ctx);
     if (!s.ok()) std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
     ok = s.ok();
   }
   canopy::destroyModel(model);
+  for (canopy::Model* m : models) canopy::destroyModel(m);
+  if (ok) ok = loadVegetation(g, scene, frames);
   for (uint32_t f = 0; ok && f < frames && !glfwWindowShouldClose(g.window); ++f) {
     glfwPollEvents();
     ok = frame(g, scene, f + 1, f, frames, f % writeEvery == 0 || f + 1 == frames);
@@ -546,9 +646,10 @@ int main(int argc, char** argv) {
   canopy::CanopyStats st{};
   if (g.ctx) st = canopy::canopyStats(g.ctx);
   shutdown(g);
-  std::printf("%u copies of %s (%u visible at the last re-slice), %llu re-slices in %u frames\n", st.layers.instances,
-              std::filesystem::path(gltf).filename().c_str(), st.layers.lastVisibleInstances,
-              (unsigned long long)st.layers.rebuilds, frames);
+  std::printf("%u copies of %s (%u visible at the last re-slice, of %u of its %u species), %llu re-slices in %u frames\n",
+              st.layers.instances, std::filesystem::path(sceneFile.empty() ? gltf : sceneFile).filename().c_str(),
+              st.layers.lastVisibleInstances, st.layers.lastVisibleSpecies, st.layers.species, (unsigned long long)st.layers.rebuilds,
+              frames);
   std::printf("self-check: %llu frames checked, %llu with vegetation in front of the host's scene, %llu pixels farther after "
               "Canopy, %llu stencil bytes changed, %d validation messages: %s\n",
               (unsigned long long)g.checkedFrames, (unsigned long long)g.framesWithVegetationInFront,

@@ -3,9 +3,11 @@
 # window and swapchain, 3 frames in flight, a D32S8 depth whose stencil the host uses, 64 copies of
 # a real glTF plant from ../shared/assets, a walking camera; validation + synchronization
 # validation silent and the host's own per-frame check (depth never farther after Canopy, stencil
-# unchanged, vegetation in front of its scene) passing. Skipped (77) without xvfb-run or the assets.
+# unchanged, vegetation in front of its scene) passing; then the six species of ../shared/assets from
+# demo/scenes/six_species.json (338 copies in one vegetation) the same way. Skipped (77) without
+# xvfb-run or the assets.
 set -u
-host=$1 out=$2
+host=$1 out=$2 scenes=$3
 command -v xvfb-run >/dev/null || { echo "xvfb-run not installed (scripts/deps.sh installs xvfb): skipped"; exit 77; }
 rm -rf "$out" && mkdir -p "$out"
 xvfb-run -a -s "-screen 0 1024x768x24" "$host" --frames 24 --validate --out "$out" --write-every 8 >"$out/stdout" 2>"$out/stderr"
@@ -17,4 +19,12 @@ grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host'
   { echo "FAIL: the self-check line"; exit 1; }
 grep -q "^64 copies of CommonTree_1.glb" "$out/stdout" || { echo "FAIL: not 64 copies"; exit 1; }
 [ -s "$out/frame_0024.ppm" ] || { echo "FAIL: no frame written"; exit 1; }
+xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 --validate --out "$out/six" \
+  --write-every 8 >"$out/stdout_six" 2>"$out/stderr_six"
+rc=$?
+cat "$out/stdout_six"
+[ $rc -eq 0 ] || { echo "FAIL: six species: exit $rc ($(tail -5 "$out/stderr_six"))"; exit 1; }
+grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages: PASS" "$out/stdout_six" ||
+  { echo "FAIL: six species: the self-check line"; exit 1; }
+grep -q "^338 copies of six_species.json (.* of its 6 species)" "$out/stdout_six" || { echo "FAIL: six species: not 338 copies of 6 species"; exit 1; }
 echo "PASS"

@@ -171,4 +171,16 @@ void modelBounds(const Model* model, Float3* min, Float3* max) {
   if (max) *max = toFloat3(model->data.boundsMax);
 }
 
+Status canopySceneInstances(const CanopyScene& scene, const std::vector<const Model*>& models, std::vector<CanopyInstance>* out) {
+  return guardApi("canopySceneInstances", [&]() -> Status {
+    if (!out) return Status::error(Result::InvalidArgument, "canopySceneInstances: out is null");
+    std::vector<Float3> lo(models.size()), hi(models.size());
+    for (size_t i = 0; i < models.size(); ++i) {
+      if (!models[i]) return Status::error(Result::InvalidArgument, "canopySceneInstances: model #" + std::to_string(i) + " is null");
+      modelBounds(models[i], &lo[i], &hi[i]);
+    }
+    return sceneCopies(scene, lo, hi, out);
+  });
+}
+
 }  // namespace canopy

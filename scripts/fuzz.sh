@@ -9,6 +9,8 @@
 # crashing input into tests/fuzz/regressions/ (ctest FuzzRegressions replays them all).
 #   scripts/fuzz.sh scene [SECONDS] the scene-file parser instead (canopy_scene_fuzz; seeds: demo/scenes
 #                                  and tests/fuzz/scenes; runs in tests/fuzz/runs_scene.tsv)
+# FUZZ_BUILD=DIR builds and runs in DIR (default build/fuzz); FUZZ_RECORD=0 leaves the tree as it is
+# (no row in the runs file, crashing inputs kept in DIR/crashes only): ctest FuzzBounded.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 target=gltf
@@ -18,9 +20,10 @@ jobs=${FUZZ_JOBS:-$(nproc)}
 if ! command -v clang++ >/dev/null; then
   echo "installing clang (libFuzzer)"; apt-get install -y -qq clang >/dev/null
 fi
-cmake -S tests/fuzz -B build/fuzz -G Ninja -DCMAKE_CXX_COMPILER=clang++ >/dev/null
-cmake --build build/fuzz >/dev/null
-out=build/fuzz
+out=${FUZZ_BUILD:-build/fuzz}
+record=${FUZZ_RECORD:-1}
+cmake -S tests/fuzz -B "$out" -G Ninja -DCMAKE_CXX_COMPILER=clang++ >/dev/null
+cmake --build "$out" >/dev/null
 rm -rf "$out/seeds" "$out/crashes"
 mkdir -p "$out/corpus" "$out/crashes"
 runs=tests/fuzz/runs.tsv
@@ -44,13 +47,16 @@ rm -f "$out"/fuzz-*.log
 set +e
 corpus=corpus
 [ "$target" = scene ] && corpus=corpus_scene
+dictPath=$(pwd)/tests/fuzz/$dict
 (cd "$out" && ./$binary -jobs="$jobs" -workers="$jobs" -max_total_time="$seconds" -max_len="${FUZZ_MAX_LEN:-65536}" -timeout=20 \
-  -rss_limit_mb=2048 -dict=../../tests/fuzz/$dict -artifact_prefix=crashes/ -print_final_stats=1 \
+  -rss_limit_mb=2048 -dict="$dictPath" -artifact_prefix=crashes/ -print_final_stats=1 \
   $corpus seeds > last_run.log 2>&1)
 rc=$?
 set -e
 execs=0 cov=0
-for l in "$out"/fuzz-*.log; do
+logs=("$out"/fuzz-*.log)
+[ -f "${logs[0]}" ] || logs=("$out/last_run.log")  # one job runs in-process: its log is last_run.log
+for l in "${logs[@]}"; do
   n=$(grep -aE '^stat::number_of_executed_units:' "$l" | awk '{print $2}' | tail -1)
   [ -n "$n" ] || n=$(grep -aoE '^#[0-9]+' "$l" | tail -1 | tr -d '#')
   execs=$((execs + ${n:-0}))
@@ -61,12 +67,14 @@ corp=$(find "$out/$corpus" -type f | wc -l)
 crashes=$(find "$out/crashes" -type f | wc -l)
 keep=tests/fuzz/regressions
 [ "$target" = scene ] && keep=tests/fuzz/scenes
-for f in "$out"/crashes/*; do
-  [ -f "$f" ] && cp "$f" $keep/ && echo "kept $(basename "$f") in $keep/"
-done
-[ -f $runs ] || printf 'date\tseconds\tjobs\texecutions\tcoverage\tcorpus\tcrashes\tcommit\n' > $runs
-printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$seconds" "$jobs" "${execs:-0}" "${cov:-0}" "${corp:-0}" \
-  "$crashes" "$(git rev-parse --short HEAD 2>/dev/null || echo -)" >> $runs
+if [ "$record" = 1 ]; then
+  for f in "$out"/crashes/*; do
+    [ -f "$f" ] && cp "$f" $keep/ && echo "kept $(basename "$f") in $keep/"
+  done
+  [ -f $runs ] || printf 'date\tseconds\tjobs\texecutions\tcoverage\tcorpus\tcrashes\tcommit\n' > $runs
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$(date -u +%FT%TZ)" "$seconds" "$jobs" "${execs:-0}" "${cov:-0}" "${corp:-0}" \
+    "$crashes" "$(git rev-parse --short HEAD 2>/dev/null || echo -)" >> $runs
+fi
 total=$(awk -F'\t' 'NR > 1 { s += $4 } END { print s + 0 }' $runs)
 echo "fuzz $target: ${execs:-0} executions in ${seconds} s on $jobs workers, coverage ${cov:-?}, corpus ${corp:-?}, crashes $crashes (libFuzzer exit $rc); all runs in $runs: $total executions"
-[ "$crashes" -eq 0 ] || { grep -ahE -A30 'ERROR|runtime error|deadly signal' "$out"/fuzz-*.log | head -60; exit 1; }
+[ "$crashes" -eq 0 ] || { grep -ahE -A30 'ERROR|runtime error|deadly signal' "${logs[@]}" | head -60; exit 1; }

@@ -407,6 +407,46 @@ Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& i
   });
 }
 
+Status setCanopySpecies(CanopyContext* c, const std::vector<CanopySpecies>& species, const std::vector<CanopyInstance>& instances) {
+  return guardApi("setCanopySpecies", [&]() -> Status {
+    if (!c) return Status::error("setCanopySpecies: null context");
+    if (c->desc.allowPerVertex)
+      return Status::error(Result::InvalidArgument, "setCanopySpecies: the per-vertex baseline (CanopyDesc.allowPerVertex) keeps "
+                                                    "the first mesh's hierarchy; create a new context instead");
+    std::vector<SpeciesModel> models;
+    for (size_t i = 0; i < species.size(); ++i) {
+      if (!species[i].model || species[i].model->data.triangleCount() == 0)
+        return Status::error(Result::InvalidModel, "setCanopySpecies: species #" + std::to_string(i) + " has no model or no triangles");
+      models.push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
+    }
+    // The vegetation as it stands (size, guard band, formats, budget, settings in force) with the
+    // new species and copies; the old one stays until the new one exists.
+    LayeredVegetationDesc ld = c->layers.desc;
+    ld.settings = c->layers.settings;
+    ld.progress = {};
+    ld.instances.clear();
+    ld.tints.clear();
+    ld.windPhases.clear();
+    ld.instanceSpecies.clear();
+    for (const CanopyInstance& i : instances) {
+      ld.instances.push_back(toGlm(i.transform));
+      ld.tints.push_back(toGlm(i.tint));
+      ld.windPhases.push_back(i.windPhase);
+      ld.instanceSpecies.push_back(i.species);
+    }
+    if (ld.instances.empty()) return Status::error(Result::InvalidArgument, "setCanopySpecies: at least one instance is needed");
+    LayeredVegetation next;
+    CANOPY_TRY(createLayeredVegetation(*c->device, models, ld, &next).context("setCanopySpecies"));
+    auto old = std::make_shared<LayeredVegetation>(std::move(c->layers));
+    c->layers = std::move(next);
+    deferRelease(*c->device, [old] { destroyLayeredVegetation(*old); });
+    c->generation++;  // new layer images and mesh: graphs rebuilt
+    c->previousAnimFrame = gpu::AnimFrame{};
+    if (!c->params.customPlane) c->planeChosen = false;
+    return Status();
+  });
+}
+
 Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
   return guardApi("resizeCanopy", [&]() -> Status {
     if (!c) return Status::error("resizeCanopy: null context");

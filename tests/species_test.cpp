@@ -265,6 +265,54 @@ TEST_F(SpeciesTest, TheLoadCallSlicesTheLayersBeforeTheFirstFrame) {
   EXPECT_LE(off, 0.005) << "the same frames, one simulation step on";
 }
 
+// Species and copies replaced at run time (setCanopySpecies) re-slice and render as a context created
+// with them (wind off); a refused change leaves the context as it was.
+TEST_F(SpeciesTest, SpeciesSetLaterRenderAsAContextCreatedWithThem) {
+  const VegetationModel red = coloured(2000, 5, glm::vec3(0.9f, 0.15f, 0.1f), false);
+  const VegetationModel blue = coloured(1600, 8, glm::vec3(0.1f, 0.25f, 0.9f), true);
+  Model redModel{red}, blueModel{blue};
+  const std::vector<CanopyInstance> copies = {copyOf(glm::translate(glm::mat4(1.0f), glm::vec3(-1.2f, 0, 0)), 1),
+                                              copyOf(glm::translate(glm::mat4(1.0f), glm::vec3(1.2f, 0, 0)), 0)};
+  const VegetationModel reference = bakedTogether({{&blue, toGlm(copies[0].transform)}, {&red, toGlm(copies[1].transform)}});
+  const LayerView view = orbitView(reference.boundsMin, reference.boundsMax, 10.0f, 8.0f, 40.0f, 160.0f / 120.0f, 0.9f);
+  std::vector<glm::vec4> created, changed;
+  std::vector<float> z;
+  {
+    Host host;
+    host.w = 160;
+    host.h = 120;
+    CanopyContext* ctx = nullptr;
+    make(host, {{&red}, {&blue}}, copies, &ctx, 0.0f);
+    ASSERT_NE(ctx, nullptr);
+    for (int i = 0; i < 3; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
+    ASSERT_TRUE(host.read(&created, &z).ok());
+    destroyCanopy(ctx);
+    host.destroy();
+  }
+  Host host;
+  host.w = 160;
+  host.h = 120;
+  CanopyContext* ctx = nullptr;
+  make(host, {{&blue}}, {copyOf(glm::mat4(1.0f), 0)}, &ctx, 0.0f);
+  ASSERT_NE(ctx, nullptr);
+  ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
+  const Status bad = setCanopySpecies(ctx, {{&redModel}}, {copyOf(glm::mat4(1.0f), 3)});
+  EXPECT_NE(bad.message().find("CanopyInstance #0.species = 3"), std::string::npos) << bad.message();
+  EXPECT_EQ(canopyStats(ctx).layers.species, 1u) << "a refused change leaves the context as it was";
+  const Status s = setCanopySpecies(ctx, {{&redModel}, {&blueModel}}, copies);
+  ASSERT_TRUE(s.ok()) << s.message();
+  for (int i = 0; i < 3; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
+  const CanopyStats st = canopyStats(ctx);
+  EXPECT_EQ(st.layers.species, 2u);
+  EXPECT_EQ(st.layers.instances, 2u);
+  ASSERT_TRUE(host.read(&changed, &z).ok());
+  const double off = differing(changed, created, 3.0f / 255.0f);
+  std::printf("species set at run time against a context created with them: %.3f %% of pixels off by > 3/255\n", 100.0 * off);
+  EXPECT_LE(off, 0.005);
+  destroyCanopy(ctx);
+  host.destroy();
+}
+
 // The sway of one copy over a gust cycle: the range of the centroid x of its crown's top third
 // (pixels of the host's image in columns [x0, x1)), frames 30.. of `frames`.
 struct Sway {

@@ -89,6 +89,13 @@ Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, c
 // releaseDevice), so the host may destroy it while frames that used it still execute.
 void destroyCanopy(CanopyContext* context);
 
+// Replaces the species and their copies at run time (a new vegetation mesh from `species`, which the
+// copies' CanopyInstance.species index): the next recorded frame re-slices at once; the simulation,
+// compositor and parameters are kept, the old mesh freed once no frame in flight reads it. Refused
+// (the context unchanged) for a context created with CanopyDesc.allowPerVertex.
+Status setCanopySpecies(CanopyContext* context, const std::vector<CanopySpecies>& species,
+                        const std::vector<CanopyInstance>& instances);
+
 // Validates and applies parameters from the next frame on. A new layer count recreates the layer
 // images (the old ones are freed once no frame in flight uses them).
 Status setCanopyParams(CanopyContext* context, const CanopyParams& params);

@@ -45,9 +45,10 @@ struct LayerInfo {
   uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
   uint64_t triangles = 0;
   // Per-plant roots (docs/design.md "Per-plant roots"), when the vegetation is more than one plant
-  // (plants x visible copies > 1): per plant with leaves in this layer, its projected bounding box's
-  // x range, its leaves' top here and its box's bottom (x lo, x hi, top, root row; pixels, y down),
-  // and the plant's key (visible copy x plants + plant).
+  // (visible copies' plants > 1) or a species responds otherwise than the method: per plant with
+  // leaves in this layer, its projected bounding box's x range, its leaves' top here and its box's
+  // bottom (x lo, x hi, top, root row; pixels, y down), and the plant's key (PlacementJob::plantBase
+  // of its copy + its plant within the species).
   std::vector<glm::vec4> plants;
   std::vector<uint32_t> plantKeys;
   // Per plant rect, its species' wind response (docs/design.md "Species: wind response"):

@@ -176,6 +176,18 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   return createCanopy(d, std::vector<SpeciesModel>{SpeciesModel{&model}}, desc, out);
 }
 
+// The copies as the layers take them (CanopyInstance's fields side by side).
+static InstanceInputs instanceInputs(const std::vector<CanopyInstance>& instances) {
+  InstanceInputs in;
+  for (const CanopyInstance& i : instances) {
+    in.models.push_back(toGlm(i.transform));
+    in.tints.push_back(toGlm(i.tint));
+    in.windPhases.push_back(i.windPhase);
+    in.species.push_back(i.species);
+  }
+  return in;
+}
+
 Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const CanopyDesc& desc, CanopyContext** out) {
   if (!out) return Status::error("createCanopy: out is null");
   *out = nullptr;
@@ -239,12 +251,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     ld.restUse = rg::Use::FragmentSampled;
     ld.settings = c->params.layers;
     ld.impostors = desc.impostors;
-    for (const CanopyInstance& i : desc.instances) {
-      ld.instances.push_back(toGlm(i.transform));
-      ld.tints.push_back(toGlm(i.tint));
-      ld.windPhases.push_back(i.windPhase);
-      ld.instanceSpecies.push_back(i.species);
-    }
+    ld.copies = instanceInputs(desc.instances);
     if (desc.allowPerVertex) {
       CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
       ld.keepBend = true;
@@ -321,16 +328,25 @@ Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, 
   });
 }
 
+// The species as the layers take them; a species without a model or triangles is refused by its
+// index (checkSpecies checks the response ranges).
+static Status speciesModels(const char* call, const std::vector<CanopySpecies>& species, std::vector<SpeciesModel>* out) {
+  for (size_t i = 0; i < species.size(); ++i) {
+    if (!species[i].model)
+      return Status::error(Result::InvalidArgument, std::string(call) + ": species #" + std::to_string(i) + " has no model");
+    if (species[i].model->data.triangleCount() == 0)
+      return Status::error(Result::InvalidModel, std::string(call) + ": species #" + std::to_string(i) + " has no triangles");
+    out->push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
+  }
+  return Status();
+}
+
 Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out) {
   return guardApi("createCanopy", [&]() -> Status {
     if (out) *out = nullptr;
     if (!device) return Status::error("createCanopy: device is required");
     std::vector<SpeciesModel> models;
-    for (size_t i = 0; i < species.size(); ++i) {
-      if (!species[i].model)
-        return Status::error(Result::InvalidArgument, "createCanopy: species #" + std::to_string(i) + " has no model");
-      models.push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
-    }
+    CANOPY_TRY(speciesModels("createCanopy", species, &models));
     return createCanopy(*device, models, desc, out);
   });
 }
@@ -384,25 +400,15 @@ const CanopyParams& canopyParams(const CanopyContext* c) { return c->params; }
 Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& instances) {
   return guardApi("setCanopyInstances", [&]() -> Status {
     if (!c) return Status::error("setCanopyInstances: null context");
-    std::vector<glm::mat4> models;
-    std::vector<glm::vec3> tints;
-    std::vector<float> phases;
-    std::vector<uint32_t> species;
-    for (const CanopyInstance& i : instances) {
-      models.push_back(toGlm(i.transform));
-      tints.push_back(toGlm(i.tint));
-      phases.push_back(i.windPhase);
-      species.push_back(i.species);
-    }
-    CANOPY_TRY(setLayerInstances(c->layers, models, tints, phases, species).context("setCanopyInstances"));
+    const InstanceInputs copies = instanceInputs(instances);
+    CANOPY_TRY(setLayerInstances(c->layers, copies).context("setCanopyInstances"));
     // The default simulation plane stands at the vegetation's depth and its tile spans the view
     // there (eq. 4's domain units): taken again from the next frame for the copies' new bounds.
     if (!c->params.customPlane) c->planeChosen = false;
     // The per-vertex baseline's motion table holds one block per copy: sized again, graphs rebuilt.
-    if (c->desc.allowPerVertex) {
-      CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(models.size())).context("setCanopyInstances"));
-      c->generation++;
-    }
+    if (c->desc.allowPerVertex) CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(copies.models.size())).context("setCanopyInstances"));
+    // The per-vertex motion table and the impostor list may have been replaced: graphs rebuilt.
+    if (c->desc.allowPerVertex || c->layers.impostors.enabled) c->generation++;
     return Status();
   });
 }
@@ -414,27 +420,14 @@ Status setCanopySpecies(CanopyContext* c, const std::vector<CanopySpecies>& spec
       return Status::error(Result::InvalidArgument, "setCanopySpecies: the per-vertex baseline (CanopyDesc.allowPerVertex) keeps "
                                                     "the first mesh's hierarchy; create a new context instead");
     std::vector<SpeciesModel> models;
-    for (size_t i = 0; i < species.size(); ++i) {
-      if (!species[i].model || species[i].model->data.triangleCount() == 0)
-        return Status::error(Result::InvalidModel, "setCanopySpecies: species #" + std::to_string(i) + " has no model or no triangles");
-      models.push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
-    }
+    CANOPY_TRY(speciesModels("setCanopySpecies", species, &models));
     // The vegetation as it stands (size, guard band, formats, budget, settings in force) with the
     // new species and copies; the old one stays until the new one exists.
     LayeredVegetationDesc ld = c->layers.desc;
     ld.settings = c->layers.settings;
     ld.progress = {};
-    ld.instances.clear();
-    ld.tints.clear();
-    ld.windPhases.clear();
-    ld.instanceSpecies.clear();
-    for (const CanopyInstance& i : instances) {
-      ld.instances.push_back(toGlm(i.transform));
-      ld.tints.push_back(toGlm(i.tint));
-      ld.windPhases.push_back(i.windPhase);
-      ld.instanceSpecies.push_back(i.species);
-    }
-    if (ld.instances.empty()) return Status::error(Result::InvalidArgument, "setCanopySpecies: at least one instance is needed");
+    ld.copies = instanceInputs(instances);
+    if (ld.copies.models.empty()) return Status::error(Result::InvalidArgument, "setCanopySpecies: at least one instance is needed");
     LayeredVegetation next;
     CANOPY_TRY(createLayeredVegetation(*c->device, models, ld, &next).context("setCanopySpecies"));
     auto old = std::make_shared<LayeredVegetation>(std::move(c->layers));

@@ -156,16 +156,15 @@ Status bake(Device& d, const ImpostorSources& src, Impostors& imp) {
   // the atlas are read then, from the vegetation that owns them (their addresses are stable).
   const Impostors* ip = &imp;
   const LayerMesh* meshPart = src.mesh;
-  const LayerInstances* copies = src.instances;
   const float transmission = src.settings->leafTransmission, opticalDepth = src.settings->leafOpticalDepth;
   const VkBuffer frameHandle = frameBuf.buffer;
-  auto pass = g.addPass("impostors: bake", [ip, meshPart, copies, transmission, opticalDepth, frameHandle, stride](rg::PassContext& c) -> Status {
+  auto pass = g.addPass("impostors: bake", [ip, meshPart, transmission, opticalDepth, frameHandle, stride](rg::PassContext& c) -> Status {
      const Impostors& im = *ip;
      const Device& dev = *c.device;
      MeshDraw md;
      md.device = c.device;
      md.mesh = meshPart;
-     md.instances = copies->buffer.buffer;
+     md.instances = im.identityCopy.buffer;
      md.leafTransmission = transmission;
      md.leafOpticalDepth = opticalDepth;
      const uint32_t T = im.tileSize, perLayer = im.tilesPerLayer();
@@ -284,12 +283,39 @@ Status createImpostors(Device& d, const ImpostorSources& src, Impostors& imp) {
   CANOPY_TRY(createBuffer(d, tableBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                           MemoryUsage::DeviceLocal, &imp.boxTable, "impostors: boxes"));
   CANOPY_TRY(uploadBuffer(d, &imp.pendingUploads, imp.boxTable, table.data(), tableBytes, kImpostorRead));
-  imp.instanceCapacity = std::max<uint32_t>(imp.baked, 1);
-  CANOPY_TRY(createBuffer(d, imp.instanceCapacity * sizeof(gpu::ImpostorInstance),
-                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::DeviceLocal,
-                          &imp.instances, "impostors: instances"));
+  CANOPY_TRY(reserveImpostorList(d, imp, *src.instances));
+  // The bake draws each species' model at its origin, untinted: a copies' table of one.
+  gpu::LayerInstance identity{};
+  identity.model = glm::mat4(1.0f);
+  identity.normalColumn0 = glm::vec4(1, 0, 0, 0);
+  identity.normalColumn1 = glm::vec4(0, 1, 0, 0);
+  identity.normalColumn2 = glm::vec4(0, 0, 1, 0);
+  identity.tint = glm::vec4(1, 1, 1, 0);
+  CANOPY_TRY(createBuffer(d, sizeof identity, VK_BUFFER_USAGE_VERTEX_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                          MemoryUsage::DeviceLocal, &imp.identityCopy, "impostors: the bake's copy"));
+  if (void* direct = hostCoherentPointer(d, imp.identityCopy.allocation)) std::memcpy(direct, &identity, sizeof identity);
+  else CANOPY_TRY(uploadBuffer(d, &imp.pendingUploads, imp.identityCopy, &identity, sizeof identity, rg::stateOf(rg::Use::VertexBuffer)));
   CANOPY_TRY(createDrawPipelines(d, src.colorFormat, imp));
   return imp.baked ? bake(d, src, imp) : Status();
+}
+
+Status reserveImpostorList(Device& d, Impostors& imp, const LayerInstances& copies) {
+  // A cut draws a box at most once per visible copy of its species.
+  uint64_t bound = imp.baked;
+  if (!copies.identity) {
+    bound = 0;
+    for (uint32_t sp : copies.species) bound += sp < imp.speciesBaked.size() ? imp.speciesBaked[sp] : 0;
+  }
+  bound = std::max<uint64_t>(bound, 1);
+  if (bound <= imp.instanceCapacity) return Status();
+  if (bound > (256ull << 20) / sizeof(gpu::ImpostorInstance))
+    return Status::error(Result::InvalidArgument, "impostors: " + std::to_string(copies.models.size()) + " copies of up to " +
+                                                      std::to_string(imp.baked) + " baked boxes each need a list of " +
+                                                      std::to_string(bound) + " impostors, over 256 MiB; lower CanopyDesc.impostors.maxLevel");
+  if (imp.instances.buffer) destroyBufferLater(d, imp.instances);  // frames in flight may read the old list
+  imp.instanceCapacity = uint32_t(bound);
+  return createBuffer(d, bound * sizeof(gpu::ImpostorInstance), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                      MemoryUsage::DeviceLocal, &imp.instances, "impostors: instances");
 }
 
 void destroyImpostors(Device& d, Impostors& imp) {
@@ -302,6 +328,7 @@ void destroyImpostors(Device& d, Impostors& imp) {
   destroyImage(d, imp.depth);
   destroyBuffer(d, imp.boxTable);
   destroyBuffer(d, imp.instances);
+  destroyBuffer(d, imp.identityCopy);
   for (GraphicsPipeline* p : {&imp.bake, &imp.layered, &imp.layeredFade, &imp.perLayer, &imp.perLayerFade, &imp.layeredHalf, &imp.layeredHalfFade})
     destroyGraphicsPipeline(d, *p);
   for (VkSampler s : {imp.linearSampler, imp.nearestSampler})
@@ -333,7 +360,8 @@ Status recordImpostors(const MeshDraw& target, const Impostors& imp, const Layer
   const VkImageLayout ro = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
   CANOPY_TRY(bindGraphics(*target.device, cmd, pipe,
                           {bindBuffer(target.frame), bindBuffer(imp.boxTable.buffer), bindBuffer(imp.instances.buffer),
-                           bindImage(imp.color.view, ro, imp.linearSampler), bindImage(imp.depth.view, ro, imp.nearestSampler)},
+                           bindImage(imp.color.view, ro, imp.linearSampler), bindImage(imp.depth.view, ro, imp.nearestSampler),
+                           bindBuffer(target.instances)},
                           push));
   d.vk.CmdDraw(cmd, 6, count, 0, first);
   return Status();

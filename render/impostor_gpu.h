@@ -32,6 +32,9 @@ struct ImpostorSources {
 // views; the bake's figures in `imp`.
 Status createImpostors(Device& device, const ImpostorSources& sources, Impostors& imp);
 void destroyImpostors(Device& device, Impostors& imp);
+// Makes the impostor list hold a cut of `copies` (a box at most once per copy of its species);
+// a larger list replaces the old one, released after the frames in flight (graphs must be rebuilt).
+Status reserveImpostorList(Device& device, Impostors& imp, const LayerInstances& copies);
 // Draws a cut's opaque (fading = false) or fading impostors inside the caller's rendering of the
 // layers `target` names (its frame block and size), by the single pass or per layer (`layer`: the
 // per-layer path's layer, ignored by the single pass); the list `draws` holds is the one uploaded

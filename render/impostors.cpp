@@ -48,20 +48,22 @@ AtlasShape atlasShape(uint64_t tiles, uint32_t tile, uint32_t maxSide) {
 
 }  // namespace
 
-Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                          const ImpostorDesc& desc, const std::vector<uint64_t>& materialStart, Impostors* imp,
+Status buildFoliageBoxes(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                         const ImpostorDesc& desc, BoxHierarchy* out) {
+  *out = BoxHierarchy{};
+  if (m.boxParent.empty()) return boxesFromLeafRoots(m, foliage, roots, desc.maxLeavesPerBox, out);
+  CANOPY_TRY(boxesFromModel(m, foliage, out));
+  // A box of many leaves of its own (a grass patch) gets regional children.
+  return refineBoxes(m, foliage, roots, desc.maxLeavesPerBox, kRefinePieces, out);
+}
+
+Status buildImpostorOrder(const VegetationModel& m, const BoxHierarchy& h, const std::vector<uint32_t>& speciesBoxes,
+                          const LeafRoots& roots, const std::vector<uint64_t>& materialStart, Impostors* imp,
                           std::vector<uint32_t>* order) {
   const uint32_t nm = uint32_t(m.materials.size());
   if (materialStart.size() < size_t(nm) + 1) return Status::error("impostors: material starts missing");
-  // The hierarchy: the model's own (the generator's L-system boxes), else a k-d split (glTF).
-  BoxHierarchy h;
-  if (!m.boxParent.empty()) {
-    CANOPY_TRY(boxesFromModel(m, foliage, &h));
-    // A box of many leaves of its own (a grass patch) gets regional children.
-    CANOPY_TRY(refineBoxes(m, foliage, roots, desc.maxLeavesPerBox, kRefinePieces, &h));
-  } else {
-    CANOPY_TRY(boxesFromLeafRoots(m, foliage, roots, desc.maxLeavesPerBox, &h));
-  }
+  if (speciesBoxes.size() < 2 || speciesBoxes.front() != 0 || speciesBoxes.back() != h.boxes.size())
+    return Status::error("impostors: the species' box ranges do not cover the hierarchy");
   const size_t nb = h.boxes.size();
   // Depth-first preorder (children in index order), so a subtree is a contiguous node range and,
   // with each node's own leaves laid out before its children's, a contiguous triangle run.
@@ -86,6 +88,13 @@ Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& 
     for (uint32_t c = childStart[b + 1]; c-- > childStart[b];) stack.push_back(childList[c]);
   }
   if (pre.size() != nb) return Status::error("impostors: the box hierarchy of " + modelName(m) + " is not a forest");
+  // A species' boxes are contiguous and only parent each other, so its subtrees are visited
+  // together: its preorder range is its box range.
+  for (size_t s = 0; s + 1 < speciesBoxes.size(); ++s)
+    for (uint32_t b = speciesBoxes[s]; b < speciesBoxes[s + 1]; ++b)
+      if (rank[b] < speciesBoxes[s] || rank[b] >= speciesBoxes[s + 1])
+        return Status::error("impostors: box " + std::to_string(b) + " of species #" + std::to_string(s) + " has a parent of another species");
+  imp->speciesNodes = speciesBoxes;
   imp->nodes.assign(nb, ImpostorNode{});
   imp->materials = nm;
   imp->runs.assign(nb * nm * 3, 0);
@@ -226,6 +235,9 @@ Status planImpostorAtlas(const ImpostorDesc& desc, uint32_t maxImageSide, uint32
     n.gpuIndex = imp->baked++;
     imp->tiles += imp->viewCount();
   }
+  imp->speciesBaked.assign(imp->speciesNodes.empty() ? 0 : imp->speciesNodes.size() - 1, 0);
+  for (size_t sp = 0; sp < imp->speciesBaked.size(); ++sp)
+    for (uint32_t i = imp->speciesNodes[sp]; i < imp->speciesNodes[sp + 1]; ++i) imp->speciesBaked[sp] += imp->nodes[i].firstTile != kNoTile;
   const AtlasShape shape = atlasShape(imp->tiles, tile, maxImageSide);
   imp->tilesPerRow = shape.perRow;
   imp->rowsPerLayer = shape.rows;
@@ -285,47 +297,88 @@ glm::mat4 impostorViewProj(const ImpostorNode& box, uint32_t k) {
 void impostorCut(const Impostors& imp, const ImpostorCutInput& in, ImpostorCut* out) {
   *out = ImpostorCut{};
   out->active = true;
+  out->perCopy = !in.copies.empty();
   const uint32_t nb = uint32_t(imp.nodes.size()), nm = imp.materials;
   const ImpostorSettings& s = in.settings;
   const bool debug = s.debugView;
   std::vector<float> carry(nb, 0.0f);
   std::vector<std::vector<ImpostorCut::Run>> perMaterial(nm);
   constexpr float kEps = 1e-4f;
-  for (uint32_t i = 0; i < nb;) {
-    const ImpostorNode& n = imp.nodes[i];
-    const float left = n.parent == kNoTile ? 1.0f : carry[n.parent];
-    float a = 0.0f;
-    if (n.firstTile != kNoTile && s.mode != ImpostorMode::Off) {
-      const float z = glm::dot(in.depthRow, glm::vec4(n.center, 1.0f));
-      const float p = in.perspective ? (z > n.radius ? 2.0f * n.radius * in.pixelScale / z : INFINITY)
-                                     : 2.0f * n.radius * in.pixelScale;
-      a = gpu::impostorSizeWeight(p, s.switchPixels, s.band);
-      if (s.mode == ImpostorMode::FarRegion)
-        a *= gpu::impostorDepthWeight(glm::dot(in.depthRow, glm::vec4(n.root, 1.0f)), in.farStart - in.farBand, in.farBand);
-    }
-    const float w = left * a;
-    carry[i] = left * (1.0f - a);
-    if (w > kEps) {
-      const gpu::ImpostorInstance inst{n.gpuIndex, std::min(w, 1.0f), n.level, 0u};
-      (w >= 1.0f - kEps ? out->opaque : out->fading).push_back(inst);
-    }
-    if (carry[i] <= kEps) {  // nothing of this subtree is drawn as leaves, nor as finer impostors
-      i = n.subtreeEnd;
-      continue;
-    }
-    for (uint32_t k = 0; k < nm; ++k) {
-      const uint64_t first = imp.ownFirst(i, k), count = imp.ownCount(i, k);
-      if (!count) continue;
-      std::vector<ImpostorCut::Run>& runs = perMaterial[k];
+  // One pass over nodes [begin, end) for a copy seen through `model` (its depth row in model space,
+  // its radius scale); false when something of it is an impostor or fades.
+  auto cutNodes = [&](uint32_t begin, uint32_t end, const glm::mat4& model, uint32_t copy, uint32_t runCopy) {
+    const glm::vec4 depthRow = glm::transpose(model) * in.depthRow;  // depthRow . (model p)
+    const float scale = std::max(glm::length(glm::vec3(model[0])), std::max(glm::length(glm::vec3(model[1])), glm::length(glm::vec3(model[2]))));
+    bool whole = true;
+    for (uint32_t i = begin; i < end;) {
+      const ImpostorNode& n = imp.nodes[i];
+      const float left = n.parent == kNoTile ? 1.0f : carry[n.parent];
+      float a = 0.0f;
+      if (n.firstTile != kNoTile && s.mode != ImpostorMode::Off) {
+        const float z = glm::dot(depthRow, glm::vec4(n.center, 1.0f)), r = n.radius * scale;
+        const float p = in.perspective ? (z > r ? 2.0f * r * in.pixelScale / z : INFINITY) : 2.0f * r * in.pixelScale;
+        a = gpu::impostorSizeWeight(p, s.switchPixels, s.band);
+        if (s.mode == ImpostorMode::FarRegion)
+          a *= gpu::impostorDepthWeight(glm::dot(depthRow, glm::vec4(n.root, 1.0f)), in.farStart - in.farBand, in.farBand);
+      }
+      const float w = left * a;
+      carry[i] = left * (1.0f - a);
+      if (w > kEps) {
+        const gpu::ImpostorInstance inst{n.gpuIndex, std::min(w, 1.0f), n.level, copy};
+        (w >= 1.0f - kEps ? out->opaque : out->fading).push_back(inst);
+        whole = false;
+      }
+      if (carry[i] <= kEps) {  // nothing of this subtree is drawn as leaves, nor as finer impostors
+        i = n.subtreeEnd;
+        whole = false;
+        continue;
+      }
       const float weight = carry[i] >= 1.0f - kEps ? 1.0f : carry[i];
-      if (!runs.empty() && runs.back().first + runs.back().count == first && runs.back().weight == weight &&
-          (!debug || runs.back().level == n.level))
-        runs.back().count += count;
-      else
-        runs.push_back({k, first, count, weight, n.level});
-      out->triangles += count;
+      whole = whole && weight == 1.0f;
+      for (uint32_t k = 0; k < nm; ++k) {
+        const uint64_t first = imp.ownFirst(i, k), count = imp.ownCount(i, k);
+        if (!count) continue;
+        std::vector<ImpostorCut::Run>& runs = perMaterial[k];
+        if (!runs.empty() && runs.back().first + runs.back().count == first && runs.back().weight == weight &&
+            runs.back().copy == runCopy && (!debug || runs.back().level == n.level))
+          runs.back().count += count;
+        else
+          runs.push_back({k, first, count, weight, n.level, runCopy});
+        out->triangles += count;
+      }
+      ++i;
     }
-    ++i;
+    return whole;
+  };
+  if (in.copies.empty()) {
+    cutNodes(0, nb, glm::mat4(1.0f), 0u, kEveryCopy);
+  } else {
+    const size_t species = imp.speciesNodes.size() - 1;
+    std::vector<uint32_t> speciesWhole(species, 0);  // its whole copies
+    std::vector<size_t> mark(nm);
+    for (const ImpostorCopy& c : in.copies) {
+      if (c.species >= species) continue;
+      for (uint32_t k = 0; k < nm; ++k) mark[k] = perMaterial[k].size();
+      const uint64_t triangles = out->triangles;
+      if (!cutNodes(imp.speciesNodes[c.species], imp.speciesNodes[c.species + 1], c.model, c.index, c.index)) continue;
+      // The whole foliage at full weight: drawn with the species' other whole copies, instanced.
+      for (uint32_t k = 0; k < nm; ++k) perMaterial[k].resize(mark[k]);
+      out->triangles = triangles;
+      out->wholeCopies.push_back(c.index);
+      speciesWhole[c.species]++;
+    }
+    std::sort(out->wholeCopies.begin(), out->wholeCopies.end());
+    // Each such species' foliage, root by root: its subtrees' runs per material.
+    for (size_t sp = 0; sp < species; ++sp) {
+      if (!speciesWhole[sp]) continue;
+      for (uint32_t i = imp.speciesNodes[sp]; i < imp.speciesNodes[sp + 1]; i = imp.nodes[i].subtreeEnd)
+        for (uint32_t k = 0; k < nm; ++k) {
+          const uint64_t first = imp.ownFirst(i, k), count = imp.subtreeEnd(i, k) - first;
+          if (!count) continue;
+          perMaterial[k].push_back({k, first, count, 1.0f, imp.nodes[i].level, kEveryCopy});
+          out->triangles += count * speciesWhole[sp];
+        }
+    }
   }
   for (auto& runs : perMaterial) out->geometry.insert(out->geometry.end(), runs.begin(), runs.end());
 }

@@ -25,6 +25,7 @@
 #include "engine/status.h"
 #include "engine/transfer.h"
 #include "render/model.h"
+#include "render/foliage_boxes.h"
 #include "render/leaf_roots.h"
 #include "shared/impostor.h"
 
@@ -46,6 +47,10 @@ struct ImpostorNode {
 struct Impostors {
   bool enabled = false;
   std::vector<ImpostorNode> nodes;       // depth-first preorder
+  // Per species its nodes [speciesNodes[s], speciesNodes[s + 1]) (a forest of its own boxes, in
+  // its model's space; docs/design.md "Impostors: copies and species").
+  std::vector<uint32_t> speciesNodes;
+  std::vector<uint32_t> speciesBaked;    // per species, its nodes with views
   uint32_t materials = 0;                // model materials (runs are per material)
   // Per node and material: own leaves' run [ownFirst, ownFirst + ownCount) and the subtree's run
   // [ownFirst, subtreeEnd) in GPU triangle numbers (3 values per node and material).
@@ -60,6 +65,7 @@ struct Impostors {
   Image color, depth;                                   // the atlas (2D arrays)
   std::vector<VkImageView> colorLayerViews, depthLayerViews;
   Buffer boxTable, instances;                            // gpu::ImpostorBox per baked node; this re-slice's list
+  Buffer identityCopy;                                   // the bake's copies' table: one copy at the model's origin
   PreparedList pendingUploads;  // the bake (or the cached views' upload) and the box table, not yet recorded (host devices)
   uint32_t instanceCapacity = 0;
   GraphicsPipeline bake, layered, layeredFade, perLayer, perLayerFade;
@@ -82,21 +88,35 @@ std::string impostorCachePath(const std::string& modelPath, const std::string& c
 // hierarchy runs, node bounds and the atlas plan.
 uint64_t impostorModelKey(const Impostors& imp, const VegetationModel& model, const std::vector<uint64_t>& meshHashes);
 
+constexpr uint32_t kEveryCopy = 0xffffffffu;
+
 // What a re-slice draws with impostors on (computed by impostorCut with the placement).
 struct ImpostorCut {
   bool active = false;
   std::vector<gpu::ImpostorInstance> opaque, fading;  // weight 1 / inside the band
-  struct Run { uint32_t material; uint64_t first, count; float weight; uint32_t level; };
-  std::vector<Run> geometry;                          // foliage runs to draw (GPU triangle numbers)
+  // A foliage run (GPU triangle numbers) of one copy, or (copy = kEveryCopy) of the copies the
+  // draw names: all the visible ones without copies, `wholeCopies` with them.
+  struct Run { uint32_t material; uint64_t first, count; float weight; uint32_t level; uint32_t copy = kEveryCopy; };
+  std::vector<Run> geometry;                          // foliage runs to draw
+  // With copies: those whose cut is their whole foliage at full weight (no impostor), ascending,
+  // drawn instanced by their species' whole runs; every other copy by runs of its own.
+  bool perCopy = false;
+  std::vector<uint32_t> wholeCopies;
   uint64_t triangles = 0;
 };
 
 // Step 1: the hierarchy and the foliage's GPU order. `materialStart[m]` is where material m's
 // foliage triangles start in GPU order; `order` (GPU -> model triangle) gets its foliage part
 // rewritten box by box. Errors name the model and what is wrong.
-Status buildImpostorOrder(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                          const ImpostorDesc& desc, const std::vector<uint64_t>& materialStart, Impostors* imp,
+// `hierarchy`: the boxes (render/foliage_boxes.h), each species' a forest of its own, species after
+// species; `speciesBoxes[s]` is where species s's boxes start (with the end appended).
+Status buildImpostorOrder(const VegetationModel& m, const BoxHierarchy& hierarchy, const std::vector<uint32_t>& speciesBoxes,
+                          const LeafRoots& roots, const std::vector<uint64_t>& materialStart, Impostors* imp,
                           std::vector<uint32_t>* order);
+// One model's box hierarchy: its own (the generator's L-system boxes, refined where a box holds
+// more than desc.maxLeavesPerBox leaves of its own), else a k-d split of its leaf roots.
+Status buildFoliageBoxes(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                         const ImpostorDesc& desc, BoxHierarchy* out);
 
 // Which nodes get views within desc's budget and tile size: fills firstTile, gpuIndex, baked,
 // tiles, tileSize, tilesPerRow, rowsPerLayer, atlasLayers, bytes (the atlas as allocated, within
@@ -109,8 +129,15 @@ float volumeRatio(const ImpostorNode& parent, const ImpostorNode& n);
 // side the view looks from): the bake's camera, and what the tests render directly.
 glm::mat4 impostorViewProj(const ImpostorNode& box, uint32_t k);
 
+// A visible copy the cut is made for: its index in the copies' table, species and transform.
+struct ImpostorCopy {
+  uint32_t index = 0, species = 0;
+  glm::mat4 model{1.0f};
+};
+
 struct ImpostorCutInput {
   ImpostorSettings settings;
+  std::vector<ImpostorCopy> copies;  // empty: the model itself at the origin (no copies)
   glm::vec4 depthRow{0};    // view depth of a world point
   float pixelScale = 1;     // pixels per world unit at view depth 1 (perspective) or everywhere (orthographic)
   bool perspective = true;
@@ -118,7 +145,8 @@ struct ImpostorCutInput {
 };
 // The cut through the hierarchy for one view: per node its impostor share a (size and, for
 // FarRegion, depth ramps; 0 for nodes without views), W = a x (what its ancestors left), its own
-// leaves drawn with what is left after it; subtrees left with nothing are skipped.
+// leaves drawn with what is left after it; subtrees left with nothing are skipped. With copies,
+// per copy through its species' nodes, seen through its transform.
 void impostorCut(const Impostors& imp, const ImpostorCutInput& in, ImpostorCut* out);
 
 }  // namespace canopy

@@ -98,8 +98,10 @@ Status setInstances(Device& d, PreparedList* uploads, const InstanceInputs& in, 
   if (void* direct = hostCoherentPointer(d, next.buffer.allocation)) {
     std::memcpy(direct, next.table.data(), bytes);
   } else {
-    // Read as the layer and per-vertex draws' instance stream and by the per-vertex motion kernel.
-    const rg::State readers{VK_PIPELINE_STAGE_2_VERTEX_ATTRIBUTE_INPUT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+    // Read as the layer and per-vertex draws' instance stream, by the per-vertex motion kernel and by
+    // the impostor draws' both stages.
+    const rg::State readers{VK_PIPELINE_STAGE_2_VERTEX_ATTRIBUTE_INPUT_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT |
+                                VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
                             VK_ACCESS_2_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_UNDEFINED};
     Status s = uploadBuffer(d, uploads, next.buffer, next.table.data(), bytes, readers);
     if (!s.ok()) {

@@ -49,8 +49,9 @@ struct MeshBuild {
   LayerStats& stats;
 };
 
-Status buildMesh(const MeshBuild& b, const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                 CompactMesh* mesh) {
+Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesParts& parts, CompactMesh* mesh) {
+  const std::vector<uint8_t>& foliage = parts.foliage;
+  const LeafRoots& roots = parts.roots;
   Device& d = b.d;
   const size_t nt = m.triangleCount();
   // GPU triangle order: foliage grouped by material, then rigid by material (one draw each).
@@ -66,7 +67,7 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const std::vector
   // With impostors the foliage of each material is laid out box by box, depth first
   // (render/impostors.h), so a box's subtree is one run per material.
   if (b.desc.impostors.enable) {
-    CANOPY_TRY(buildImpostorOrder(m, foliage, roots, b.desc.impostors, start, &b.impostors, &order));
+    CANOPY_TRY(buildImpostorOrder(m, parts.boxes, parts.speciesBoxes, roots, start, &b.impostors, &order));
     CANOPY_TRY(planImpostorAtlas(b.desc.impostors, d.properties.limits.maxImageDimension2D,
                                  d.properties.limits.maxImageArrayLayers, &b.impostors));
   }
@@ -255,6 +256,7 @@ Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, Speci
   // Only the per-vertex leaf and the per-leaf root are used from here on, by the compaction; the
   // per-vertex root goes now and the rest after it (the placement reads the compact mesh).
   std::vector<uint32_t>().swap(p.roots.rootOfVertex);
+  if (desc.impostors.enable) CANOPY_TRY(buildFoliageBoxes(m, p.foliage, p.roots, desc.impostors, &p.boxes));
   return findPlants(m, p.roots, &p.plants);
 }
 }  // namespace
@@ -268,9 +270,6 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
                         Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
   *rootKey = 0;
   CANOPY_TRY(checkSpecies(species));
-  if (species.size() > 1 && desc.impostors.enable)
-    return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked from one model: not yet with " +
-                                                      std::to_string(species.size()) + " species");
   if (species.size() > 1 && desc.keepBend)
     return Status::error(Result::InvalidArgument, "the per-vertex wind baseline (CanopyDesc.allowPerVertex) reads one model's "
                                                   "branch hierarchy: not yet with " + std::to_string(species.size()) + " species");
@@ -285,7 +284,7 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
     bool cached = false;
     std::string note;
     CANOPY_TRY(prepareSpecies(desc, *species[s].model, parts[s], &key, &cached, &note));
-    if (s == 0) *rootKey = key;  // the impostor views' cache key (impostors take one species)
+    if (s == 0) *rootKey = key;  // the impostor views' cache key (cached for one species only)
     stats.rootCacheHit = stats.rootCacheHit && cached;
     stats.rootCacheNote += (s ? "; " : "") + note;
   }
@@ -310,7 +309,8 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
     mesh.leafRootPositions.resize(roots.leafCount());
     for (uint32_t l = 0; l < roots.leafCount(); ++l) mesh.leafRootPositions[l] = glm::vec4(m.positions[roots.leafRoot[l]], 1.0f);
   }
-  CANOPY_TRY(buildMesh(MeshBuild{d, desc, mesh, impostors, stats}, m, all.foliage, roots, out));
+  CANOPY_TRY(buildMesh(MeshBuild{d, desc, mesh, impostors, stats}, m, all, out));
+  all.boxes = BoxHierarchy{};
   // A chunk holds one material, and materials are numbered species after species.
   const std::vector<uint32_t> speciesOf = materialSpecies(mesh.species);
   for (MeshChunk& c : mesh.chunks) c.species = speciesOf[c.material];
@@ -352,7 +352,10 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
     // A chunk belongs to one species: only the runs of that species' copies (render/species.h).
     static const std::vector<InstanceRun> firstCopy = {{0, 1}};
     const std::vector<InstanceRun>* runs = o.runs ? o.runs : &firstCopy;
-    if (md.speciesCopies && md.speciesCopies->size() > 1) {
+    if (part && part->copies.count) {
+      speciesRuns.assign(1, part->copies);  // one copy's own cut (render/impostors.h)
+      runs = &speciesRuns;
+    } else if (md.speciesCopies && md.speciesCopies->size() > 1) {
       const InstanceRun own = (*md.speciesCopies)[c.species];
       if (o.runs) clipRuns(*o.runs, own, &speciesRuns);
       else speciesRuns.assign(own.count ? 1 : 0, InstanceRun{own.first, 1});
@@ -442,7 +445,7 @@ Status drawMeshParts(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPi
 }
 
 void appendRunParts(const std::vector<MeshChunk>& chunks, uint64_t first, uint64_t count, float weight, uint32_t level,
-                    std::vector<ChunkPart>* out) {
+                    std::vector<ChunkPart>* out, InstanceRun copies) {
   // Chunks are in GPU triangle order and never span materials: find the one holding `first`.
   auto it = std::upper_bound(chunks.begin(), chunks.end(), first,
                              [](uint64_t t, const MeshChunk& c) { return t < c.firstTriangle; });
@@ -458,6 +461,7 @@ void appendRunParts(const std::vector<MeshChunk>& chunks, uint64_t first, uint64
     p.triangleCount = uint32_t(take);
     p.weight = weight;
     p.level = level;
+    p.copies = copies;
     out->push_back(p);
     first += take;
     count -= take;

@@ -101,6 +101,7 @@ struct ChunkPart {
   uint64_t ringVertex = 0, ringIndex = 0, ringRoot = 0;
   float weight = 1.0f;  // LayerDrawPush.lod.x: below 1 for a box fading towards its impostor
   uint32_t level = 0;   // the part's foliage box level (the debug view)
+  InstanceRun copies;   // the copies it is drawn for (an impostor cut's copy); count 0: the draw's
 };
 
 // What a draw of the mesh binds besides the mesh (meshDraw() of the vegetation, layers.cpp, fills
@@ -183,7 +184,7 @@ Status drawWholeMesh(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPi
 Status drawMeshParts(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPipeline& pipe, uint32_t passKind,
                      uint32_t target, const std::vector<ChunkPart>& parts, const MeshDrawOptions& options);
 void appendRunParts(const std::vector<MeshChunk>& chunks, uint64_t first, uint64_t count, float weight, uint32_t level,
-                    std::vector<ChunkPart>* out);
+                    std::vector<ChunkPart>* out, InstanceRun copies = {});
 
 // Draws one material group of the chunk parts (`foliage`: the foliage's parts, else the rigid
 // chunks) with `pipe` inside the caller's rendering; `perVertex`/`options` as drawWholeMesh and

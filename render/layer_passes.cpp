@@ -96,7 +96,8 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     const LayerShadingPipelines::ShadeOnce& layeredOnce = half ? lv.pipelines.shaded.layeredHalfOnce : lv.pipelines.shaded.layeredOnce;
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
-    o.runs = t.runs;
+    // With copies the cut's parts for every copy draw its whole copies (the rest are per copy).
+    o.runs = cut && imp->cut.perCopy ? &imp->wholeRuns : t.runs;
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
       if (opaque) CANOPY_TRY(recordImpostors(meshDraw(lv), lv.impostors, lv.settings, lv.pipelines.singlePass, cmd, *imp, false, i));
       const std::vector<ChunkPart>* drawn = parts ? parts : cut ? &imp->parts : nullptr;

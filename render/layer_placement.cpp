@@ -322,8 +322,8 @@ Status advancePlacement(const PlacementInputs& in, PlacementJob& job, const Plac
 
 // The impostor cut of the visible placement (LayerSettings.impostors; render/impostors.h): which
 // boxes are drawn as impostors, with which weight, and the remaining foliage as chunk parts.
-void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out,
-                     LayerStats& stats) {
+void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, const LayerView& view,
+                     const std::vector<InstanceRun>& runs, ImpostorDraws* out, LayerStats& stats) {
   const auto t0 = PlacementClock::now();
   *out = ImpostorDraws{};
   const LayerSettings& s = *pin.settings;
@@ -339,8 +339,20 @@ void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, c
   const uint32_t n = l.count();
   in.farStart = l.region[2] ? frame.boundaries[l.region[0] + l.region[1]] : INFINITY;
   in.farBand = s.impostors.band * (frame.boundaries[n] - frame.boundaries[0]) / float(n);
+  // Copies (not the model alone at its origin): each visible one cut through its species' boxes.
+  const LayerInstances& copies = *pin.instances;
+  if (!copies.identity)
+    for (const InstanceRun& r : runs)
+      for (uint32_t i = r.first; i < r.first + r.count && i < copies.models.size(); ++i)
+        in.copies.push_back({i, i < copies.species.size() ? copies.species[i] : 0u, copies.models[i]});
   impostorCut(*pin.impostors, in, &out->cut);
-  for (const ImpostorCut::Run& r : out->cut.geometry) appendRunParts(pin.mesh->chunks, r.first, r.count, r.weight, r.level, &out->parts);
+  for (const ImpostorCut::Run& r : out->cut.geometry)
+    appendRunParts(pin.mesh->chunks, r.first, r.count, r.weight, r.level, &out->parts,
+                   r.copy == kEveryCopy ? InstanceRun{} : InstanceRun{r.copy, 1});
+  for (uint32_t c : out->cut.wholeCopies) {
+    if (!out->wholeRuns.empty() && out->wholeRuns.back().first + out->wholeRuns.back().count == c) out->wholeRuns.back().count++;
+    else out->wholeRuns.push_back({c, 1});
+  }
   out->instances = out->cut.opaque;
   out->opaque = uint32_t(out->cut.opaque.size());
   out->instances.insert(out->instances.end(), out->cut.fading.begin(), out->cut.fading.end());
@@ -375,7 +387,7 @@ Status placeForView(const PlacementInputs& in, const LayerView& view, VisibleLay
   visible.frame = job.frame;
   visible.layers = std::move(job.layers);
   stats.lastPlacementMs = job.ms;
-  planImpostorCut(in, visible.frame, view, &visible.impostors, stats);
+  planImpostorCut(in, visible.frame, view, visible.runs, &visible.impostors, stats);
   return Status();
 }
 

@@ -101,6 +101,7 @@ struct PlacementJob {
 struct ImpostorDraws {
   ImpostorCut cut;
   std::vector<ChunkPart> parts;
+  std::vector<InstanceRun> wholeRuns;  // with copies: the cut's whole copies (its parts with copies.count 0 draw them)
   std::vector<gpu::ImpostorInstance> instances;
   uint32_t opaque = 0;
 };
@@ -131,10 +132,11 @@ uint32_t visibleSpecies(const PlacementJob& job);
 void takeVertexBounds(VisibleLayers& v, const PlacementJob& job);
 Status advancePlacement(const PlacementInputs& in, PlacementJob& job, const PlacementClock::time_point* deadline, bool* done);
 Status placeForView(const PlacementInputs& in, const LayerView& view, VisibleLayers& visible, LayerStats& stats);
-// The impostor cut of the placement `frame` for `view` (nothing when impostors are off): the visible
-// set's at a re-slice at once, a spread re-slice's when its placement is done.
-void planImpostorCut(const PlacementInputs& in, const gpu::LayerFrame& frame, const LayerView& view, ImpostorDraws* out,
-                     LayerStats& stats);
+// The impostor cut of the placement `frame` for `view` and its visible copies `runs` (nothing when
+// impostors are off): the visible set's at a re-slice at once, a spread re-slice's when its
+// placement is done.
+void planImpostorCut(const PlacementInputs& in, const gpu::LayerFrame& frame, const LayerView& view,
+                     const std::vector<InstanceRun>& runs, ImpostorDraws* out, LayerStats& stats);
 
 // The pixels of a `width` x `height` target the world box [boundsMin, boundsMax] can cover seen
 // through each of `viewProjs` (the visible placement's, and a spread re-slice's next set), 2 pixels

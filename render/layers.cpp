@@ -263,7 +263,7 @@ Status createLayeredVegetation(Device& d, const std::vector<SpeciesModel>& speci
                                std::to_string(image) + " of " + std::to_string(m.images.size()));
     }
   }
-  const VegetationModel& m = *species[0].model;  // the impostors' (one species)
+  const VegetationModel& m = *species[0].model;  // the impostor views' cache file (one species)
   if (desc.stagingRingBytes < 1 || desc.stagingRingBytes > (4ull << 30))
     return Status::error("layers: stagingRingBytes " + std::to_string(desc.stagingRingBytes) + " is outside [1, 4 GiB]");
   const uint64_t liveAtStart = d.allocator->liveBytes;
@@ -284,19 +284,17 @@ Status createLayeredVegetation(Device& d, const std::vector<SpeciesModel>& speci
       CANOPY_TRY(createTargets(lv));
     }
     CANOPY_TRY(placeLayerMesh(d, desc, lv.mesh, lv.stats, std::move(mesh), liveAtStart));
-    InstanceInputs copies{desc.instances, desc.tints, desc.windPhases, desc.instanceSpecies};
+    InstanceInputs copies = desc.copies;
     if (copies.models.empty()) copies.models = {glm::mat4(1.0f)};
     CANOPY_TRY(setInstances(d, &lv.mesh.pendingUploads, copies, lv.mesh.species, &lv.instances));
     CANOPY_TRY(useShadingFor(lv, lv.settings));
-    if (lv.impostors.enabled && !lv.instances.identity)
-      return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
-                                                    "not yet with instances or a transform (CanopyDesc.instances)");
     if (lv.impostors.enabled) {
       if (lv.mesh.streamed)
         return Status::error("impostors (CanopyDesc.impostors.enable) bake from the resident mesh and cut it into draw "
                              "ranges: the mesh (" + mib(lv.stats.meshBytes) + ") is streamed under deviceMemoryBudget " +
                              mib(desc.deviceMemoryBudget) + "; raise it (or 0: no limit)");
-      if (!desc.rootCacheDir.empty() && !m.path.empty()) {
+      if (species.size() > 1) lv.impostors.cacheNote = "cache off: the views are cached for one species";
+      if (!desc.rootCacheDir.empty() && !m.path.empty() && species.size() == 1) {
         // The views' file cache sits beside the leaf roots' and is keyed by what they are drawn from.
         const CompactMesh& hm = lv.mesh.hostMesh;
         const std::vector<uint64_t> meshHashes = {
@@ -408,15 +406,15 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
   return createTargets(lv);
 }
 
-Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                         const std::vector<float>& windPhases, const std::vector<uint32_t>& species) {
+Status setLayerInstances(LayeredVegetation& lv, const InstanceInputs& copies) {
   LayerInstances next;
-  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, InstanceInputs{models, tints, windPhases, species}, lv.mesh.species,
-                          &next));
-  if (lv.impostors.enabled && !next.identity) {
-    destroyInstances(*lv.device, next);
-    return Status::error(Result::InvalidArgument, "impostors (CanopyDesc.impostors.enable) are baked and drawn at the model's origin: "
-                                                  "not yet with instances or a transform");
+  CANOPY_TRY(setInstances(*lv.device, &lv.mesh.pendingUploads, copies, lv.mesh.species, &next));
+  if (lv.impostors.enabled) {
+    const Status s = reserveImpostorList(*lv.device, lv.impostors, next);
+    if (!s.ok()) {
+      destroyInstances(*lv.device, next);
+      return s;
+    }
   }
   destroyBufferLater(*lv.device, lv.instances.buffer);  // frames in flight read the old table
   lv.instances = std::move(next);

@@ -50,12 +50,9 @@ struct LayeredVegetationDesc : LayerMeshDesc {
   // the measured drawing rate give (tests: a deterministic number of slices). 0: measured.
   uint32_t fixedSliceTriangles = 0;
   rg::Use restUse = rg::Use::FragmentSampled;  // how the layer images are left for their readers
-  // The placed copies (docs/design.md "Instances"): model -> world transforms and tints; empty:
-  // one copy at the model's origin.
-  std::vector<glm::mat4> instances;
-  std::vector<glm::vec3> tints;
-  std::vector<float> windPhases;  // s, the per-vertex baseline's; empty: none
-  std::vector<uint32_t> instanceSpecies;  // per copy: its species (render/species.h); empty: all species 0
+  // The placed copies (docs/design.md "Instances"; render/layer_instances.h): transforms, tints,
+  // wind phases, species; no models: one copy at the model's origin.
+  InstanceInputs copies;
   LayerSettings settings;
 };
 
@@ -115,7 +112,7 @@ uint32_t layerShadingFeatures(const LayeredVegetation& lv, const LayerSettings& 
 // textures, creates the targets and pipelines. `model` can be released afterwards.
 Status createLayeredVegetation(Device& device, const VegetationModel& model, const LayeredVegetationDesc& desc,
                                LayeredVegetation* out);
-// The same for several species in one set of layers (render/species.h; desc.instanceSpecies names
+// The same for several species in one set of layers (render/species.h; desc.copies.species names
 // each copy's): each species' mesh and textures stored once however many copies.
 Status createLayeredVegetation(Device& device, const std::vector<SpeciesModel>& species, const LayeredVegetationDesc& desc,
                                LayeredVegetation* out);
@@ -138,9 +135,9 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
 // *targetsRecreated (optional) tells whether the layer images were recreated.
 Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& settings, bool* targetsRecreated = nullptr);
 
-// Replaces the placed copies (transforms and tints; empty tints: none) and re-slices at once.
-Status setLayerInstances(LayeredVegetation& lv, const std::vector<glm::mat4>& models, const std::vector<glm::vec3>& tints,
-                         const std::vector<float>& windPhases = {}, const std::vector<uint32_t>& species = {});
+// Replaces the placed copies and re-slices at once (with impostors the list grows for them:
+// record graphs must then be rebuilt).
+Status setLayerInstances(LayeredVegetation& lv, const InstanceInputs& copies);
 
 // Changes the layer images' size (the host's target was resized): recreates the layer and
 // background images (a graph holding them must be rebuilt) and marks the layers for a rebuild;

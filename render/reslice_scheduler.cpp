@@ -174,7 +174,7 @@ LayerInfo mixLayerInfo(const LayerInfo& a, const LayerInfo& b, float t) {
 // first and last slices — or every foliage chunk, then the rigid chunks, each whole.
 void planSpreadItems(ResliceScheduler& r, const ResliceParts& p) {
   SpreadRebuild& sp = r.spread;
-  planImpostorCut(p.placement, sp.job.frame, sp.job.view, &sp.impostors, p.stats);
+  planImpostorCut(p.placement, sp.job.frame, sp.job.view, sp.job.runs, &sp.impostors, p.stats);
   const bool cut = sp.impostors.cut.active;
   sp.items = cut ? sp.impostors.parts : std::vector<ChunkPart>{};
   for (uint32_t c = 0; c < p.mesh.chunks.size(); ++c) {

@@ -61,7 +61,7 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     merged->boundsMin = glm::vec3(INFINITY);
     merged->boundsMax = glm::vec3(-INFINITY);
   }
-  uint32_t vertexBase = 0, leafBase = 0, plantBase = 0, materialBase = 0, imageBase = 0;
+  uint32_t vertexBase = 0, leafBase = 0, plantBase = 0, materialBase = 0, imageBase = 0, triangleBase = 0;
   for (size_t s = 0; s < in.size(); ++s) {
     const VegetationModel& m = *in[s].model;
     SpeciesParts& p = parts[s];
@@ -88,6 +88,15 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     for (uint32_t l : p.roots.leafOfVertex) out->roots.leafOfVertex.push_back(l == kNoLeaf ? kNoLeaf : l + leafBase);
     for (uint32_t v : p.roots.leafRoot) out->roots.leafRoot.push_back(v + vertexBase);
     for (uint32_t pl : p.plants.leafPlant) out->plants.leafPlant.push_back(pl == kNoPlant ? kNoPlant : pl + plantBase);
+    // Boxes: triangles past the earlier species', parents past their boxes.
+    const uint32_t boxBase = uint32_t(out->boxes.boxes.size());
+    out->speciesBoxes.push_back(boxBase);
+    for (FoliageBox b : p.boxes.boxes) {
+      if (b.parent != kNoBox) b.parent += boxBase;
+      b.firstTriangle += out->boxes.triangles.size();
+      out->boxes.boxes.push_back(b);
+    }
+    for (uint32_t t : p.boxes.triangles) out->boxes.triangles.push_back(t + triangleBase);
     append(out->plants.boundsMin, p.plants.boundsMin);
     append(out->plants.boundsMax, p.plants.boundsMax);
     if (several) {
@@ -107,12 +116,14 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
       for (const std::string& w : m.warnings) merged->warnings.push_back(ms.name + ": " + w);
     }
     vertexBase += uint32_t(m.positions.size());
+    triangleBase += uint32_t(m.triangleCount());
     leafBase += ms.leafCount;
     plantBase += ms.plantCount;
     materialBase += ms.materialCount;
     imageBase += uint32_t(m.images.size());
     p = SpeciesParts{};
   }
+  out->speciesBoxes.push_back(uint32_t(out->boxes.boxes.size()));
   return Status();
 }
 

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "engine/status.h"
+#include "render/foliage_boxes.h"
 #include "render/leaf_roots.h"
 #include "render/material_split.h"
 #include "render/model.h"
@@ -53,11 +54,14 @@ struct SpeciesParts {
   std::vector<uint8_t> foliage;  // per triangle
   LeafRoots roots;               // leafOfVertex and leafRoot (rootOfVertex dropped)
   Plants plants;
+  BoxHierarchy boxes;            // with impostors: its foliage boxes (render/impostors.h buildFoliageBoxes)
+  std::vector<uint32_t> speciesBoxes;  // merged: where each species' boxes start, then the end
 };
 
 // The species laid end to end: `merged` gets every species' triangles, materials and images with
-// their indices moved past the earlier species' (bend and box hierarchies are not merged: the
-// per-vertex baseline and impostors take one species), `out` the parts renumbered alike, and
+// their indices moved past the earlier species' (the bend hierarchy is not merged: the per-vertex
+// baseline takes one species), `out` the parts renumbered alike (box hierarchies side by side, a
+// forest per species), and
 // `species` each one's ranges. The parts are consumed.
 Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesParts>& parts, VegetationModel* merged,
                     SpeciesParts* out, std::vector<MeshSpecies>* species);

@@ -10,9 +10,11 @@
 // result is weighted by the box's share at its level-of-detail transition.
 #include "layers_impostor_common.glsl"
 
-layout(location = 0) in vec3 vWorld;
+layout(location = 0) in vec3 vModel;
 layout(location = 1) flat in uvec4 vBoxViews;
 layout(location = 2) flat in vec2 vWeights;
+layout(location = 3) flat in vec4 vEye;
+layout(location = 4) flat in uint vCopy;
 layout(location = 0) out vec4 outColor;
 
 // Where the ray p + t * ray meets view k's central plane (t), or a negative t' sentinel when the
@@ -49,9 +51,11 @@ vec4 sampleView(ImpostorBox b, uint k, vec3 p, vec3 ray, out vec3 leaf) {
 
 void main() {
   ImpostorBox b = boxes[vBoxViews.x];
-  vec3 ray = f.eye.w > 0.0 ? normalize(vWorld - f.eye.xyz) : -f.eye.xyz;
+  LayerInstance copy = copies[vCopy];
+  modelEye = vEye;
+  vec3 ray = modelEye.w > 0.0 ? normalize(vModel - modelEye.xyz) : -modelEye.xyz;
   vec4 color = vec4(0.0);
-  vec3 leaf = vWorld;
+  vec3 leaf = vModel;
   if (pc.shape == IMPOSTOR_SHAPE_CROSSED) {
     // The polygons the ray meets, weighted, then composited front to back (at most 12: insertion).
     vec3 w = towardsViewer(b.center.xyz);
@@ -60,7 +64,7 @@ void main() {
     uint n = 0u;
     for (uint k = pc.firstView; k < IMPOSTOR_VIEWS; ++k) {
       float t;
-      if (impostorCrossWeight(impostorViewScore(k, w)) <= 0.0 || !rayOnView(b, k, vWorld, ray, t)) continue;
+      if (impostorCrossWeight(impostorViewScore(k, w)) <= 0.0 || !rayOnView(b, k, vModel, ray, t)) continue;
       uint i = n++;
       for (; i > 0u && ts[i - 1u] > t; --i) {
         ts[i] = ts[i - 1u];
@@ -73,7 +77,7 @@ void main() {
     float strongest = 0.0;
     for (uint i = 0u; i < n; ++i) {
       vec3 at;
-      vec4 ck = sampleView(b, ks[i], vWorld, ray, at) * impostorCrossWeight(impostorViewScore(ks[i], w));
+      vec4 ck = sampleView(b, ks[i], vModel, ray, at) * impostorCrossWeight(impostorViewScore(ks[i], w));
       vec4 add = (1.0 - color.a) * ck;
       color += add;
       if (!placed && (color.a >= 0.5 || add.a > strongest)) leaf = at;
@@ -82,15 +86,17 @@ void main() {
     }
   } else {
     vec3 leaf1, leaf2;
-    vec4 c1 = sampleView(b, vBoxViews.y, vWorld, ray, leaf1);
-    vec4 c2 = sampleView(b, vBoxViews.z, vWorld, ray, leaf2);
+    vec4 c1 = sampleView(b, vBoxViews.y, vModel, ray, leaf1);
+    vec4 c2 = sampleView(b, vBoxViews.z, vModel, ray, leaf2);
     color = vWeights.x * c1 + (1.0 - vWeights.x) * c2;
     leaf = vWeights.x * c1.a >= (1.0 - vWeights.x) * c2.a ? leaf1 : leaf2;
   }
   if (color.a < 1.0 / 255.0) discard;
   if (pc.fading != 0u) leaf = b.center.xyz - ray * length(b.halfExtent.xyz);
-  vec4 clip = f.viewProj * vec4(leaf, 1.0);
+  vec4 clip = f.viewProj * (copy.model * vec4(leaf, 1.0));
   gl_FragDepth = clamp(clip.z / clip.w, 0.0, 1.0);
+  // The copy's tint multiplies the baked colour as it multiplies the leaves' base colour.
+  color.rgb *= copy.tint.rgb;
   if (pc.debugLevels != 0u) color.rgb = lodLevelColor(vBoxViews.w) * color.a;
   outColor = color * vWeights.y;
 }

@@ -724,6 +724,104 @@ TEST_F(ImpostorTest, WhatImpostorsNeedIsRefusedWithTheReason) {
   destroyLayeredVegetation(lv);
 }
 
+// Issue 53: impostors for copies and species. Two species (a tree crown and a shrub, each with its
+// own materials and texture, each baked once at its origin) placed as copies — the tree turned and
+// scaled, the shrub tinted — seen from where each copy's plant box is at its switch: the layers
+// with every copy an impostor against the same layers drawn from the leaves (the switch test's
+// metric), then with the switch between the two copies' sizes, one impostor and one copy's leaves.
+TEST_F(ImpostorTest, CopiesOfTwoSpeciesMatchTheirLeavesAtTheSwitchDistance) {
+  const uint32_t w = 256, h = 192;
+  const VegetationModel tree = treeWithBoxes();
+  SceneDesc sd;
+  sd.kind = SceneKind::Shrub;
+  sd.faces = 8000;
+  sd.seed = 3;
+  sd.textureSize = 64;
+  sd.boxes = true;
+  VegetationModel shrub;
+  ASSERT_TRUE(generateScene(sd, &shrub).ok());
+  const float rt = 0.5f * glm::length(tree.boundsMax - tree.boundsMin), rs = 0.5f * glm::length(shrub.boundsMax - shrub.boundsMin);
+  const glm::vec3 ct = 0.5f * (tree.boundsMin + tree.boundsMax), cs = 0.5f * (shrub.boundsMin + shrub.boundsMax);
+  // The tree turned 60 degrees and scaled 1.3, the shrub scaled to the tree's size, side by side.
+  const glm::mat4 treeAt = glm::translate(glm::mat4(1.0f), glm::vec3(-1.4f * rt, 0.0f, 0.0f)) *
+                           glm::rotate(glm::mat4(1.0f), glm::radians(60.0f), glm::vec3(0, 1, 0)) * glm::scale(glm::mat4(1.0f), glm::vec3(1.3f)) *
+                           glm::translate(glm::mat4(1.0f), -ct);
+  const float shrubScale = rt / rs;
+  const glm::mat4 shrubAt = glm::translate(glm::mat4(1.0f), glm::vec3(1.4f * rt, 0.0f, 0.0f)) *
+                            glm::scale(glm::mat4(1.0f), glm::vec3(shrubScale)) * glm::translate(glm::mat4(1.0f), -cs);
+  LayeredVegetationDesc d;
+  d.width = w;
+  d.height = h;
+  d.impostors.enable = true;
+  d.impostors.maxLevel = 0;
+  d.impostors.tilePixels = 128;
+  d.copies.models = {treeAt, shrubAt};
+  d.copies.tints = {glm::vec3(1.0f), glm::vec3(1.0f, 0.8f, 0.6f)};
+  d.copies.species = {0, 1};
+  LayeredVegetation lv;
+  const Status made = createLayeredVegetation(dev, {SpeciesModel{&tree}, SpeciesModel{&shrub}}, d, &lv);
+  ASSERT_TRUE(made.ok()) << made.message();
+  EXPECT_EQ(lv.stats.species, 2u);
+  ASSERT_EQ(lv.impostors.speciesBaked.size(), 2u);
+  EXPECT_GE(lv.impostors.speciesBaked[0], 1u);
+  EXPECT_GE(lv.impostors.speciesBaked[1], 1u) << "each species' model is baked";
+  const LayerView view = lookFrom(glm::vec3(0.0f, 0.3f * rt, 9.0f * rt), glm::vec3(0.0f), w, h, 40.0f);
+  // Each copy's plant box (the largest baked box of its species) projected through its transform.
+  auto copyBoxPixels = [&](uint32_t species, const glm::mat4& model, float scale) {
+    float best = 0;
+    const ImpostorNode* top = nullptr;
+    for (uint32_t i = lv.impostors.speciesNodes[species]; i < lv.impostors.speciesNodes[species + 1]; ++i) {
+      const ImpostorNode& n = lv.impostors.nodes[i];
+      if (n.firstTile != kNoTile && (!top || n.radius > top->radius)) top = &n;
+    }
+    if (!top) return best;
+    const float z = -(view.view * model * glm::vec4(top->center, 1.0f)).z;
+    return 2.0f * top->radius * scale * std::abs(view.proj[1][1]) * 0.5f * float(h) / z;
+  };
+  const float pTree = copyBoxPixels(0, treeAt, 1.3f), pShrub = copyBoxPixels(1, shrubAt, shrubScale);
+  ASSERT_GT(pTree, 0.0f);
+  ASSERT_GT(pShrub, 0.0f);
+  ASSERT_TRUE(renderOnce(dev, lv, view).ok());
+  const std::vector<glm::vec4> leaves = flatten(lv);
+  EXPECT_EQ(lv.stats.lastImpostors, 0u);
+  EXPECT_EQ(lv.stats.lastVisibleInstances, 2u);
+  // Every copy at its switch: each an impostor of its own species, no leaf drawn.
+  LayerSettings s = lv.settings;
+  s.impostors.mode = ImpostorMode::ByProjectedSize;
+  s.impostors.band = 0.0f;
+  s.impostors.switchPixels = std::max(pTree, pShrub) * 1.001f;
+  ASSERT_TRUE(setLayerSettings(lv, s).ok());
+  ASSERT_TRUE(renderOnce(dev, lv, view).ok());
+  EXPECT_EQ(lv.stats.lastImpostors, 2u);
+  EXPECT_EQ(lv.stats.lastDrawnTriangles, 0u);
+  const std::vector<glm::vec4> both = flatten(lv);
+  const ImageDiff all = compareImages(both, leaves);
+  std::printf("two species as copies, every copy an impostor (%.1f and %.1f px boxes): mean |d| %.4f, coverage IoU %.3f over %llu px\n",
+              pTree, pShrub, all.meanAbs, all.coverageIoU, (unsigned long long)all.covered);
+  // The switch test's bound (AtTheSwitchDistanceTheImpostorLayerMatchesTheLeaves): IoU >= 0.6,
+  // mean |RGBA difference| <= 0.25; a copy drawn at its model's origin or turned wrongly misses
+  // its leaves' coverage entirely.
+  EXPECT_GE(all.coverageIoU, 0.6);
+  EXPECT_LE(all.meanAbs, 0.25);
+  if (all.coverageIoU < 0.6 || all.meanAbs > 0.25) writeDiff("species_copies_all", w, h, both, leaves);
+  // The switch between the two sizes: the smaller copy an impostor, the larger its leaves.
+  s.impostors.switchPixels = 0.5f * (pTree + pShrub);
+  ASSERT_TRUE(setLayerSettings(lv, s).ok());
+  ASSERT_TRUE(renderOnce(dev, lv, view).ok());
+  EXPECT_EQ(lv.stats.lastImpostors, 1u);
+  const uint64_t largerFoliage = pTree > pShrub ? lv.mesh.species[0].triangles : lv.mesh.species[1].triangles;
+  EXPECT_GT(lv.stats.lastDrawnTriangles, 0u);
+  EXPECT_LE(lv.stats.lastDrawnTriangles, largerFoliage);
+  const std::vector<glm::vec4> mixed = flatten(lv);
+  const ImageDiff one = compareImages(mixed, leaves);
+  std::printf("two species as copies, one impostor: mean |d| %.4f, coverage IoU %.3f\n", one.meanAbs, one.coverageIoU);
+  EXPECT_GE(one.coverageIoU, 0.6);
+  EXPECT_LE(one.meanAbs, 0.25);
+  EXPECT_GE(one.coverageIoU, all.coverageIoU) << "a copy drawn from its leaves is closer to the leaves than its impostor";
+  if (one.coverageIoU < 0.6 || one.meanAbs > 0.25) writeDiff("species_copies_one", w, h, mixed, leaves);
+  destroyLayeredVegetation(lv);
+}
+
 }  // namespace
 
 // Lluch et al.'s level limit (seed 002 section 3): "if the ratio [of a node's box volume to its

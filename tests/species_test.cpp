@@ -213,10 +213,6 @@ TEST_F(SpeciesTest, BadSpeciesAreRefusedByName) {
   EXPECT_NE(s.message().find("species #0.responseSpeed"), std::string::npos) << s.message();
   s = createCanopy(dev, std::vector<SpeciesModel>{}, d, &ctx);
   EXPECT_NE(s.message().find("at least one species"), std::string::npos) << s.message();
-  d.impostors.enable = true;
-  s = createCanopy(dev, {{&plant}, {&plant}}, d, &ctx);
-  EXPECT_NE(s.message().find("not yet with 2 species"), std::string::npos) << s.message();
-  d.impostors.enable = false;
   ASSERT_TRUE(createCanopy(dev, {{&plant}, {&plant}}, d, &ctx).ok());
   s = setCanopyInstances(ctx, {copyOf(glm::mat4(1.0f), 1), copyOf(glm::mat4(1.0f), 7)});
   EXPECT_NE(s.message().find("CanopyInstance #1.species = 7"), std::string::npos) << s.message();

@@ -39,7 +39,7 @@ struct ImpostorInstance {
   uint box;      // into the ImpostorBox table
   float weight;  // its share of the box's pixels, (0, 1]: 1 beyond the transition band
   uint level;    // the box's level (the debug view's colour)
-  uint pad0;
+  uint copy;     // the copy it stands for: its index in the placed copies' table (gpu::LayerInstance)
 };
 CANOPY_SIZE_CHECK(ImpostorInstance, 16)
 

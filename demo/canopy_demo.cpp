@@ -206,6 +206,13 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
                   st.layers.lastVisibleSpecies);
     text += copies;
   }
+  if (st.layers.impostorBakedBoxes > 0) {
+    char imp[256];
+    std::snprintf(imp, sizeof imp, "impostors: %u boxes baked; the last re-slice drew %u as impostors (%u fading) for %u copies, and %llu foliage triangles\n",
+                  st.layers.impostorBakedBoxes, st.layers.lastImpostors, st.layers.lastFadingBoxes, st.layers.lastImpostorCopies,
+                  (unsigned long long)st.layers.lastDrawnTriangles);
+    text += imp;
+  }
   text += first.summary(warmup > 0 ? "\nFirst frame (of the warm-up; slices the layers):" : "\nFirst frame (slices the layers):");
   if (!steady.wallMs.empty())
     text += steady.summary((warmup > 0 ? "\nWritten frames 1.." : "\nFrames 2..") + std::to_string(o.frames) + " (medians" +

@@ -755,8 +755,6 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   // A scene file's species in one vegetation, its copies placed (docs/scene-files.md).
   const SceneCopies* copies = o.copies.get();
   if (copies) desc.instances = copies->instances;
-  if (copies && copies->species.size() > 1 && desc.impostors.enable && o.impostors == ImpostorMode::Off && !o.impostorDebug)
-    desc.impostors.enable = false;  // the window's offer; impostors take one species for now
   auto create = [&]() {
     return copies ? createCanopy(d, copies->species, desc, &host.canopy) : createCanopy(d, model, desc, &host.canopy);
   };

@@ -359,6 +359,7 @@ void planImpostorCut(const PlacementInputs& pin, const gpu::LayerFrame& frame, c
   stats.lastImpostors = uint32_t(out->instances.size());
   stats.lastFadingBoxes = uint32_t(out->cut.fading.size());
   stats.lastDrawnTriangles = out->cut.triangles;
+  stats.lastImpostorCopies = out->cut.perCopy ? uint32_t(in.copies.size() - out->cut.wholeCopies.size()) : out->instances.empty() ? 0u : 1u;
   stats.lastPlacementMs += msSince(t0);
 }
 

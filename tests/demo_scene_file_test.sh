@@ -1,8 +1,8 @@
 #!/bin/bash
 # ctest: canopy-demo --scene-file (issue 53; docs/scene-files.md). The generated forest clearing of
 # demo/scenes (no assets needed) walks 6 frames with its 4 species in one vegetation; the six-species
-# scene of ../shared/assets walks 60 frames with every species in view (skipped with a message where
-# the folder is absent); a broken scene file is refused in one line naming the file and the JSON
+# scene of ../shared/assets walks 60 frames with every species in view, then again with far copies as
+# impostors (skipped with a message where the folder is absent); a broken scene file is refused in one line naming the file and the JSON
 # pointer. Validation and synchronization validation on: any message fails the run (exit 1).
 set -u
 demo=$1 scenes=$2 assets=$3 out=$4
@@ -33,3 +33,14 @@ fi
 grep -q "^species: 6, copies: 338; in the last re-slice's view: [0-9]* copies of 6 species" "$out/six/timing.txt" ||
   fail "six species: $(grep '^species' "$out/six/timing.txt")"
 echo "six species: $(grep '^species' "$out/six/timing.txt")"
+
+# The same walk with far copies drawn as impostors of their species (each species' boxes baked once).
+"$demo" --scene-file "$scenes/six_species.json" --camera walk --frames 60 --size 320x240 --warmup 0.2 --validate --no-mp4 \
+  --impostors far --out "$out/six_far" >"$out/stdout_six_far" 2>"$out/stderr_six_far" ||
+  fail "six species, impostors far: exit $? ($(tail -5 "$out/stderr_six_far"))"
+[ -s "$out/six_far/frame_0059.png" ] || fail "six species, impostors far: no 60th frame"
+grep -q "^species: 6, copies: 338; in the last re-slice's view: [0-9]* copies of 6 species" "$out/six_far/timing.txt" ||
+  fail "six species, impostors far: $(grep '^species' "$out/six_far/timing.txt")"
+grep -q "^impostors: [0-9]* boxes baked; the last re-slice drew [1-9][0-9]* as impostors .* for [1-9][0-9]* copies" "$out/six_far/timing.txt" ||
+  fail "six species, impostors far: no copy drawn as an impostor: $(grep '^impostors' "$out/six_far/timing.txt")"
+echo "six species, impostors far: $(grep '^impostors' "$out/six_far/timing.txt")"

@@ -601,6 +601,7 @@ struct LayerStats {
   uint32_t lastImpostors = 0;        // boxes drawn as impostors by the last re-slice
   uint32_t lastFadingBoxes = 0;      // of which inside the transition band
   uint64_t lastDrawnTriangles = 0;   // foliage triangles the last re-slice drew
+  uint32_t lastImpostorCopies = 0;   // copies with a box drawn as an impostor (or leaves left out) by the last re-slice
   // Instances (CanopyDesc.instances): how many, and how many the last placement found in view.
   uint32_t instances = 0, lastVisibleInstances = 0;
   uint32_t lastVisibleSpecies = 0;  // species with a copy in the last placement's view

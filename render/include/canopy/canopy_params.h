@@ -491,8 +491,8 @@ enum class DepthConvention : uint32_t {
 // instances: the copies of the model the context draws as one vegetation (one set of layers, one
 // simulation; the mesh and its leaf roots stored once, the draws instanced): each a model -> world
 // transform, a tint and a wind phase. Empty: one copy at the model's origin. Copies outside the view
-// are not drawn. Impostors draw the model at its origin only (refused with other instances).
-// docs/design.md "Instances".
+// are not drawn. With impostors each model's views are baked once and far copies drawn as its
+// impostors through their transform and tint. docs/design.md "Instances".
 // guardBand: the layer images extend beyond each edge of the targets by this fraction of their
 // width and height (rounded to a multiple of 16 pixels; docs/design.md "Layers: guard band"), so a
 // camera that turns or strafes between re-slices shows the layers' content from there instead of an

@@ -95,6 +95,7 @@ void destroyNow(CanopyContext* c) {
     dropPreparedWork(*c->device, c->perVertexUploads);
     for (RecordGraph& g : c->recordGraphs) g.graph->release(*c->device);
     destroyCompositor(c->compositor);
+    destroyShadowCaster(c->shadow);
     destroyPerVertex(c->perVertex);
     destroyLayerDynamics(c->dynamics);
     destroyLayeredVegetation(c->layers);
@@ -618,6 +619,24 @@ Status recordCanopy(CanopyContext* c, VkCommandBuffer cmd, const CanopyFrameInpu
     if (!graph) CANOPY_TRY(buildRecordGraph(*c, in, &graph));
     graph->lastUse = ++c->recordGraphUses;
     return graph->graph->record(cmd);
+  });
+}
+
+Status recordCanopyShadow(CanopyContext* c, VkCommandBuffer cmd, const CanopyShadowInputs& in, bool* updated) {
+  return guardApi("recordCanopyShadow", [&]() -> Status {
+    if (updated) *updated = false;
+    if (!c) return Status::error("recordCanopyShadow: null context");
+    if (!cmd) return Status::error("recordCanopyShadow: null command buffer");
+    CANOPY_TRY(checkShadowInputs(in));
+    if (c->frames == 0)
+      return Status::error(Result::InvalidArgument, "recordCanopyShadow: record a frame first (recordCanopy): the shadow follows "
+                                                    "that frame's layers and wind");
+    ShadowSources src;
+    src.layers = &c->layers;
+    src.dynamics = &c->dynamics;
+    src.displaced = c->params.animation == AnimationMode::Layers2D;
+    src.generation = c->generation;
+    return recordShadow(c->shadow, src, cmd, in, updated);
   });
 }
 

@@ -418,7 +418,11 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
                                bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
                                bindBuffer(perVertex->tips)},
                               push));
-    else
+    else if (!o.extra.empty()) {
+      std::vector<Binding> all = {frame, roots, base, normal, trans, transColor};
+      all.insert(all.end(), o.extra.begin(), o.extra.end());
+      CANOPY_TRY(bindGraphics(*md.device, cmd, pipe, all, &push, uint32_t(sizeof push)));
+    } else
       CANOPY_TRY(bindGraphics(*md.device, cmd, pipe, {frame, roots, base, normal, trans, transColor}, push));
     // gl_PrimitiveID restarts at each draw: a part's ids would start at its first triangle, so the
     // id output (re-sliced at once) never draws parts. One instanced draw per run of visible copies

@@ -134,6 +134,8 @@ struct MeshDrawOptions {
   // The copies drawn (instanced draws, one per chunk and run; render/layer_instances.h); null: the
   // first copy only (the impostor bake, the per-vertex baseline).
   const std::vector<InstanceRun>* runs = nullptr;
+  // Bound after layers_common.glsl's six (the shadow caster's: render/shadow.cpp); empty: none.
+  std::vector<Binding> extra;
 };
 
 // Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh

@@ -41,6 +41,8 @@ struct Host {
   // The host's own passes on its targets before Canopy's (after the clear) and after them, in
   // graphs of their own (their barriers from the graph); null: none.
   std::function<void(rg::RenderGraph&, rg::ResourceId color, rg::ResourceId depth)> passesBefore, passesAfter;
+  // Recorded after the contexts, into the frame's command buffer (a shadow: recordCanopyShadow); null: none.
+  std::function<Status(VkCommandBuffer)> recordAfter;
 
   Status create(Device& d, uint32_t inFlight) {
     dev = &d;
@@ -177,6 +179,7 @@ struct Host {
       CANOPY_TRY(after.realize(*dev));  // no transients
       CANOPY_TRY(after.record(cmd));
     }
+    if (recordAfter) CANOPY_TRY(recordAfter(cmd));
     if (passesAfter) {
       rg::RenderGraph after;
       const auto ca = after.importImage("host colour", descOf(color), src, src);

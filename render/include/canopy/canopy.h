@@ -166,6 +166,27 @@ struct CanopyFrameInputs {
 // `final` states.
 Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
+// The vegetation's shadow for one of the host's lights (docs/embedding.md "Shadows"; docs/design.md
+// "Shadows"): the foliage (alpha-tested) and the trunks drawn, depth only, into the host's depth
+// image from `lightViewProj`, each leaf displaced as the last recorded frame shows it on screen.
+struct CanopyShadowInputs {
+  // The host's shadow map (or one layer of its cascade array: a 2D view of that layer), a depth
+  // format (D16_UNORM, D32_SFLOAT, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT), declared with
+  // VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT; its states as for recordCanopy's images.
+  CanopyImage depth;
+  uint32_t width = 0, height = 0;  // the image's size, pixels, [1, 16384]
+  Float4x4 lightViewProj;          // world -> the light's Vulkan clip space: orthographic (a sun) or perspective (a spot)
+  bool reverseZ = false;           // the map's convention: near is 1, the test GREATER_OR_EQUAL (else LESS_OR_EQUAL)
+  bool clear = true;               // clear to the far value first; false: drawn over what the host drew
+  uint32_t cascade = 0;            // [0, 7]: whose update counter
+  // [1, 64]: the vegetation is drawn at every updateInterval-th call for this cascade (the first
+  // included); the calls between only move the image from `current` to `final`, its contents kept.
+  uint32_t updateInterval = 1;
+};
+// Records the shadow into `cmd` after this frame's recordCanopy (the same command buffer or a later
+// one); *updated (optional): whether this call drew. Refused before the first recordCanopy.
+Status recordCanopyShadow(CanopyContext* context, VkCommandBuffer cmd, const CanopyShadowInputs& inputs, bool* updated = nullptr);
+
 // Loading without a hitch (a loading screen): records into the host's `cmd` the uploads createCanopy
 // staged (mesh, textures, the simulation's first clear) and the first re-slice of the layers for
 // `camera`, so the first recordCanopy at that camera (bit for bit) costs what any frame costs. The

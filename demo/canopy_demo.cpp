@@ -100,9 +100,13 @@ Status writeContactSheet(const std::string& path, const std::vector<std::vector<
 struct SwayMeter {
   uint8_t clear[3] = {0, 0, 0};
   uint32_t width = 0, height = 0, rowBegin = 0, rowEnd = 0;
+  bool greyGround = false;  // --shadows: the ground is grey at every shade (never vegetation)
   std::vector<double> centroidX;
 
-  bool vegetation(const uint8_t* p) const { return drawn(p, clear); }
+  bool vegetation(const uint8_t* p) const {
+    const bool grey = std::max({p[0], p[1], p[2]}) - std::min({p[0], p[1], p[2]}) <= 4;
+    return drawn(p, clear) && !(greyGround && grey);
+  }
   void add(const std::vector<uint8_t>& rgba) {
     if (centroidX.empty()) {  // the rows to follow, from frame 0
       uint32_t top = height, bottom = 0;
@@ -133,6 +137,46 @@ struct SwayMeter {
                   "Sway (top third of the vegetation, rows %u..%u): horizontal centroid %.1f .. %.1f px, range %.1f px "
                   "(frames %zu and %zu)\n",
                   rowBegin, rowEnd - 1, *lo, *hi, *hi - *lo, size_t(lo - centroidX.begin()), size_t(hi - centroidX.begin()));
+    return line;
+  }
+};
+
+// --shadows: the caster's centroid in the shadow map along the direction the camera's right runs
+// there (light pixels), per written frame, against the crown's on-screen centroid (SwayMeter).
+struct ShadowMeter {
+  glm::vec2 axis{1.0f, 0.0f};  // unit, in the map's pixels
+  std::vector<double> centroid;
+  void add(const std::vector<float>& depth, uint32_t size) {
+    double sum = 0, n = 0;
+    for (uint32_t y = 0; y < size; ++y)
+      for (uint32_t x = 0; x < size; ++x)
+        if (depth[size_t(y) * size + x] < 1.0f) {
+          sum += glm::dot(glm::vec2(x + 0.5f, y + 0.5f), axis);
+          n += 1;
+        }
+    centroid.push_back(n > 0 ? sum / n : 0.0);
+  }
+  static double sd(const std::vector<double>& v) {
+    double m = 0, q = 0;
+    for (double x : v) m += x / double(v.size());
+    for (double x : v) q += (x - m) * (x - m) / double(v.size());
+    return std::sqrt(q);
+  }
+  std::string summary(const std::vector<double>& screen) const {
+    const size_t n = std::min(screen.size(), centroid.size());
+    if (n < 2) return "";
+    double ma = 0, mb = 0, ab = 0, aa = 0, bb = 0;
+    for (size_t i = 0; i < n; ++i) ma += screen[i] / double(n), mb += centroid[i] / double(n);
+    for (size_t i = 0; i < n; ++i) {
+      ab += (screen[i] - ma) * (centroid[i] - mb);
+      aa += (screen[i] - ma) * (screen[i] - ma);
+      bb += (centroid[i] - mb) * (centroid[i] - mb);
+    }
+    char line[320];
+    std::snprintf(line, sizeof line,
+                  "Shadow (recordCanopyShadow, every frame): the caster's centroid in the map sways %.3f light px (s.d.) along "
+                  "the camera's right, the crown's on screen %.3f px; correlation %.3f over %zu frames\n",
+                  sd(centroid), sd(screen), aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0, n);
     return line;
   }
 };
@@ -184,7 +228,7 @@ constexpr uint32_t kHeldFrames = 10;
 
 std::string timingReport(const Options& o, const std::string& label, const Device& dev, const CanopyStats& st,
                          uint32_t warmup, const TimingLog& first, const TimingLog& steady, const TimingLog& alone,
-                         const std::vector<double>& pngMs, const SwayMeter* sway) {
+                         const std::vector<double>& pngMs, const SwayMeter* sway, const ShadowMeter* shadow = nullptr) {
   char head[2048];
   std::snprintf(head, sizeof head,
                 "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
@@ -241,6 +285,7 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
     text += line;
   }
   if (sway) text += "\n" + sway->summary();
+  if (sway && shadow) text += shadow->summary(sway->centroidX);
   char ringNote[128];
   std::snprintf(ringNote, sizeof ringNote, st.layers.meshResident ? "resident" : "streamed through a %.1f MiB ring",
                 double(st.layers.meshRingBytes) / double(1 << 20));
@@ -377,7 +422,9 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     sway.width = o.width;
     sway.height = o.height;
     for (int c = 0; c < 3; ++c) sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(host.clearSrgb[c], 0.0f, 1.0f)));
+    sway.greyGround = o.shadows;
     const bool measureSway = o.camera == CameraMotion::Still && o.debug == CompositeDebugView::None;
+    ShadowMeter shadow;
     // Warm-up: whole frames at the same dt and camera as frame 0, not written, so the wind has
     // reached the plant and the history ring (exact delay) is full when the first frame is written.
     const uint32_t warmup = uint32_t(std::lround(double(o.warmupSeconds) * o.fps));
@@ -395,6 +442,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     // Frames in flight: frame n is recorded into slot n % 2 while frame n - 1 may still execute;
     // the loop waits only for the slot's previous frame (its fence), then writes that frame.
     std::function<Status(uint32_t, const std::vector<uint8_t>&)> written;  // set below
+    std::function<Status(uint32_t, const std::vector<float>&)> shadowWritten;
     double lastDone = -1.0;
     auto retire = [&](uint32_t slot) -> Status {
       const InFlight& p = inFlight[slot];
@@ -416,6 +464,11 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
         std::vector<uint8_t> rgba;
         readPixels(host, slot, &rgba);
         CANOPY_TRY(written(uint32_t(p.index), rgba));
+        if (host.shadow.readback) {
+          std::vector<float> depth;
+          readShadowMap(host, slot, &depth);
+          CANOPY_TRY(shadowWritten(uint32_t(p.index), depth));
+        }
       }
       return Status();
     };
@@ -463,6 +516,32 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       }
       return Status();
     };
+    // --shadows: the map's caster centroid along where the camera's right runs in it; the map itself
+    // with --debug shadow-map (near the sun dark, nothing white).
+    if (o.shadows) {
+      const CanopyFrame f0 = frameAt(0);
+      const glm::vec3 right(glm::inverse(toGlm(f0.camera.view))[0]);
+      const glm::vec3 c = 0.5f * (model.boundsMin + model.boundsMax);
+      auto lightPixel = [&](glm::vec3 p) {
+        const glm::vec4 q = host.shadow.light * glm::vec4(p, 1.0f);
+        return (glm::vec2(q) / q.w * 0.5f + 0.5f) * float(Host::Shadow::kSize);
+      };
+      const glm::vec2 along = lightPixel(c + right) - lightPixel(c);
+      if (glm::length(along) > 0.0f) shadow.axis = glm::normalize(along);
+    }
+    shadowWritten = [&](uint32_t i, const std::vector<float>& depth) -> Status {
+      if (measureSway) shadow.add(depth, Host::Shadow::kSize);
+      if (!o.debugShadowMap) return Status();
+      std::vector<uint8_t> grey(depth.size() * 4);
+      for (size_t k = 0; k < depth.size(); ++k) {
+        const uint8_t v = uint8_t(std::lround(255.0f * std::clamp(depth[k], 0.0f, 1.0f)));
+        grey[4 * k] = grey[4 * k + 1] = grey[4 * k + 2] = v;
+        grey[4 * k + 3] = 255;
+      }
+      char name[64];
+      std::snprintf(name, sizeof name, "/shadow_%04u.png", i);
+      return writer.push(o.outDir + name, Host::Shadow::kSize, Host::Shadow::kSize, grey);
+    };
     for (uint32_t i = 0; i < o.frames; ++i) CANOPY_TRY(submit(frameAt(i), true, int64_t(i)));
     CANOPY_TRY(drain());
     CANOPY_TRY(writer.finish());
@@ -480,7 +559,8 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     if (o.lightSheet) CANOPY_TRY(writeLightSheet(o, host, sway.clear, frameAt, submit, drain, written));
     CANOPY_TRY(writer.finish());
     const std::string text =
-        timingReport(o, label, dev, st, warmup, first, steady, alone, writer.writeMs(), measureSway ? &sway : nullptr);
+        timingReport(o, label, dev, st, warmup, first, steady, alone, writer.writeMs(), measureSway ? &sway : nullptr,
+                     measureSway && o.shadows ? &shadow : nullptr);
     writeTextFile(o.outDir + "/timing.txt", text);
     std::printf("%s\n", text.c_str());
     printWrittenFiles(o, picked, crop);

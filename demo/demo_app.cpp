@@ -13,6 +13,14 @@
 #include "demo/progress.h"
 #include "render/gltf_loader.h"
 #include "tools/param_table.h"
+#include "engine/graphics_pipeline.h"
+#include "engine/shader_registry.h"
+#include <glm/gtc/matrix_transform.hpp>
+
+// canopy-demo's own shaders (demo/shaders; CMakeLists.txt canopy_demo_shaders).
+namespace canopy_demo {
+const canopy::EmbeddedShader* findEmbeddedShader(const char* name);
+}
 
 namespace canopy::demo {
 
@@ -66,8 +74,11 @@ void printHelp() {
       "  --impostor-views N  6 (Lluch et al.'s diagonal planes) or 12 (and the box faces: before 0.7) (default 6)\n"
       "  --impostor-shape S  crossed (the paper's crossed polygons) or facing (one polygon facing the viewer,\n"
       "                      two views blended: before 0.7) (default crossed)\n"
-      "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid)\n"
-      "                      (default none)\n"
+      "  --debug VIEW        none, layers (false colour), velocity (simulation field), grid (warp grid), or\n"
+      "                      shadow-map (implies --shadows; each frame's shadow map to shadow_NNNN.png) (default none)\n"
+      "  --shadows           a grey ground under the scene, lit by the sun (--light) through the vegetation's\n"
+      "                      shadow map (recordCanopyShadow, updated every frame; timing.txt: its cost and how\n"
+      "                      it sways against the crown on screen)\n"
       "Light and leaf shading (Habel: specular front, diffuse back, transmission on the unlit side):\n"
       "  --light X,Y,Z       direction towards the light, world space, y up; the camera looks from +Z\n"
       "                      (default %g,%g,%g; behind the plant: e.g. 0.2,0.35,-1)\n"
@@ -199,6 +210,7 @@ struct SwitchOption {
 };
 const SwitchOption kSwitchOptions[] = {
     {"--impostor-debug", &Options::impostorDebug, true},
+    {"--shadows", &Options::shadows, true},
     {"--no-translucency", &Options::translucency, false},
     {"--light-sheet", &Options::lightSheet, true},
     {"--window", &Options::window, true},
@@ -234,8 +246,9 @@ const std::vector<ChoiceOption>& choiceOptions() {
        {{"off", [](Options& o) { o.impostors = ImpostorMode::Off; }},
         {"far", [](Options& o) { o.impostors = ImpostorMode::FarRegion; }},
         {"size", [](Options& o) { o.impostors = ImpostorMode::ByProjectedSize; }}}},
-      {"--debug", "none, layers, velocity or grid",
+      {"--debug", "none, layers, velocity, grid or shadow-map",
        {{"none", [](Options& o) { o.debug = CompositeDebugView::None; }},
+        {"shadow-map", [](Options& o) { o.debugShadowMap = o.shadows = true; }},
         {"layers", [](Options& o) { o.debug = CompositeDebugView::Layers; }},
         {"velocity", [](Options& o) { o.debug = CompositeDebugView::Velocity; }},
         {"grid", [](Options& o) { o.debug = CompositeDebugView::Grid; }}}},
@@ -607,6 +620,29 @@ Status buildGraph(Host& h) {
       .sideEffect();
   CANOPY_TRY(g.bindImage(t.color, h.color));
   CANOPY_TRY(g.bindImage(t.depth, h.depth));
+  if (h.shadow.on) {
+    // The ground under the vegetation, lit through the shadow map Canopy drew after the previous
+    // frame (the map rests sampled; recordCanopyShadow leaves it so).
+    const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+    const auto map = g.importImage("demo: shadow map", descOf(h.shadow.map), sampled, sampled);
+    CANOPY_TRY(g.bindImage(map, h.shadow.map));
+    Host* hp = &h;
+    g.addPass("demo: ground", [hp, t](rg::PassContext& x) {
+       beginHostRendering(x, t, hp->width, hp->height, false);
+       const Host::Shadow& sh = hp->shadow;
+       Status st = bindGraphics(*x.device, x.cmd, sh.ground,
+                                {bindBuffer(sh.groundFrame.buffer),
+                                 bindImage(sh.map.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, sh.sampler)},
+                                sh.viewProj);
+       if (st.ok()) vkCmdDraw(x.cmd, 6, 1, 0, 0);
+       x.device->cmdEndRendering(x.cmd);
+       return st;
+     })
+        .write(t.color, rg::Use::ColorAttachmentReadWrite)
+        .write(t.depth, rg::Use::DepthAttachmentWrite)
+        .read(map, rg::Use::FragmentSampled)
+        .sideEffect();
+  }
   CANOPY_TRY(addCanopyPasses(h.canopy, g, t));
   if (h.presentFormat != VK_FORMAT_UNDEFINED) {
     // The swapchain image arrives undefined (its old contents are not needed) and leaves ready to present.
@@ -711,6 +747,116 @@ void destroyTargets(Host& h) {
 
 }  // namespace
 
+namespace {
+
+// --shadows: the ground under the scene's bounds (wide enough for the shadow of its height), the sun's
+// orthographic view around the ground and the vegetation, the shadow map, the ground's pipeline and
+// (with a read-back) the map's copy per slot.
+Status createShadow(Host& host, const VegetationModel& model, const Options& o) {
+  Device& d = *host.device;
+  Host::Shadow& sh = host.shadow;
+  sh.on = true;
+  sh.readback = host.wantsReadback;
+  const glm::vec3 lo = model.boundsMin, hi = model.boundsMax, ext = hi - lo;
+  sh.groundCenter = glm::vec3(0.5f * (lo.x + hi.x), lo.y, 0.5f * (lo.z + hi.z));
+  sh.groundHalf = 0.5f * std::max(ext.x, ext.z) + ext.y;
+  glm::vec3 l(o.light.x, o.light.y, o.light.z);
+  l = glm::length(l) > 0.0f ? glm::normalize(l) : glm::vec3(0, 1, 0);
+  const glm::vec3 centre(sh.groundCenter.x, lo.y + 0.5f * ext.y, sh.groundCenter.z);
+  const float reach = glm::length(glm::vec3(sh.groundHalf, ext.y, sh.groundHalf));
+  const glm::mat4 view = glm::lookAt(centre + l * (2.0f * reach), centre, std::abs(l.y) > 0.99f ? glm::vec3(0, 0, 1) : glm::vec3(0, 1, 0));
+  // The map spans the casters only (the ground outside it reads the cleared edge: lit), so its
+  // texels go to the vegetation.
+  glm::vec3 vlo(INFINITY), vhi(-INFINITY);
+  for (int k = 0; k < 8; ++k) {
+    const glm::vec3 p(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+    const glm::vec3 q(view * glm::vec4(p, 1.0f));
+    vlo = glm::min(vlo, q);
+    vhi = glm::max(vhi, q);
+  }
+  const glm::vec2 pad = 0.02f * glm::vec2(vhi - vlo);
+  sh.light = glm::orthoRH_ZO(vlo.x - pad.x, vhi.x + pad.x, vlo.y - pad.y, vhi.y + pad.y, -vhi.z - 0.01f * reach, -vlo.z + 0.01f * reach) * view;
+  ImageDesc m;
+  m.format = VK_FORMAT_D32_SFLOAT;
+  m.width = m.height = Host::Shadow::kSize;
+  m.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+            VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, m, &sh.map, "demo: shadow map"));
+  VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  si.magFilter = si.minFilter = VK_FILTER_NEAREST;
+  si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  CANOPY_VK(vkCreateSampler(d.device, &si, nullptr, &sh.sampler));
+  struct GroundFrame {
+    glm::mat4 light;
+    glm::vec4 origin, u, v, albedo, lightTexel;
+  } gf{sh.light, glm::vec4(sh.groundCenter, 1.0f), glm::vec4(sh.groundHalf, 0, 0, 0), glm::vec4(0, 0, sh.groundHalf, 0),
+       glm::vec4(0.45f, 0.45f, 0.45f, 0.35f), glm::vec4(l, 1.0f / float(Host::Shadow::kSize))};
+  CANOPY_TRY(createBuffer(d, sizeof gf, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::Upload, &sh.groundFrame, "demo: ground"));
+  void* mapped = hostCoherentPointer(d, sh.groundFrame.allocation);
+  if (!mapped) return Status::error("demo: the ground's buffer is not host-visible");
+  std::memcpy(mapped, &gf, sizeof gf);
+  GraphicsPipelineDesc gp;
+  gp.vertexShader = "demo_ground.vert";
+  gp.fragmentShader = "demo_ground.frag";
+  gp.shaderLookup = canopy_demo::findEmbeddedShader;
+  gp.pushConstantSize = sizeof(glm::mat4);
+  gp.colorFormats = {VK_FORMAT_R8G8B8A8_SRGB};
+  gp.depthFormat = VK_FORMAT_D32_SFLOAT;
+  CANOPY_TRY(createGraphicsPipeline(d, gp, &sh.ground));
+  // Once: the map cleared (nothing casts yet) into the state every frame imports it in.
+  {
+    rg::RenderGraph g;
+    const auto mi = g.importImage("demo: shadow map", descOf(sh.map), {}, rg::stateOf(rg::Use::FragmentSampled));
+    g.addPass("demo: shadow map's first clear", [mi](rg::PassContext& x) {
+       const VkClearDepthStencilValue dv{1.0f, 0};
+       const VkImageSubresourceRange dr{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+       vkCmdClearDepthStencilImage(x.cmd, x.image(mi).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+       return Status();
+     }).write(mi, rg::Use::TransferDst);
+    CANOPY_TRY(g.bindImage(mi, sh.map));
+    CANOPY_TRY(g.compile());
+    CANOPY_TRY(g.realize(d));
+    CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) { return g.record(cmd); }));
+  }
+  if (!sh.readback) return Status();
+  const VkDeviceSize bytes = VkDeviceSize(Host::Shadow::kSize) * Host::Shadow::kSize * 4;
+  for (Buffer& b : sh.mapReadback)
+    CANOPY_TRY(createBuffer(d, bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback, &b, "demo: shadow map read-back"));
+  rg::RenderGraph& g = sh.copy;
+  const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled), hostRead = rg::stateOf(rg::Use::HostRead);
+  const auto mi = g.importImage("demo: shadow map", descOf(sh.map), sampled, sampled);
+  sh.copyTarget = g.importBuffer("demo: shadow map read-back", bytes, hostRead, hostRead);
+  const rg::ResourceId rb = sh.copyTarget;
+  g.addPass("demo: shadow map to host", [mi, rb](rg::PassContext& x) {
+     VkBufferImageCopy r{};
+     r.imageSubresource = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 0, 1};
+     r.imageExtent = {Host::Shadow::kSize, Host::Shadow::kSize, 1};
+     vkCmdCopyImageToBuffer(x.cmd, x.image(mi).image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, x.buffer(rb), 1, &r);
+     return Status();
+   })
+      .read(mi, rg::Use::TransferSrc)
+      .write(rb, rg::Use::TransferDst)
+      .sideEffect();
+  CANOPY_TRY(g.bindImage(mi, sh.map));
+  CANOPY_TRY(g.bindBuffer(rb, sh.mapReadback[0].buffer));
+  CANOPY_TRY(g.compile());
+  return g.realize(d);
+}
+
+void destroyShadow(Host& h) {
+  Device& d = *h.device;
+  Host::Shadow& sh = h.shadow;
+  sh.copy.release(d);
+  for (Buffer& b : sh.mapReadback) destroyBuffer(d, b);
+  destroyGraphicsPipeline(d, sh.ground);
+  destroyBuffer(d, sh.groundFrame);
+  if (sh.sampler) vkDestroySampler(d.device, sh.sampler, nullptr);
+  destroyImage(d, sh.map);
+  sh = Host::Shadow{};
+}
+
+}  // namespace
+
 Status createHost(Device& d, const VegetationModel& model, const Options& o, uint32_t w, uint32_t h, bool readback,
                   VkFormat presentFormat, Host* out) {
   Host& host = *out;
@@ -789,6 +935,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
     if (desc.impostors.enable) std::printf("cache: impostor views: %s\n", st.layers.impostorCacheNote.c_str());
   }
   CANOPY_TRY(setCanopyParams(host.canopy, paramsFrom(o, canopyParams(host.canopy))));
+  if (o.shadows) CANOPY_TRY(createShadow(host, model, o));
   return Status();
 }
 
@@ -808,6 +955,7 @@ void destroyHost(Host& h) {
   vkDeviceWaitIdle(d.device);
   destroyTargets(h);
   for (GpuTimer& t : h.timer) t.destroy(d);
+  if (h.shadow.on) destroyShadow(h);
   destroyCanopy(h.canopy);
   h.canopy = nullptr;
   h.device = nullptr;
@@ -823,7 +971,31 @@ Status recordHostFrame(Host& h, VkCommandBuffer cmd, const CanopyFrame& frame, c
   }
   if (h.readbackId != rg::kInvalidResource) CANOPY_TRY(h.graph.bindBuffer(h.readbackId, h.readback[slot].buffer));
   h.timer[slot].reset(cmd);
-  return h.graph.record(cmd, &h.timer[slot]);
+  h.shadow.viewProj = toGlm(frame.camera.proj) * toGlm(frame.camera.view);
+  CANOPY_TRY(h.graph.record(cmd, &h.timer[slot]));
+  if (!h.shadow.on) return Status();
+  // The vegetation's shadow of this frame (the ground of the next frame reads it), then its read-back.
+  Host::Shadow& sh = h.shadow;
+  const rg::State sampled = rg::stateOf(rg::Use::FragmentSampled);
+  CanopyShadowInputs in;
+  in.depth = canopyImage(sh.map.image, sh.map.view,
+                         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                             VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                         VK_FORMAT_D32_SFLOAT, sampled, sampled);
+  in.width = in.height = Host::Shadow::kSize;
+  in.lightViewProj = toFloat4x4(sh.light);
+  h.timer[slot].begin(cmd, "canopy: shadow map");
+  const Status st = recordCanopyShadow(h.canopy, cmd, in);
+  h.timer[slot].end(cmd);
+  CANOPY_TRY(st);
+  if (!sh.readback) return Status();
+  CANOPY_TRY(sh.copy.bindBuffer(sh.copyTarget, sh.mapReadback[slot].buffer));
+  return sh.copy.record(cmd);
+}
+
+void readShadowMap(const Host& h, uint32_t slot, std::vector<float>* depth) {
+  depth->resize(size_t(Host::Shadow::kSize) * Host::Shadow::kSize);
+  std::memcpy(depth->data(), h.shadow.mapReadback[slot].allocation.mapped, depth->size() * sizeof(float));
 }
 
 Status createFrameRing(Device& d, FrameRing* r) {

@@ -69,6 +69,11 @@ struct Options {
   float leafTransmission = LayerSettings{}.leafTransmission;
   bool translucency = true;
   bool lightSheet = false;             // also write light_sheet.png: lit from the front, from behind, from behind without translucency
+  // The vegetation's shadow (recordCanopyShadow; docs/design.md "Shadows"): a grey ground under the
+  // scene lit by the sun (--light) through a shadow map Canopy draws every frame; with
+  // debugShadowMap each written frame's map also goes to shadow_NNNN.png.
+  bool shadows = false;
+  bool debugShadowMap = false;
   // Output
   uint32_t width = 640, height = 480;
   uint32_t frames = 60;
@@ -148,6 +153,23 @@ struct Host {
   VkFormat presentFormat = VK_FORMAT_UNDEFINED;
   glm::vec4 clear{0.0f, 0.0f, 0.0f, 1.0f};  // linear
   glm::vec3 clearSrgb{0.0f};                 // the same colour as the sRGB target stores it
+  // --shadows (docs/design.md "Shadows"): the sun's shadow map Canopy draws after each frame, the
+  // ground the next frame draws with it (before Canopy's passes), and per slot the map read back.
+  struct Shadow {
+    static constexpr uint32_t kSize = 512;
+    bool on = false, readback = false;
+    Image map;                              // D32, kSize x kSize; rests sampled by the fragment stage
+    VkSampler sampler = VK_NULL_HANDLE;
+    GraphicsPipeline ground;                // demo/shaders/demo_ground.*
+    Buffer groundFrame;                     // the quad, the light and the albedo (the shaders' GroundBuf)
+    glm::mat4 light{1.0f};                  // world -> the light's clip space
+    glm::vec3 groundCenter{0.0f};
+    float groundHalf = 1.0f;
+    glm::mat4 viewProj{1.0f};               // this frame's camera (the ground's draw)
+    Buffer mapReadback[kFramesInFlight];    // kSize^2 floats
+    rg::RenderGraph copy;                   // the map into a slot's buffer
+    rg::ResourceId copyTarget = rg::kInvalidResource;
+  } shadow;
 };
 
 // Creates targets + context at width x height. `presentFormat` != UNDEFINED adds a blit to an
@@ -165,6 +187,9 @@ Status recordHostFrame(Host& host, VkCommandBuffer cmd, const CanopyFrame& frame
 // The pixels of the frame recorded in `slot`, after its submission completed (RGBA8, rows top to
 // bottom, alpha = 255).
 void readPixels(const Host& host, uint32_t slot, std::vector<uint8_t>* rgba);
+// With --shadows and a read-back: the shadow map of the frame recorded in `slot` (depth, 0 near the
+// sun, kSize^2 floats, rows top to bottom of the light's view), after its submission completed.
+void readShadowMap(const Host& host, uint32_t slot, std::vector<float>* depth);
 
 // The demo's own frames in flight: a command buffer, a fence and an acquire semaphore per slot.
 struct FrameRing {

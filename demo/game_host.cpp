@@ -13,6 +13,10 @@
 // geometry behind the vegetation) and the vegetation in front somewhere — and the stencil byte for
 // byte unchanged; with --validate, validation and synchronization validation must stay silent.
 //
+// The sun casts shadows (docs/embedding.md "Shadows"): after each frame the host draws its boxes into
+// its own shadow map, then Canopy draws the forest over them (recordCanopyShadow, swaying as the
+// leaves on screen); the next frame's ground and boxes sample it (3x3 PCF).
+//
 //   canopy-game-host [--frames N] [--plants N] [--gltf FILE | --scene-file FILE] [--out DIR] [--write-every K] [--validate]
 // Exit 0 when every check passes, 1 on a failure, 2 on bad arguments, 77 without a display.
 #include <canopy/canopy.h>
@@ -35,6 +39,8 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "host_vk.h"  // the example hosts' Vulkan helpers and box shaders
+#include "host_shadowed.frag.h"
+#include "host_shadowed.vert.h"
 
 namespace host {
 const char* const kProgram = "canopy-game-host";
@@ -47,6 +53,7 @@ using host::kColorFormat;
 using host::kColorUsage;
 using host::kDepthUsage;
 constexpr uint8_t kOutlined = 1;  // the stencil value of the outlined box
+constexpr uint32_t kShadowSize = 1024;  // the sun's shadow map, texels a side
 
 using host::BoxPush;
 using host::barrier;
@@ -82,7 +89,19 @@ struct Game {
   VkCommandPool pool = VK_NULL_HANDLE;
   Slot slots[kFrames];
   VkPipelineLayout layout = VK_NULL_HANDLE;
-  VkPipeline scene = VK_NULL_HANDLE, outline = VK_NULL_HANDLE;
+  VkPipeline outline = VK_NULL_HANDLE;
+  // The sun's shadow map (D32, depth only): the host's boxes, then the forest (recordCanopyShadow);
+  // sampled by the next frame's shadowed pipeline (host_shadowed.*, descriptor set 0: the map).
+  host::Image shadowMap;
+  VkSampler shadowSampler = VK_NULL_HANDLE;
+  VkDescriptorSetLayout shadowSetLayout = VK_NULL_HANDLE;
+  VkDescriptorPool shadowPool = VK_NULL_HANDLE;
+  VkDescriptorSet shadowSet = VK_NULL_HANDLE;
+  VkPipelineLayout shadedLayout = VK_NULL_HANDLE;
+  VkPipeline shaded = VK_NULL_HANDLE, casters = VK_NULL_HANDLE;
+  glm::mat4 light{1.0f};
+  bool shadowReady = false;
+  uint64_t shadowUpdates = 0;
   canopy::Device* adopted = nullptr;
   canopy::CanopyContext* ctx = nullptr;
   int validationMessages = 0;
@@ -155,19 +174,69 @@ bool createSwapchain(Game& g) {
   return true;
 }
 
-// The scene pipeline (depth LESS, the stencil written from a dynamic reference) and the outline
-// pipeline (no depth test, drawn where the stencil is not the outlined box's).
+// The outline pipeline (no depth test, drawn where the stencil is not the outlined box's); the
+// scene's own (shadowed) is createShadows'.
 bool createPipelines(Game& g) {
   HOST_CHECK(host::createBoxLayout(g.dev.device, &g.layout));
   VkPipelineDepthStencilStateCreateInfo ds = host::depthTested(VK_COMPARE_OP_LESS);
   ds.stencilTestEnable = VK_TRUE;
-  ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0xff, 0xff, 0};
-  ds.back = ds.front;
-  HOST_CHECK(host::createBoxPipeline(g.dev.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.scene));
   ds.depthTestEnable = ds.depthWriteEnable = VK_FALSE;
   ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_NOT_EQUAL, 0xff, 0, 0};
   ds.back = ds.front;
   HOST_CHECK(host::createBoxPipeline(g.dev.device, g.layout, kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.outline));
+  return true;
+}
+
+// The shadow map, its sampler and descriptor set, the shadowed scene pipeline (depth LESS, the
+// stencil written from a dynamic reference, the map sampled) and the casters' depth-only pipeline (host_box.vert alone) into the map.
+bool createShadows(Game& g) {
+  HOST_CHECK(host::createImage(g.dev.device, g.dev.memory, kShadowSize, kShadowSize, VK_FORMAT_D32_SFLOAT,
+                               VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                               VK_IMAGE_ASPECT_DEPTH_BIT, &g.shadowMap));
+  VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};
+  si.magFilter = si.minFilter = VK_FILTER_NEAREST;
+  si.addressModeU = si.addressModeV = si.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
+  HOST_CHECK(vkCreateSampler(g.dev.device, &si, nullptr, &g.shadowSampler));
+  VkDescriptorSetLayoutBinding b{0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_FRAGMENT_BIT, nullptr};
+  VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+  li.bindingCount = 1;
+  li.pBindings = &b;
+  HOST_CHECK(vkCreateDescriptorSetLayout(g.dev.device, &li, nullptr, &g.shadowSetLayout));
+  VkDescriptorPoolSize ps{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1};
+  VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  pi.maxSets = 1;
+  pi.poolSizeCount = 1;
+  pi.pPoolSizes = &ps;
+  HOST_CHECK(vkCreateDescriptorPool(g.dev.device, &pi, nullptr, &g.shadowPool));
+  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  ai.descriptorPool = g.shadowPool;
+  ai.descriptorSetCount = 1;
+  ai.pSetLayouts = &g.shadowSetLayout;
+  HOST_CHECK(vkAllocateDescriptorSets(g.dev.device, &ai, &g.shadowSet));
+  VkDescriptorImageInfo ii{g.shadowSampler, g.shadowMap.view, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = g.shadowSet;
+  w.descriptorCount = 1;
+  w.descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
+  w.pImageInfo = &ii;
+  vkUpdateDescriptorSets(g.dev.device, 1, &w, 0, nullptr);
+  VkPushConstantRange range{VK_SHADER_STAGE_VERTEX_BIT, 0, 2 * sizeof(glm::mat4)};
+  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+  pl.setLayoutCount = 1;
+  pl.pSetLayouts = &g.shadowSetLayout;
+  pl.pushConstantRangeCount = 1;
+  pl.pPushConstantRanges = &range;
+  HOST_CHECK(vkCreatePipelineLayout(g.dev.device, &pl, nullptr, &g.shadedLayout));
+  VkPipelineDepthStencilStateCreateInfo ds = host::depthTested(VK_COMPARE_OP_LESS);
+  ds.stencilTestEnable = VK_TRUE;
+  ds.front = {VK_STENCIL_OP_KEEP, VK_STENCIL_OP_REPLACE, VK_STENCIL_OP_KEEP, VK_COMPARE_OP_ALWAYS, 0xff, 0xff, 0};
+  ds.back = ds.front;
+  HOST_CHECK(host::createHostPipeline(g.dev.device, g.shadedLayout,
+                                      {host_shadowed_vert, sizeof(host_shadowed_vert), host_shadowed_frag, sizeof(host_shadowed_frag)},
+                                      kColorFormat, g.depthFormat, g.depthFormat, ds, true, &g.shaded));
+  HOST_CHECK(host::createHostPipeline(g.dev.device, g.layout, {host_box_vert, sizeof(host_box_vert), nullptr, 0}, VK_FORMAT_UNDEFINED,
+                                      VK_FORMAT_D32_SFLOAT, VK_FORMAT_UNDEFINED, host::depthTested(VK_COMPARE_OP_LESS_OR_EQUAL), false,
+                                      &g.casters));
   return true;
 }
 
@@ -253,6 +322,22 @@ glm::mat4 walkView(const Scene& s, uint32_t frame, uint32_t frames) {
   return glm::lookAt(eye, eye + dir, glm::vec3(0, 1, 0));
 }
 
+// The sun: an orthographic view around the ground and everything standing on it (Vulkan clip, depth
+// 0 near the sun).
+glm::mat4 sunViewProj(const Scene& s) {
+  const float w = s.half + 0.5f * s.spacing, height = s.plantMax.y - s.plantMin.y;
+  const glm::vec3 l = glm::normalize(glm::vec3(0.5f, 1.0f, 0.35f)), centre(0.0f, 0.5f * height, 0.0f);
+  const float reach = glm::length(glm::vec3(w, height, w));
+  const glm::mat4 view = glm::lookAt(centre + l * (2.0f * reach), centre, glm::vec3(0, 1, 0));
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (int k = 0; k < 8; ++k) {
+    const glm::vec3 q(view * glm::vec4(k & 1 ? w : -w, k & 2 ? height : 0.0f, k & 4 ? w : -w, 1.0f));
+    lo = glm::min(lo, q);
+    hi = glm::max(hi, q);
+  }
+  return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z - 0.01f * reach, -lo.z + 0.01f * reach) * view;
+}
+
 // Checks the slot's last frame (its readback is complete once its fence was waited for).
 void checkSlot(Game& g, Slot& s) {
   const size_t n = size_t(kW) * kH;
@@ -319,15 +404,36 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
           VK_ACCESS_2_TRANSFER_READ_BIT, kColorStage, kColorAccess);
   barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, kCopy,
           VK_ACCESS_2_TRANSFER_READ_BIT, kDepthStage, kDepthAccess);
-  // The host's opaque scene: ground and boxes, the outlined box writing its stencil value.
-  std::vector<std::pair<BoxPush, uint32_t>> boxes;
+  // The sun's shadow map, once: cleared (nothing casts yet) into the state the scene samples it in.
+  if (!g.shadowReady) {
+    barrier(cmd, g.shadowMap.image, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+            VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+    const VkClearDepthStencilValue far{1.0f, 0};
+    const VkImageSubresourceRange range{VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
+    vkCmdClearDepthStencilImage(cmd, g.shadowMap.image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &far, 1, &range);
+    barrier(cmd, g.shadowMap.image, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+            kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT);
+    g.shadowReady = true;
+  }
+  // The host's opaque scene: ground and boxes in the sun's light and the forest's and boxes'
+  // shadows (the map the previous frame drew), the outlined box writing its stencil value.
+  struct Placed {
+    glm::mat4 model;
+    uint32_t color, stencil;  // host_shadowed.vert's colour index; the stencil value
+  };
+  std::vector<Placed> placed;
   const float w = sc.half * 2.0f + sc.spacing;
-  boxes.push_back({{vp * glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, -0.05f, 0)), glm::vec3(w, 0.1f, w)),
-                    glm::vec4(0.35f, 0.45f, 0.25f, 1)}, 0u});
-  for (size_t i = 0; i < sc.boxes.size(); ++i)
-    boxes.push_back({{vp * sc.boxes[i], i == 0 ? glm::vec4(0.8f, 0.3f, 0.25f, 1) : glm::vec4(0.6f, 0.6f, 0.65f, 1)},
-                     i == 0 ? uint32_t(kOutlined) : 0u});
-  drawBoxes(g, cmd, g.scene, true, boxes);
+  placed.push_back({glm::scale(glm::translate(glm::mat4(1.0f), glm::vec3(0, -0.05f, 0)), glm::vec3(w, 0.1f, w)), 0u, 0u});
+  for (size_t i = 0; i < sc.boxes.size(); ++i) placed.push_back({sc.boxes[i], i == 0 ? 1u : 2u, i == 0 ? uint32_t(kOutlined) : 0u});
+  host::beginBoxPass(cmd, g.color.view, g.depth.view, true, true, {{0.55f, 0.7f, 0.9f, 1.0f}}, 1.0f, kW, kH, g.shaded);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.shadedLayout, 0, 1, &g.shadowSet, 0, nullptr);
+  for (const Placed& p : placed) {
+    const glm::mat4 push[2] = {vp * p.model, g.light * p.model};
+    vkCmdSetStencilReference(cmd, VK_STENCIL_FACE_FRONT_AND_BACK, p.stencil);
+    vkCmdPushConstants(cmd, g.shadedLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof push, push);
+    vkCmdDraw(cmd, 36, 1, 0, p.color);
+  }
+  vkCmdEndRendering(cmd);
   // Depth and stencil before Canopy (the self-check).
   barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
           kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
@@ -351,6 +457,51 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   // The outline of box 0, where the stencil is not its own: the stencil survived Canopy's passes.
   const glm::mat4 grown = sc.boxes[0] * glm::scale(glm::mat4(1.0f), glm::vec3(1.12f));
   drawBoxes(g, cmd, g.outline, false, {{{vp * grown, glm::vec4(1.0f, 0.85f, 0.1f, 1)}, uint32_t(kOutlined)}});
+  // The sun's shadow map for the next frame: the host's boxes (its own casters), then the forest
+  // over them, each leaf where this frame shows it.
+  barrier(cmd, g.shadowMap.image, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+          VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+          kDepthStage, kDepthAccess);
+  {
+    VkRenderingAttachmentInfo z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    z.imageView = g.shadowMap.view;
+    z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    z.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    z.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {kShadowSize, kShadowSize}};
+    ri.layerCount = 1;
+    ri.pDepthAttachment = &z;
+    vkCmdBeginRendering(cmd, &ri);
+    const VkViewport v{0, 0, float(kShadowSize), float(kShadowSize), 0, 1};
+    const VkRect2D area{{0, 0}, {kShadowSize, kShadowSize}};
+    vkCmdSetViewport(cmd, 0, 1, &v);
+    vkCmdSetScissor(cmd, 0, 1, &area);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.casters);
+    for (const glm::mat4& b : sc.boxes) {
+      const BoxPush push{g.light * b, glm::vec4(0.0f)};
+      vkCmdPushConstants(cmd, g.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push, &push);
+      vkCmdDraw(cmd, 36, 1, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+  }
+  canopy::CanopyShadowInputs shadow;
+  shadow.depth = canopy::canopyImage(
+      g.shadowMap.image, g.shadowMap.view,
+      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_FORMAT_D32_SFLOAT,
+      {kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
+      {VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+  shadow.width = shadow.height = kShadowSize;
+  shadow.lightViewProj = toCanopy(g.light);
+  shadow.clear = false;  // over the boxes the host drew
+  bool updated = false;
+  const canopy::Status shadowStatus = canopy::recordCanopyShadow(g.ctx, cmd, shadow, &updated);
+  if (!shadowStatus.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", shadowStatus.message().c_str());
+    return false;
+  }
+  g.shadowUpdates += updated;
   // Depth, stencil and colour after, then the colour into the swapchain image.
   barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
           kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
@@ -542,8 +693,14 @@ void shutdown(Game& g) {
     }
     for (VkSemaphore s : g.presentReady) vkDestroySemaphore(g.dev.device, s, nullptr);
     vkDestroyCommandPool(g.dev.device, g.pool, nullptr);
-    vkDestroyPipeline(g.dev.device, g.scene, nullptr);
     vkDestroyPipeline(g.dev.device, g.outline, nullptr);
+    vkDestroyPipeline(g.dev.device, g.shaded, nullptr);
+    vkDestroyPipeline(g.dev.device, g.casters, nullptr);
+    vkDestroyPipelineLayout(g.dev.device, g.shadedLayout, nullptr);
+    vkDestroyDescriptorPool(g.dev.device, g.shadowPool, nullptr);
+    vkDestroyDescriptorSetLayout(g.dev.device, g.shadowSetLayout, nullptr);
+    vkDestroySampler(g.dev.device, g.shadowSampler, nullptr);
+    host::destroyImage(g.dev.device, g.shadowMap);
     vkDestroyPipelineLayout(g.dev.device, g.layout, nullptr);
     host::destroyImage(g.dev.device, g.color);
     host::destroyImage(g.dev.device, g.depth);
@@ -615,7 +772,7 @@ int main(int argc, char** argv) {
             host::createImage(g.dev.device, g.dev.memory, kW, kH, kColorFormat, kColorUsage, VK_IMAGE_ASPECT_COLOR_BIT, &g.color) == VK_SUCCESS &&
             host::createImage(g.dev.device, g.dev.memory, kW, kH, g.depthFormat, kDepthUsage,
                               VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT, &g.depth) == VK_SUCCESS &&
-            createPipelines(g) && createFrames(g);
+            createPipelines(g) && createShadows(g) && createFrames(g);
   if (ok && sceneFile.empty()) {
     const canopy::Status s = canopy::loadModel(gltf, {}, &model);
     if (!s.ok()) std::fprintf(stderr, "canopy-game-host: %s\n", s.message().c_str());
@@ -638,6 +795,7 @@ int main(int argc, char** argv) {
   }
   canopy::destroyModel(model);
   for (canopy::Model* m : models) canopy::destroyModel(m);
+  g.light = sunViewProj(scene);
   if (ok) ok = loadVegetation(g, scene, frames);
   for (uint32_t f = 0; ok && f < frames && !glfwWindowShouldClose(g.window); ++f) {
     glfwPollEvents();
@@ -650,16 +808,16 @@ int main(int argc, char** argv) {
               st.layers.instances, std::filesystem::path(sceneFile.empty() ? gltf : sceneFile).filename().c_str(),
               st.layers.lastVisibleInstances, st.layers.lastVisibleSpecies, st.layers.species, (unsigned long long)st.layers.rebuilds,
               frames);
-  std::printf("self-check: %llu frames checked, %llu with vegetation in front of the host's scene, %llu pixels farther after "
-              "Canopy, %llu stencil bytes changed, %d validation messages: %s\n",
-              (unsigned long long)g.checkedFrames, (unsigned long long)g.framesWithVegetationInFront,
+  std::printf("self-check: %llu frames checked, %llu with vegetation in front of the host's scene, %llu with the forest's shadow "
+              "drawn, %llu pixels farther after Canopy, %llu stencil bytes changed, %d validation messages: %s\n",
+              (unsigned long long)g.checkedFrames, (unsigned long long)g.framesWithVegetationInFront, (unsigned long long)g.shadowUpdates,
               (unsigned long long)g.fartherPixels, (unsigned long long)g.stencilChanged, g.validationMessages,
               ok && g.fartherPixels == 0 && g.stencilChanged == 0 && g.validationMessages == 0 && g.framesWithVegetationInFront > 0 &&
-                      g.checkedFrames == frames
+                      g.checkedFrames == frames && g.shadowUpdates == frames
                   ? "PASS"
                   : "FAIL");
   return ok && g.fartherPixels == 0 && g.stencilChanged == 0 && g.validationMessages == 0 && g.framesWithVegetationInFront > 0 &&
-                 g.checkedFrames == frames
+                 g.checkedFrames == frames && g.shadowUpdates == frames
              ? 0
              : 1;
 }

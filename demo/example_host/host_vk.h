@@ -258,16 +258,27 @@ inline VkResult createBoxLayout(VkDevice device, VkPipelineLayout* out) {
   return vkCreatePipelineLayout(device, &li, nullptr, out);
 }
 
-// A box pipeline for dynamic rendering into `color` and `depth` (`stencil`: the depth format again,
-// or UNDEFINED), with depth-stencil state `ds`; viewport, scissor and (with `stencilReference`)
-// the stencil reference are dynamic.
-inline VkResult createBoxPipeline(VkDevice device, VkPipelineLayout layout, VkFormat color, VkFormat depth, VkFormat stencil,
-                                  const VkPipelineDepthStencilStateCreateInfo& ds, bool stencilReference, VkPipeline* out) {
+// A host's SPIR-V: a vertex shader and a fragment shader (none: a depth-only pass).
+struct ShaderPair {
+  const uint32_t* vert = nullptr;
+  size_t vertBytes = 0;
+  const uint32_t* frag = nullptr;
+  size_t fragBytes = 0;
+};
+
+// A pipeline for dynamic rendering of `shaders` (no vertex input: the shaders make their corners)
+// into `color` (UNDEFINED: none, a depth-only pass) and `depth` (`stencil`: the depth format again,
+// or UNDEFINED), with depth-stencil state `ds`; viewport, scissor and (with `stencilReference`) the
+// stencil reference are dynamic.
+inline VkResult createHostPipeline(VkDevice device, VkPipelineLayout layout, const ShaderPair& shaders, VkFormat color, VkFormat depth,
+                                   VkFormat stencil, const VkPipelineDepthStencilStateCreateInfo& ds, bool stencilReference,
+                                   VkPipeline* out) {
   VkShaderModule modules[2] = {};
-  const uint32_t* code[2] = {host_box_vert, host_box_frag};
-  const size_t size[2] = {sizeof(host_box_vert), sizeof(host_box_frag)};
+  const uint32_t* code[2] = {shaders.vert, shaders.frag};
+  const size_t size[2] = {shaders.vertBytes, shaders.fragBytes};
+  const uint32_t stageCount = shaders.frag ? 2 : 1;
   VkResult r = VK_SUCCESS;
-  for (int i = 0; i < 2 && r == VK_SUCCESS; ++i) {
+  for (uint32_t i = 0; i < stageCount && r == VK_SUCCESS; ++i) {
     VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     mi.codeSize = size[i];
     mi.pCode = code[i];
@@ -295,19 +306,19 @@ inline VkResult createBoxPipeline(VkDevice device, VkPipelineLayout layout, VkFo
   VkPipelineColorBlendAttachmentState blend{};
   blend.colorWriteMask = 0xf;
   VkPipelineColorBlendStateCreateInfo cb{VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO};
-  cb.attachmentCount = 1;
+  cb.attachmentCount = color != VK_FORMAT_UNDEFINED ? 1 : 0;
   cb.pAttachments = &blend;
   const VkDynamicState dyn[] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR, VK_DYNAMIC_STATE_STENCIL_REFERENCE};
   VkPipelineDynamicStateCreateInfo dy{VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO};
   dy.dynamicStateCount = stencilReference ? 3 : 2;
   dy.pDynamicStates = dyn;
   VkPipelineRenderingCreateInfo rci{VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO};
-  rci.colorAttachmentCount = 1;
+  rci.colorAttachmentCount = color != VK_FORMAT_UNDEFINED ? 1 : 0;
   rci.pColorAttachmentFormats = &color;
   rci.depthAttachmentFormat = depth;
   rci.stencilAttachmentFormat = stencil;
   VkGraphicsPipelineCreateInfo pci{VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO, &rci};
-  pci.stageCount = 2;
+  pci.stageCount = stageCount;
   pci.pStages = stages;
   pci.pVertexInputState = &vin;
   pci.pInputAssemblyState = &ia;
@@ -322,6 +333,13 @@ inline VkResult createBoxPipeline(VkDevice device, VkPipelineLayout layout, VkFo
   for (VkShaderModule m : modules)
     if (m) vkDestroyShaderModule(device, m, nullptr);
   return r;
+}
+
+// The box pipeline (host_box.vert/frag) into `color` and `depth`, as createHostPipeline.
+inline VkResult createBoxPipeline(VkDevice device, VkPipelineLayout layout, VkFormat color, VkFormat depth, VkFormat stencil,
+                                  const VkPipelineDepthStencilStateCreateInfo& ds, bool stencilReference, VkPipeline* out) {
+  return createHostPipeline(device, layout, {host_box_vert, sizeof(host_box_vert), host_box_frag, sizeof(host_box_frag)}, color, depth,
+                            stencil, ds, stencilReference, out);
 }
 
 // The host's device, made as docs/embedding.md says: a physical device Canopy can run on

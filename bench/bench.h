@@ -105,5 +105,8 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
 // Species (issue 53): six species against one at equal placed faces, mesh memory against copies,
 // the first frame with and without recordCanopyLoad.
 int runSpeciesBench(Device& dev, uint64_t facesPerSpecies, uint32_t copiesPerSpecies, int frames, uint32_t width, uint32_t height);
+// Shadows (issue 54): the frame without a shadow and with an update every 1, 2 and 4 frames, and the
+// update's own cost, for a shrub of each face count and a six-species forest.
+int runShadowBench(Device& dev, const std::vector<uint64_t>& faceCounts, int frames, uint32_t width, uint32_t height, uint32_t mapSize);
 }
 }  // namespace canopy

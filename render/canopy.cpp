@@ -752,6 +752,8 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.frames = c->frames;
   s.layersRebuilt = c->layersRebuilt;
   s.resourceGeneration = c->generation;
+  s.shadowUpdates = c->shadow.updates;
+  s.shadowSkips = c->shadow.skips;
   s.internalGraphBuilds = c->recordGraphBuilds;
   s.pendingReleases = c->device->pendingReleases.size();
   s.deviceBytes = c->device->allocator->liveBytes;

@@ -623,6 +623,9 @@ struct CanopyStats {
   // live buffers and images, their highest total so far, and the memory blocks Canopy allocated
   // (0 when the host's DeviceMemoryAllocator provides the memory).
   uint64_t deviceBytes = 0, peakDeviceBytes = 0, deviceBlockBytes = 0;
+  // recordCanopyShadow: calls that drew the vegetation's shadow, and calls between updates
+  // (CanopyShadowInputs.updateInterval) that only moved the map's state.
+  uint64_t shadowUpdates = 0, shadowSkips = 0;
   LayerStats layers;
   SimulationStats simulation;
 };

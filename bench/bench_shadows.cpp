@@ -118,7 +118,7 @@ Status measure(Device& d, const Scene& sc, uint32_t w, uint32_t h, uint32_t mapS
     const LayerView view = orbitView(sc.lo, sc.hi, 20.0f, 15.0f, 40.0f, float(w) / float(h), 0.9f);
     const glm::mat4 light = sunAround(sc.lo, sc.hi);
     bool first = true;
-    uint64_t number = 0;
+    static uint64_t number = 0;  // the device's frame numbers never decrease, across contexts
     // interval 0: no shadow. Warm-up frames first, then the variants alternated frame by frame.
     std::vector<double> wall[4], drawn, skipped;
     const uint32_t intervals[4] = {0, 1, 2, 4};

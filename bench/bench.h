@@ -1,4 +1,5 @@
 #pragma once
+#include <algorithm>
 #include <chrono>
 #include <functional>
 #include <cstdint>
@@ -12,6 +13,13 @@
 namespace canopy {
 struct Device;
 namespace bench {
+// The median of samples (the upper one of an even count; 0 for none): the benchmarks' figure of record.
+inline double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
 // Wall clock in milliseconds (steady), for the benchmarks' frame and step times.
 inline double nowMs() {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();

@@ -19,11 +19,6 @@
 namespace canopy::bench {
 namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 double mean(const std::vector<double>& v) {
   double s = 0;
   for (double x : v) s += x;

@@ -32,11 +32,6 @@ double rssMiB() {
   return double(resident) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // Non-finite floats in a buffer read back whole.
 Status countNonFinite(Device& d, const Buffer& b, uint64_t* bad, uint64_t* seen) {

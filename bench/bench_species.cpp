@@ -20,11 +20,6 @@
 namespace canopy::bench {
 namespace {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // A context on `species` with `copies`, its host targets and frame graph.
 struct SpeciesRun {

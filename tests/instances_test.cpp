@@ -17,6 +17,8 @@ using namespace canopy;
 using canopy::test::GpuTest;
 using canopy::test::Host;
 using canopy::test::differing;
+using canopy::test::createHostContext;
+using canopy::test::renderHostFrames;
 
 namespace {
 
@@ -76,34 +78,15 @@ class InstancesTest : public GpuTest {
             bool perVertex = false, float wind = 1.0f) {
     host.w = 160;
     host.h = 120;
-    ASSERT_TRUE(host.create(dev, 1).ok());
-    CanopyDesc d;
-    d.width = host.w;
-    d.height = host.h;
-    d.colorFormat = host.colorFormat;
-    d.instances = instances;
-    d.params.simulation.wind.strength = wind;
-    d.allowPerVertex = perVertex;
-    if (perVertex) d.params.animation = AnimationMode::PerVertex;
-    const Status made = createCanopy(dev, model, d, ctx);
+    const Status made = createHostContext(dev, host, {SpeciesModel{&model}}, instances, wind, perVertex, ctx);
     ASSERT_TRUE(made.ok()) << made.message();
   }
   // `frames` frames of a context on `model` (with `instances`) seen by `view`, read back.
   void render(const VegetationModel& model, const std::vector<CanopyInstance>& instances, const LayerView& view, int frames,
               std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr, bool perVertex = false,
               float wind = 1.0f) {
-    Host host;
-    CanopyContext* ctx = nullptr;
-    make(host, model, instances, &ctx, perVertex, wind);
-    ASSERT_NE(ctx, nullptr);
-    for (int i = 0; i < frames; ++i) {
-      const Status s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
-      ASSERT_TRUE(s.ok()) << s.message();
-    }
-    ASSERT_TRUE(host.read(color, depth).ok());
-    if (stats) *stats = canopyStats(ctx);
-    destroyCanopy(ctx);
-    host.destroy();
+    const Status s = renderHostFrames(dev, frameNumber, {SpeciesModel{&model}}, instances, view, frames, color, depth, stats, perVertex, wind);
+    ASSERT_TRUE(s.ok()) << s.message();
   }
 };
 

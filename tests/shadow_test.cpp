@@ -185,13 +185,7 @@ struct Scene {
   Status create(Device& dev, const VegetationModel& m, float wind) {
     host.w = 160;
     host.h = 120;
-    CANOPY_TRY(host.create(dev, 1));
-    CanopyDesc d;
-    d.width = host.w;
-    d.height = host.h;
-    d.colorFormat = host.colorFormat;
-    d.params.simulation.wind.strength = wind;
-    CANOPY_TRY(createCanopy(dev, m, d, &ctx));
+    CANOPY_TRY(canopy::test::createHostContext(dev, host, {SpeciesModel{&m}}, {}, wind, false, &ctx));
     view = orbitView(m.boundsMin, m.boundsMax, 0.0f, 10.0f, 40.0f, 160.0f / 120.0f, 1.0f);
     return Status();
   }

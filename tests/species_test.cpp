@@ -18,6 +18,8 @@ using namespace canopy;
 using canopy::test::GpuTest;
 using canopy::test::Host;
 using canopy::test::differing;
+using canopy::test::createHostContext;
+using canopy::test::renderHostFrames;
 
 namespace {
 
@@ -95,32 +97,13 @@ class SpeciesTest : public GpuTest {
   uint64_t frameNumber = 0;
   void make(Host& host, const std::vector<SpeciesModel>& species, const std::vector<CanopyInstance>& instances,
             CanopyContext** ctx, float wind) {
-    ASSERT_TRUE(host.create(dev, 1).ok());
-    CanopyDesc d;
-    d.width = host.w;
-    d.height = host.h;
-    d.colorFormat = host.colorFormat;
-    d.instances = instances;
-    d.params.simulation.wind.strength = wind;
-    const Status made = createCanopy(dev, species, d, ctx);
+    const Status made = createHostContext(dev, host, species, instances, wind, false, ctx);
     ASSERT_TRUE(made.ok()) << made.message();
   }
   void render(const std::vector<SpeciesModel>& species, const std::vector<CanopyInstance>& instances, const LayerView& view,
               int frames, std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats) {
-    Host host;
-    host.w = 160;
-    host.h = 120;
-    CanopyContext* ctx = nullptr;
-    make(host, species, instances, &ctx, 1.0f);
-    ASSERT_NE(ctx, nullptr);
-    for (int i = 0; i < frames; ++i) {
-      const Status s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
-      ASSERT_TRUE(s.ok()) << s.message();
-    }
-    ASSERT_TRUE(host.read(color, depth).ok());
-    if (stats) *stats = canopyStats(ctx);
-    destroyCanopy(ctx);
-    host.destroy();
+    const Status s = renderHostFrames(dev, frameNumber, species, instances, view, frames, color, depth, stats);
+    ASSERT_TRUE(s.ok()) << s.message();
   }
 };
 

@@ -255,4 +255,40 @@ inline double differing(const std::vector<glm::vec4>& a, const std::vector<glm::
 }
 
 
+// A context on `species` with `instances` (the wind's strength `wind`; `perVertex`: the per-vertex
+// baseline draws it) for `host`'s targets, which are created here at host.w x host.h.
+inline Status createHostContext(Device& dev, Host& host, const std::vector<SpeciesModel>& species,
+                                const std::vector<CanopyInstance>& instances, float wind, bool perVertex, CanopyContext** ctx) {
+  CANOPY_TRY(host.create(dev, 1));
+  CanopyDesc d;
+  d.width = host.w;
+  d.height = host.h;
+  d.colorFormat = host.colorFormat;
+  d.instances = instances;
+  d.params.simulation.wind.strength = wind;
+  d.allowPerVertex = perVertex;
+  if (perVertex) d.params.animation = AnimationMode::PerVertex;
+  return createCanopy(dev, species, d, ctx);
+}
+
+// `frames` frames at `view` of a context on `species` with `instances` in a 160x120 host (frame
+// numbers from `frameNumber`, which never decreases on the device), read back; the context's
+// statistics in *stats (optional); everything destroyed after.
+inline Status renderHostFrames(Device& dev, uint64_t& frameNumber, const std::vector<SpeciesModel>& species,
+                               const std::vector<CanopyInstance>& instances, const LayerView& view, int frames,
+                               std::vector<glm::vec4>* color, std::vector<float>* depth, CanopyStats* stats = nullptr,
+                               bool perVertex = false, float wind = 1.0f) {
+  Host host;
+  host.w = 160;
+  host.h = 120;
+  CanopyContext* ctx = nullptr;
+  Status s = createHostContext(dev, host, species, instances, wind, perVertex, &ctx);
+  for (int i = 0; s.ok() && i < frames; ++i) s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
+  if (s.ok()) s = host.read(color, depth);
+  if (s.ok() && stats) *stats = canopyStats(ctx);
+  if (ctx) destroyCanopy(ctx);
+  host.destroy();
+  return s;
+}
+
 }  // namespace canopy::test

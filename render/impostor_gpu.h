@@ -17,10 +17,10 @@ namespace canopy {
 struct Device;
 struct ImpostorDraws;
 
-// What the impostors' creation reads of the vegetation: the mesh the bake draws and the placed
-// copies' table that draw binds (both must stay where they are until the bake is recorded: on a
-// host's device, in its first frame), the settings the views are shaded with, the layers' colour
-// format.
+// What the impostors' creation reads of the vegetation: the mesh the bake draws (it must stay where
+// it is until the bake is recorded: on a host's device, in its first frame; the bake binds a copies'
+// table of its own, one copy at the origin), the placed copies (they size the impostor list), the
+// settings the views are shaded with, the layers' colour format.
 struct ImpostorSources {
   const LayerMesh* mesh = nullptr;
   const LayerInstances* instances = nullptr;

@@ -68,6 +68,10 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.time = d.time;
   // Eq. 5's s: the wave's propagation speed (the paper's meaning) unless the host gives one.
   f.propagation = p.propagationSpeed > 0.0f ? p.propagationSpeed : d.waveSpeed;
+  f.bend = d.bend ? 1u : 0u;
+  f.bendOrigin = d.bendOrigin;
+  f.bendX = d.bendX;
+  f.bendZ = d.bendZ;
   f.offsetMode = p.approximateOffset == ApproximateOffset::Direction ? ANIM_OFFSET_DIRECTION : ANIM_OFFSET_VELOCITY;
   f.rigidity = p.rigidity;
   f.everyPartMoves = p.everyPartMoves ? 1u : 0u;

@@ -47,6 +47,8 @@ struct DynamicsFrameDesc {
   float nominalDt = 1.0f / 30.0f;     // the simulation's nominal step (eq. 6's Delta t unless DynamicsParams.dt), s
   uint32_t newestSlot = ANIM_RING_UNORDERED;  // ring slot of the newest field, when written in step order
   uint32_t halfResolution = 0;        // the layers' LayerFrame.halfResolution, passed to the composite
+  bool bend = false;                  // the pushers' bend field may be non-zero: the corners add it
+  glm::vec4 bendOrigin{0.0f, 0.0f, 0.0f, 1.0f}, bendX{1.0f, 0.0f, 0.0f, 0.0f}, bendZ{0.0f, 0.0f, 1.0f, 0.0f};  // AnimFrame's
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.
 uint32_t gridCorners(uint32_t pixels, uint32_t cellSize);

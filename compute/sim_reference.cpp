@@ -14,7 +14,7 @@ SimState makeState(uint32_t n, uint32_t ringSize) {
   s.velB.assign(velocityFloats(n), 0.0f);
   s.mg.assign(mgFloats(n, mgLevelCount(n)), 0.0f);
   s.wave.assign(6 * size_t(n) * n, 0.0f);
-  s.tiled.assign(2 * size_t(n) * n, 0.0f);
+  s.tiled.assign(2 * size_t(tiledVec2s(n)), 0.0f);
   s.ring.assign(size_t(ringSize) * 2 * n * n, 0.0f);
   s.ringTimes.assign(ringSize, 0.0f);
   return s;
@@ -453,18 +453,42 @@ void waveStep(const SimFrame& f, SimState& s) {
 
 void tile(const SimFrame& f, SimState& s) {
   const uint n = f.n, half = n / 2;
-  const float* S = &s.wave[0];
   float* ring = &s.ring[size_t(f.ringSlot) * 2 * n * n];
-  for (uint j = 0; j < n; ++j)
-    for (uint i = 0; i < n; ++i) {
-      const uint i2 = (i + half) % n, j2 = (j + half) % n;
-      const float wx = tileWeight(i, n), wy = tileWeight(j, n);
-      for (uint k = 0; k < 2; ++k) {
-        float t = wy * (wx * S[2 * (j * n + i) + k] + (1 - wx) * S[2 * (j * n + i2) + k]) +
-                  (1 - wy) * (wx * S[2 * (j2 * n + i) + k] + (1 - wx) * S[2 * (j2 * n + i2) + k]);
-        s.tiled[2 * (j * n + i) + k] = t;
-        ring[2 * (j * n + i) + k] = t;
+  // V_s into the plants' field and the ring; V_wind (after V_s and V_prev in the wave buffer) into
+  // the host's (shaders/sim_tile.comp).
+  for (uint field = 0; field < 2; ++field) {
+    const float* S = &s.wave[field == 0 ? 0 : 2 * size_t(waveWind(n, 0))];
+    float* out = &s.tiled[field == 0 ? 0 : 2 * size_t(tiledWindOffset(n))];
+    for (uint j = 0; j < n; ++j)
+      for (uint i = 0; i < n; ++i) {
+        const uint i2 = (i + half) % n, j2 = (j + half) % n;
+        const float wx = tileWeight(i, n), wy = tileWeight(j, n);
+        for (uint k = 0; k < 2; ++k) {
+          float t = wy * (wx * S[2 * (j * n + i) + k] + (1 - wx) * S[2 * (j * n + i2) + k]) +
+                    (1 - wy) * (wx * S[2 * (j2 * n + i) + k] + (1 - wx) * S[2 * (j2 * n + i2) + k]);
+          out[2 * (j * n + i) + k] = t;
+          if (field == 0) ring[2 * (j * n + i) + k] = t;
+        }
       }
+  }
+  // The pushers' bend field, each cell a damped spring toward the motors' target (the shader's
+  // substeps and order).
+  const uint bn = SIM_BEND_SCALE * n;
+  for (uint j = 0; j < bn; ++j)
+    for (uint i = 0; i < bn; ++i) {
+      const uint b = j * bn + i;
+      float* value = &s.tiled[2 * size_t(bendOffset(n) + b)];
+      float* rate = &s.tiled[2 * size_t(bendRateOffset(n) + b)];
+      vec2 v(value[0], value[1]), r(rate[0], rate[1]), target(0.0f);
+      const vec2 p = bendCellCentre(n, i, j);
+      for (uint m = 0; m < f.motorCount; ++m) target += motorBendTarget(f.motors[m], p);
+      const uint steps = uint(std::clamp(std::ceil(f.dt * 120.0f), 1.0f, 1200.0f));
+      const float h = f.dt / float(steps);
+      for (uint k = 0; k < steps; ++k) {
+        r += h * (-f.bendK * (v - target) - f.bendZeta * r);
+        v += h * r;
+      }
+      value[0] = v.x, value[1] = v.y, rate[0] = r.x, rate[1] = r.y;
     }
   s.ringTimes[f.ringSlot] = f.time + f.dt;
 }

@@ -25,6 +25,7 @@ Status checkPositive(const char* name, double v, double hi, const char* unit) {
 
 const rg::State kPersistent = rg::stateOf(rg::Use::ComputeStorageReadWrite);
 const rg::State kFrameRest = rg::stateOf(rg::Use::ComputeStorageRead);
+const rg::State kReadbackRest = rg::stateOf(rg::Use::HostRead);
 
 // Every simulation kernel binds the same seven buffers (shaders/sim_common.glsl), in this order.
 // A pass's slots name what its kernels read and write (`uses`); the others are bound untouched. A
@@ -53,6 +54,24 @@ Status simDispatch(rg::PassContext& c, const rg::Slots& slots, const ComputePipe
 
 }  // namespace
 
+rg::State windImageRest() {
+  // Any shader stage of the host may sample it after recordCanopy (docs/embedding.md "The wind").
+  return {VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+}
+
+const WindSlot* completedWindSlot(const Simulation& s, uint64_t completedFrame, uint32_t* index) {
+  const WindSlot* best = nullptr;
+  for (size_t i = 0; i < s.windSlots.size(); ++i) {
+    const WindSlot& w = s.windSlots[i];
+    if (w.valid && w.frame <= completedFrame && (!best || w.frame > best->frame || (w.frame == best->frame && w.time > best->time))) {
+      best = &w;
+      if (index) *index = uint32_t(i);
+    }
+  }
+  return best;
+}
+
 Status validateSimulationDesc(const SimulationDesc& d) {
   // SIM_MAX_GROUP_SIZE is the schema's groupSize bound (<canopy/canopy.h>, CANOPY_SIMULATION_DESC).
   static_assert(SIM_MAX_GROUP_SIZE == 1024u, "CANOPY_SIMULATION_DESC's groupSize range");
@@ -60,7 +79,7 @@ Status validateSimulationDesc(const SimulationDesc& d) {
 }
 
 Status validateSimulationParams(const SimulationParams& p, float dt) {
-  static_assert(SIM_MAX_MOTORS == kMaxMotors, "CANOPY_SIMULATION_PARAMS's motor count");
+  static_assert(SIM_MAX_MOTORS == kMaxMotors + kMaxPushers, "the host's motors and the pushers share SimFrame.motors");
   CANOPY_TRY(checkPositive("dt", dt, 10, "s"));
   return checkParams(p, "SimulationParams.");
 }
@@ -168,7 +187,10 @@ const ComputePipeline& projectionKernel(const Simulation& s, const gpu::SimFrame
 }  // namespace
 
 Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt, uint32_t ringSlot, uint32_t ringSize,
-                    gpu::SimFrame* out) {
+                    gpu::SimFrame* out, const std::vector<gpu::SimMotor>& pushers) {
+  if (p.motors.size() > kMaxMotors || pushers.size() > kMaxPushers)
+    return Status::error("makeSimFrame: " + std::to_string(p.motors.size()) + " motors and " + std::to_string(pushers.size()) +
+                         " pushers (at most " + std::to_string(kMaxMotors) + " and " + std::to_string(kMaxPushers) + ")");
   // The parameters were checked when they were given (validateSimulationParams; setCanopyParams),
   // not every frame; the step's dt is this frame's.
   CANOPY_TRY(checkPositive("dt", dt, 10, "s"));
@@ -195,7 +217,7 @@ Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt,
   f.mgLevels = gpu::mgLevelCount(n);
   f.mgSerialSize = 8;  // prepareSimulationStep applies the simulation's own settings (createSimulation)
   f.groupSize = SIM_MAX_GROUP_SIZE;
-  f.motorCount = uint32_t(p.motors.size());
+  f.motorCount = uint32_t(p.motors.size() + pushers.size());
   f.strength = p.wind.strength;
   f.frequency = p.wind.frequency;
   f.baseline = p.wind.baseline;
@@ -219,8 +241,13 @@ Status makeSimFrame(const SimulationParams& p, uint32_t n, float time, float dt,
   }
   f.ringSlot = ringSlot;
   f.ringSize = ringSize;
-  for (size_t i = 0; i < p.motors.size(); ++i)
-    f.motors[i] = {p.motors[i].x, p.motors[i].y, p.motors[i].radius, p.motors[i].strength};
+  for (size_t i = 0; i < p.motors.size(); ++i) {
+    const Motor& m = p.motors[i];
+    f.motors[i] = {glm::vec4(m.x, m.y, m.x, m.y), glm::vec4(m.radius, m.strength, 0.0f, 0.0f), glm::vec4(0.0f)};
+  }
+  for (size_t i = 0; i < pushers.size(); ++i) f.motors[p.motors.size() + i] = pushers[i];
+  f.bendK = p.push.stiffness;
+  f.bendZeta = p.push.damping;
   CANOPY_TRY(checkLoopBudget(f));
   *out = f;
   return Status();
@@ -272,9 +299,18 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, 
   CANOPY_TRY(createBuffer(d, 2 * gpu::velocityFloats(n) * F, use, MemoryUsage::DeviceLocal, &s.velocity, "sim velocity"));
   CANOPY_TRY(createBuffer(d, gpu::mgFloats(n, gpu::mgLevelCount(n)) * F, use, MemoryUsage::DeviceLocal, &s.multigrid, "sim multigrid"));
   CANOPY_TRY(createBuffer(d, 6ull * n * n * F, use, MemoryUsage::DeviceLocal, &s.wave, "sim wave"));
-  CANOPY_TRY(createBuffer(d, 2ull * n * n * F, use, MemoryUsage::DeviceLocal, &s.tiled, "sim tiled"));
+  CANOPY_TRY(createBuffer(d, 2ull * gpu::tiledVec2s(n) * F, use, MemoryUsage::DeviceLocal, &s.tiled, "sim tiled"));
   CANOPY_TRY(createBuffer(d, uint64_t(s.ringSize) * 2 * n * n * F, use, MemoryUsage::DeviceLocal, &s.ring, "sim history ring"));
   CANOPY_TRY(createBuffer(d, s.ringSize * F, use, MemoryUsage::DeviceLocal, &s.ringTimes, "sim ring times"));
+  ImageDesc wind;
+  wind.format = kWindImageFormat;
+  wind.width = wind.height = n;
+  wind.usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+  CANOPY_TRY(createImage(d, wind, &s.windImage, "sim wind image"));
+  // The host frame F reads the copy of frame F - framesInFlight while F's is written: one more slot.
+  s.windSlots.assign(d.framesInFlight + 1, WindSlot{});
+  CANOPY_TRY(createBuffer(d, s.windSlots.size() * 2ull * n * n * F, VK_BUFFER_USAGE_TRANSFER_DST_BIT, MemoryUsage::Readback,
+                          &s.windReadback, "sim wind readback"));
 
   const uint32_t push = sizeof(gpu::SimPush);
   const ComputePipelineDesc one{nullptr, push, {s.groupSize}, true}, grid{nullptr, push};
@@ -332,6 +368,14 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, 
     pass.write(ids[i], rg::Use::TransferDst);
     CANOPY_TRY(g.bindBuffer(ids[i], bufs[i]->buffer));
   }
+  const rg::ResourceId windImage = g.importImage("sim wind image", descOf(s.windImage), {}, windImageRest());
+  CANOPY_TRY(g.bindImage(windImage, s.windImage));
+  g.addPass("sim: clear wind image", [windImage](rg::PassContext& c) {
+     const VkClearColorValue zero{};
+     const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+     c.device->vk.CmdClearColorImage(c.cmd, c.image(windImage).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &all);
+     return Status();
+   }).write(windImage, rg::Use::TransferDst);
   CANOPY_TRY(submitOrDefer(d, std::move(work), deferred));  // the host's first frame records it on its device
 
   CANOPY_TRY(addSimulationPasses(s, s.graph, &s.graphIds));
@@ -349,7 +393,8 @@ void destroySimulation(Simulation& s) {
                              &s.wideStam, &s.wideOscillator, &s.laneProject, &s.laneDiffuse,
                              &s.laneOscillator})
     destroyComputePipeline(d, *p);
-  for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes}) destroyBuffer(d, *b);
+  for (Buffer* b : {&s.frame, &s.velocity, &s.multigrid, &s.wave, &s.tiled, &s.ring, &s.ringTimes, &s.windReadback}) destroyBuffer(d, *b);
+  destroyImage(d, s.windImage);
   s.device = nullptr;
 }
 
@@ -370,6 +415,10 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
   CANOPY_TRY(g.bindBuffer(r.tiled, s.tiled.buffer));
   CANOPY_TRY(g.bindBuffer(r.ring, s.ring.buffer));
   CANOPY_TRY(g.bindBuffer(r.ringTimes, s.ringTimes.buffer));
+  r.windImage = g.importImage("sim wind image", descOf(s.windImage), windImageRest(), windImageRest());
+  CANOPY_TRY(g.bindImage(r.windImage, s.windImage));
+  r.windReadback = g.importBuffer("sim wind readback", s.windReadback.size, kReadbackRest, kReadbackRest);
+  CANOPY_TRY(g.bindBuffer(r.windReadback, s.windReadback.buffer));
   Simulation* sp = &s;
   auto mac = [sp] { return sp->next.scheme == SIM_SCHEME_MAC_MULTIGRID; };
   // Which passes run this frame is the graph's to know (when): none while held, the MAC passes or
@@ -418,8 +467,33 @@ Status addSimulationPasses(Simulation& s, rg::RenderGraph& g, SimulationResource
                   })
       .when(stepping);
   rg::addSlotPass(g, "sim: tile + history",
-                  simSlots(s, r, {{r.frame, read}, {r.wave, read}, {r.tiled, write}, {r.ring, write}, {r.ringTimes, write}}),
-                  [=](rg::PassContext& c, const rg::Slots& slots) { return simDispatch(c, slots, sp->tile, sp->n, sp->n, 0); })
+                  simSlots(s, r, {{r.frame, read}, {r.wave, read}, {r.tiled, readWrite}, {r.ring, write}, {r.ringTimes, write}}),
+                  [=](rg::PassContext& c, const rg::Slots& slots) {
+                    return simDispatch(c, slots, sp->tile, SIM_BEND_SCALE * sp->n, SIM_BEND_SCALE * sp->n, 0);
+                  })
+      .when(stepping);
+  // The wind a host reads: the tiled V_wind into the image any of its shaders may sample, and into
+  // this step's readback slot for sampleCanopyWind.
+  const VkDeviceSize windBytes = 2ull * s.n * s.n * sizeof(float), windOffset = 2ull * gpu::tiledWindOffset(s.n) * sizeof(float);
+  g.addPass("sim: wind image", [sp, r, windOffset](rg::PassContext& c) {
+     VkBufferImageCopy copy{};
+     copy.bufferOffset = windOffset;
+     copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+     copy.imageExtent = {sp->n, sp->n, 1};
+     c.device->vk.CmdCopyBufferToImage(c.cmd, c.buffer(r.tiled), c.image(r.windImage).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                                       1, &copy);
+     return Status();
+   })
+      .read(r.tiled, Use::TransferSrc)
+      .write(r.windImage, Use::TransferDst)
+      .when(stepping);
+  g.addPass("sim: wind readback", [sp, r, windOffset, windBytes](rg::PassContext& c) {
+     const VkBufferCopy copy{windOffset, sp->windSlotNext * windBytes, windBytes};
+     c.device->vk.CmdCopyBuffer(c.cmd, c.buffer(r.tiled), c.buffer(r.windReadback), 1, &copy);
+     return Status();
+   })
+      .read(r.tiled, Use::TransferSrc)
+      .write(r.windReadback, Use::TransferDst)
       .when(stepping);
   *out = r;
   return Status();
@@ -436,7 +510,7 @@ Status chooseGroupSize(const Simulation& s, gpu::SimFrame* f) {
 Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt) {
   const uint32_t slot = uint32_t(s.stats.steps % s.ringSize);
   gpu::SimFrame f;
-  CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, slot, s.ringSize, &f));
+  CANOPY_TRY(makeSimFrame(p, s.n, float(s.time), dt, slot, s.ringSize, &f, s.pushers));
   f.mgSerialSize = s.mgSerialSize;
   CANOPY_TRY(chooseGroupSize(s, &f));
   s.next = f;
@@ -444,7 +518,11 @@ Status prepareSimulationStep(Simulation& s, const SimulationParams& p, float dt)
   s.laneProjectNext = &projectionKernel(s, f, &projectThreads) == &s.laneProject;
   s.laneDiffuseNext = s.laneWidth != 0 && estimateLaneDiffuseTrips(f, s.laneWidth) <= kMaxLoopTrips;
   s.laneOscillatorNext = s.laneWidth != 0 && estimateLaneOscillatorTrips(f, s.laneWidth) <= kMaxLoopTrips;
+  for (const gpu::SimMotor& m : s.pushers) s.bendUsed = s.bendUsed || m.bend.x != 0.0f;
+  // This step's readback slot (the caller names its host frame and plane: WindSlot).
+  s.windSlotNext = uint32_t(s.stats.steps % s.windSlots.size());
   s.time += dt;
+  s.windSlots[s.windSlotNext] = {true, s.stats.steps + 1, s.time, SimulationPlane{}};
   s.stats.steps++;
   s.stats.lastWaveSubsteps = s.next.waveSubsteps;
   s.stats.lastDiffuseSweeps = s.next.diffuseSweeps;

@@ -27,15 +27,28 @@ struct Device;
 static_assert(uint32_t(FluidScheme::MacMultigrid) == SIM_SCHEME_MAC_MULTIGRID && uint32_t(FluidScheme::Stam) == SIM_SCHEME_STAM);
 static_assert(uint32_t(FluidBoundary::WindTunnel) == SIM_BOUNDARY_TUNNEL && uint32_t(FluidBoundary::Walls) == SIM_BOUNDARY_WALLS);
 static_assert(kWindFromLeft == SIM_SIDE_LEFT && kWindFromRight == SIM_SIDE_RIGHT && kWindFromBottom == SIM_SIDE_BOTTOM &&
-              kWindFromTop == SIM_SIDE_TOP && kMaxMotors == SIM_MAX_MOTORS);
+              kWindFromTop == SIM_SIDE_TOP && kMaxMotors + kMaxPushers == SIM_MAX_MOTORS);
 
 // Resources of one simulation as seen by a render graph (addSimulationPasses).
 struct SimulationResources {
-  rg::ResourceId frame, velocity, multigrid, wave, tiled, ring, ringTimes;
+  rg::ResourceId frame, velocity, multigrid, wave, tiled, ring, ringTimes, windImage, windReadback;
+};
+
+// The wind a host reads (docs/design.md "The wind a host reads"): the tiled V_wind copied each
+// step into an n x n R32G32_SFLOAT image (domain units/s, row 0 at the bottom), left in
+// kWindImageRest for any shader stage, and into a host-visible ring of windSlotCount copies.
+inline constexpr VkFormat kWindImageFormat = VK_FORMAT_R32G32_SFLOAT;
+rg::State windImageRest();
+// One readback slot: the step it holds, the host frame that recorded it and the plane it maps by.
+struct WindSlot {
+  bool valid = false;
+  uint64_t frame = 0;   // the host frame number whose recording copied it
+  double time = 0.0;    // simulation time at the end of that step, s
+  SimulationPlane plane;
 };
 
 // GPU state of a simulation. Memory: velocity 2 * 2(N+2)^2 floats, multigrid ~(8/3) N^2 floats,
-// wave 6 N^2 floats, tiled 2 N^2 floats and the history ring H * N^2 * 8 bytes (H * 32 KiB at N = 64).
+// wave 6 N^2 floats, tiled 2 tiledVec2s(N) = 20 N^2 floats (V_s, V_wind, the bend field) and the history ring H * N^2 * 8 bytes (H * 32 KiB at N = 64).
 struct Simulation {
   Device* device = nullptr;
   uint32_t n = 0, ringSize = 0;
@@ -56,6 +69,12 @@ struct Simulation {
   uint32_t laneWidth = 0;
   bool laneProjectNext = false, laneDiffuseNext = false, laneOscillatorNext = false;  // the next recorded step uses them (prepareSimulationStep)
   gpu::SimFrame next{};  // the block the next recorded step uploads (prepareSimulationStep)
+  std::vector<gpu::SimMotor> pushers;  // the next step's pushers (after the params' motors; the context sets them)
+  bool bendUsed = false;  // a step had a pusher with a bend: the field may be non-zero (DynamicsFrameDesc.bend)
+  Image windImage;        // kWindImageFormat, n x n
+  Buffer windReadback;    // windSlots.size() copies of n*n vec2, host-visible
+  std::vector<WindSlot> windSlots;  // framesInFlight + 1
+  uint32_t windSlotNext = 0;        // the slot the next recorded step copies into
   double time = 0.0;     // simulation clock, s
   float nominalDt = 1.0f / 30.0f;  // SimulationDesc.nominalDt: eq. 6's Delta t (DynamicsParams.dt 0)
   SimulationStats stats;
@@ -70,8 +89,10 @@ Status validateSimulationDesc(const SimulationDesc& desc);
 Status validateSimulationParams(const SimulationParams& params, float dt);
 // The GPU parameter block for one step (substep counts, sweep counts); pure CPU, also used by the
 // CPU reference so both run exactly the same step.
+// `pushers` (at most kMaxPushers) follow params.motors in SimFrame.motors (the context maps its
+// CanopyPushers to them: render/pushers.h).
 Status makeSimFrame(const SimulationParams& params, uint32_t n, float time, float dt, uint32_t ringSlot,
-                    uint32_t ringSize, gpu::SimFrame* out);
+                    uint32_t ringSize, gpu::SimFrame* out, const std::vector<gpu::SimMotor>& pushers = {});
 // Loop iterations one shader invocation of the busiest simulation kernel runs for this step, and
 // the check against kMaxLoopTrips (lavapipe silently stops loops past 65535 iterations).
 inline constexpr double kMaxLoopTrips = 60000;
@@ -119,6 +140,8 @@ struct SimulationFields {
   std::vector<float> multigrid;
 };
 Status readSimulationFields(Simulation& sim, SimulationFields* out);
+// The readback slot to sample on the CPU: the newest whose frame is at most `completedFrame` (null: none).
+const WindSlot* completedWindSlot(const Simulation& sim, uint64_t completedFrame, uint32_t* index);
 // Overwrites device state from host data (tests: initial conditions), submitted at once. Empty
 // vectors are skipped.
 Status writeSimulationState(Simulation& sim, const std::vector<float>& velocity, const std::vector<float>& wave);

@@ -472,9 +472,28 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       }
       return Status();
     };
+    // --pusher: the sphere at written frame i (none in the warm-up and the held frames), and its
+    // screen path, one line a frame: x y (pixels, y down) and its radius in pixels.
+    const glm::vec3 pusherRight(glm::inverse(toGlm(frameAt(0).camera.view))[0]);
+    std::string pusherPath;
+    auto pushersFor = [&](int64_t index, const CanopyFrame& f) -> Status {
+      if (o.pusher == PusherPath::None) return Status();
+      if (index < 0) return setCanopyPushers(host.canopy, {});
+      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps);
+      const glm::mat4 view = toGlm(f.camera.view), proj = toGlm(f.camera.proj);
+      const glm::vec4 q = proj * view * glm::vec4(toGlm(p.a), 1.0f);
+      const float depth = -(view * glm::vec4(toGlm(p.a), 1.0f)).z;
+      const float x = (q.x / q.w * 0.5f + 0.5f) * float(o.width), y = (q.y / q.w * 0.5f + 0.5f) * float(o.height);
+      const float r = p.radius * std::abs(proj[1][1]) * 0.5f * float(o.height) / std::max(depth, 1e-6f);
+      char line[96];
+      std::snprintf(line, sizeof line, "%lld %.2f %.2f %.2f\n", static_cast<long long>(index), double(x), double(y), double(r));
+      pusherPath += line;
+      return setCanopyPushers(host.canopy, {p});
+    };
     auto submit = [&](CanopyFrame f, bool keep, int64_t index) -> Status {
       const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
       CANOPY_TRY(retire(slot));
+      CANOPY_TRY(pushersFor(index, f));
       f.frameNumber = ++frameNumber;
       CANOPY_TRY(recordFrameSlot(host, ring, slot, f, nullptr));
       VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -544,6 +563,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     };
     for (uint32_t i = 0; i < o.frames; ++i) CANOPY_TRY(submit(frameAt(i), true, int64_t(i)));
     CANOPY_TRY(drain());
+    if (o.pusher != PusherPath::None) writeTextFile(o.outDir + "/pusher_path.txt", pusherPath);
     CANOPY_TRY(writer.finish());
     // Canopy's frame with nothing else running: the last view held, one frame at a time (submit to
     // fence), no file written; the first two are not kept (a moving path's last view re-slices).
@@ -591,6 +611,17 @@ int compareFolders(const Options& o) {
   WorldLockError worst;
   uint32_t n = 0, worstFrame = 0;
   double colourSum = 0, silSum = 0;
+  // A's pusher_path.txt (--pusher): the largest per-pixel difference over the frames, measured
+  // against the band the pusher's path sweeps on screen.
+  std::vector<glm::vec3> path;  // x, y, radius (pixels)
+  if (FILE* pf = std::fopen((o.compareA + "/pusher_path.txt").c_str(), "r")) {
+    long long frame = 0;
+    float x = 0, y = 0, r = 0;
+    while (std::fscanf(pf, "%lld %f %f %f", &frame, &x, &y, &r) == 4) path.push_back({x, y, r});
+    std::fclose(pf);
+  }
+  std::vector<uint8_t> maxDiff;
+  uint32_t diffW = 0, diffH = 0;
   for (;; ++n) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame_%04u.png", n);
@@ -609,6 +640,12 @@ int compareFolders(const Options& o) {
       return 1;
     }
     const WorldLockError e = compareFrames(a, b, wa, ha, clear);
+    if (!path.empty()) {
+      if (maxDiff.empty()) maxDiff.assign(size_t(wa) * ha, 0), diffW = wa, diffH = ha;
+      for (size_t k = 0; k < maxDiff.size() && maxDiff.size() == size_t(wa) * ha; ++k)
+        for (int c = 0; c < 3; ++c)
+          maxDiff[k] = std::max<uint8_t>(maxDiff[k], uint8_t(std::abs(int(a[4 * k + c]) - int(b[4 * k + c]))));
+    }
     std::printf("%6u %9.4f %9.3f px %7.2f px %7.2f px %9.2f\n", n, e.coverageIoU, e.silhouetteMeanPx, e.silhouetteP99Px,
                 e.centroidPx, e.colourMean);
     if (n == 0 || e.coverageIoU < worst.coverageIoU) worst.coverageIoU = e.coverageIoU, worstFrame = n;
@@ -627,6 +664,34 @@ int compareFolders(const Options& o) {
               "centroid worst %.2f px; colour worst %.2f, average %.2f levels\n",
               n, worst.coverageIoU, worstFrame, worst.silhouetteMeanPx, silSum / n, worst.silhouetteP99Px, worst.centroidPx,
               worst.colourMean, colourSum / n);
+  if (!path.empty() && !maxDiff.empty()) {
+    // Pixels whose largest difference exceeds 8 levels, inside the band (within 3 radii of the
+    // path's screen positions) and beyond it; the difference image: white = 32 levels or more,
+    // the band's edge in red.
+    const int kLevels = 8;
+    uint64_t inside = 0, beyond = 0;
+    std::vector<uint8_t> image(maxDiff.size() * 4, 255);
+    for (uint32_t y = 0; y < diffH; ++y)
+      for (uint32_t x = 0; x < diffW; ++x) {
+        // Both in Vulkan's framebuffer convention: rows from the top.
+        float nearest = 1e30f;
+        for (const glm::vec3& p : path)
+          nearest = std::min(nearest, glm::length(glm::vec2(float(x) + 0.5f - p.x, float(y) + 0.5f - p.y)) / std::max(p.z, 1e-3f));
+        const size_t k = size_t(y) * diffW + x;
+        const bool band = nearest <= 3.0f;
+        if (maxDiff[k] > kLevels) (band ? inside : beyond)++;
+        const uint8_t v = uint8_t(std::min(255, int(maxDiff[k]) * 8));
+        image[4 * k] = image[4 * k + 1] = image[4 * k + 2] = v;
+        if (nearest > 2.95f && nearest <= 3.0f) image[4 * k] = 255, image[4 * k + 1] = image[4 * k + 2] = 0;
+      }
+    const std::string out = o.compareA + "/difference.png";
+    const Status w = writePng(out, diffW, diffH, image);
+    std::printf("pusher band (3 radii of its path, %zu frames): %llu pixels differ by > %d levels inside it, %llu beyond it "
+                "(%.2f %% of the differing pixels beyond); %s%s\n",
+                path.size(), static_cast<unsigned long long>(inside), kLevels, static_cast<unsigned long long>(beyond),
+                inside + beyond ? 100.0 * double(beyond) / double(inside + beyond) : 0.0, out.c_str(),
+                w.ok() ? "" : (" not written: " + w.message()).c_str());
+  }
   return 0;
 }
 

@@ -50,6 +50,8 @@ void printHelp() {
       "  --faces N           generated scene's triangles, %llu..%llu, K/M suffixes (default %lluK)\n"
       "  --seed S            generated scene's seed, 0..4294967295 (default %u)\n"
       "  --gltf FILE         load a .gltf/.glb instead of generating a scene\n"
+      "  --pusher PATH       a sphere walking through the scene (setCanopyPushers): line (across the view)\n"
+      "                      or circle, over the written frames; pusher_path.txt holds its screen path\n"
       "  --scene-file FILE   a scene file (docs/scene-files.md): several species, placed copies and\n"
       "                      scatters, in one vegetation (instead of --scene / --gltf)\n"
       "  --rigid M1,M2       materials (names or #index) forced to be rigid background (trunk, branches)\n"
@@ -230,6 +232,10 @@ const std::vector<ChoiceOption>& choiceOptions() {
        {{"exact", [](Options& o) { o.delay = DelayMode::Exact; }},
         {"approx", [](Options& o) { o.delay = DelayMode::Approximate; }},
         {"approximate", [](Options& o) { o.delay = DelayMode::Approximate; }}}},
+      {"--pusher", "line or circle",
+       {{"line", [](Options& o) { o.pusher = PusherPath::Line; }},
+        {"circle", [](Options& o) { o.pusher = PusherPath::Circle; }},
+        {"none", [](Options& o) { o.pusher = PusherPath::None; }}}},
       {"--method", "2d or per-vertex",
        {{"2d", [](Options& o) { o.method = AnimationMode::Layers2D; }},
         {"per-vertex", [](Options& o) { o.method = AnimationMode::PerVertex; }}}},
@@ -513,6 +519,35 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label, S
                (unsigned long long)st.faces, (unsigned long long)st.rigidFaces, (unsigned long long)st.leaves, seconds());
   *label = std::string(sceneName(o.scene)) + " " + std::to_string(st.faces) + " faces";
   return Status();
+}
+
+CanopyPusher pusherAt(PusherPath path, const glm::vec3& lo, const glm::vec3& hi, const glm::vec3& cameraRight, uint32_t i,
+                      uint32_t frames, float fps) {
+  // A sphere a twelfth of the scene's width across, half sunk into the ground, walking over the
+  // written frames: along the camera's right through the centre, or once around a circle.
+  const glm::vec3 c = 0.5f * (lo + hi);
+  const float extent = std::max(hi.x - lo.x, hi.z - lo.z);
+  const float radius = extent / 24.0f;
+  const float t = frames > 1 ? float(i) / float(frames - 1) : 0.0f, seconds = float(std::max(frames, 2u) - 1) / fps;
+  glm::vec3 right(cameraRight.x, 0.0f, cameraRight.z);
+  right = glm::length(right) > 1e-6f ? glm::normalize(right) : glm::vec3(1.0f, 0.0f, 0.0f);
+  glm::vec3 p, v;
+  if (path == PusherPath::Circle) {
+    const glm::vec3 fwd = glm::cross(glm::vec3(0.0f, 1.0f, 0.0f), right);
+    const float a = 6.2831853f * t, r = 0.3f * extent;
+    p = c + r * (std::cos(a) * right + std::sin(a) * fwd);
+    v = (r * 6.2831853f / seconds) * (-std::sin(a) * right + std::cos(a) * fwd);
+  } else {
+    p = c + (0.8f * t - 0.4f) * extent * right;
+    v = (0.8f * extent / seconds) * right;
+  }
+  p.y = lo.y + 0.5f * radius;
+  CanopyPusher out;
+  out.a = out.b = toFloat3(p);
+  out.radius = radius;
+  out.velocity = toFloat3(v);
+  out.bend = 2.0f;
+  return out;
 }
 
 CameraRig defaultRig(const Options& o) {

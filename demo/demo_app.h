@@ -21,6 +21,8 @@
 
 namespace canopy::demo {
 
+enum class PusherPath { None, Line, Circle };  // --pusher
+
 // A scene file's species and copies (--scene-file; docs/scene-files.md), loaded by loadScene.
 struct SceneCopies {
   std::vector<VegetationModel> models;  // per species
@@ -74,6 +76,10 @@ struct Options {
   // debugShadowMap each written frame's map also goes to shadow_NNNN.png.
   bool shadows = false;
   bool debugShadowMap = false;
+  // A sphere walking through the scene (setCanopyPushers; docs/design.md "Pushers"): along a line
+  // across the view or around a circle, over the written frames; pusher_path.txt holds its screen
+  // path (--compare-frames then measures the difference against a run without it).
+  PusherPath pusher = PusherPath::None;
   // Output
   uint32_t width = 640, height = 480;
   uint32_t frames = 60;
@@ -105,6 +111,11 @@ struct Options {
   std::string device;
   std::string injectFault;  // "oom:N" / "lost:N" (tools/fault_loader.h), empty: none
 };
+
+// --pusher: the sphere's world position, radius and velocity at written frame `i` of `frames`,
+// over the bounds of the scene (a line across the view of frame 0's camera, or a circle).
+CanopyPusher pusherAt(PusherPath path, const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::vec3& cameraRight,
+                      uint32_t i, uint32_t frames, float fps);
 
 // Whether the context is created with both methods (CanopyDesc.allowPerVertex; the scene then
 // carries its branch hierarchy).

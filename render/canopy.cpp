@@ -513,6 +513,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   }
   SharedSimulation& sh = *c->shared;
   Simulation& sim = sh.sim;
+  const LayerView view = standardView(*c, f.camera);
+  chooseSimulationPlane(*c, view);  // before the step: the pushers are mapped through it
   // One step per host frame for a shared simulation, by the first context recorded in it.
   const bool stepHere = !sh.everStepped || sh.lastStepFrame != frameNumber;
   c->skipSimulationStep = !stepHere || f.dt == 0.0f;
@@ -520,13 +522,17 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (stepHere) {
     sh.everStepped = true;
     sh.lastStepFrame = frameNumber;
-    if (f.dt > 0.0f) CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
+    if (f.dt > 0.0f) {
+      mapPushers(c->pushers, c->plane, view, &sim.pushers, &c->pusherCounts);
+      CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
+      // The step's readback slot maps by this frame's plane (sampleCanopyWind).
+      sim.windSlots[sim.windSlotNext].frame = frameNumber;
+      sim.windSlots[sim.windSlotNext].plane = c->plane;
+    }
   }
-  const LayerView view = standardView(*c, f.camera);
   if (f.cameraCut) requestReslice(c->layers.reslice, "camera cut", true);
   bool rebuild = false;
   CANOPY_TRY(updateLayerView(c->layers, view, &rebuild));
-  chooseSimulationPlane(*c, view);
   // The dynamics run in the slice camera's pixels, where the layers and their warp grid are
   // (docs/design.md "Layers: reprojection"); the composite maps the current camera into them.
   const LayerView& slice = c->layers.visible.view;
@@ -544,6 +550,11 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   // The simulation writes slot step % H: the exact delay can binary-search the ring (anim_displace.comp).
   // Before the first step every slot reads time 0, which is in order from any slot.
   fd.halfResolution = c->layers.visible.frame.halfResolution;
+  fd.bend = sim.bendUsed;
+  const BendPlane bp = bendPlaneOf(c->plane);
+  fd.bendOrigin = glm::vec4(bp.origin, bp.tile);
+  fd.bendX = glm::vec4(bp.x, 0.0f);
+  fd.bendZ = glm::vec4(bp.z, 0.0f);
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
   CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
   const gpu::AnimFrame& a = c->dynamics.current;
@@ -754,6 +765,9 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.resourceGeneration = c->generation;
   s.shadowUpdates = c->shadow.updates;
   s.shadowSkips = c->shadow.skips;
+  s.pushersMapped = c->pusherCounts.mapped;
+  s.pushersOutside = c->pusherCounts.outside;
+  s.pushersBehind = c->pusherCounts.behind;
   s.internalGraphBuilds = c->recordGraphBuilds;
   s.pendingReleases = c->device->pendingReleases.size();
   s.deviceBytes = c->device->allocator->liveBytes;
@@ -767,6 +781,63 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.layers.instances = uint32_t(c->layers.instances.models.size());
   s.simulation = c->shared->sim.stats;
   return s;
+}
+
+Status setCanopyPushers(CanopyContext* c, const std::vector<CanopyPusher>& pushers) {
+  return guardApi("setCanopyPushers", [&]() -> Status {
+    if (!c) return Status::error(Result::InvalidArgument, "setCanopyPushers: null context");
+    CANOPY_TRY(checkPushers(pushers));
+    c->pushers = pushers;
+    return Status();
+  });
+}
+
+// The mapping the wind is read through: the context's plane (canopy_wind.glsl's CanopyWindInfo).
+static CanopyWindInfo windInfo(const SimulationPlane& p, uint32_t n) {
+  const glm::vec3 normal = glm::cross(toGlm(p.right), toGlm(p.up));
+  return CanopyWindInfo{{p.origin.x, p.origin.y, p.origin.z, p.tileSize},
+                        {p.right.x, p.right.y, p.right.z, float(n)},
+                        {p.up.x, p.up.y, p.up.z, 0.0f},
+                        {normal.x, normal.y, normal.z, 0.0f}};
+}
+
+Status canopyWind(const CanopyContext* c, CanopyWind* out) {
+  return guardApi("canopyWind", [&]() -> Status {
+    if (!c || !out) return Status::error(Result::InvalidArgument, "canopyWind: context and out are required");
+    const Simulation& sim = c->shared->sim;
+    *out = CanopyWind{};
+    out->image = sim.windImage.image;
+    out->view = sim.windImage.view;
+    out->format = kWindImageFormat;
+    out->size = sim.n;
+    const rg::State rest = windImageRest();
+    out->state = ResourceState{rest.stage, rest.access, rest.layout};
+    // Before the first frame chose it, the plane the host gave or a placeholder (the field is zero).
+    out->info = windInfo(c->plane, sim.n);
+    return Status();
+  });
+}
+
+Status sampleCanopyWind(const CanopyContext* c, const Float3* points, size_t count, Float3* out, uint64_t* fieldFrame) {
+  return guardApi("sampleCanopyWind", [&]() -> Status {
+    if (fieldFrame) *fieldFrame = 0;
+    if (!c) return Status::error(Result::InvalidArgument, "sampleCanopyWind: null context");
+    if (count > 0 && (!points || !out)) return Status::error(Result::InvalidArgument, "sampleCanopyWind: points and out are required");
+    const Simulation& sim = c->shared->sim;
+    const Device& d = *c->device;
+    // Frames at most frameNumber - framesInFlight have completed (CanopyFrame.frameNumber).
+    const uint64_t completed = d.frameNumber >= d.framesInFlight ? d.frameNumber - d.framesInFlight : 0;
+    uint32_t slot = 0;
+    const WindSlot* w = d.anyFrame ? completedWindSlot(sim, completed, &slot) : nullptr;
+    const float* field = w ? static_cast<const float*>(sim.windReadback.allocation.mapped) : nullptr;
+    for (size_t i = 0; i < count; ++i) {
+      if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y) || !std::isfinite(points[i].z))
+        return Status::error(Result::InvalidArgument, "sampleCanopyWind: points[" + std::to_string(i) + "] is not finite");
+      out[i] = field ? toFloat3(windAtWorld(field + size_t(slot) * 2 * sim.n * sim.n, sim.n, w->plane, toGlm(points[i]))) : Float3{};
+    }
+    if (fieldFrame && field) *fieldFrame = w->frame;
+    return Status();
+  });
 }
 
 LayeredVegetation& canopyLayers(CanopyContext* c) { return c->layers; }

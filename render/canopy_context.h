@@ -10,6 +10,7 @@
 
 #include "render/canopy.h"
 #include "render/per_vertex.h"
+#include "render/pushers.h"
 #include "render/shadow.h"
 
 namespace canopy {
@@ -61,6 +62,8 @@ struct CanopyContext {
   PreparedList perVertexUploads;  // the per-vertex baseline's uploads not yet recorded (host devices: the first frame records them)
   std::vector<CanopyTargetUse> groupUses;  // <canopy/canopy_graph.h>: how the passes use the host's images
   ShadowCaster shadow;  // recordCanopyShadow (render/shadow.h): created at its first call
+  std::vector<CanopyPusher> pushers;  // setCanopyPushers: mapped onto the plane at every step
+  PusherCounts pusherCounts;          // the last step's mapping
 };
 
 // recordCanopy()'s graph for these images (same images, views, states and declarations, built for

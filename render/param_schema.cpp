@@ -22,6 +22,7 @@ namespace {
   S(Motor, CANOPY_MOTOR_PARAMS)                            \
   S(FluidParams, CANOPY_FLUID_PARAMS)                      \
   S(WaveParams, CANOPY_WAVE_PARAMS)                        \
+  S(PushParams, CANOPY_PUSH_PARAMS)                        \
   S(SimulationParams, CANOPY_SIMULATION_PARAMS)            \
   S(SimulationDesc, CANOPY_SIMULATION_DESC)                \
   S(RegionSplit, CANOPY_REGION_SPLIT)                      \
@@ -31,6 +32,7 @@ namespace {
   S(DynamicsParams, CANOPY_DYNAMICS_PARAMS)                \
   S(CompositeParams, CANOPY_COMPOSITE_PARAMS)              \
   S(SimulationPlane, CANOPY_SIMULATION_PLANE)              \
+  S(CanopyPusher, CANOPY_PUSHER_PARAMS)                    \
   S(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)             \
   S(CanopyParams, CANOPY_PARAMS)                           \
   S(CanopyDesc, CANOPY_DESC)

@@ -6,6 +6,7 @@
 // for the layer (eq. 3-4 exact: the history ring at t - gamma, linear in time; eq. 5 approximate:
 // one lookup at B = A + gamma s V_s), and turned into d_i (eq. 6-7).
 #include "shared/anim.h"
+#include "shared/sim.h"
 
 layout(local_size_x = ANIM_GROUP_SIZE) in;
 layout(binding = 0, scalar) readonly buffer FrameBuf {
@@ -62,6 +63,26 @@ void historySlots(inout float tau, out uint lo, out uint hi) {
   hi = a > 0u ? (newest + H - a + 1u) % H : lo;
 }
 
+// The pushers' bend field at world point w (docs/design.md "Pushers"): a horizontal world vector,
+// tile units/s; bilinear over its cells, zero outside them (it is not tiled).
+vec3 sampleBend(vec3 w) {
+  uint n = f.n, bn = SIM_BEND_SCALE * n;
+  vec3 rel = w - f.bendOrigin.xyz;
+  vec2 g = vec2(dot(rel, f.bendX.xyz), dot(rel, f.bendZ.xyz)) / f.bendOrigin.w;
+  vec2 x = g * float(n) - 0.5;
+  vec2 fl = floor(x);
+  vec2 t = x - fl;
+  int i0 = int(fl.x), j0 = int(fl.y);
+  vec2 v[4];
+  for (int k = 0; k < 4; ++k) {
+    int i = i0 + (k & 1), j = j0 + (k >> 1);
+    bool inside = i >= 0 && j >= 0 && i < int(bn) && j < int(bn);
+    v[k] = inside ? tiled[bendOffset(n) + uint(j) * bn + uint(i)] : vec2(0.0);
+  }
+  vec2 b = mix(mix(v[0], v[1], t.x), mix(v[2], v[3], t.x), t.y);
+  return b.x * f.bendX.xyz + b.y * f.bendZ.xyz;
+}
+
 // The simulation-plane velocity at time tau from the ring: the two slots bracketing tau, linear in
 // time; tau is clamped to the history that exists.
 vec2 sampleHistory(vec2 a, float tau) {
@@ -110,7 +131,9 @@ void main() {
   vec3 rel = world - f.simOrigin.xyz;
   vec2 a = vec2(dot(rel, f.simRight.xyz), dot(rel, f.simUp.xyz)) / f.simOrigin.w;
   vec2 vs = sampleTiled(false, 0u, a);
-  vec3 v0 = simToView(f, vs);
+  // The pushers bend each layer where its world point is, undelayed (docs/design.md "Pushers").
+  vec3 bend = f.bend != 0u ? vec3(f.viewRotation * vec4(sampleBend(world), 0.0)) : vec3(0.0);
+  vec3 v0 = simToView(f, vs);  // eq. 4's V_0 (the delays): the wind's
   // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's;
   // the plant's species' wind response with it (flexibility, response speed).
   AnimLayer rooted = f.layers[layer];
@@ -126,14 +149,14 @@ void main() {
       response = species.xy;
     }
   }
-  vec3 vi = v0;
+  vec3 vi = v0 + bend;
   if (layer > 0u) {
     float gamma = speciesDelay(f.maxDelay, layerDelay(f.maxDelay, f.layers[layer], v0.z), response.y);
     if (f.delayMode == ANIM_DELAY_EXACT) {
-      vi = simToView(f, sampleHistory(a, f.time - gamma));
+      vi = simToView(f, sampleHistory(a, f.time - gamma)) + bend;
     } else {
       // Simulation coordinates are domain units = tile units (eq. 5: shared/anim.h).
-      vi = simToView(f, sampleTiled(false, 0u, approximateLookup(f, a, gamma, vs)));
+      vi = simToView(f, sampleTiled(false, 0u, approximateLookup(f, a, gamma, vs))) + bend;
     }
   }
   uint at = layer * corners + id;

@@ -25,7 +25,7 @@ float motorSourcesAt(vec2 p) {
 layout(binding = 1, scalar) SIM_COHERENT buffer VelBuf { float vel[]; };
 layout(binding = 2, scalar) SIM_COHERENT buffer MgBuf { float mg[]; };
 layout(binding = 3, scalar) SIM_COHERENT buffer WaveBuf { vec2 wave[]; };
-layout(binding = 4, scalar) writeonly buffer TiledBuf { vec2 tiled[]; };
+layout(binding = 4, scalar) buffer TiledBuf { vec2 tiled[]; };
 layout(binding = 5, scalar) writeonly buffer RingBuf { vec2 ring[]; };
 layout(binding = 6, scalar) writeonly buffer RingTimesBuf { float ringTimes[]; };
 layout(push_constant, scalar) uniform Push { SimPush pc; };

@@ -76,6 +76,7 @@ void changeValue(T& v) {
   else if constexpr (std::is_same_v<T, WindParams>) v.strength += 1.0f;
   else if constexpr (std::is_same_v<T, FluidParams>) v.iterations += 1;
   else if constexpr (std::is_same_v<T, WaveParams>) v.gain += 1.0f;
+  else if constexpr (std::is_same_v<T, PushParams>) v.damping += 1.0f;
   else if constexpr (std::is_same_v<T, RegionSplit>) v.absolute = !v.absolute;
   else if constexpr (std::is_same_v<T, ImpostorSettings>) v.band += 1.0f;
   else if constexpr (std::is_same_v<T, PerVertexParams>) v.seed += 1;
@@ -136,6 +137,7 @@ DEFINE_CASES(WindParams, CANOPY_WIND_PARAMS)
 DEFINE_CASES(Motor, CANOPY_MOTOR_PARAMS)
 DEFINE_CASES(FluidParams, CANOPY_FLUID_PARAMS)
 DEFINE_CASES(WaveParams, CANOPY_WAVE_PARAMS)
+DEFINE_CASES(PushParams, CANOPY_PUSH_PARAMS)
 DEFINE_CASES(SimulationParams, CANOPY_SIMULATION_PARAMS)
 DEFINE_CASES(SimulationDesc, CANOPY_SIMULATION_DESC)
 DEFINE_CASES(RegionSplit, CANOPY_REGION_SPLIT)
@@ -145,6 +147,7 @@ DEFINE_CASES(LayerSettings, CANOPY_LAYER_SETTINGS)
 DEFINE_CASES(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 DEFINE_CASES(CompositeParams, CANOPY_COMPOSITE_PARAMS)
 DEFINE_CASES(SimulationPlane, CANOPY_SIMULATION_PLANE)
+DEFINE_CASES(CanopyPusher, CANOPY_PUSHER_PARAMS)
 DEFINE_CASES(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
 DEFINE_CASES(CanopyParams, CANOPY_PARAMS)
 
@@ -157,7 +160,7 @@ void forEachStruct(void (*fn)(const char*, std::vector<Refusal>, std::vector<std
 
 TEST(ParamSchema, DefaultsPassTheirOwnChecks) {
   for (const Status& s : {checkParams(CanopyParams{}), checkParams(CanopyDesc{}), checkParams(ImpostorDesc{}),
-                          checkParams(SimulationPlane{}), checkParams(Motor{})})
+                          checkParams(SimulationPlane{}), checkParams(Motor{}), checkParams(CanopyPusher{})})
     EXPECT_TRUE(s.ok()) << s.message();
 }
 
@@ -165,8 +168,8 @@ TEST(ParamSchema, DefaultsPassTheirOwnChecks) {
 // the range, the open end, a non-power of two, one past the last enumerator), naming the field.
 TEST(ParamSchema, EveryCheckedFieldRefusesAValueOutsideItsRange) {
   size_t checked = 0;
-  forEachStruct<WindParams, Motor, FluidParams, WaveParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
-                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, PerVertexParams, CanopyParams>(
+  forEachStruct<WindParams, Motor, FluidParams, WaveParams, PushParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
+                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, CanopyParams>(
       [](const char* type, std::vector<Refusal> refusals, std::vector<std::string>) {
         for (const Refusal& r : refusals) {
           EXPECT_TRUE(r.refused) << type << "." << r.field << " accepted a value outside its range";
@@ -197,8 +200,8 @@ TEST(ParamSchema, EveryCheckedFieldRefusesAValueOutsideItsRange) {
 // The generated operator== compares every field of every list (LayerSettings had a hand-written
 // one over 17 fields that a new field could silently miss).
 TEST(ParamSchema, EqualitySeesEveryField) {
-  forEachStruct<WindParams, Motor, FluidParams, WaveParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
-                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, PerVertexParams, CanopyParams>(
+  forEachStruct<WindParams, Motor, FluidParams, WaveParams, PushParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
+                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, CanopyParams>(
       [](const char* type, std::vector<Refusal>, std::vector<std::string> unseen) {
         for (const std::string& f : unseen) ADD_FAILURE() << type << "::operator== does not see " << f;
       });

@@ -44,6 +44,9 @@ struct AnimFrame {
   vec4 simOrigin;     // xyz: world point at simulation coordinate (0, 0); w: tile size, world units
   vec4 simRight;      // xyz: the simulation plane's x axis (unit, world)
   vec4 simUp;         // xyz: its y axis (unit, world)
+  vec4 bendOrigin;    // the pushers' bend field: xyz the world point at its coordinate (0, 0); w: tile size, world units
+  vec4 bendX;         // xyz: its first axis (unit, horizontal)
+  vec4 bendZ;         // xyz: its second axis (unit, horizontal)
   vec4 lambda;        // xyz: lambda_x, lambda_y, lambda_z, pixels per domain unit; w: dt of eq. 6, s
   float time;         // time of the newest simulation field, s
   uint halfResolution;  // LayerFrame.halfResolution of the layers drawn (the composite's reads)
@@ -65,12 +68,12 @@ struct AnimFrame {
   // finds its two slots by binary search. ANIM_RING_UNORDERED: by a search of every slot.
   uint newestSlot;
   uint offsetMode;    // ANIM_OFFSET_*: eq. 5's offset along V's direction or V itself
-  float pad0;
+  uint bend;          // 1: add the pushers' bend field (the tiled buffer after V_s and V_wind: shared/sim.h)
   float pad1;
   float pad2;
   AnimLayer layers[CANOPY_MAX_LAYERS];
 };
-CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 5 + 4 * 20 + 32 * CANOPY_MAX_LAYERS)
+CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 8 + 4 * 20 + 32 * CANOPY_MAX_LAYERS)
 
 // Eq. 1-2 in general: simulation-plane velocity -> world -> view.
 CANOPY_INLINE vec3 simToView(AnimFrame f, vec2 vs) {

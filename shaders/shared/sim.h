@@ -19,7 +19,12 @@
 #define SIM_SIDE_BOTTOM 4u  // on the bottom boundary, toward +y
 #define SIM_SIDE_TOP 8u     // on the top boundary, toward -y
 
-#define SIM_MAX_MOTORS 8u
+// Motors of a step: the host's SimulationParams.motors (at most 8) then the pushers the context
+// maps onto the plane (at most 32; docs/design.md "Pushers").
+#define SIM_MAX_MOTORS 40u
+// The pushers' bend field (docs/design.md "Pushers"): BEND_SCALE times n cells a side on the
+// world's horizontal plane, BEND_SCALE tiles a side around the simulation tile's centre, not tiled.
+#define SIM_BEND_SCALE 2u
 // Invocations of the single-workgroup solver kernels: a specialization constant chosen per device
 // class (compute/simulation.cpp, simulationGroupSize); this is the largest allowed and the default.
 #define SIM_MAX_GROUP_SIZE 1024u
@@ -28,6 +33,17 @@
 #define SIM_MG_COARSE_SWEEPS 32u
 
 CANOPY_NAMESPACE_BEGIN
+
+// One motor of the fluid (a point or a segment: a sphere or a capsule seen on the plane), in domain
+// units. A host's SimulationParams.motors entry is a point with no velocity and no bend.
+struct SimMotor {
+  vec4 segment;  // xy: one end, zw: the other (equal for a point), domain units
+  vec4 flow;     // x: radius R (domain units), y: outward speed at the rim (domain units/s),
+                 // zw: the body's velocity on the plane times its air coupling (domain units/s)
+  vec4 bend;     // x: the bend field's peak target (domain units/s); y: the radius on the ground (tile units)
+  vec4 ground;   // the segment's ends on the bend field's plane: xy one end, zw the other (tile units)
+};
+CANOPY_SIZE_CHECK(SimMotor, 64)
 
 // Everything a simulation step reads, uploaded once per step (vkCmdUpdateBuffer in the graph).
 struct SimFrame {
@@ -61,11 +77,11 @@ struct SimFrame {
   uint ringSlot;       // history ring slot the tile pass writes
   uint ringSize;       // H
   uint groupSize;      // invocations of the single-workgroup kernels (their specialization constant)
-  uint pad1;
-  uint pad2;
-  vec4 motors[8];      // xy: position (domain units), z: radius (domain units), w: outward speed at the rim (domain units/s)
+  float bendK;         // the bend field's spring stiffness, 1/s^2 (SimulationParams.push)
+  float bendZeta;      // its damping, 1/s
+  SimMotor motors[SIM_MAX_MOTORS];  // [0, motorCount): the host's motors, then the pushers
 };
-CANOPY_SIZE_CHECK(SimFrame, 256)
+CANOPY_SIZE_CHECK(SimFrame, 128 + 64 * SIM_MAX_MOTORS)
 
 struct SimPush {
   uint phase;  // pass-specific selector (e.g. which velocity buffer a projection works on)
@@ -122,20 +138,64 @@ CANOPY_INLINE float inflowSpeed(SimFrame f, uint side, float s) {
   float noise = 0.65f * valueNoise(x, seed) + 0.35f * valueNoise(2.3f * x + 0.37f * f.time, seed ^ 0x5bd1e995u);
   return f.strength * temporal * (1.0f + f.gust * noise);
 }
-// Mass-source rate (1/s) of the point motors at domain position p. An incompressible flow removes
-// any radial push (it is a pure gradient), so a motor — a character or an explosion displacing
-// air — is a source the projection keeps: div u = q. q = 6 s (1 - r/R) / R inside radius R, so the
-// total flux is 2 pi R s and the outward speed at the rim is s (negative s: a sink). The source
-// at p is the sum of motorSource over SimFrame.motors[0 .. motorCount), in that order (the CPU
+// The point of motor m's segment nearest to p (a point motor: its position).
+CANOPY_INLINE vec2 motorNearest(SimMotor m, vec2 p) {
+  vec2 a = vec2(m.segment.x, m.segment.y), b = vec2(m.segment.z, m.segment.w);
+  vec2 ab = b - a;
+  float len2 = dot(ab, ab);
+  float t = len2 > 0.0f ? clamp(dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+  return a + t * ab;
+}
+// Mass-source rate (1/s) of a motor at domain position p. An incompressible flow removes any radial
+// push (it is a pure gradient), so a motor — a character or an explosion displacing air — is a
+// source the projection keeps: div u = q. Two terms, d = p - the nearest point of the motor,
+// r = |d|, R its radius:
+//  - the outward push s (flow.y): q = 6 s (1 - r/R) / R inside R, so the flux out of a point motor is
+//    2 pi R s and the outward speed at the rim is s (negative s: a sink);
+//  - the moving body (flow.zw = v): the air it displaces, q = -v . grad chi with chi = (1 - r^2/R^2)^2
+//    the body's smooth footprint: q = 4 (1 - r^2/R^2) (v . d) / R^2, a source ahead of it and a sink
+//    behind (net zero), so air is pushed aside in front and drawn in behind.
+// The source at p is the sum over SimFrame.motors[0 .. motorCount), in that order (the CPU
 // reference's motorSources, the shaders' motorSourcesAt). The term takes one motor, not the frame:
 // GLSL passes a struct by value, and lavapipe copied the whole frame — its motors[] indexed by the
 // loop — on every call (~0.14 ms per projection at N = 64, docs/performance.md).
-CANOPY_INLINE float motorSource(vec4 motor, vec2 p) {
-  float dx = p.x - motor.x, dy = p.y - motor.y;
-  float r = sqrt(dx * dx + dy * dy);
-  float R = motor.z;
-  return r < R ? 6.0f * motor.w * (1.0f - r / R) / R : 0.0f;
+CANOPY_INLINE float motorSource(SimMotor m, vec2 p) {
+  vec2 d = p - motorNearest(m, p);
+  float r2 = dot(d, d);
+  float R = m.flow.x;
+  if (r2 >= R * R) return 0.0f;
+  float r = sqrt(r2);
+  float q = 6.0f * m.flow.y * (1.0f - r / R) / R;
+  return q + 4.0f * (1.0f - r2 / (R * R)) * (m.flow.z * d.x + m.flow.w * d.y) / (R * R);
 }
+// The bend field's target at its position g (tile units on the ground plane) from motor m: away
+// from the motor's ground segment, |target| = peak * k rho (1 - rho^2)^2 with rho = r/R, k =
+// 5^(5/2)/16 so the largest is `peak` (at rho = 1/sqrt 5): zero on the motor's axis (no direction
+// there) and at its rim. The target is a horizontal vector (the field's two axes).
+CANOPY_INLINE vec2 motorBendTarget(SimMotor m, vec2 g) {
+  vec2 a = vec2(m.ground.x, m.ground.y), b = vec2(m.ground.z, m.ground.w);
+  vec2 ab = b - a;
+  float len2 = dot(ab, ab);
+  float t = len2 > 0.0f ? clamp(dot(g - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+  vec2 d = g - (a + t * ab);
+  float r2 = dot(d, d);
+  float R = m.bend.y;
+  if (m.bend.x == 0.0f || r2 >= R * R) return vec2(0.0f, 0.0f);
+  float w = 1.0f - r2 / (R * R);
+  return (m.bend.x * 3.4938562f * w * w / R) * d;  // rho * d/r = d / R
+}
+// The bend field's cell (i, j) centre (tile units from the field's corner).
+CANOPY_INLINE vec2 bendCellCentre(uint n, uint i, uint j) {
+  return vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n));
+}
+// The tiled buffer: tiled V_s (n*n vec2, what the plants read), the tiled V_wind (n*n vec2, what a
+// host reads: the wind image and sampleCanopyWind), then the bend field's value and its rate
+// ((SIM_BEND_SCALE n)^2 vec2 each).
+CANOPY_INLINE uint tiledWindOffset(uint n) { return n * n; }
+CANOPY_INLINE uint bendCells(uint n) { return SIM_BEND_SCALE * SIM_BEND_SCALE * n * n; }
+CANOPY_INLINE uint bendOffset(uint n) { return 2u * n * n; }
+CANOPY_INLINE uint bendRateOffset(uint n) { return 2u * n * n + bendCells(n); }
+CANOPY_INLINE uint tiledVec2s(uint n) { return 2u * n * n + 2u * bendCells(n); }
 // Linear seam-blend weight of the tiling (docs/design.md): 1 at the tile centre, 0 at its edges.
 CANOPY_INLINE float tileWeight(uint i, uint n) {
   return 1.0f - abs((float(i) + 0.5f) / float(n) - 0.5f) * 2.0f;

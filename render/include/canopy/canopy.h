@@ -187,6 +187,45 @@ struct CanopyShadowInputs {
 // one); *updated (optional): whether this call drew. Refused before the first recordCanopy.
 Status recordCanopyShadow(CanopyContext* context, VkCommandBuffer cmd, const CanopyShadowInputs& inputs, bool* updated = nullptr);
 
+// ---------------------------------------------------------------------------------------------
+// One wind for the scene (docs/embedding.md "The wind"; docs/design.md "The wind a host reads",
+// "Pushers")
+
+// What a host's shader needs to read the wind (<canopy/canopy_wind.glsl>: the same 64 bytes).
+struct CanopyWindInfo {
+  float origin[4] = {0, 0, 0, 1};  // xyz: world point at plane coordinate (0, 0); w: the tile's size, world units
+  float right[4] = {1, 0, 0, 0};   // xyz: the plane's unit x axis; w: the image's size n, texels a side
+  float up[4] = {0, 1, 0, 0};      // xyz: its unit y axis
+  float normal[4] = {0, 0, 1, 0};  // xyz: right x up (the wind has no component along it)
+};
+// The simulation's wind as an image a host's shaders sample (canopyWindAt in <canopy/canopy_wind.glsl>).
+struct CanopyWind {
+  VkImage image = VK_NULL_HANDLE;
+  VkImageView view = VK_NULL_HANDLE;        // 2D, colour
+  VkFormat format = VK_FORMAT_UNDEFINED;    // R32G32_SFLOAT: the plane's velocity, domain units/s
+  uint32_t size = 0;                        // texels a side (SimulationDesc.gridSize)
+  // The state every recordCanopy (and createCanopy's first uploads) leaves it in: SHADER_READ_ONLY
+  // layout, its writes visible to sampled reads of the vertex, fragment and compute stages; the
+  // host's reads need no barrier of their own.
+  ResourceState state;
+  CanopyWindInfo info;  // the plane's mapping now (changes when the plane does: copy it every frame)
+};
+// The wind image and its mapping. The image lives as long as the context (the simulation's, with
+// CanopyDesc.shareSimulationWith); it is written by the recordCanopy that steps the simulation.
+Status canopyWind(const CanopyContext* context, CanopyWind* out);
+// The wind at `count` world points (world units/s, as canopyWindAt) on the CPU, for gameplay code:
+// from a copy read back without a stall, framesInFlight host frames late (the newest step whose
+// frame has completed by CanopyFrame.frameNumber's promise). *fieldFrame (optional): the host frame
+// whose step it is; 0 and zero vectors before any has completed.
+Status sampleCanopyWind(const CanopyContext* context, const Float3* points, size_t count, Float3* out,
+                        uint64_t* fieldFrame = nullptr);
+// The spheres and capsules moving through the vegetation from the next recorded frame on (replacing
+// the last call's; empty: none): each mapped onto the simulation plane every frame, a local bend
+// of the foliage that springs back and a motor of the fluid (CanopyPusher). At most kMaxPushers;
+// more, or a field outside its range, is refused naming it (the pushers in force are kept). With a
+// shared simulation the context that steps it (the first recorded in a frame) maps its own.
+Status setCanopyPushers(CanopyContext* context, const std::vector<CanopyPusher>& pushers);
+
 // Loading without a hitch (a loading screen): records into the host's `cmd` the uploads createCanopy
 // staged (mesh, textures, the simulation's first clear) and the first re-slice of the layers for
 // `camera`, so the first recordCanopy at that camera (bit for bit) costs what any frame costs. The

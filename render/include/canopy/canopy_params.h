@@ -144,6 +144,7 @@ struct LeafRootOptions {
 
 inline constexpr uint32_t kMaxLayers = 32;
 inline constexpr uint32_t kMaxMotors = 8;
+inline constexpr uint32_t kMaxPushers = 32;  // setCanopyPushers: more are refused
 
 enum class FluidScheme : uint32_t {
   MacMultigrid = 0,  // staggered grid + multigrid projection (default)
@@ -197,11 +198,20 @@ CANOPY_PARAM_STRUCT(FluidParams, CANOPY_FLUID_PARAMS)
   X(uint32_t, maxSubsteps, 64, Closed, 1, 4096, "", "stable substeps per step; a longer step is clamped (stats.clampedSeconds)")
 CANOPY_PARAM_STRUCT(WaveParams, CANOPY_WAVE_PARAMS)
 
+// How grass pushed by a CanopyPusher springs back (docs/design.md "Pushers"): each cell of the
+// pushers' bend field is a damped spring B'' = -stiffness (B - target) - damping B'. The defaults
+// (omega 3 /s, damping ratio 0.7) settle to 10 % of a bend in about a second.
+#define CANOPY_PUSH_PARAMS(X)                                                                                           \
+  X(float, stiffness, 9.0f, Closed, 0, 400, "1/s^2", "pull of the pushed grass back to its rest (and toward a pusher's target)") \
+  X(float, damping, 4.2f, Closed, 0, 100, "1/s", "damping of the spring back")
+CANOPY_PARAM_STRUCT(PushParams, CANOPY_PUSH_PARAMS)
+
 #define CANOPY_SIMULATION_PARAMS(X)                                                                                     \
   X(WindParams, wind, {}, Nested, 0, 0, "", "injected wind")                                                            \
   X(FluidParams, fluid, {}, Nested, 0, 0, "", "the fluid solver")                                                       \
   X(WaveParams, wave, {}, Nested, 0, 0, "", "the wave oscillator")                                                      \
-  X(std::vector<Motor>, motors, {}, Each, 0, kMaxMotors, "", "point motors, at most kMaxMotors")
+  X(std::vector<Motor>, motors, {}, Each, 0, kMaxMotors, "", "point motors, at most kMaxMotors")                       \
+  X(PushParams, push, {}, Nested, 0, 0, "", "how grass pushed by a CanopyPusher springs back")
 CANOPY_PARAM_STRUCT(SimulationParams, CANOPY_SIMULATION_PARAMS)
 
 // Fixed at creation. The simulation domain is the unit square of the simulation plane.
@@ -405,6 +415,21 @@ CANOPY_PARAM_STRUCT(CompositeParams, CANOPY_COMPOSITE_PARAMS)
   X(float, tileSize, 1.0f, AboveMin, 0, 1e30, "world units", "covered by one tile")
 CANOPY_PARAM_STRUCT(SimulationPlane, CANOPY_SIMULATION_PLANE)
 
+// Something moving through the vegetation (a character, a vehicle, a blast), in world space:
+// setCanopyPushers. A capsule from `a` to `b` (a sphere when they are equal). Canopy maps it onto
+// the simulation plane every frame (docs/design.md "Pushers"): a local bend of the foliage near it
+// that springs back (SimulationParams.push), and a motor of the fluid (the air it displaces as it
+// moves, and an optional outward blow), which the wind a host reads carries too.
+#define CANOPY_PUSHER_PARAMS(X)                                                                                         \
+  X(Float3, a, (Float3{0.0f, 0.0f, 0.0f}), Finite, 0, 0, "world space", "the capsule's first end (a sphere's centre)") \
+  X(Float3, b, (Float3{0.0f, 0.0f, 0.0f}), Finite, 0, 0, "world space", "its other end (equal to a: a sphere)")         \
+  X(float, radius, 0.5f, AboveMin, 0, 1e6, "world units", "the capsule's radius: what it touches")                    \
+  X(Float3, velocity, (Float3{0.0f, 0.0f, 0.0f}), Finite, 0, 0, "world units/s", "how it moves (the air it displaces)") \
+  X(float, bend, 1.0f, Closed, 0, 16, "x the default wind", "how far it bends the foliage it touches: 1 as far as a wind of WindParams.strength's default (0.5 domain units/s)") \
+  X(float, air, 1.0f, Closed, 0, 16, "", "scales the air its motion displaces (1: its own volume)")                    \
+  X(float, blow, 0.0f, Closed, -1000, 1000, "world units/s", "an outward push of air at its radius (a blast, a rotor's downwash; negative: inward)")
+CANOPY_PARAM_STRUCT(CanopyPusher, CANOPY_PUSHER_PARAMS)
+
 // How the vegetation is animated (docs/design.md "Per-vertex wind baseline"). A host switches
 // between the two on the same context and scene (CanopyDesc.allowPerVertex) to compare them.
 enum class AnimationMode : uint32_t {
@@ -540,6 +565,7 @@ Status checkParams(const WindParams& params, const std::string& prefix = "WindPa
 Status checkParams(const Motor& params, const std::string& prefix = "Motor.");
 Status checkParams(const FluidParams& params, const std::string& prefix = "FluidParams.");
 Status checkParams(const WaveParams& params, const std::string& prefix = "WaveParams.");
+Status checkParams(const PushParams& params, const std::string& prefix = "PushParams.");
 Status checkParams(const SimulationParams& params, const std::string& prefix = "SimulationParams.");
 Status checkParams(const SimulationDesc& params, const std::string& prefix = "SimulationDesc.");
 Status checkParams(const RegionSplit& params, const std::string& prefix = "RegionSplit.");
@@ -549,6 +575,7 @@ Status checkParams(const LayerSettings& params, const std::string& prefix = "Lay
 Status checkParams(const DynamicsParams& params, const std::string& prefix = "DynamicsParams.");
 Status checkParams(const CompositeParams& params, const std::string& prefix = "CompositeParams.");
 Status checkParams(const SimulationPlane& params, const std::string& prefix = "SimulationPlane.");
+Status checkParams(const CanopyPusher& params, const std::string& prefix = "CanopyPusher.");
 Status checkParams(const PerVertexParams& params, const std::string& prefix = "PerVertexParams.");
 Status checkParams(const CanopyParams& params, const std::string& prefix = "CanopyParams.");
 Status checkParams(const CanopyDesc& params, const std::string& prefix = "CanopyDesc.");
@@ -626,6 +653,9 @@ struct CanopyStats {
   // recordCanopyShadow: calls that drew the vegetation's shadow, and calls between updates
   // (CanopyShadowInputs.updateInterval) that only moved the map's state.
   uint64_t shadowUpdates = 0, shadowSkips = 0;
+  // setCanopyPushers: of the last frame's pushers, those mapped onto the plane, those outside its
+  // domain and those behind the camera (these two do nothing).
+  uint32_t pushersMapped = 0, pushersOutside = 0, pushersBehind = 0;
   LayerStats layers;
   SimulationStats simulation;
 };

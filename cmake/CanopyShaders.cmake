@@ -22,7 +22,7 @@ function(canopy_embed_shaders target)
     add_custom_command(
       OUTPUT ${hdr}
       COMMAND ${GLSLANG_VALIDATOR} --quiet --target-env vulkan1.2
-              -I${CMAKE_CURRENT_SOURCE_DIR}/shaders --vn ${var}
+              -I${CMAKE_CURRENT_SOURCE_DIR}/shaders -I${CMAKE_CURRENT_SOURCE_DIR}/render/include --vn ${var}
               --depfile ${hdr}.d -o ${hdr} ${src}
       MAIN_DEPENDENCY ${src}
       DEPFILE ${hdr}.d

@@ -477,6 +477,11 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
 // visible at the vegetation's centre depth.
 static void chooseSimulationPlane(CanopyContext& c, const LayerView& view) {
   if (c.planeChosen) return;
+  if (c.params.customPlane) {  // CanopyDesc.params' plane (setCanopyParams sets it as it is given)
+    c.plane = c.params.plane;
+    c.planeChosen = true;
+    return;
+  }
   const LayerInstances& lv = c.layers.instances;  // the world bounds of every copy
   const glm::vec3 centre = 0.5f * (lv.boundsMin + lv.boundsMax);
   const float depth = glm::dot(centre - viewPosition(view.view), viewForward(view.view));

@@ -479,15 +479,24 @@ void tile(const SimFrame& f, SimState& s) {
       const uint b = j * bn + i;
       float* value = &s.tiled[2 * size_t(bendOffset(n) + b)];
       float* rate = &s.tiled[2 * size_t(bendRateOffset(n) + b)];
-      vec2 v(value[0], value[1]), r(rate[0], rate[1]), target(0.0f);
+      vec2 v(value[0], value[1]), r(rate[0], rate[1]);
+      vec3 target(0.0f);
       const vec2 p = bendCellCentre(n, i, j);
-      for (uint m = 0; m < f.motorCount; ++m) target += motorBendTarget(f.motors[m], p);
+      float* reach = &s.tiled[2 * size_t(bendReachOffset(n) + b)];
+      bool touched = false;
+      for (uint m = 0; m < f.motorCount; ++m) {
+        const vec3 t = motorBendTarget(f.motors[m], p);
+        target += t;
+        if (t.z > 0.0f) {
+          const vec2 mine(f.motors[m].bend.z, f.motors[m].bend.w);
+          const vec2 kept = touched ? glm::max(vec2(reach[0], reach[1]), mine) : mine;
+          reach[0] = kept.x, reach[1] = kept.y;
+          touched = true;
+        }
+      }
       const uint steps = uint(std::clamp(std::ceil(f.dt * 120.0f), 1.0f, 1200.0f));
       const float h = f.dt / float(steps);
-      for (uint k = 0; k < steps; ++k) {
-        r += h * (-f.bendK * (v - target) - f.bendZeta * r);
-        v += h * r;
-      }
+      for (uint k = 0; k < steps; ++k) bendSubstep(v, r, target, f.bendK, f.bendZeta, h);
       value[0] = v.x, value[1] = v.y, rate[0] = r.x, rate[1] = r.y;
     }
   s.ringTimes[f.ringSlot] = f.time + f.dt;

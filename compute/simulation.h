@@ -48,7 +48,7 @@ struct WindSlot {
 };
 
 // GPU state of a simulation. Memory: velocity 2 * 2(N+2)^2 floats, multigrid ~(8/3) N^2 floats,
-// wave 6 N^2 floats, tiled 2 tiledVec2s(N) = 20 N^2 floats (V_s, V_wind, the bend field) and the history ring H * N^2 * 8 bytes (H * 32 KiB at N = 64).
+// wave 6 N^2 floats, tiled 2 tiledVec2s(N) = 28 N^2 floats (V_s, V_wind, the bend field) and the history ring H * N^2 * 8 bytes (H * 32 KiB at N = 64).
 struct Simulation {
   Device* device = nullptr;
   uint32_t n = 0, ringSize = 0;

@@ -557,7 +557,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.halfResolution = c->layers.visible.frame.halfResolution;
   fd.bend = sim.bendUsed;
   const BendPlane bp = bendPlaneOf(c->plane);
-  fd.bendOrigin = glm::vec4(bp.origin, bp.tile);
+  c->pusherHeight = pusherHeight(c->pushers, c->pusherHeight);
+  fd.bendOrigin = glm::vec4(bp.origin.x, c->pusherHeight, bp.origin.z, bp.tile);
   fd.bendX = glm::vec4(bp.x, 0.0f);
   fd.bendZ = glm::vec4(bp.z, 0.0f);
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;

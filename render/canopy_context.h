@@ -64,6 +64,7 @@ struct CanopyContext {
   ShadowCaster shadow;  // recordCanopyShadow (render/shadow.h): created at its first call
   std::vector<CanopyPusher> pushers;  // setCanopyPushers: mapped onto the plane at every step
   PusherCounts pusherCounts;          // the last step's mapping
+  float pusherHeight = 0.0f;          // the layers' bend lookup height (pusherHeight)
 };
 
 // recordCanopy()'s graph for these images (same images, views, states and declarations, built for

@@ -29,6 +29,13 @@ BendPlane bendPlaneOf(const SimulationPlane& plane) {
   return b;
 }
 
+float pusherHeight(const std::vector<CanopyPusher>& pushers, float previous) {
+  if (pushers.empty()) return previous;
+  double sum = 0;
+  for (const CanopyPusher& p : pushers) sum += std::min(p.a.y, p.b.y);
+  return float(sum / double(pushers.size()));
+}
+
 void mapPushers(const std::vector<CanopyPusher>& pushers, const SimulationPlane& plane, const LayerView& camera,
                 std::vector<gpu::SimMotor>* motors, PusherCounts* counts) {
   motors->clear();
@@ -59,7 +66,7 @@ void mapPushers(const std::vector<CanopyPusher>& pushers, const SimulationPlane&
     gpu::SimMotor m;
     m.segment = glm::vec4(pa - shift, pb - shift);
     m.flow = glm::vec4(R, p.blow / tile, v.x, v.y);
-    m.bend = glm::vec4(p.bend * kPusherBendUnit, R, 0.0f, 0.0f);
+    m.bend = glm::vec4(p.bend * kPusherBendUnit, R, std::max(a.y, b.y) + p.radius, p.radius);
     m.ground = glm::vec4(ga, gb);
     motors->push_back(m);
     counts->mapped++;

@@ -18,7 +18,7 @@ inline constexpr float kPusherBendUnit = 0.5f;
 // The bend field's plane: the world's horizontal plane (glTF's +Y up), SIM_BEND_SCALE tiles a side
 // centred under the simulation tile's centre, its first axis the plane's right made horizontal.
 struct BendPlane {
-  glm::vec3 origin{0.0f};  // world point at bend coordinate (0, 0) (its height is not used)
+  glm::vec3 origin{0.0f};  // world point at bend coordinate (0, 0); its y: the pushers' height (the layers' lookup)
   glm::vec3 x{1.0f, 0.0f, 0.0f}, z{0.0f, 0.0f, 1.0f};
   float tile = 1.0f;       // world units per tile unit (the simulation plane's tileSize)
 };
@@ -37,6 +37,9 @@ struct PusherCounts {
 // One motor per pusher that can touch the vegetation: for the fluid its segment in plane
 // coordinates (tile units) moved by whole tiles into the simulated tile (the plants read the field
 // through fract()); for the bend field its segment on the ground plane (tile units).
+// The height the layers look the bend field up at: the mean of the pushers' lower centres (y);
+// `previous` when there are none (their trail springs back where they were).
+float pusherHeight(const std::vector<CanopyPusher>& pushers, float previous);
 void mapPushers(const std::vector<CanopyPusher>& pushers, const SimulationPlane& plane, const LayerView& camera,
                 std::vector<gpu::SimMotor>* motors, PusherCounts* counts);
 

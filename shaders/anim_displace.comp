@@ -64,7 +64,8 @@ void historySlots(inout float tau, out uint lo, out uint hi) {
 }
 
 // The pushers' bend field at world point w (docs/design.md "Pushers"): a horizontal world vector,
-// tile units/s; bilinear over its cells, zero outside them (it is not tiled).
+// tile units/s; bilinear over its cells, zero outside them (it is not tiled), and above the height
+// its pushers reached (the world's +Y up).
 vec3 sampleBend(vec3 w) {
   uint n = f.n, bn = SIM_BEND_SCALE * n;
   vec3 rel = w - f.bendOrigin.xyz;
@@ -73,11 +74,16 @@ vec3 sampleBend(vec3 w) {
   vec2 fl = floor(x);
   vec2 t = x - fl;
   int i0 = int(fl.x), j0 = int(fl.y);
+  // Each cell's bend counts up to the height its pusher reached, fading over its radius above:
+  // what is higher (a farther plant's part seen above the path in the same slab) is not touched.
   vec2 v[4];
   for (int k = 0; k < 4; ++k) {
     int i = i0 + (k & 1), j = j0 + (k >> 1);
     bool inside = i >= 0 && j >= 0 && i < int(bn) && j < int(bn);
-    v[k] = inside ? tiled[bendOffset(n) + uint(j) * bn + uint(i)] : vec2(0.0);
+    uint c = uint(j) * bn + uint(i);
+    vec2 reach = inside ? tiled[bendReachOffset(n) + c] : vec2(0.0, 1.0);
+    float above = clamp((w.y - reach.x) / max(reach.y, 1e-6), 0.0, 1.0);
+    v[k] = inside ? tiled[bendOffset(n) + c] * (1.0 - above) : vec2(0.0);
   }
   vec2 b = mix(mix(v[0], v[1], t.x), mix(v[2], v[3], t.x), t.y);
   return b.x * f.bendX.xyz + b.y * f.bendZ.xyz;
@@ -131,8 +137,21 @@ void main() {
   vec3 rel = world - f.simOrigin.xyz;
   vec2 a = vec2(dot(rel, f.simRight.xyz), dot(rel, f.simUp.xyz)) / f.simOrigin.w;
   vec2 vs = sampleTiled(false, 0u, a);
-  // The pushers bend each layer where its world point is, undelayed (docs/design.md "Pushers").
-  vec3 bend = f.bend != 0u ? vec3(f.viewRotation * vec4(sampleBend(world), 0.0)) : vec3(0.0);
+  // The pushers bend each layer where its foliage meets them, undelayed (docs/design.md "Pushers"):
+  // the corner's ray is taken where it crosses the pushers' height (bendOrigin.y), held inside the
+  // layer's slab (half-way to its neighbours' depths), so the layer holding the pushed plants gets
+  // the bend at their place and the others only where their slab comes near it.
+  vec3 bend = vec3(0.0);
+  if (f.bend != 0u) {
+    float zLayer = f.layers[layer].depth;
+    float lo = layer > 0u ? 0.5 * (f.layers[layer - 1u].depth + zLayer) : -3.0e38;
+    float hi = layer + 1u < f.layerCount ? 0.5 * (zLayer + f.layers[layer + 1u].depth) : 3.0e38;
+    float dy = p1.y - p0.y;
+    float zHit = abs(dy) > 1e-12 ? d0 + (d1 - d0) * ((f.bendOrigin.y - p0.y) / dy) : zLayer;
+    float z = zHit > 0.0 ? clamp(zHit, lo, hi) : zLayer;
+    vec3 at = p0 + (p1 - p0) * ((z - d0) / (d1 - d0));
+    bend = vec3(f.viewRotation * vec4(sampleBend(at), 0.0));
+  }
   vec3 v0 = simToView(f, vs);  // eq. 4's V_0 (the delays): the wind's
   // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's;
   // the plant's species' wind response with it (flexibility, response speed).

@@ -23,19 +23,25 @@ void main() {
   uint i = gl_GlobalInvocationID.x, j = gl_GlobalInvocationID.y;
   uint bn = SIM_BEND_SCALE * n;
   if (i >= bn || j >= bn) return;
-  // The bend field: B'' = -k (B - target) - zeta B', semi-implicit Euler in substeps of at most
-  // 1/120 s (stable for k dt^2 < 1 at the schema's largest stiffness).
+  // The bend field (shared/sim.h bendSubstep): substeps of at most 1/120 s.
   uint b = j * bn + i;
   vec2 value = tiled[bendOffset(n) + b], rate = tiled[bendRateOffset(n) + b];
-  vec2 target = vec2(0.0);
+  vec3 target = vec3(0.0);
   vec2 p = bendCellCentre(n, i, j);
-  for (uint m = 0u; m < f.motorCount; ++m) target += motorBendTarget(f.motors[m], p);
+  vec2 reach = tiled[bendReachOffset(n) + b];
+  bool touched = false;
+  for (uint m = 0u; m < f.motorCount; ++m) {
+    vec3 t = motorBendTarget(f.motors[m], p);
+    target += t;
+    if (t.z > 0.0) {  // the reach of the pushers touching it now (their trail keeps the last)
+      reach = touched ? max(reach, vec2(f.motors[m].bend.z, f.motors[m].bend.w)) : vec2(f.motors[m].bend.z, f.motors[m].bend.w);
+      touched = true;
+    }
+  }
+  tiled[bendReachOffset(n) + b] = reach;
   uint steps = uint(clamp(ceil(f.dt * 120.0), 1.0, 1200.0));
   float h = f.dt / float(steps);
-  for (uint s = 0u; s < steps; ++s) {
-    rate += h * (-f.bendK * (value - target) - f.bendZeta * rate);
-    value += h * rate;
-  }
+  for (uint s = 0u; s < steps; ++s) bendSubstep(value, rate, target, f.bendK, f.bendZeta, h);
   tiled[bendOffset(n) + b] = value;
   tiled[bendRateOffset(n) + b] = rate;
   if (i >= n || j >= n) return;

@@ -23,12 +23,15 @@
 #define CANOPY_SIZE_CHECK(T, bytes) \
   static_assert(sizeof(T) == (bytes), #T ": size differs from its GLSL scalar-layout size");
 #define CANOPY_INLINE inline
+// A shared function's in-out parameter: a reference in C++, `inout` in GLSL.
+#define CANOPY_INOUT(T) T&
 #else
 #extension GL_EXT_scalar_block_layout : require
 #define CANOPY_NAMESPACE_BEGIN
 #define CANOPY_NAMESPACE_END
 #define CANOPY_SIZE_CHECK(T, bytes)
 #define CANOPY_INLINE
+#define CANOPY_INOUT(T) inout T
 #endif
 
 #endif

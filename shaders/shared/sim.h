@@ -40,7 +40,8 @@ struct SimMotor {
   vec4 segment;  // xy: one end, zw: the other (equal for a point), domain units
   vec4 flow;     // x: radius R (domain units), y: outward speed at the rim (domain units/s),
                  // zw: the body's velocity on the plane times its air coupling (domain units/s)
-  vec4 bend;     // x: the bend field's peak target (domain units/s); y: the radius on the ground (tile units)
+  vec4 bend;     // x: the bend field's peak target (domain units/s); y: the radius on the ground (tile units);
+                 // z: the highest world y it reaches (its top + its radius); w: its radius, world units
   vec4 ground;   // the segment's ends on the bend field's plane: xy one end, zw the other (tile units)
 };
 CANOPY_SIZE_CHECK(SimMotor, 64)
@@ -168,11 +169,12 @@ CANOPY_INLINE float motorSource(SimMotor m, vec2 p) {
   float q = 6.0f * m.flow.y * (1.0f - r / R) / R;
   return q + 4.0f * (1.0f - r2 / (R * R)) * (m.flow.z * d.x + m.flow.w * d.y) / (R * R);
 }
-// The bend field's target at its position g (tile units on the ground plane) from motor m: away
-// from the motor's ground segment, |target| = peak * k rho (1 - rho^2)^2 with rho = r/R, k =
-// 5^(5/2)/16 so the largest is `peak` (at rho = 1/sqrt 5): zero on the motor's axis (no direction
-// there) and at its rim. The target is a horizontal vector (the field's two axes).
-CANOPY_INLINE vec2 motorBendTarget(SimMotor m, vec2 g) {
+// The bend field's target at its position g (tile units on the ground plane) from motor m, in xy,
+// and in z 1 where the motor touches g (its ground segment within its radius R), else 0. Away from
+// the segment, |target| = peak * k rho (1 - rho^2)^2 with rho = r/R, k = 5^(5/2)/16 so the largest
+// is `peak` (at rho = 1/sqrt 5): zero on the axis (no direction there) and at the rim. The target
+// is a horizontal vector (the field's two axes).
+CANOPY_INLINE vec3 motorBendTarget(SimMotor m, vec2 g) {
   vec2 a = vec2(m.ground.x, m.ground.y), b = vec2(m.ground.z, m.ground.w);
   vec2 ab = b - a;
   float len2 = dot(ab, ab);
@@ -180,22 +182,40 @@ CANOPY_INLINE vec2 motorBendTarget(SimMotor m, vec2 g) {
   vec2 d = g - (a + t * ab);
   float r2 = dot(d, d);
   float R = m.bend.y;
-  if (m.bend.x == 0.0f || r2 >= R * R) return vec2(0.0f, 0.0f);
+  if (m.bend.x == 0.0f || r2 >= R * R) return vec3(0.0f, 0.0f, 0.0f);
   float w = 1.0f - r2 / (R * R);
-  return (m.bend.x * 3.4938562f * w * w / R) * d;  // rho * d/r = d / R
+  vec2 target = (m.bend.x * 3.4938562f * w * w / R) * d;  // rho * d/r = d / R
+  return vec3(target.x, target.y, 1.0f);
+}
+// One substep of h seconds of a bend cell (value, rate) toward `target` (motorBendTarget summed;
+// z > 0: touched). Where a pusher touches it the grass goes where it is pushed at the contact rate
+// (bendContact, 1/s: a foot does not wait for a spring); elsewhere it springs back, the damped
+// spring B'' = -k (B - 0) - zeta B' of SimulationParams.push (semi-implicit Euler).
+#define SIM_BEND_CONTACT_RATE 30.0f
+CANOPY_INLINE void bendSubstep(CANOPY_INOUT(vec2) value, CANOPY_INOUT(vec2) rate, vec3 target, float k, float zeta, float h) {
+  if (target.z > 0.0f) {
+    vec2 next = value + (vec2(target.x, target.y) - value) * (1.0f - exp(-h * SIM_BEND_CONTACT_RATE));
+    rate = (next - value) / h;
+    value = next;
+  } else {
+    rate += h * (-k * value - zeta * rate);
+    value += h * rate;
+  }
 }
 // The bend field's cell (i, j) centre (tile units from the field's corner).
 CANOPY_INLINE vec2 bendCellCentre(uint n, uint i, uint j) {
   return vec2((float(i) + 0.5f) / float(n), (float(j) + 0.5f) / float(n));
 }
 // The tiled buffer: tiled V_s (n*n vec2, what the plants read), the tiled V_wind (n*n vec2, what a
-// host reads: the wind image and sampleCanopyWind), then the bend field's value and its rate
-// ((SIM_BEND_SCALE n)^2 vec2 each).
+// host reads: the wind image and sampleCanopyWind), then the bend field's value, its rate and its
+// reach (the world height the last pusher touching the cell reached, and the fade above it, world
+// units) ((SIM_BEND_SCALE n)^2 vec2 each).
 CANOPY_INLINE uint tiledWindOffset(uint n) { return n * n; }
 CANOPY_INLINE uint bendCells(uint n) { return SIM_BEND_SCALE * SIM_BEND_SCALE * n * n; }
 CANOPY_INLINE uint bendOffset(uint n) { return 2u * n * n; }
 CANOPY_INLINE uint bendRateOffset(uint n) { return 2u * n * n + bendCells(n); }
-CANOPY_INLINE uint tiledVec2s(uint n) { return 2u * n * n + 2u * bendCells(n); }
+CANOPY_INLINE uint bendReachOffset(uint n) { return 2u * n * n + 2u * bendCells(n); }
+CANOPY_INLINE uint tiledVec2s(uint n) { return 2u * n * n + 3u * bendCells(n); }
 // Linear seam-blend weight of the tiling (docs/design.md): 1 at the tile centre, 0 at its edges.
 CANOPY_INLINE float tileWeight(uint i, uint n) {
   return 1.0f - abs((float(i) + 0.5f) / float(n) - 0.5f) * 2.0f;

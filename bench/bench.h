@@ -115,6 +115,8 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
 int runSpeciesBench(Device& dev, uint64_t facesPerSpecies, uint32_t copiesPerSpecies, int frames, uint32_t width, uint32_t height);
 // Shadows (issue 54): the frame without a shadow and with an update every 1, 2 and 4 frames, and the
 // update's own cost, for a shrub of each face count and a six-species forest.
+// canopy-bench pushers: 32 pushers against none on the field scene (bench/bench_pushers.cpp).
+int runPusherBench(Device& dev, uint64_t faces, int frames, uint32_t width, uint32_t height);
 int runShadowBench(Device& dev, const std::vector<uint64_t>& faceCounts, int frames, uint32_t width, uint32_t height, uint32_t mapSize);
 }
 }  // namespace canopy

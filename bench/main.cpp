@@ -14,6 +14,7 @@
 //                [--csv FILE] [--no-cross-fade] [--half-res N] [--depth-search N]
 //   canopy-bench species [--faces 8000] [--copies N] [--frames N] [--size WxH]
 //   canopy-bench shadows [--faces 80000,1000000] [--frames N] [--size WxH] [--map N]
+//   canopy-bench pushers [--faces 80000] [--frames N] [--size WxH]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -68,6 +69,9 @@ static int usage(const char* why) {
                "                 update every 1, 2 and 4 frames, and the update's own GPU time, for a shrub per face count\n"
                "                 (--faces, default 80000,1000000) and a six-species forest (--frames per variant, default\n"
                "                 20; --size default 640x480; --map N: the shadow map's side, default 1024)\n"
+               "  pushers        32 pushers (setCanopyPushers) against none on the field scene: the frame and the GPU\n"
+               "                 time of the passes they touch (--faces, default 80000; --frames per variant, default\n"
+               "                 40; --size default 640x480)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"
@@ -135,7 +139,7 @@ int main(int argc, char** argv) {
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
   std::string scene;
-  bool runSpecies = false, runShadows = false;
+  bool runSpecies = false, runShadows = false, runPushers = false;
   uint32_t mapSize = 1024;
   uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
@@ -157,6 +161,7 @@ int main(int argc, char** argv) {
     else if (a == "leafsheet") runLeafSheetSection = true;
     else if (a == "species") runSpecies = true;
     else if (a == "shadows") runShadows = true;
+    else if (a == "pushers") runPushers = true;
     else if (a == "--map") {
       if (!cli::parseUint(next(), 16, 16384, &mapSize)) return usage("--map needs the shadow map's side in [16, 16384]");
     }
@@ -321,7 +326,7 @@ int main(int argc, char** argv) {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows)
+      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -369,6 +374,9 @@ int main(int argc, char** argv) {
   if (rc == 0 && runShadows)
     rc = bench::runShadowBench(dev, facesGiven ? faces : std::vector<uint64_t>{80000, 1000000}, frames ? frames : 20,
                                sizeGiven ? t1.width : 640u, sizeGiven ? t1.height : 480u, mapSize);
+  if (rc == 0 && runPushers)
+    rc = bench::runPusherBench(dev, facesGiven ? faces.front() : 80000, frames ? frames : 40, sizeGiven ? t1.width : 640u,
+                               sizeGiven ? t1.height : 480u);
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

@@ -3,7 +3,9 @@
 # window and swapchain, 3 frames in flight, a D32S8 depth whose stencil the host uses, 64 copies of
 # a real glTF plant from ../shared/assets, a walking camera; validation + synchronization
 # validation silent and the host's own per-frame check (depth never farther after Canopy, stencil
-# unchanged, vegetation in front of its scene, the forest's shadow drawn into its shadow map every frame) passing; then the six species of ../shared/assets from
+# unchanged, vegetation in front of its scene, the forest's shadow drawn into its shadow map every frame,
+# its 4096 falling leaves moved by canopyWindAt following sampleCanopyWind's wind, its character
+# mapped as a pusher every frame) passing; then the six species of ../shared/assets from
 # demo/scenes/six_species.json (338 copies in one vegetation) the same way. Skipped (77) without
 # xvfb-run or the assets.
 set -u
@@ -15,16 +17,17 @@ rc=$?
 cat "$out/stdout"
 [ $rc -eq 77 ] && exit 77
 [ $rc -eq 0 ] || { echo "FAIL: exit $rc ($(tail -5 "$out/stderr"))"; exit 1; }
-grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 24 with the forest's shadow drawn, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages: PASS" "$out/stdout" ||
+grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 24 with the forest's shadow drawn, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages, leaves following the wind (correlation >= 0.8): yes: PASS" "$out/stdout" ||
   { echo "FAIL: the self-check line"; exit 1; }
 grep -q "^64 copies of CommonTree_1.glb" "$out/stdout" || { echo "FAIL: not 64 copies"; exit 1; }
+grep -q "the character (a capsule pusher) mapped onto the plane in 24 of 24 frames" "$out/stdout" || { echo "FAIL: the character"; exit 1; }
 [ -s "$out/frame_0024.ppm" ] || { echo "FAIL: no frame written"; exit 1; }
 xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 --validate --out "$out/six" \
   --write-every 8 >"$out/stdout_six" 2>"$out/stderr_six"
 rc=$?
 cat "$out/stdout_six"
 [ $rc -eq 0 ] || { echo "FAIL: six species: exit $rc ($(tail -5 "$out/stderr_six"))"; exit 1; }
-grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 24 with the forest's shadow drawn, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages: PASS" "$out/stdout_six" ||
+grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 24 with the forest's shadow drawn, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages, leaves following the wind (correlation >= 0.8): yes: PASS" "$out/stdout_six" ||
   { echo "FAIL: six species: the self-check line"; exit 1; }
 grep -q "^338 copies of six_species.json (.* of its 6 species)" "$out/stdout_six" || { echo "FAIL: six species: not 338 copies of 6 species"; exit 1; }
 echo "PASS"

@@ -55,7 +55,7 @@ Status simDispatch(rg::PassContext& c, const rg::Slots& slots, const ComputePipe
 }  // namespace
 
 rg::State windImageRest() {
-  // Any shader stage of the host may sample it after recordCanopy (docs/embedding.md "The wind").
+  // Any shader stage of the host may sample it after recordCanopy (docs/embedding.md "The wind and pushers").
   return {VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
 }

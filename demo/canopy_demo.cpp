@@ -479,7 +479,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     auto pushersFor = [&](int64_t index, const CanopyFrame& f) -> Status {
       if (o.pusher == PusherPath::None) return Status();
       if (index < 0) return setCanopyPushers(host.canopy, {});
-      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps);
+      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps, o.windStrength);
       const glm::mat4 view = toGlm(f.camera.view), proj = toGlm(f.camera.proj);
       const glm::vec4 q = proj * view * glm::vec4(toGlm(p.a), 1.0f);
       const float depth = -(view * glm::vec4(toGlm(p.a), 1.0f)).z;
@@ -622,6 +622,15 @@ int compareFolders(const Options& o) {
   }
   std::vector<uint8_t> maxDiff;
   uint32_t diffW = 0, diffH = 0;
+  // pusher_sheet.png: for six frames spread over the run, the band's crop from A, from B and their
+  // difference (x4): the grass parting where the sphere is and springing back behind it.
+  std::vector<std::vector<uint8_t>> sheetRows;
+  glm::ivec4 crop(0);  // x0, y0, x1, y1
+  if (!path.empty()) {
+    glm::vec2 lo(1e30f), hi(-1e30f);
+    for (const glm::vec3& p : path) lo = glm::min(lo, glm::vec2(p) - 3.0f * p.z), hi = glm::max(hi, glm::vec2(p) + 3.0f * p.z);
+    crop = glm::ivec4(int(std::floor(lo.x)), int(std::floor(lo.y)), int(std::ceil(hi.x)), int(std::ceil(hi.y)));
+  }
   for (;; ++n) {
     char name[32];
     std::snprintf(name, sizeof name, "/frame_%04u.png", n);
@@ -641,6 +650,22 @@ int compareFolders(const Options& o) {
     }
     const WorldLockError e = compareFrames(a, b, wa, ha, clear);
     if (!path.empty()) {
+      const uint32_t frames = uint32_t(path.size());
+      const int x0 = std::max(crop.x, 0), y0 = std::max(crop.y, 0), x1 = std::min(crop.z, int(wa)), y1 = std::min(crop.w, int(ha));
+      if (frames >= 6 && x1 > x0 && y1 > y0 && n % ((frames - 1) / 5) == 0 && sheetRows.size() < 6 * size_t(y1 - y0)) {
+        for (int y = y0; y < y1; ++y) {
+          std::vector<uint8_t> row;
+          for (int part = 0; part < 3; ++part)
+            for (int x = x0; x < x1; ++x) {
+              const size_t k = size_t(y) * wa + size_t(x);
+              for (int c = 0; c < 3; ++c)
+                row.push_back(part == 0 ? a[4 * k + c] : part == 1 ? b[4 * k + c]
+                                                       : uint8_t(std::min(255, 4 * std::abs(int(a[4 * k + c]) - int(b[4 * k + c])))));
+              row.push_back(255);
+            }
+          sheetRows.push_back(std::move(row));
+        }
+      }
       if (maxDiff.empty()) maxDiff.assign(size_t(wa) * ha, 0), diffW = wa, diffH = ha;
       for (size_t k = 0; k < maxDiff.size() && maxDiff.size() == size_t(wa) * ha; ++k)
         for (int c = 0; c < 3; ++c)
@@ -684,6 +709,12 @@ int compareFolders(const Options& o) {
         image[4 * k] = image[4 * k + 1] = image[4 * k + 2] = v;
         if (nearest > 2.95f && nearest <= 3.0f) image[4 * k] = 255, image[4 * k + 1] = image[4 * k + 2] = 0;
       }
+    if (!sheetRows.empty()) {
+      std::vector<uint8_t> sheet;
+      for (const std::vector<uint8_t>& row : sheetRows) sheet.insert(sheet.end(), row.begin(), row.end());
+      const Status ws = writePng(o.compareA + "/pusher_sheet.png", uint32_t(sheetRows[0].size() / 4), uint32_t(sheetRows.size()), sheet);
+      if (!ws.ok()) std::fprintf(stderr, "canopy-demo: %s\n", ws.message().c_str());
+    }
     const std::string out = o.compareA + "/difference.png";
     const Status w = writePng(out, diffW, diffH, image);
     std::printf("pusher band (3 radii of its path, %zu frames): %llu pixels differ by > %d levels inside it, %llu beyond it "

@@ -522,7 +522,7 @@ Status loadScene(const Options& o, VegetationModel* model, std::string* label, S
 }
 
 CanopyPusher pusherAt(PusherPath path, const glm::vec3& lo, const glm::vec3& hi, const glm::vec3& cameraRight, uint32_t i,
-                      uint32_t frames, float fps) {
+                      uint32_t frames, float fps, float windStrength) {
   // A sphere a twelfth of the scene's width across, half sunk into the ground, walking over the
   // written frames: along the camera's right through the centre, or once around a circle.
   const glm::vec3 c = 0.5f * (lo + hi);
@@ -546,7 +546,8 @@ CanopyPusher pusherAt(PusherPath path, const glm::vec3& lo, const glm::vec3& hi,
   out.a = out.b = toFloat3(p);
   out.radius = radius;
   out.velocity = toFloat3(v);
-  out.bend = 2.0f;
+  // Twice as far as the demo's wind (--strength, domain units/s) bends the grass: bend 1 is 0.5 of them.
+  out.bend = std::clamp(4.0f * windStrength, 1.0f, 16.0f);
   return out;
 }
 

@@ -113,9 +113,10 @@ struct Options {
 };
 
 // --pusher: the sphere's world position, radius and velocity at written frame `i` of `frames`,
-// over the bounds of the scene (a line across the view of frame 0's camera, or a circle).
+// over the bounds of the scene (a line across the view of frame 0's camera, or a circle), bending
+// the grass twice as far as the wind of `windStrength` (domain units/s).
 CanopyPusher pusherAt(PusherPath path, const glm::vec3& boundsMin, const glm::vec3& boundsMax, const glm::vec3& cameraRight,
-                      uint32_t i, uint32_t frames, float fps);
+                      uint32_t i, uint32_t frames, float fps, float windStrength);
 
 // Whether the context is created with both methods (CanopyDesc.allowPerVertex; the scene then
 // carries its branch hierarchy).

@@ -45,9 +45,10 @@ std::string run(const std::string& command) {
 // glslang's reflection of the active bindings: "name: offset -1, type 8b5e, ..., binding 4, ..."
 // lines under "Uniform reflection:" (opaque types) and the block sections (buffers).
 std::map<int, Kind> glslangBindings(const std::string& source, std::string* log) {
-  // The include folder is the runtime's shaders/ for both registries (cmake/CanopyShaders.cmake).
-  const std::string cmd = std::string(CANOPY_GLSLANG_VALIDATOR) + " -V --target-env vulkan1.2 -I" +
-                          CANOPY_SHADER_SOURCES + " -q -o /dev/null " + source + " 2>&1";
+  // The include folders are the runtime's shaders/ and the public include folder (a host's view of
+  // <canopy/canopy_wind.glsl>) for both registries (cmake/CanopyShaders.cmake).
+  const std::string cmd = std::string(CANOPY_GLSLANG_VALIDATOR) + " -V --target-env vulkan1.2 -I" + CANOPY_SHADER_SOURCES + " -I" +
+                          CANOPY_SOURCE_DIR + "/render/include -q -o /dev/null " + source + " 2>&1";
   *log = run(cmd);
   std::map<int, Kind> out;
   std::istringstream in(*log);
@@ -127,7 +128,7 @@ TEST(SpirVReflect, EveryEmbeddedShaderLayoutMatchesGlslangReflection) {
   std::printf("%zu runtime shaders + %zu test shaders, %zu active bindings compared with glslang's reflection\n",
               shaders, testShaders, bindings);
   EXPECT_GT(shaders, 30u);
-  EXPECT_EQ(testShaders, 5u);
+  EXPECT_EQ(testShaders, 6u);
   EXPECT_GT(bindings, 100u);
 }
 
@@ -141,8 +142,8 @@ TEST(SpirVReflect, TestShadersLiveOutsideTheRuntime) {
   }
   for (size_t i = 0; const EmbeddedShader* sh = embeddedShaderAt(i); ++i)
     EXPECT_EQ(canopy_test::findEmbeddedShader(sh->name), nullptr) << sh->name;
-  EXPECT_EQ(n, 5u);
-  for (const char* name : {"example_write.comp", "interop_probe.comp", "per_vertex_probe.comp"})
+  EXPECT_EQ(n, 6u);
+  for (const char* name : {"example_write.comp", "interop_probe.comp", "per_vertex_probe.comp", "wind_probe.comp"})
     EXPECT_NE(canopy_test::findEmbeddedShader(name), nullptr) << name;
 }
 

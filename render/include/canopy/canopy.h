@@ -188,7 +188,7 @@ struct CanopyShadowInputs {
 Status recordCanopyShadow(CanopyContext* context, VkCommandBuffer cmd, const CanopyShadowInputs& inputs, bool* updated = nullptr);
 
 // ---------------------------------------------------------------------------------------------
-// One wind for the scene (docs/embedding.md "The wind"; docs/design.md "The wind a host reads",
+// One wind for the scene (docs/embedding.md "The wind and pushers"; docs/design.md "The wind a host reads",
 // "Pushers")
 
 // What a host's shader needs to read the wind (<canopy/canopy_wind.glsl>: the same 64 bytes).

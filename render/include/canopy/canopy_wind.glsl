@@ -1,4 +1,4 @@
-// Canopy's wind for a host's shaders (docs/embedding.md "The wind"): include it (glslc -I of the
+// Canopy's wind for a host's shaders (docs/embedding.md "The wind and pushers"): include it (glslc -I of the
 // installed include folder, or GL_GOOGLE_include_directive) in any stage, bind the image that
 // canopyWind() names as a sampled image (any sampler: texels are fetched, not filtered), and pass
 // the CanopyWindInfo it gives (a uniform block, a storage buffer or push constants: 64 bytes,

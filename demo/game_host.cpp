@@ -18,6 +18,7 @@
 // leaves on screen); the next frame's ground and boxes sample it (3x3 PCF).
 //
 //   canopy-game-host [--frames N] [--plants N] [--gltf FILE | --scene-file FILE] [--out DIR] [--write-every K] [--validate]
+//                    [--no-push] [--no-leaves]
 // Exit 0 when every check passes, 1 on a failure, 2 on bad arguments, 77 without a display.
 #include <canopy/canopy.h>
 
@@ -76,6 +77,8 @@ struct Slot {
   Readback readback;
   bool pending = false, write = false;
   uint64_t frame = 0;
+  glm::mat4 invViewProj{1.0f};  // the frame's camera (the band mask: each pixel's world point)
+  size_t walked = 0;            // how much of the character's path that frame had walked
 };
 
 struct Game {
@@ -128,6 +131,11 @@ struct Game {
   // The self-check's totals.
   uint64_t fartherPixels = 0, stencilChanged = 0, checkedFrames = 0, framesWithVegetationInFront = 0;
   std::string outDir;
+  // --no-push: the character is drawn but not given to Canopy; --no-leaves: no leaves drawn (the
+  // two together let a test compare frames with and without the character's push).
+  bool push = true, drawLeaves = true;
+  std::string characterPath;  // per frame: x y (pixels, rows from the top) and radius (pixels) of the character's middle
+  std::vector<glm::vec4> walked;  // the character's path so far: x, z, its radius
 };
 
 bool createInstanceAndDevice(Game& g, bool validate) {
@@ -522,6 +530,20 @@ void checkSlot(Game& g, Slot& s) {
     std::ofstream o(g.outDir + name, std::ios::binary);
     o << "P6\n" << kW << " " << kH << "\n255\n";
     for (size_t i = 0; i < n; ++i) o.write(reinterpret_cast<const char*>(rgba + 4 * i), 3);
+    // The band the character's push may reach: pixels whose world point (the depth after Canopy)
+    // lies within 3 radii, horizontally, of where it has walked (255), the others 0.
+    std::snprintf(name, sizeof name, "/band_%04llu.pgm", (unsigned long long)s.frame);
+    std::ofstream m(g.outDir + name, std::ios::binary);
+    m << "P5\n" << kW << " " << kH << "\n255\n";
+    for (size_t i = 0; i < n; ++i) {
+      const float x = (float(i % kW) + 0.5f) / float(kW) * 2.0f - 1.0f, y = (float(i / kW) + 0.5f) / float(kH) * 2.0f - 1.0f;
+      const glm::vec4 w = s.invViewProj * glm::vec4(x, y, depthOf(after, i), 1.0f);
+      const glm::vec2 at = glm::vec2(w.x, w.z) / w.w;
+      bool near = false;
+      for (size_t k = 0; k < s.walked && k < g.walked.size() && !near; ++k)
+        near = glm::length(at - glm::vec2(g.walked[k])) <= 3.0f * g.walked[k].z;
+      m.put(near ? char(255) : char(0));
+    }
   }
 }
 
@@ -581,7 +603,20 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   placed.push_back({glm::scale(glm::translate(glm::mat4(1.0f), 0.5f * (ca + cb)),
                                glm::vec3(2.0f * walker.radius, cb.y - ca.y + 2.0f * walker.radius, 2.0f * walker.radius)),
                     1u, 0u});
-  const canopy::Status pushed = canopy::setCanopyPushers(g.ctx, {walker});
+  {
+    const glm::vec3 mid = 0.5f * (ca + cb);
+    const glm::vec4 q = vp * glm::vec4(mid, 1.0f);
+    const float depth = -(view * glm::vec4(mid, 1.0f)).z;
+    char line[96];
+    std::snprintf(line, sizeof line, "%llu %.2f %.2f %.2f\n", (unsigned long long)number, double((q.x / q.w * 0.5f + 0.5f) * kW),
+                  double((q.y / q.w * 0.5f + 0.5f) * kH), double(walker.radius * std::abs(proj[1][1]) * 0.5f * kH / std::max(depth, 1e-4f)));
+    g.characterPath += line;
+  }
+  g.walked.push_back(glm::vec4(0.5f * (ca.x + cb.x), 0.5f * (ca.z + cb.z), walker.radius, 0.0f));
+  s.walked = g.walked.size();
+  s.invViewProj = glm::inverse(vp);
+  const canopy::Status pushed = canopy::setCanopyPushers(g.ctx, g.push ? std::vector<canopy::CanopyPusher>{walker}
+                                                                       : std::vector<canopy::CanopyPusher>{});
   if (!pushed.ok()) {
     std::fprintf(stderr, "canopy-game-host: %s\n", pushed.message().c_str());
     return false;
@@ -615,7 +650,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
     std::fprintf(stderr, "canopy-game-host: %s\n", st.message().c_str());
     return false;
   }
-  g.characterMapped += canopy::canopyStats(g.ctx).pushersMapped == 1;
+  g.characterMapped += canopy::canopyStats(g.ctx).pushersMapped == (g.push ? 1u : 0u);
   // The outline of box 0, where the stencil is not its own: the stencil survived Canopy's passes.
   const glm::mat4 grown = sc.boxes[0] * glm::scale(glm::mat4(1.0f), glm::vec3(1.12f));
   drawBoxes(g, cmd, g.outline, false, {{{vp * grown, glm::vec4(1.0f, 0.85f, 0.1f, 1)}, uint32_t(kOutlined)}});
@@ -664,7 +699,7 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
       glm::vec4 right, up;
     } draw{vp, glm::vec4(glm::vec3(inv[0]) * size, 40.0f * size), glm::vec4(glm::vec3(inv[1]) * size, 0.0f)};
     vkCmdPushConstants(cmd, g.leafDrawLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof draw, &draw);
-    vkCmdDraw(cmd, 6 * kLeaves, 1, 0, 0);
+    vkCmdDraw(cmd, g.drawLeaves ? 6 * kLeaves : 0, 1, 0, 0);
     vkCmdEndRendering(cmd);
     const VkBufferCopy copy{0, 14 * VkDeviceSize(kW) * kH, VkDeviceSize(kLeaves) * 32};
     vkCmdCopyBuffer(cmd, g.leaves, s.readback.buffer, 1, &copy);
@@ -954,7 +989,8 @@ int main(int argc, char** argv) {
     if (a == "--help" || a == "-h") {
       std::printf("usage: canopy-game-host [--frames N (1..10000, default 48)] [--plants N (1..4096, default 64)] [--gltf FILE]\n"
                   "                        [--scene-file FILE (a scene of glTF species instead of --gltf's copies)]\n"
-                  "                        [--out DIR] [--write-every K (default 1)] [--validate]\n");
+                  "                        [--out DIR] [--write-every K (default 1)] [--validate]\n"
+                  "                        [--no-push (the character not given to Canopy)] [--no-leaves (none drawn)]\n");
       return 0;
     } else if (a == "--frames") {
       if (!number(1, 10000, &frames)) return std::fprintf(stderr, "canopy-game-host: --frames needs an integer in [1, 10000]\n"), 2;
@@ -970,6 +1006,10 @@ int main(int argc, char** argv) {
       g.outDir = argv[++i];
     } else if (a == "--validate") {
       validate = true;
+    } else if (a == "--no-push") {
+      g.push = false;
+    } else if (a == "--no-leaves") {
+      g.drawLeaves = false;
     } else {
       std::fprintf(stderr, "canopy-game-host: unknown or incomplete argument '%s'\n", a.c_str());
       return 2;
@@ -1025,6 +1065,7 @@ int main(int argc, char** argv) {
   }
   canopy::CanopyStats st{};
   if (g.ctx) st = canopy::canopyStats(g.ctx);
+  if (!g.outDir.empty()) std::ofstream(g.outDir + "/character_path.txt") << g.characterPath;
   shutdown(g);
   std::printf("%u copies of %s (%u visible at the last re-slice, of %u of its %u species), %llu re-slices in %u frames\n",
               st.layers.instances, std::filesystem::path(sceneFile.empty() ? gltf : sceneFile).filename().c_str(),

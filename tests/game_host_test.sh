@@ -6,7 +6,8 @@
 # unchanged, vegetation in front of its scene, the forest's shadow drawn into its shadow map every frame,
 # its 4096 falling leaves moved by canopyWindAt following sampleCanopyWind's wind, its character
 # mapped as a pusher every frame) passing; then the six species of ../shared/assets from
-# demo/scenes/six_species.json (338 copies in one vegetation) the same way. Skipped (77) without
+# demo/scenes/six_species.json (338 copies in one vegetation) the same way, and its character parting
+# the grass (with and without its push: tests/game_host_push.py). Skipped (77) without
 # xvfb-run or the assets.
 set -u
 host=$1 out=$2 scenes=$3
@@ -30,4 +31,13 @@ cat "$out/stdout_six"
 grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host's scene, 24 with the forest's shadow drawn, 0 pixels farther after Canopy, 0 stencil bytes changed, 0 validation messages, leaves following the wind (correlation >= 0.8): yes: PASS" "$out/stdout_six" ||
   { echo "FAIL: six species: the self-check line"; exit 1; }
 grep -q "^338 copies of six_species.json (.* of its 6 species)" "$out/stdout_six" || { echo "FAIL: six species: not 338 copies of 6 species"; exit 1; }
+# The character parts the grass: the six species without leaves, with and without its push; the
+# frames' difference inside the band where it walked (the host's band masks), at most 25 % beyond.
+for run in push nopush; do
+  extra="--no-leaves"
+  [ "$run" = nopush ] && extra="--no-leaves --no-push"
+  xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 --validate $extra \
+    --out "$out/$run" --write-every 1 >"$out/stdout_$run" 2>"$out/stderr_$run" || { echo "FAIL: $run: exit $? ($(tail -5 "$out/stderr_$run"))"; exit 1; }
+done
+python3 "$(dirname "$0")/game_host_push.py" "$out/push" "$out/nopush" 25 || { echo "FAIL: the character's push"; exit 1; }
 echo "PASS"

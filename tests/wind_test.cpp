@@ -361,18 +361,6 @@ float horizontalDistanceToSegment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
 // near zero beyond 3 radii of its path.
 TEST_F(WindTest, APusherPartsTheGrassWhereItWalksAndItSpringsBack) {
   VegetationModel m = scene(SceneKind::GrassField, 20000);
-  Host hostA, hostB;
-  hostA.w = hostB.w = 160;
-  hostA.h = hostB.h = 120;
-  CanopyContext *a = nullptr, *b = nullptr;
-  ASSERT_TRUE(test::createHostContext(dev, hostA, {SpeciesModel{&m}}, {}, 0.5f, false, &a).ok());
-  ASSERT_TRUE(test::createHostContext(dev, hostB, {SpeciesModel{&m}}, {}, 0.5f, false, &b).ok());
-  // The bend is read at the warp grid's corners: the sphere spans a few cells on screen.
-  for (CanopyContext* ctx : {a, b}) {
-    CanopyParams p = canopyParams(ctx);
-    p.dynamics.cellSize = 4;
-    ASSERT_TRUE(setCanopyParams(ctx, p).ok());
-  }
   const LayerView view = orbitView(m.boundsMin, m.boundsMax, 0.0f, 25.0f, 40.0f, 160.0f / 120.0f, 0.9f);
   const glm::vec3 c = 0.5f * (m.boundsMin + m.boundsMax), ext = m.boundsMax - m.boundsMin;
   const float extent = std::max(ext.x, ext.z), R = extent / 12.0f;
@@ -381,73 +369,97 @@ TEST_F(WindTest, APusherPartsTheGrassWhereItWalksAndItSpringsBack) {
   const float dt = 1.0f / 30.0f, speed = 0.6f * extent / 2.0f;  // across 0.6 of the field in 2 s
   const int walk = 60, after = 60;
   const glm::vec3 end = start + speed * dt * float(walk - 1) * right;
-  double maxBeyond = 0, maxPeak = 0, sumLag = 0, sway = 0;
-  int lagFrames = 0, swayCount = 0, settledFrame = -1;
-  std::vector<double> bandAfter;
-  std::printf("[ push ] frame, pusher along its path (world units), the difference's peak (pixels) and where it is\n");
-  for (int k = 0; k < walk + after; ++k) {
-    const glm::vec3 p = start + speed * dt * float(std::min(k, walk - 1)) * right;
-    std::vector<CanopyPusher> pushers;
-    if (k < walk) {
-      CanopyPusher q;
-      q.a = q.b = toFloat3(p);
-      q.radius = R;
-      q.velocity = toFloat3(speed * right);
-      q.bend = 2.0f;
-      pushers.push_back(q);
+  struct Result {
+    double peak = 0, beyond = 0, lagSeconds = 0, swayRms = 0, settled = -1;
+  };
+  // One run with the sphere (its bend and air) against one without, frame by frame.
+  auto run = [&](float bend, float air, bool print, Result* out) {
+    Host hostA, hostB;
+    hostA.w = hostB.w = 160;
+    hostA.h = hostB.h = 120;
+    CanopyContext *a = nullptr, *b = nullptr;
+    ASSERT_TRUE(test::createHostContext(dev, hostA, {SpeciesModel{&m}}, {}, 0.5f, false, &a).ok());
+    ASSERT_TRUE(test::createHostContext(dev, hostB, {SpeciesModel{&m}}, {}, 0.5f, false, &b).ok());
+    // The bend is read at the warp grid's corners: the sphere spans a few cells on screen.
+    for (CanopyContext* ctx : {a, b}) {
+      CanopyParams p = canopyParams(ctx);
+      p.dynamics.cellSize = 4;
+      ASSERT_TRUE(setCanopyParams(ctx, p).ok());
     }
-    ASSERT_TRUE(setCanopyPushers(a, pushers).ok());
-    ASSERT_TRUE(hostA.frame(++frameNumber, {a}, view, dt).ok());
-    ASSERT_TRUE(hostB.frame(frameNumber, {b}, view, dt).ok());
-    ASSERT_TRUE(hostA.finish().ok());
-    ASSERT_TRUE(hostB.finish().ok());
-    const LayerDynamics &da = canopyDynamics(a), &db = canopyDynamics(b);
-    const gpu::AnimFrame& f = da.current;
-    const size_t corners = size_t(f.gridX) * f.gridY, count = corners * f.layerCount;
-    std::vector<glm::vec2> dA(count), dB(count);
-    ASSERT_TRUE(readbackBuffer(dev, da.displacement, dA.data(), count * sizeof(glm::vec2), rg::stateOf(rg::Use::ComputeStorageRead)).ok());
-    ASSERT_TRUE(readbackBuffer(dev, db.displacement, dB.data(), count * sizeof(glm::vec2), rg::stateOf(rg::Use::ComputeStorageRead)).ok());
-    double peak = 0, band = 0;
-    glm::vec3 peakAt(0.0f);
-    for (uint32_t layer = 0; layer < f.layerCount; ++layer)
-      for (uint32_t id = 0; id < corners; ++id) {
-        const size_t i = size_t(layer) * corners + id;
-        const double diff = glm::length(dA[i] - dB[i]);
-        const glm::vec3 w = cornerWorld(f, id, layer);
-        if (w.x < m.boundsMin.x || w.x > m.boundsMax.x || w.z < m.boundsMin.z || w.z > m.boundsMax.z) continue;  // no grass there
-        const float fromPath = horizontalDistanceToSegment(w, start, end);
-        if (fromPath > 3.0f * R) maxBeyond = std::max(maxBeyond, diff);
-        else band = std::max(band, diff);
-        if (k >= walk && fromPath <= 3.0f * R) sway += glm::dot(dB[i], dB[i]), swayCount++;
-        if (diff > peak) peak = diff, peakAt = w;
+    double sumLag = 0, sway = 0;
+    int lagFrames = 0, swayCount = 0;
+    std::vector<double> bandAfter;
+    for (int k = 0; k < walk + after; ++k) {
+      const glm::vec3 p = start + speed * dt * float(std::min(k, walk - 1)) * right;
+      std::vector<CanopyPusher> pushers;
+      if (k < walk) {
+        CanopyPusher q;
+        q.a = q.b = toFloat3(p);
+        q.radius = R;
+        q.velocity = toFloat3(speed * right);
+        q.bend = bend;
+        q.air = air;
+        pushers.push_back(q);
       }
-    maxPeak = std::max(maxPeak, peak);
-    if (k >= walk) bandAfter.push_back(band);
-    // The peak behind the pusher along its walk (positive: behind), over the middle of the walk.
-    const float lag = glm::dot(p - peakAt, right);
-    if (k >= 15 && k < walk) sumLag += lag, lagFrames++;
-    if (k % 10 == 0 || k == walk)
-      std::printf("[ push ] %3d %s %.3f: peak %.2f px at %.3f along, %.3f from its path\n", k, k < walk ? "at" : "gone, last at",
-                  glm::dot(p - start, right), peak, glm::dot(peakAt - start, right), horizontalDistanceToSegment(peakAt, start, end));
-  }
-  const double swayRms = std::sqrt(sway / std::max(swayCount, 1));
-  for (size_t i = 0; i < bandAfter.size(); ++i)
-    if (settledFrame < 0 && bandAfter[i] <= 0.1 * swayRms) settledFrame = int(i);
-  const double lagSeconds = sumLag / std::max(lagFrames, 1) / speed;
-  std::printf("[ push ] radius %.3f, speed %.3f world units/s: the difference peaks at %.2f px; its peak %.3f world units "
-              "(%.2f radii, %.3f s) behind the sphere on average; beyond 3 radii of the path at most %.3f px (%.1f %% of the "
-              "peak); the undisturbed sway in the band %.2f px RMS; after the sphere left the band's difference fell within 10 %% "
-              "of it in %.2f s\n",
-              R, speed, maxPeak, sumLag / std::max(lagFrames, 1), sumLag / std::max(lagFrames, 1) / R, lagSeconds, maxBeyond,
-              100.0 * maxBeyond / std::max(maxPeak, 1e-9), swayRms, settledFrame < 0 ? -1.0 : settledFrame * dt);
-  EXPECT_GT(maxPeak, swayRms) << "the grass parts by more than its undisturbed sway";
-  EXPECT_GE(lagSeconds, -0.1);
-  EXPECT_LE(lagSeconds, 1.0) << "the bend follows the sphere (its trail springs back behind it)";
-  EXPECT_LE(maxBeyond, 0.05 * maxPeak) << "grass beyond 3 radii of the path keeps its sway";
-  EXPECT_GE(settledFrame, 0) << "the grass springs back";
-  EXPECT_LE(settledFrame * dt, 1.5) << "within 1.5 s";
-  destroyCanopy(a);
-  destroyCanopy(b);
-  hostA.destroy();
-  hostB.destroy();
+      ASSERT_TRUE(setCanopyPushers(a, pushers).ok());
+      ASSERT_TRUE(hostA.frame(++frameNumber, {a}, view, dt).ok());
+      ASSERT_TRUE(hostB.frame(frameNumber, {b}, view, dt).ok());
+      ASSERT_TRUE(hostA.finish().ok());
+      ASSERT_TRUE(hostB.finish().ok());
+      const LayerDynamics &da = canopyDynamics(a), &db = canopyDynamics(b);
+      const gpu::AnimFrame& f = da.current;
+      const size_t corners = size_t(f.gridX) * f.gridY, count = corners * f.layerCount;
+      std::vector<glm::vec2> dA(count), dB(count);
+      ASSERT_TRUE(readbackBuffer(dev, da.displacement, dA.data(), count * sizeof(glm::vec2), rg::stateOf(rg::Use::ComputeStorageRead)).ok());
+      ASSERT_TRUE(readbackBuffer(dev, db.displacement, dB.data(), count * sizeof(glm::vec2), rg::stateOf(rg::Use::ComputeStorageRead)).ok());
+      double peak = 0, band = 0;
+      glm::vec3 peakAt(0.0f);
+      for (uint32_t layer = 0; layer < f.layerCount; ++layer)
+        for (uint32_t id = 0; id < corners; ++id) {
+          const size_t i = size_t(layer) * corners + id;
+          const double diff = glm::length(dA[i] - dB[i]);
+          const glm::vec3 w = cornerWorld(f, id, layer);
+          if (w.x < m.boundsMin.x || w.x > m.boundsMax.x || w.z < m.boundsMin.z || w.z > m.boundsMax.z) continue;  // no grass there
+          const float fromPath = horizontalDistanceToSegment(w, start, end);
+          if (fromPath > 3.0f * R) out->beyond = std::max(out->beyond, diff);
+          else band = std::max(band, diff);
+          if (k >= walk && fromPath <= 3.0f * R) sway += glm::dot(dB[i], dB[i]), swayCount++;
+          if (diff > peak) peak = diff, peakAt = w;
+        }
+      out->peak = std::max(out->peak, peak);
+      if (k >= walk) bandAfter.push_back(band);
+      // The peak behind the sphere along its walk (positive: behind), over the middle of the walk.
+      if (k >= 15 && k < walk) sumLag += glm::dot(p - peakAt, right), lagFrames++;
+      if (print && (k % 10 == 0 || k == walk))
+        std::printf("[ push ] %3d %s %.3f: peak %.2f px at %.3f along, %.3f from its path\n", k, k < walk ? "at" : "gone, last at",
+                    glm::dot(p - start, right), peak, glm::dot(peakAt - start, right), horizontalDistanceToSegment(peakAt, start, end));
+    }
+    out->swayRms = std::sqrt(sway / std::max(swayCount, 1));
+    for (size_t i = 0; i < bandAfter.size() && out->settled < 0; ++i)
+      if (bandAfter[i] <= 0.1 * out->swayRms) out->settled = double(i) * dt;
+    out->lagSeconds = sumLag / std::max(lagFrames, 1) / speed;
+    destroyCanopy(a);
+    destroyCanopy(b);
+    hostA.destroy();
+    hostB.destroy();
+  };
+  std::printf("[ push ] frame, sphere along its path (world units), the difference's peak (pixels) and where it is\n");
+  Result pushed, airOnly;
+  const CanopyPusher defaults;
+  run(2.0f, defaults.air, true, &pushed);
+  run(0.0f, 1.0f, false, &airOnly);
+  std::printf("[ push ] radius %.3f, speed %.3f world units/s, bend 2, air %.2f: the difference peaks at %.2f px, %.3f s behind "
+              "the sphere on average; beyond 3 radii of its path at most %.3f px (%.1f %% of the peak); the undisturbed sway in "
+              "the band %.2f px RMS; after the sphere left the band's difference fell within 10 %% of it in %.2f s\n",
+              R, speed, defaults.air, pushed.peak, pushed.lagSeconds, pushed.beyond, 100.0 * pushed.beyond / std::max(pushed.peak, 1e-9),
+              pushed.swayRms, pushed.settled);
+  std::printf("[ push ] the fluid motor alone (bend 0, air 1): the difference peaks at %.2f px, beyond 3 radii %.3f px\n",
+              airOnly.peak, airOnly.beyond);
+  EXPECT_GT(pushed.peak, pushed.swayRms) << "the grass parts by more than its undisturbed sway";
+  EXPECT_GE(pushed.lagSeconds, -0.1);
+  EXPECT_LE(pushed.lagSeconds, 1.0) << "the bend follows the sphere (its trail springs back behind it)";
+  EXPECT_LE(pushed.beyond, 0.05 * pushed.peak) << "grass beyond 3 radii of the path keeps its sway";
+  EXPECT_GE(pushed.settled, 0.0) << "the grass springs back";
+  EXPECT_LE(pushed.settled, 1.5) << "within 1.5 s";
+  EXPECT_LT(airOnly.peak, pushed.peak) << "the bend, not the fluid motor, parts the grass";
 }

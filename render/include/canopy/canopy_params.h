@@ -426,7 +426,7 @@ CANOPY_PARAM_STRUCT(SimulationPlane, CANOPY_SIMULATION_PLANE)
   X(float, radius, 0.5f, AboveMin, 0, 1e6, "world units", "the capsule's radius: what it touches")                    \
   X(Float3, velocity, (Float3{0.0f, 0.0f, 0.0f}), Finite, 0, 0, "world units/s", "how it moves (the air it displaces)") \
   X(float, bend, 1.0f, Closed, 0, 16, "x the default wind", "how far it bends the foliage it touches: 1 as far as a wind of WindParams.strength's default (0.5 domain units/s)") \
-  X(float, air, 1.0f, Closed, 0, 16, "", "scales the air its motion displaces (1: its own volume)")                    \
+  X(float, air, 0.25f, Closed, 0, 16, "", "scales the air its motion displaces (1: its cross-section's; 0.25: the plane's column counts a quarter)") \
   X(float, blow, 0.0f, Closed, -1000, 1000, "world units/s", "an outward push of air at its radius (a blast, a rotor's downwash; negative: inward)")
 CANOPY_PARAM_STRUCT(CanopyPusher, CANOPY_PUSHER_PARAMS)
 

@@ -191,14 +191,27 @@ TEST_F(WindTest, HostShaderAndCpuSamplerReadTheSimulationsWind) {
   EXPECT_EQ(fieldFrame, 0u);
   EXPECT_EQ(early[1].x, 0.0f);
 
-  for (int round = 0; round < 2; ++round) {
-    SCOPED_TRACE(round == 0 ? "tilted plane" : "after the plane moved");
-    if (round == 1) {
-      CanopyParams p = canopyParams(ctx);
-      p.plane = tiltedPlane(m, -40.0f, 35.0f, 0.2f * (m.boundsMax - m.boundsMin));
-      ASSERT_TRUE(setCanopyParams(ctx, p).ok());
-    }
-    const SimulationPlane plane = canopyParams(ctx).plane;
+  const char* rounds[3] = {"tilted plane", "moved plane", "the default plane after a cut"};
+  LayerView roundView = view;
+  for (int round = 0; round < 3; ++round) {
+    SCOPED_TRACE(rounds[round]);
+    CanopyParams p = canopyParams(ctx);
+    if (round == 1) p.plane = tiltedPlane(m, -40.0f, 35.0f, 0.2f * (m.boundsMax - m.boundsMin));
+    // Back to the default plane, taken again from the camera of a cut that re-slices elsewhere.
+    if (round == 2) p.customPlane = false, roundView = orbitView(m.boundsMin, m.boundsMax, 70.0f, 30.0f, 40.0f, 96.0f / 64.0f, 1.3f);
+    ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+    ASSERT_TRUE(host.frame(++frameNumber, {ctx}, roundView, 1.0f / 30.0f, round == 2).ok());
+    // The plane the wind is read through, as a host gets it (CanopyWindInfo).
+    CanopyWind cw;
+    ASSERT_TRUE(canopyWind(ctx, &cw).ok());
+    SimulationPlane plane;
+    plane.origin = {cw.info.origin[0], cw.info.origin[1], cw.info.origin[2]};
+    plane.tileSize = cw.info.origin[3];
+    plane.right = {cw.info.right[0], cw.info.right[1], cw.info.right[2]};
+    plane.up = {cw.info.up[0], cw.info.up[1], cw.info.up[2]};
+    EXPECT_EQ(uint32_t(cw.info.right[3]), n);
+    if (round < 2) EXPECT_TRUE(plane == canopyParams(ctx).plane);
+    else EXPECT_FALSE(plane == canopyParams(ctx).plane) << "the default plane follows the new camera";
     const std::vector<glm::vec4> pts = windPoints(plane, n);
     Probe probe;
     s = probe.create(dev, pts);
@@ -206,7 +219,7 @@ TEST_F(WindTest, HostShaderAndCpuSamplerReadTheSimulationsWind) {
     host.recordAfter = [&](VkCommandBuffer cmd) { return probe.record(ctx, cmd); };
     uint64_t lastStep = 0;
     for (int i = 0; i < 24; ++i) {
-      s = host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f);
+      s = host.frame(++frameNumber, {ctx}, roundView, 1.0f / 30.0f);
       ASSERT_TRUE(s.ok()) << s.message();
       lastStep = frameNumber;
     }
@@ -245,7 +258,7 @@ TEST_F(WindTest, HostShaderAndCpuSamplerReadTheSimulationsWind) {
     // sampleCanopyWind reads a copy framesInFlight frames late: two frames that hold the
     // simulation (dt 0) make the last step's copy the newest completed one.
     host.recordAfter = nullptr;
-    for (int i = 0; i < int(dev.framesInFlight); ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 0.0f).ok());
+    for (int i = 0; i < int(dev.framesInFlight); ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, roundView, 0.0f).ok());
     std::vector<Float3> in(pts.size()), cpuOut(pts.size());
     for (size_t k = 0; k < pts.size(); ++k) in[k] = toFloat3(glm::vec3(pts[k]));
     s = sampleCanopyWind(ctx, in.data(), in.size(), cpuOut.data(), &fieldFrame);
@@ -256,7 +269,7 @@ TEST_F(WindTest, HostShaderAndCpuSamplerReadTheSimulationsWind) {
     std::printf("[ wind ] %s: |wind| up to %.4f world units/s at %zu points; canopyWindAt vs the simulation's tiled wind "
                 "%.2e (cell centres %.2e), along the normal %.2e; sampleCanopyWind (frame %llu, %u frames late) vs canopyWindAt %.2e; "
                 "tiled V_wind vs the tiling of V_wind %.2e\n",
-                round == 0 ? "tilted plane" : "moved plane", scale, pts.size(), maxShader, maxCell, maxNormal,
+                rounds[round], scale, pts.size(), maxShader, maxCell, maxNormal,
                 static_cast<unsigned long long>(fieldFrame), dev.framesInFlight, maxSampler, maxTile);
     EXPECT_LE(maxShader, 1e-4 * scale);
     EXPECT_LE(maxCell, 1e-4 * scale);

@@ -215,8 +215,9 @@ struct CanopyWind {
 Status canopyWind(const CanopyContext* context, CanopyWind* out);
 // The wind at `count` world points (world units/s, as canopyWindAt) on the CPU, for gameplay code:
 // from a copy read back without a stall, framesInFlight host frames late (the newest step whose
-// frame has completed by CanopyFrame.frameNumber's promise). *fieldFrame (optional): the host frame
-// whose step it is; 0 and zero vectors before any has completed.
+// frame has completed by CanopyFrame.frameNumber's promise), through the plane of the context that
+// stepped it. *fieldFrame (optional): the host frame whose step it is; 0 and zero vectors before any
+// has completed.
 Status sampleCanopyWind(const CanopyContext* context, const Float3* points, size_t count, Float3* out,
                         uint64_t* fieldFrame = nullptr);
 // The spheres and capsules moving through the vegetation from the next recorded frame on (replacing

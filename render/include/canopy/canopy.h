@@ -211,7 +211,8 @@ struct CanopyWind {
   CanopyWindInfo info;  // the plane's mapping now (changes when the plane does: copy it every frame)
 };
 // The wind image and its mapping. The image lives as long as the context (the simulation's, with
-// CanopyDesc.shareSimulationWith); it is written by the recordCanopy that steps the simulation.
+// CanopyDesc.shareSimulationWith); it is written by the recordCanopy that steps the simulation, and
+// may be sampled from the first recordCanopy (or recordCanopyLoad) on, which records its first clear.
 Status canopyWind(const CanopyContext* context, CanopyWind* out);
 // The wind at `count` world points (world units/s, as canopyWindAt) on the CPU, for gameplay code:
 // from a copy read back without a stall, framesInFlight host frames late (the newest step whose

@@ -324,6 +324,7 @@ Status adoptDeviceInto(const AdoptDeviceDesc& desc, Device* out) {
   d.shaderClipDistance = on.core.shaderClipDistance;
   d.fragmentPrimitiveId = on.core.geometryShader;
   d.independentBlend = on.core.independentBlend;
+  d.pipelineStatistics = on.core.pipelineStatisticsQuery;  // the host's own choice (engine/pass_counters.h)
 
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
   pci.flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT | VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;

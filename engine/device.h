@@ -37,6 +37,7 @@ struct Device {
   bool shaderClipDistance = false; // gl_ClipDistance (the per-layer-draw fallback)
   bool fragmentPrimitiveId = false; // gl_PrimitiveID in fragment shaders (geometryShader feature)
   bool independentBlend = false;
+  bool pipelineStatistics = false; // pipelineStatisticsQuery enabled (Canopy's own device: engine/pass_counters.h)
   uint32_t timestampValidBits = 0;
   // Compute subgroups (Vulkan 1.1 core): the lane-blocked simulation kernels (compute/simulation.cpp)
   // need shuffles and arithmetic reductions in compute shaders.

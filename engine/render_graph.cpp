@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "engine/device.h"
+#include "engine/pass_counters.h"
 #include "engine/timing.h"
 
 namespace canopy::rg {
@@ -562,7 +563,23 @@ Status RenderGraph::bindImage(ResourceId id, const Image& image) {
 }
 
 // ---- record -----------------------------------------------------------------------------------
-Status RenderGraph::record(VkCommandBuffer cmd, GpuTimer* timer) {
+void RenderGraph::passBytes(uint32_t pass, uint64_t* bytesRead, uint64_t* bytesWritten) const {
+  *bytesRead = *bytesWritten = 0;
+  for (const AccessDecl& a : passes_.at(pass).accesses) {
+    const Resource& r = resources_[a.id];
+    const uint64_t bytes = r.isImage ? uint64_t(r.imageDesc.width) * r.imageDesc.height * std::max<uint32_t>(r.imageDesc.layers, 1) *
+                                           texelBytes(r.imageDesc.format)
+                                     : uint64_t(r.bufferInfo.size);
+    const bool writes = isWriteAccess(a.state.access);
+    const bool reads = (a.state.access & ~(VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_SHADER_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT |
+                                           VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                                           VK_ACCESS_2_HOST_WRITE_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT)) != 0;
+    if (reads) *bytesRead += bytes;
+    if (writes) *bytesWritten += bytes;
+  }
+}
+
+Status RenderGraph::record(VkCommandBuffer cmd, GpuTimer* timer, PassCounters* counters) {
   if (!compiled_) return Status::error("render graph: record() before compile()");
   if (!device_) return Status::error("render graph: record() before realize()");
   for (const Pass& p : passes_) {
@@ -623,7 +640,13 @@ Status RenderGraph::record(VkCommandBuffer cmd, GpuTimer* timer) {
       if (plan.skipped[pi]) continue;
       Pass& p = passes_[pi];
       if (timer) timer->begin(cmd, p.name);
+      if (counters) {
+        uint64_t read = 0, written = 0;
+        passBytes(pi, &read, &written);
+        counters->begin(cmd, p.name, read, written);
+      }
       Status st = p.fn ? p.fn(ctx) : Status();
+      if (counters) counters->end(cmd);
       if (timer) timer->end(cmd);
       if (!st.ok()) return st.context("pass '" + p.name + "'");
     }

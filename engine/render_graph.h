@@ -16,6 +16,7 @@
 namespace canopy {
 struct Device;
 class GpuTimer;
+class PassCounters;
 }
 
 namespace canopy::rg {
@@ -151,8 +152,12 @@ class RenderGraph {
   Status bindBuffer(ResourceId id, VkBuffer buffer);
   Status bindImage(ResourceId id, const Image& image);
 
-  // Records barriers and passes into `cmd`; with a timer each pass is wrapped in timestamps.
-  Status record(VkCommandBuffer cmd, GpuTimer* timer = nullptr);
+  // Records barriers and passes into `cmd`; with a timer each pass is wrapped in timestamps, with
+  // counters in pipeline statistics queries (with the bytes of its declared accesses).
+  Status record(VkCommandBuffer cmd, GpuTimer* timer = nullptr, PassCounters* counters = nullptr);
+  // The bytes of the resources pass `pass` declares it reads and writes, whole (buffers: their
+  // size; images: width x height x layers x texel size): an estimate of its traffic.
+  void passBytes(uint32_t pass, uint64_t* bytesRead, uint64_t* bytesWritten) const;
 
   // The schedule record() would use now: the passes whose `when` is false left out, with the
   // barriers planned without their accesses (planned once per combination, then cached).

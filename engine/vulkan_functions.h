@@ -38,7 +38,7 @@ namespace canopy {
   X(CmdBindVertexBuffers) X(CmdBindIndexBuffer) X(CmdSetViewport) X(CmdSetScissor) X(CmdSetBlendConstants) \
   X(CmdCopyBuffer) X(CmdCopyImage) X(CmdCopyBufferToImage) X(CmdCopyImageToBuffer) X(CmdUpdateBuffer)            \
   X(CmdFillBuffer) X(CmdClearColorImage) X(CmdClearDepthStencilImage)                            \
-  X(CmdResetQueryPool) X(CmdWriteTimestamp)
+  X(CmdResetQueryPool) X(CmdWriteTimestamp) X(CmdBeginQuery) X(CmdEndQuery)
 
 struct VulkanFunctions {
 #define CANOPY_VK_MEMBER(name) PFN_vk##name name = nullptr;

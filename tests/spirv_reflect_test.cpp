@@ -128,7 +128,7 @@ TEST(SpirVReflect, EveryEmbeddedShaderLayoutMatchesGlslangReflection) {
   std::printf("%zu runtime shaders + %zu test shaders, %zu active bindings compared with glslang's reflection\n",
               shaders, testShaders, bindings);
   EXPECT_GT(shaders, 30u);
-  EXPECT_EQ(testShaders, 6u);
+  EXPECT_EQ(testShaders, 8u);
   EXPECT_GT(bindings, 100u);
 }
 
@@ -142,7 +142,7 @@ TEST(SpirVReflect, TestShadersLiveOutsideTheRuntime) {
   }
   for (size_t i = 0; const EmbeddedShader* sh = embeddedShaderAt(i); ++i)
     EXPECT_EQ(canopy_test::findEmbeddedShader(sh->name), nullptr) << sh->name;
-  EXPECT_EQ(n, 6u);
+  EXPECT_EQ(n, 8u);
   for (const char* name : {"example_write.comp", "interop_probe.comp", "per_vertex_probe.comp", "wind_probe.comp"})
     EXPECT_NE(canopy_test::findEmbeddedShader(name), nullptr) << name;
 }

@@ -166,6 +166,11 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   VkPhysicalDeviceVulkan11Features f11{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES, &f12};
   VkPhysicalDeviceFeatures2 f2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2, &f11};
   CANOPY_TRY(enableDeviceFeatures(vkGetInstanceProcAddr, d.instance, physical, core13 ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2, &f2));
+  // Canopy's own programs count work per pass when the device can (engine/pass_counters.h); a
+  // host's device has what the host enabled.
+  VkPhysicalDeviceFeatures supported{};
+  vkGetPhysicalDeviceFeatures(physical, &supported);
+  if (supported.pipelineStatisticsQuery) f2.features.pipelineStatisticsQuery = VK_TRUE;
   if (desc.disableShaderOutputLayer) {
     f12.shaderOutputLayer = VK_FALSE;
     if (!f2.features.shaderClipDistance)

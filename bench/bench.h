@@ -115,6 +115,9 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
 int runSpeciesBench(Device& dev, uint64_t facesPerSpecies, uint32_t copiesPerSpecies, int frames, uint32_t width, uint32_t height);
 // Shadows (issue 54): the frame without a shadow and with an update every 1, 2 and 4 frames, and the
 // update's own cost, for a shrub of each face count and a six-species forest.
+// canopy-bench counters: the work per frame kind, counted (bench/bench_counters.cpp).
+int runCounterBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::vector<std::pair<uint32_t, uint32_t>>& sizes,
+                    const std::string& jsonPath);
 // canopy-bench pushers: 32 pushers against none on the field scene (bench/bench_pushers.cpp).
 int runPusherBench(Device& dev, uint64_t faces, int frames, uint32_t width, uint32_t height);
 int runShadowBench(Device& dev, const std::vector<uint64_t>& faceCounts, int frames, uint32_t width, uint32_t height, uint32_t mapSize);

@@ -15,6 +15,7 @@
 //   canopy-bench species [--faces 8000] [--copies N] [--frames N] [--size WxH]
 //   canopy-bench shadows [--faces 80000,1000000] [--frames N] [--size WxH] [--map N]
 //   canopy-bench pushers [--faces 80000] [--frames N] [--size WxH]
+//   canopy-bench counters [--faces 80000,1000000,10000000] [--size WxH] [--json FILE]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -69,6 +70,10 @@ static int usage(const char* why) {
                "                 update every 1, 2 and 4 frames, and the update's own GPU time, for a shrub per face count\n"
                "                 (--faces, default 80000,1000000) and a six-species forest (--frames per variant, default\n"
                "                 20; --size default 640x480; --map N: the shadow map's side, default 1024)\n"
+               "  counters       the work per frame kind, counted: vertex, primitive, fragment and compute invocations\n"
+               "                 (pipeline statistics) and the bytes each pass declares, for still, reprojected, re-slice\n"
+               "                 and spread-step frames, per pixel and per face (--faces, default 80000,1000000,10000000;\n"
+               "                 --size, default 1024x768 and 1920x1080; --json, default bench_counters.json)\n"
                "  pushers        32 pushers (setCanopyPushers) against none on the field scene: the frame and the GPU\n"
                "                 time of the passes they touch (--faces, default 80000; --frames per variant, default\n"
                "                 40; --size default 640x480)\n"
@@ -139,7 +144,7 @@ int main(int argc, char** argv) {
   uint32_t rebuilds = 5;
   std::string layout = "5(3-1-1)";
   std::string scene;
-  bool runSpecies = false, runShadows = false, runPushers = false;
+  bool runSpecies = false, runShadows = false, runPushers = false, runCounters = false, jsonGiven = false;
   uint32_t mapSize = 1024;
   uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
@@ -162,6 +167,7 @@ int main(int argc, char** argv) {
     else if (a == "species") runSpecies = true;
     else if (a == "shadows") runShadows = true;
     else if (a == "pushers") runPushers = true;
+    else if (a == "counters") runCounters = true;
     else if (a == "--map") {
       if (!cli::parseUint(next(), 16, 16384, &mapSize)) return usage("--map needs the shadow map's side in [16, 16384]");
     }
@@ -246,6 +252,7 @@ int main(int argc, char** argv) {
       const char* v = next();
       if (!v) return usage("--json needs a file name ('' for none)");
       t1.json = v;
+      jsonGiven = true;
     } else if (a == "--size") {
       const char* v = next();
       unsigned w = 0, h = 0;
@@ -326,7 +333,7 @@ int main(int argc, char** argv) {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers)
+      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -374,6 +381,11 @@ int main(int argc, char** argv) {
   if (rc == 0 && runShadows)
     rc = bench::runShadowBench(dev, facesGiven ? faces : std::vector<uint64_t>{80000, 1000000}, frames ? frames : 20,
                                sizeGiven ? t1.width : 640u, sizeGiven ? t1.height : 480u, mapSize);
+  if (rc == 0 && runCounters)
+    rc = bench::runCounterBench(dev, facesGiven ? faces : std::vector<uint64_t>{80000, 1000000, 10000000},
+                                sizeGiven ? std::vector<std::pair<uint32_t, uint32_t>>{{t1.width, t1.height}}
+                                          : std::vector<std::pair<uint32_t, uint32_t>>{{1024, 768}, {1920, 1080}},
+                                jsonGiven ? t1.json : std::string("bench_counters.json"));
   if (rc == 0 && runPushers)
     rc = bench::runPusherBench(dev, facesGiven ? faces.front() : 80000, frames ? frames : 40, sizeGiven ? t1.width : 640u,
                                sizeGiven ? t1.height : 480u);

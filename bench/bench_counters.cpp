@@ -33,6 +33,7 @@ Status countFrames(Device& d, const VegetationModel& m, uint32_t w, uint32_t h, 
   desc.height = h;
   desc.colorFormat = VK_FORMAT_R8G8B8A8_UNORM;
   desc.deviceMemoryBudget = 0;  // the mesh resident: the counts are the method's, not the staging ring's
+  desc.params.layers.rebuildBudgetMs = 4.0f;  // re-slices spread unless asked at once
   CanopyContext* ctx = nullptr;
   HostTargets targets;
   rg::RenderGraph graph;
@@ -67,18 +68,21 @@ Status countFrames(Device& d, const VegetationModel& m, uint32_t w, uint32_t h, 
     };
     const float aspect = float(w) / float(h);
     const LayerView still = orbitView(m.boundsMin, m.boundsMax, 20.0f, 15.0f, 40.0f, aspect);
-    for (int i = 0; i < 3; ++i) CANOPY_TRY(frame(still, nullptr));  // sliced, the history filled a little
+    // The first slice (spread over frames), then a few frames of the history.
+    for (int i = 0; i < 400 && (i < 3 || canopyStats(ctx).layers.spreadPhase != 0); ++i) CANOPY_TRY(frame(still, nullptr));
     FrameCounts fc[4];
     for (int k = 0; k < 4; ++k) fc[k].kind = kKinds[k];
     CANOPY_TRY(frame(still, &fc[0]));
+    const uint64_t rebuilds = canopyStats(ctx).layers.rebuilds;
     CANOPY_TRY(frame(orbitView(m.boundsMin, m.boundsMax, 20.25f, 15.0f, 40.0f, aspect), &fc[1]));
-    if (canopyStats(ctx).layersRebuilt) return Status::error("counters: the 0.25-degree move re-sliced");
+    if (canopyStats(ctx).layers.rebuilds != rebuilds || canopyStats(ctx).layers.spreadPhase != 0)
+      return Status::error("counters: the 0.25-degree move re-sliced");
     CANOPY_TRY(requestCanopyRebuild(ctx, true));
     CANOPY_TRY(frame(still, &fc[2]));
-    CanopyParams p = canopyParams(ctx);
-    p.layers.rebuildBudgetMs = 4.0f;
-    CANOPY_TRY(setCanopyParams(ctx, p));
+    // A spread re-slice: the placement's frames, then the first frame that draws part of the new set.
     CANOPY_TRY(requestCanopyRebuild(ctx, false));
+    for (int i = 0; i < 2000 && canopyStats(ctx).layers.spreadPhase != 2; ++i) CANOPY_TRY(frame(still, nullptr));
+    if (canopyStats(ctx).layers.spreadPhase != 2) return Status::error("counters: the spread re-slice never reached its drawing phase");
     CANOPY_TRY(frame(still, &fc[3]));
     for (const FrameCounts& f : fc) out->push_back(f);
     return Status();

@@ -86,6 +86,11 @@ int main(int argc, char** argv) {
   std::printf("Device: %s (%s), Vulkan %u.%u.%u, timestamp period %.3f ns\n", p.deviceName, typeName(p.deviceType),
               VK_API_VERSION_MAJOR(p.apiVersion), VK_API_VERSION_MINOR(p.apiVersion), VK_API_VERSION_PATCH(p.apiVersion),
               p.limits.timestampPeriod);
+  // What a new driver is judged by (scripts/figures_of_record.sh reads these lines).
+  std::printf("Driver version 0x%08x, vendor 0x%04x, device 0x%04x; subgroup size %u (compute shuffles %s); "
+              "max workgroup %u invocations; pipeline statistics %s\n",
+              p.driverVersion, p.vendorID, p.deviceID, dev.subgroupSize, dev.computeSubgroupShuffle ? "yes" : "no",
+              p.limits.maxComputeWorkGroupInvocations, dev.pipelineStatistics ? "yes" : "no");
 
   int rc = 0;
   ExamplePipelines pipes;

@@ -285,7 +285,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, 
   // 8-lane steps, so a wide group only adds lanes to every barrier; measured with `canopy-bench sim
   // --groups` (docs/performance.md): 64 is fastest there. GPUs take the widest group the device allows.
   if (desc.groupSize) s.groupSize = desc.groupSize;
-  else if (d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU) s.groupSize = 64;
+  else if (cpuClass(d)) s.groupSize = 64;
   else s.groupSize = std::min<uint32_t>(SIM_MAX_GROUP_SIZE, d.properties.limits.maxComputeWorkGroupInvocations);
   if (s.groupSize > d.properties.limits.maxComputeWorkGroupInvocations || s.groupSize > d.properties.limits.maxComputeWorkGroupSize[0])
     return Status::error(Result::UnsupportedDevice, "simulation groupSize = " + std::to_string(s.groupSize) +
@@ -330,7 +330,7 @@ Status createSimulation(Device& d, const SimulationDesc& desc, Simulation* out, 
   // least W wide; the narrower ones (the tail, at most 8 a side) fit its fixed private copy for W <= 16,
   // and W >= 8 keeps the coarsest level (at most 4 wide) in the tail.
   const uint32_t W = d.subgroupSize;
-  if (!desc.groupSize && d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && d.computeSubgroupShuffle &&
+  if (!desc.groupSize && cpuClass(d) && d.computeSubgroupShuffle &&
       (W == 8 || W == 16) && n >= W && n <= 128) {
     uint32_t floats = 0;  // register floats per lane of each kernel (see the shaders)
     for (uint32_t l = 0; l < laneRegisterLevels(n, gpu::mgLevelCount(n), W); ++l) floats += (n >> l) * (n >> l) / W;

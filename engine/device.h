@@ -38,6 +38,9 @@ struct Device {
   bool fragmentPrimitiveId = false; // gl_PrimitiveID in fragment shaders (geometryShader feature)
   bool independentBlend = false;
   bool pipelineStatistics = false; // pipelineStatisticsQuery enabled (Canopy's own device: engine/pass_counters.h)
+  // Choose what a GPU gets on any device (tests: the GPU paths on lavapipe): the widest single-workgroup
+  // solver kernels, no lane kernels, one composite tile per workgroup (cpuClass()).
+  bool forceGpuClass = false;
   uint32_t timestampValidBits = 0;
   // Compute subgroups (Vulkan 1.1 core): the lane-blocked simulation kernels (compute/simulation.cpp)
   // need shuffles and arithmetic reductions in compute shaders.
@@ -86,6 +89,11 @@ void deferRelease(Device& device, std::function<void()> release);
 // A host frame with this number is being recorded: frees what its frames in flight no longer use.
 // Refuses a number smaller than the newest seen.
 Status beginDeviceFrame(Device& device, uint64_t frameNumber);
+// Whether Canopy takes its CPU-device defaults on `device` (docs/performance.md): a CPU device not
+// forced to the GPU class.
+inline bool cpuClass(const Device& device) {
+  return device.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU && !device.forceGpuClass;
+}
 // Frees everything pending (the host's frames have completed: destroy, releaseDevice).
 void releaseAllPending(Device& device);
 

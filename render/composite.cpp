@@ -351,7 +351,7 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.dispHeight = c.displacementImage.extent.height;
   // A workgroup launch on lavapipe costs more than one 8x8 tile's pixels (docs/performance.md);
   // GPUs want one workgroup per tile for parallelism.
-  const bool cpuDevice = c.device->properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  const bool cpuDevice = cpuClass(*c.device);
   p.tilesPerGroup = c.desc.tilesPerGroup != 0 ? c.desc.tilesPerGroup : cpuDevice ? 16u : 1u;
   c.params = params;
   c.occupancyPending = c.occupancyPending || layersRebuilt;

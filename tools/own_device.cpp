@@ -219,6 +219,8 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
   d.sink = sink;
   d.validationEnabled = validation;
   d.deferUploads = desc.deferUploads;
+  const char* gpuClass = std::getenv("CANOPY_GPU_CLASS");
+  d.forceGpuClass = desc.forceGpuClass || (gpuClass && std::string(gpuClass) == "1");
   return s.context("createDevice");
 }
 

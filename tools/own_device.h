@@ -27,6 +27,9 @@ struct DeviceDesc {
   std::vector<const char*> deviceExtensions;
   // Behave as a device without shaderOutputLayer (tests and benchmarks of the per-layer fallback).
   bool disableShaderOutputLayer = false;
+  // Take the GPU-class defaults on any device (Device::forceGpuClass); also set by the environment
+  // variable CANOPY_GPU_CLASS=1 (the tests' GPU paths on lavapipe, ctest CorrectnessSubsetGpuClass).
+  bool forceGpuClass = false;
   uint32_t framesInFlight = 2;
   // Record uploads into the next recordCanopy() command buffer as on a host's device (adoptDevice),
   // instead of submitting them at once (Canopy's own tools, the render-graph path).

@@ -31,6 +31,10 @@ double quantile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, size_t(std::ceil(q * double(v.size()))) - (q > 0 ? 1 : 0))];
 }
 
+// What a frame of the policy side did (canopyStats after beginCanopyFrame): re-sliced at once, a step
+// of a spread re-slice (placing, drawing or cross-fading), or neither — the layers only reprojected.
+enum class FrameKind { Reprojected, Spread, Reslice };
+
 // One context with its host targets and frame graph.
 struct Side {
   Device& d;
@@ -40,6 +44,7 @@ struct Side {
   uint32_t w = 0, h = 0;
   uint32_t halfResolutionLayers = 0;  // LayerSettings.halfResolutionLayers (both sides alike)
   uint32_t depthSearchSteps = CompositeParams{}.depthSearchSteps;  // CompositeParams.depthSearchSteps
+  FrameKind lastKind = FrameKind::Reprojected;
   explicit Side(Device& dev, uint32_t half = 0) : d(dev), halfResolutionLayers(half) {}
   ~Side() {
     graph.release(d);
@@ -74,6 +79,8 @@ struct Side {
     f.camera = toCamera(view);
     f.dt = 1.0f / 30.0f;
     CANOPY_TRY(beginCanopyFrame(ctx, f));
+    const CanopyStats st = canopyStats(ctx);
+    lastKind = st.layersRebuilt ? FrameKind::Reslice : st.layers.spreadPhase != 0 ? FrameKind::Spread : FrameKind::Reprojected;
     const double t0 = nowMs();
     CANOPY_TRY(submitAndWait(d, [&](VkCommandBuffer cmd) { return graph.record(cmd, nullptr); }));
     *ms = nowMs() - t0;
@@ -160,6 +167,8 @@ Status measureCrossFade(Device& d, const VegetationModel& model, const CameraBen
 struct PathResult {
   std::string name;
   std::vector<double> autoMs, everyMs;
+  std::vector<double> stillMs;        // the still camera's frames, one drawn before each of this path's
+  std::vector<double> reprojectedMs;  // the policy side's frames that only reprojected (no re-slice work)
   WorldLockError worst;          // min IoU, max of the distances and colour
   WorldLockError worstDepth;     // the same over depth coverage (alpha >= depthAlpha)
   double silhouetteMeanAvg = 0;  // the silhouette mean over the frames
@@ -202,24 +211,20 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
     Status s = parseSceneKind(o.scene, &sd.kind);
     if (s.ok()) s = generateScene(sd, &model);
     const float aspect = float(o.width) / float(o.height);
-    // The still camera: a context's frames after its first two (the first slices the layers).
+    // The still camera: a context's frames after its first two (the first slices the layers), one
+    // drawn before each frame of every path, so the still and moving frames share the machine's state.
     std::vector<double> stillMs;
     const LayerView view0 = cameraPathView(CameraPath{}, model.boundsMin, model.boundsMax, aspect, 0);
-    {
-      Side still(d, o.halfResolutionLayers);
-      if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
-      if (s.ok()) {
-        const LayerStats st = canopyStats(still.ctx).layers;
-        std::printf("%llu faces: layer images %ux%u, the output and a guard band of %u x %u px on each side\n",
-                    (unsigned long long)faces, st.layerWidth, st.layerHeight, st.guardX, st.guardY);
-      }
-      for (int i = 0; i < o.frames + 2 && s.ok(); ++i) {
-        double ms = 0;
-        s = still.frame(view0, &ms, nullptr);
-        if (i < 2) continue;
-        stillMs.push_back(ms);
-        if (csv) std::fprintf(csv, "%llu,still,%d,%.3f,%.3f,0,1,0,0,0,1\n", (unsigned long long)faces, i - 2, ms, ms);
-      }
+    Side still(d, o.halfResolutionLayers);
+    if (s.ok()) s = still.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
+    if (s.ok()) {
+      const LayerStats st = canopyStats(still.ctx).layers;
+      std::printf("%llu faces: layer images %ux%u, the output and a guard band of %u x %u px on each side\n",
+                  (unsigned long long)faces, st.layerWidth, st.layerHeight, st.guardX, st.guardY);
+    }
+    for (int i = 0; i < 2 && s.ok(); ++i) {
+      double ms = 0;
+      s = still.frame(view0, &ms, nullptr);
     }
     std::vector<PathResult> results;
     for (CameraMotion m : o.paths) {
@@ -248,12 +253,17 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       uint32_t lastRebuilds = before;
       for (int i = 0; i < o.frames && s.ok(); ++i) {
         const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
-        double ma = 0, mb = 0;
-        s = autoSide.frame(v, &ma, &a, &ca);
+        double ms0 = 0, ma = 0, mb = 0;
+        s = still.frame(view0, &ms0, nullptr);
+        if (s.ok()) s = autoSide.frame(v, &ma, &a, &ca);
         if (s.ok()) s = every.frame(v, &mb, &b, &cb);
         if (!s.ok()) break;
+        stillMs.push_back(ms0);
+        r.stillMs.push_back(ms0);
         r.autoMs.push_back(ma);
         r.everyMs.push_back(mb);
+        if (autoSide.lastKind == FrameKind::Reprojected) r.reprojectedMs.push_back(ma);
+        if (csv) std::fprintf(csv, "%llu,still,%d,%.3f,%.3f,0,1,0,0,0,1\n", (unsigned long long)faces, int(stillMs.size()) - 1, ms0, ms0);
         const uint32_t rebuilds = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds);
         const WorldLockError e = compareFrames(a, b, o.width, o.height, clear);
         if (i == 0 || e.coverageIoU < r.worst.coverageIoU) r.worst.coverageIoU = e.coverageIoU;
@@ -305,6 +315,14 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
                   quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
                   em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
                   r.worst.silhouetteP99Px, r.worstDepth.coverageIoU, r.worstDepth.silhouetteMeanPx);
+    }
+    // The issue-56 figure: the frames that only reprojected, against the still frames drawn alternately.
+    std::printf("\n  Reprojected frames (the policy side's frames with no re-slice work: not re-sliced at once, no step of a\n"
+                "  spread re-slice) against the still camera's frames drawn alternately with them, medians:\n");
+    std::printf("  %-7s %7s %12s %9s %11s\n", "path", "frames", "reproj. ms", "still ms", "x still");
+    for (const PathResult& r : results) {
+      const double rm = quantile(r.reprojectedMs, 0.5), sm = quantile(r.stillMs, 0.5);
+      std::printf("  %-7s %7zu %12.2f %9.2f %11.2f\n", r.name.c_str(), r.reprojectedMs.size(), rm, sm, rm / std::max(sm, 1e-9));
     }
     if (!fades.empty()) {
       std::printf("\n  Cross-fade at one camera (spread re-slice, %u frames of fade): coverage of each frame of the re-slice\n"

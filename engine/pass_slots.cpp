@@ -17,6 +17,7 @@ const char* useName(Use u) {
     case Use::ComputeUniform: return "ComputeUniform";
     case Use::FragmentSampled: return "FragmentSampled";
     case Use::FragmentStorageRead: return "FragmentStorageRead";
+    case Use::FragmentUniform: return "FragmentUniform";
     case Use::VertexStorageRead: return "VertexStorageRead";
     default: return "a use no descriptor has";
   }
@@ -29,7 +30,7 @@ bool fits(VkDescriptorType t, Use u) {
     case VK_DESCRIPTOR_TYPE_STORAGE_BUFFER:
       return u == Use::ComputeStorageRead || u == Use::ComputeStorageWrite || u == Use::ComputeStorageReadWrite ||
              u == Use::VertexStorageRead || u == Use::FragmentStorageRead;
-    case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: return u == Use::ComputeUniform;
+    case VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER: return u == Use::ComputeUniform || u == Use::FragmentUniform;
     case VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER:
     case VK_DESCRIPTOR_TYPE_SAMPLED_IMAGE: return u == Use::ComputeSampled || u == Use::FragmentSampled;
     case VK_DESCRIPTOR_TYPE_STORAGE_IMAGE:

@@ -38,6 +38,7 @@ enum class Use {
   ComputeUniform,
   FragmentSampled,
   FragmentStorageRead,
+  FragmentUniform,
   VertexStorageRead,
   VertexBuffer,
   IndexBuffer,

@@ -63,7 +63,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .when(computePath);
   rg::addSlotPass(g, "composite: classify",
                   {rg::slot(displacement, Use::ComputeStorageRead), rg::slot(occupancy, Use::ComputeStorageRead),
-                   rg::slot(tileList, Use::ComputeStorageReadWrite), rg::slot(view, Use::ComputeStorageRead)},
+                   rg::slot(tileList, Use::ComputeStorageReadWrite), rg::slot(view, Use::ComputeUniform)},
                   [cp](rg::PassContext& x, const rg::Slots& s) {
                     const gpu::CompositePush& p = cp->push;
                     return rg::dispatchSlots(x, cp->classifyPipeline, s, p.tilesX * p.tilesY, 1, 1, p);
@@ -78,11 +78,12 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
                                rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler),
                                rg::slot(tileList, Use::ComputeStorageRead),
                                rg::slot(composed, Use::ComputeStorageWrite),
-                               rg::slot(view, Use::ComputeStorageRead)};
+                               rg::slot(view, Use::ComputeUniform)};
   rg::addSlotPass(g, "composite: warp + composite (tiles)", tileSlots, [cp](rg::PassContext& x, const rg::Slots& s) {
     rg::Slots now = s;
     now[0].sampler = cp->params.bilinear ? cp->linear : cp->nearest;
-    return rg::dispatchIndirectSlots(x, cp->tilesPipeline, now, cp->tileList.buffer, 0, cp->push);
+    return rg::dispatchIndirectSlots(x, cp->tilesPipelines[gpu::compositeTileVariant(cp->push.flags)], now, cp->tileList.buffer, 0,
+                                     cp->push);
   })
       .read(tileList, rg::Use::IndirectBuffer)  // the dispatch's arguments, not a descriptor
       .when(computePath);
@@ -223,8 +224,6 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
       CANOPY_TRY(createComputePipeline(d, cp, &out->displacementPipeline));
       cp.shader = "composite_classify.comp";
       CANOPY_TRY(createComputePipeline(d, cp, &out->classifyPipeline));
-      cp.shader = "composite_tiles.comp";
-      CANOPY_TRY(createComputePipeline(d, cp, &out->tilesPipeline));
       GraphicsPipelineDesc rp = gp;
       rp.vertexShader = "composite_resolve.vert";
       rp.fragmentShader = "composite_resolve.frag";
@@ -258,7 +257,7 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
                             MemoryUsage::DeviceLocal, &out->sceneDepth, "composite: scene depth"));
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
                             &out->debugStandIn, "composite: debug stand-in"));
-    CANOPY_TRY(createBuffer(d, sizeof(gpu::CompositeView), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::CompositeView), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->viewBuffer, "composite: view"));
     CANOPY_TRY(makeSampler(d, VK_FILTER_LINEAR, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->linear));
     CANOPY_TRY(makeSampler(d, VK_FILTER_NEAREST, VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK, &out->nearest));
@@ -277,7 +276,7 @@ void destroyCompositor(Compositor& c) {
   destroyComputePipeline(d, c.sceneDepthPipeline);
   destroyComputePipeline(d, c.displacementPipeline);
   destroyComputePipeline(d, c.classifyPipeline);
-  destroyComputePipeline(d, c.tilesPipeline);
+  for (ComputePipeline& p : c.tilesPipelines) destroyComputePipeline(d, p);
   destroyGraphicsPipeline(d, c.resolve);
   for (Image* img : {&c.displacementImage, &c.composed}) destroyImage(d, *img);
   destroyBuffer(d, c.tileList);
@@ -353,6 +352,19 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   // GPUs want one workgroup per tile for parallelism.
   const bool cpuDevice = cpuClass(*c.device);
   p.tilesPerGroup = c.desc.tilesPerGroup != 0 ? c.desc.tilesPerGroup : cpuDevice ? 16u : 1u;
+  if (c.computeAvailable) {
+    // Both variants of this bilinear setting (a still frame's and a moving camera's), so the first
+    // moving frame does not compile one.
+    for (uint32_t reproject : {0u, COMPOSITE_VARIANT_REPROJECT}) {
+      const uint32_t v = reproject | (params.bilinear ? COMPOSITE_VARIANT_BILINEAR : 0u);
+      if (c.tilesPipelines[v].pipeline != VK_NULL_HANDLE) continue;
+      ComputePipelineDesc cp;
+      cp.pushConstantSize = sizeof(gpu::CompositePush);
+      cp.shader = "composite_tiles.comp";
+      cp.specialization = {v};
+      CANOPY_TRY(createComputePipeline(*c.device, cp, &c.tilesPipelines[v]));
+    }
+  }
   c.params = params;
   c.occupancyPending = c.occupancyPending || layersRebuilt;
   c.occupancyUnitePending = c.occupancyUnitePending || uniteNext;
@@ -380,7 +392,9 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   const rg::State storageRead = rg::stateOf(rg::Use::ComputeStorageRead);
   const auto occupancy = g.importBuffer("composite: occupancy", c.occupancy.size, storageRead, storageRead);
   const auto scene = g.importBuffer("composite: scene depth", c.sceneDepth.size, storageRead, storageRead);
-  const auto view = g.importBuffer("composite: view", c.viewBuffer.size, storageRead, storageRead);
+  // A uniform buffer: its reads are the same for every lane (CPU drivers load storage buffers lane by lane).
+  const rg::State uniformRead = rg::stateOf(rg::Use::ComputeUniform);
+  const auto view = g.importBuffer("composite: view", c.viewBuffer.size, uniformRead, uniformRead);
   CANOPY_TRY(g.bindBuffer(occupancy, c.occupancy.buffer));
   CANOPY_TRY(g.bindBuffer(scene, c.sceneDepth.buffer));
   CANOPY_TRY(g.bindBuffer(view, c.viewBuffer.buffer));
@@ -436,7 +450,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
                                    rg::slot(scene, Use::FragmentStorageRead),
                                    debugSlot(debug.animFrame),
                                    debugSlot(debug.tiled),
-                                   rg::slot(view, Use::FragmentStorageRead)};
+                                   rg::slot(view, Use::FragmentUniform)};
   auto pass = rg::addSlotPass(g, "composite: warp + composite", fragmentSlots, [cp, t, motion, debugSources](rg::PassContext& x,
                                                                                                         const rg::Slots& slots) {
     const gpu::CompositePush& p = cp->push;

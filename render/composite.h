@@ -64,7 +64,10 @@ struct Compositor {
   // Compute path (CompositePath::Compute): displacement image, classification, tile kernel, resolve.
   bool computeAvailable = false;  // RGBA32F storage + linear filtering on this device
   bool computeThisFrame = false;  // prepareComposite's choice (debug views use the fragment path)
-  ComputePipeline displacementPipeline, classifyPipeline, tilesPipeline;
+  ComputePipeline displacementPipeline, classifyPipeline;
+  // The tile kernel per variant (COMPOSITE_VARIANT_*: still or reprojected, bilinear or nearest),
+  // created when prepareComposite first needs it: the two of the bilinear setting in use.
+  ComputePipeline tilesPipelines[COMPOSITE_TILE_VARIANTS];
   GraphicsPipeline resolve;
   Image displacementImage;        // RGBA32F array: (d_i, previous d_i) per warp-grid corner
   Image composed;  // the tile kernel's result per pixel, RGBA32UI (compositePackPixel, shared/composite.h)

@@ -68,20 +68,19 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       const glm::vec4 rayA = reproject ? gpu::compositeRayOrigin(in.view.currentToSlice, p, outSize) : glm::vec4(0.0f);
       const glm::vec4 rayB = in.view.currentToSlice[2];
       // The depth search of layer i (or the background), as composite_search.glsl: false where
-      // nothing is found; *s the plane's point on entry, the layer pixel shown on return.
+      // nothing is found or the meeting point's texels are empty; *s the plane's point on entry, the
+      // layer pixel shown on return.
       auto depthSearch = [&](uint32_t i, const glm::vec2& d, glm::vec2* s) {
         const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
         if (ray.steps == 0) return true;
         const float scale = i == COMPOSITE_VIEW_BACKGROUND ? 1.0f : gpu::layerTexelScale(pc.halfResolution, i);
         for (uint32_t k = 0; k < ray.steps; ++k) {
           const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
-          if (x.w <= 0.0f) continue;
-          const float zt = tex.depthAt(i, glm::vec2(x) - d, scale, bilinear);
-          if (zt >= 1.0f) continue;
+          const float zt = x.w > 0.0f ? tex.depthAt(i, glm::vec2(x) - d, scale, bilinear) : 1.0f;
           const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
-          if (c.z > 0.0f && tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f) {
+          if (zt < 1.0f && c.z > 0.0f) {
             *s = glm::vec2(c);
-            return true;
+            return tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f;
           }
         }
         return false;

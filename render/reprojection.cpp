@@ -107,6 +107,9 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
       reach = std::max({reach, glm::length(a - m), glm::length(b - m)});
     }
     if (!std::isfinite(stretch) || !std::isfinite(reach)) return glm::vec4(0.0f);
+    // The short path: every texel of the range lands within kShortPathPx of its plane's mapping (a
+    // thin slab, a small motion since the slice, a pure rotation): the homography alone.
+    if (reach < kShortPathPx) return glm::vec4(0.0f);
     const double steps = std::max(2.0, std::min<double>(maxSteps, std::ceil(stretch / kSearchSpacingPx) + 1.0));
     // The ends as the slice camera's NDC depths (what its layer texels hold).
     const glm::dmat4 proj(slice.proj);

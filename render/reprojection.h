@@ -39,7 +39,8 @@ struct LayerSearch {
 // rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
 // `layerSize` (the slice camera's, guard band included). `search` (one per layer, or empty) and
 // `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, a sample
-// every two layer pixels the ray crosses between the range's ends, at most maxSteps;
+// every two layer pixels the ray crosses between the range's ends, at most maxSteps, none where the
+// range lands within kShortPathPx of the plane (the short path);
 // `backgroundSearch` the rigid background's (its vertices' depths).
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,
@@ -64,6 +65,10 @@ struct PixelExtent {
   bool known = false;
 };
 
+// A layer whose every texel lands within this many layer pixels of its plane's mapping is shown by
+// the plane's homography alone, without the depth search (compositeView; docs/design.md "Layers:
+// reprojection", the short path).
+constexpr double kShortPathPx = 0.25;
 // Depths averaged over a slab's range by estimateReprojectionError (midpoints).
 constexpr int kDepthSamples = 8;
 // Zooming in beyond this many current pixels per layer texel re-slices (the reprojected layers blur).

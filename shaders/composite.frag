@@ -21,7 +21,7 @@ layout(binding = 7, scalar) readonly buffer SceneBuf { float sceneDepth[]; };
 // Debug views only (a stand-in buffer otherwise): the dynamics frame and the tiled field.
 layout(binding = 8, scalar) readonly buffer AnimBuf { AnimFrame anim; };
 layout(binding = 9, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
-layout(binding = 10, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
+layout(binding = 10, std140) uniform ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 layout(location = 0) out vec4 outColor;   // premultiplied, blended over the host's colour
@@ -34,6 +34,7 @@ vec3 planePoint(uint i, vec2 p) {
   return compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
 }
 
+#define COMPOSITE_SEARCH_BILINEAR ((pc.flags & COMPOSITE_BILINEAR) != 0u)
 #include "composite_search.glsl"
 
 vec2 displacementAt(uint base, GridSample g, bool previous) {
@@ -96,7 +97,8 @@ void main() {
       vec3 h = planePoint(COMPOSITE_VIEW_BACKGROUND, p);
       vec2 s = h.xy / h.z;
       // The depth search (composite_search.glsl) from the background plane's point.
-      inside = h.z > 0.0 && compositeDepthSearch(COMPOSITE_VIEW_BACKGROUND, rayA, rayB, vec2(0.0), size, s);
+      float zs;
+      inside = h.z > 0.0 && compositeDepthSearch(true, 0u, rayA, rayB, vec2(0.0), size, s, zs);
       is = ivec2(floor(s));
       inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
     }
@@ -126,7 +128,8 @@ void main() {
     }
     vec2 d = displacementAt(i * corners, g, false);
     // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here.
-    if (reproject && !compositeDepthSearch(i, rayA, rayB, d, size, s)) continue;
+    float zSearch;
+    if (reproject && !compositeDepthSearch(false, i, rayA, rayB, d, size, s, zSearch)) continue;
     vec2 q = s - d;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {

@@ -15,7 +15,7 @@ layout(local_size_x = COMPOSITE_CLASSIFY_GROUP) in;
 layout(binding = 0, scalar) readonly buffer DispBuf { vec2 disp[]; };
 layout(binding = 1, scalar) readonly buffer OccBuf { uint occupancy[]; };
 layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
-layout(binding = 3, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
+layout(binding = 3, std140) uniform ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 // Whether an occupancy tile of `slot` (a layer, or layerCount: the background) meets the layer-pixel

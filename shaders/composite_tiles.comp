@@ -20,8 +20,15 @@ layout(binding = 6, scalar) readonly buffer TileBuf { CompositeTileHeader header
 // Colour (premultiplied), the host's depth to write and motion where frontmost, packed
 // (compositePackPixel, shared/composite.h).
 layout(binding = 7, rgba32ui) writeonly uniform uimage2D outPixel;
-layout(binding = 8, scalar) readonly buffer ViewBuf { CompositeView view; };  // reprojection
+layout(binding = 8, std140) uniform ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
+// The kernel's variant (COMPOSITE_VARIANT_*, compositeTileVariant): one pipeline per case, so a
+// still frame's kernel holds no reprojection code and no kernel holds both depth reads — CPU
+// drivers run both sides of every branch, masked (docs/design.md "Layers: reprojection", cost).
+layout(constant_id = 0) const uint kVariant = 0u;
+const bool reproject = (kVariant & COMPOSITE_VARIANT_REPROJECT) != 0u;
+const bool bilinear = (kVariant & COMPOSITE_VARIANT_BILINEAR) != 0u;
+#define COMPOSITE_SEARCH_BILINEAR bilinear
 
 #include "composite_search.glsl"
 
@@ -38,24 +45,26 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
   float sceneZ = compositeStandardDepth(pc.flags, sceneRaw);
   vec4 bg = vec4(0.0);
   float bgZ = 1.0;
-  bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   if ((tileEntry.x & COMPOSITE_TILE_BACKGROUND) != 0u) {
-    ivec2 is = ip + ivec2(origin);
-    bool inside = true;
     if (reproject) {
       const uint b = 3u * COMPOSITE_VIEW_BACKGROUND;
       vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
       vec2 s = h.xy / h.z;
-      // The depth search (composite_search.glsl) from the background plane's point.
-      inside = h.z > 0.0 && compositeDepthSearch(COMPOSITE_VIEW_BACKGROUND, rayA, rayB, vec2(0.0), size, s);
-      is = ivec2(floor(s));
+      // The depth search (composite_search.glsl) from the background plane's point; its depth read
+      // is the texel's shown.
+      float zs;
+      bool inside = h.z > 0.0 && compositeDepthSearch(true, 0u, rayA, rayB, vec2(0.0), size, s, zs);
       inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
-    }
-    if (inside) {
+      if (inside) {
+        ivec2 is = ivec2(floor(s));
+        bg = texelFetch(backgroundColor, is, 0);
+        if (bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, zs, size));
+      }
+    } else {
+      ivec2 is = ip + ivec2(origin);
       bg = texelFetch(backgroundColor, is, 0);
       bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
-      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, bgZ, size));
     }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
@@ -63,11 +72,13 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
 
   vec2 s = p + origin;  // layer i's pixel under p (the slice camera's)
   vec2 uvGrid = gridTexcoord(pc, gridSample(pc, s));
-  bool bilinear = (pc.flags & COMPOSITE_BILINEAR) != 0u;
   vec4 acc = vec4(0.0);
   float frontZ = 1.0;
-  vec2 motion = vec2(0.0);
   bool front = false;
+  // The frontmost sample's motion inputs, its motion computed once after the loop.
+  vec2 frontS = vec2(0.0);
+  vec4 frontDisp = vec4(0.0), frontClip = vec4(0.0);
+  float frontSlice = 0.0;
   uint layers = mask & compositeLayerBits(pc.layerCount);
   while (layers != 0u) {
     uint i = uint(findLSB(layers));
@@ -80,8 +91,10 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       uvGrid = gridTexcoord(pc, gridSample(pc, s));
     }
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
-    // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here.
-    if (reproject && !compositeDepthSearch(i, rayA, rayB, dd.xy, size, s)) continue;
+    // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here; its
+    // last read is the depth at that pixel.
+    float z = 1.0;
+    if (reproject && !compositeDepthSearch(false, i, rayA, rayB, dd.xy, size, s, z)) continue;
     vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
@@ -91,12 +104,13 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
       if (c.a < COMPOSITE_MIN_ALPHA) continue;
     }
-    float z;
-    if (bilinear) {
-      vec4 z4 = textureGather(layerDepth, uvw, 0);
-      z = min(min(z4.x, z4.y), min(z4.z, z4.w));
-    } else {
-      z = textureLod(layerDepth, uvw, 0.0).r;
+    if (!reproject) {
+      if (bilinear) {
+        vec4 z4 = textureGather(layerDepth, uvw, 0);
+        z = min(min(z4.x, z4.y), min(z4.z, z4.w));
+      } else {
+        z = textureLod(layerDepth, uvw, 0.0).r;
+      }
     }
     vec4 clip = vec4(0.0);
     float zSlice = z;
@@ -109,16 +123,19 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
     if (!front && c.a >= pc.depthAlpha) {
       front = true;
       frontZ = z;
-      // Where the texel is shown now minus where it was shown in the previous frame (its
-      // displacement then, dd.zw, and the previous camera); zw = xy when that frame is not valid.
-      if (reproject && (pc.flags & COMPOSITE_MOTION_VALID) != 0u)
-        motion = compositeClipPixel(clip, outSize) -
-                 compositeClipPixel(compositeClipOf(toPrevious, s - dd.xy + dd.zw, zSlice, size), outSize);
-      else
-        motion = dd.xy - dd.zw;
+      frontS = s;
+      frontDisp = dd;
+      frontClip = clip;
+      frontSlice = zSlice;
     }
     if ((pc.flags & COMPOSITE_EARLY_EXIT) != 0u && acc.a >= COMPOSITE_OPAQUE) break;
   }
+  // Where the frontmost texel is shown now minus where it was shown in the previous frame (its
+  // displacement then, zw, and the previous camera); zw = xy when that frame is not valid.
+  vec2 motion = frontDisp.xy - frontDisp.zw;
+  if (reproject && (pc.flags & COMPOSITE_MOTION_VALID) != 0u)
+    motion = compositeClipPixel(frontClip, outSize) -
+             compositeClipPixel(compositeClipOf(toPrevious, frontS - frontDisp.xy + frontDisp.zw, frontSlice, size), outSize);
   acc = underPremultiplied(acc, bg);
   float vegZ = min(frontZ, bgZ);
   bool vegetationFront = (pc.flags & COMPOSITE_MOTION) != 0u && front && frontZ < bgZ;

@@ -3,6 +3,7 @@
 // pure rotation it is exact at every depth (no re-slice needed); off the plane under translation the
 // error is the parallax of the distance to the plane.
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include <glm/glm.hpp>
@@ -196,7 +197,8 @@ TEST(Reprojection, TheGuardBandShowsTheOutputOffsetAndHoldsWhatATurnBringsIn) {
 
 // The depth search (shared/composite.h compositeRayCrossing, float as on the GPU): a current pixel's
 // ray meets a slice texel's depth where the slice camera saw that point, for every camera path
-// (a pure rotation: the plane's own pixel, whatever the depth).
+// that moves the eye (a pure rotation or zoom: the plane's own pixel, whatever the depth, which the
+// short path shows without a search).
 TEST(Reprojection, TheDepthSearchFindsAPointAtItsOwnDepth) {
   const LayerView slice = along(CameraMotion::Still, 0);
   const double mid = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
@@ -206,6 +208,10 @@ TEST(Reprojection, TheDepthSearchFindsAPointAtItsOwnDepth) {
     const LayerView current = along(m, 20);
     const gpu::CompositeView v = compositeView(slice, current, current, {float(mid)}, float(mid), kSize, kSize,
                                                {LayerSearch{float(mid - 1.0), float(mid + 1.0)}}, 16);
+    if (m == CameraMotion::Turn || m == CameraMotion::Zoom) {  // the eye stays put: every depth lands on the plane's pixel
+      EXPECT_EQ(v.search[0].z, 0.0f) << cameraMotionName(m) << " takes the plane alone (the short path)";
+      continue;
+    }
     EXPECT_GE(v.search[0].z, 2.0f) << cameraMotionName(m);
     const glm::dmat4 sliceVP = glm::dmat4(slice.proj) * glm::dmat4(slice.view);
     double worst = 0.0;
@@ -224,6 +230,38 @@ TEST(Reprojection, TheDepthSearchFindsAPointAtItsOwnDepth) {
     EXPECT_LT(worst, 0.02) << cameraMotionName(m) << ": layer pixels off the slice camera's";
     std::printf("  %s: the crossing at most %.4f layer pixels off\n", cameraMotionName(m), worst);
   }
+}
+
+// The depth search's length per layer (compositeView): a thin slab under a small motion since the
+// slice lands within kShortPathPx of its plane and takes the homography alone (no samples); a
+// thick slab under a large motion takes the full search (maxSteps samples); between them the
+// samples grow with the parallax, two layer pixels apart.
+TEST(Reprojection, AThinSlabUnderASmallMotionTakesTheShortPathAndAThickOneTheFullSearch) {
+  const LayerView slice = along(CameraMotion::Still, 0);
+  const double mid = viewDepth(slice, glm::dvec3(0.0, 1.0, 0.0));
+  auto searchOf = [&](CameraMotion m, uint32_t frame, double halfThickness) {
+    const LayerView current = along(m, frame);
+    const gpu::CompositeView v = compositeView(slice, current, current, {float(mid)}, float(mid), kSize, kSize,
+                                               {LayerSearch{float(mid - halfThickness), float(mid + halfThickness)}}, 16);
+    return v.search[0];
+  };
+  for (CameraMotion m : {CameraMotion::Orbit, CameraMotion::Dolly, CameraMotion::Strafe}) {
+    const glm::vec4 thin = searchOf(m, 1, 0.005), thick = searchOf(m, 60, 1.0);
+    std::printf("  %s: a slab 0.01 deep one frame after the slice: %.0f samples; 2.0 deep 60 frames after: %.0f samples, "
+                "reach %.1f layer px\n", cameraMotionName(m), double(thin.z), double(thick.z), double(thick.w));
+    EXPECT_EQ(thin.z, 0.0f) << cameraMotionName(m) << ": the short path";
+    EXPECT_EQ(thick.z, 16.0f) << cameraMotionName(m) << ": the full search";
+    // Between them the samples never fall as the parallax grows (the slab thickens).
+    float last = 0.0f;
+    for (double h : {0.005, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0}) {
+      const float steps = searchOf(m, 20, h).z;
+      EXPECT_GE(steps, last) << cameraMotionName(m) << " half thickness " << h;
+      last = steps;
+    }
+  }
+  // Whatever the thickness, a pure rotation or zoom is the plane's homography exactly: the short path.
+  EXPECT_EQ(searchOf(CameraMotion::Turn, 60, 1.0).z, 0.0f);
+  EXPECT_EQ(searchOf(CameraMotion::Zoom, 60, 1.0).z, 0.0f);
 }
 
 }  // namespace

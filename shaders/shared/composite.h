@@ -35,6 +35,11 @@
 #define COMPOSITE_REPROJECT 512u  // the current camera differs from the slice camera: read the
                                   // layers through CompositeView (else pixel p is layer pixel p)
 
+// The tile kernel's specialization (composite_tiles.comp kVariant): one pipeline per combination of
+// these, picked per frame from the flags (compositeTileVariant).
+#define COMPOSITE_VARIANT_REPROJECT 1u
+#define COMPOSITE_VARIANT_BILINEAR 2u
+#define COMPOSITE_TILE_VARIANTS 4u
 
 // CompositePush.debugView: what the demo's and a host's debug overlays show.
 #define COMPOSITE_DEBUG_NONE 0u
@@ -253,6 +258,12 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
 // coordinates.
 CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
   return vec2((s.cell.x + s.t.x + 0.5f) / float(c.dispWidth), (s.cell.y + s.t.y + 0.5f) / float(c.dispHeight));
+}
+
+// The tile kernel's variant for a frame's flags (COMPOSITE_VARIANT_*).
+CANOPY_INLINE uint compositeTileVariant(uint flags) {
+  return ((flags & COMPOSITE_REPROJECT) != 0u ? COMPOSITE_VARIANT_REPROJECT : 0u) |
+         ((flags & COMPOSITE_BILINEAR) != 0u ? COMPOSITE_VARIANT_BILINEAR : 0u);
 }
 
 // Bits 0 .. count-1 set (count up to 32; a shift by 32 is undefined).

@@ -110,7 +110,9 @@ gpu::CompositeView compositeView(const LayerView& slice, const LayerView& curren
     // The short path: every texel of the range lands within kShortPathPx of its plane's mapping (a
     // thin slab, a small motion since the slice, a pure rotation): the homography alone.
     if (reach < kShortPathPx) return glm::vec4(0.0f);
-    const double steps = std::max(2.0, std::min<double>(maxSteps, std::ceil(stretch / kSearchSpacingPx) + 1.0));
+    // A stretch within one spacing: one sample at the range's middle and its secant step (the
+    // iterative inverse warp's first iteration); longer ones a sample every spacing, the ends included.
+    const double steps = stretch <= kSearchSpacingPx ? 1.0 : std::min<double>(maxSteps, std::ceil(stretch / kSearchSpacingPx) + 1.0);
     // The ends as the slice camera's NDC depths (what its layer texels hold).
     const glm::dmat4 proj(slice.proj);
     const glm::dvec4 cn = proj * glm::dvec4(0.0, 0.0, -double(l.zNear), 1.0), cf = proj * glm::dvec4(0.0, 0.0, -double(l.zFar), 1.0);

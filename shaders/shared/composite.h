@@ -169,7 +169,8 @@ CANOPY_INLINE CompositeRay compositeRaySearch(vec4 a, vec4 b, vec4 search) {
   r.pad0 = 0u;
   vec2 tNear = compositeRayT(a, b, search.x), tFar = compositeRayT(a, b, search.y);
   if (tNear.y == 0.0f || tFar.y == 0.0f) r.steps = 0u;
-  r.t0 = min(tNear.x, tFar.x);
+  // One sample: the range's middle (a thin range's secant step from about the plane's point).
+  r.t0 = r.steps == 1u ? 0.5f * (tNear.x + tFar.x) : min(tNear.x, tFar.x);
   r.dt = r.steps > 1u ? (max(tNear.x, tFar.x) - r.t0) / float(r.steps - 1u) : 0.0f;
   return r;
 }

@@ -68,19 +68,24 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       const glm::vec4 rayA = reproject ? gpu::compositeRayOrigin(in.view.currentToSlice, p, outSize) : glm::vec4(0.0f);
       const glm::vec4 rayB = in.view.currentToSlice[2];
       // The depth search of layer i (or the background), as composite_search.glsl: false where
-      // nothing is found or the meeting point's texels are empty; *s the plane's point on entry, the
-      // layer pixel shown on return.
-      auto depthSearch = [&](uint32_t i, const glm::vec2& d, glm::vec2* s) {
+      // nothing is found; *s the plane's point on entry, the layer pixel shown on return, *z the
+      // slice depth shown there (the found sample's; the plane's point's without a search).
+      auto depthSearch = [&](uint32_t i, const glm::vec2& d, glm::vec2* s, float* z) {
         const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
-        if (ray.steps == 0) return true;
         const float scale = i == COMPOSITE_VIEW_BACKGROUND ? 1.0f : gpu::layerTexelScale(pc.halfResolution, i);
+        *z = 1.0f;
+        if (ray.steps == 0) {
+          *z = tex.depthAt(i, *s - d, scale, bilinear);
+          return *z < 1.0f;
+        }
         for (uint32_t k = 0; k < ray.steps; ++k) {
           const glm::vec4 x = gpu::compositeRaySample(ray, k, size);
           const float zt = x.w > 0.0f ? tex.depthAt(i, glm::vec2(x) - d, scale, bilinear) : 1.0f;
           const glm::vec3 c = gpu::compositeRayCrossing(ray, k, zt, size);
           if (zt < 1.0f && c.z > 0.0f) {
             *s = glm::vec2(c);
-            return tex.depthAt(i, glm::vec2(c) - d, scale, bilinear) < 1.0f;
+            *z = zt;
+            return true;
           }
         }
         return false;
@@ -88,10 +93,11 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
         int bx = int(x) + int(origin.x), by = int(y) + int(origin.y);
         bool inside = true;
+        float searched = 1.0f;  // the search's depth (reprojected)
         if (reproject) {
           const glm::vec3 hp = planePoint(in.view, COMPOSITE_VIEW_BACKGROUND, p);
           glm::vec2 s = glm::vec2(hp) / hp.z;
-          inside = hp.z > 0.0f && depthSearch(COMPOSITE_VIEW_BACKGROUND, glm::vec2(0.0f), &s);
+          inside = hp.z > 0.0f && depthSearch(COMPOSITE_VIEW_BACKGROUND, glm::vec2(0.0f), &s, &searched);
           bx = int(std::floor(s.x));
           by = int(std::floor(s.y));
           inside = inside && s.x >= 0.0f && s.y >= 0.0f && s.x < size.x && s.y < size.y;
@@ -101,7 +107,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           bg = in.backgroundColor[b];
           bgZ = bg.a > 0.0f ? in.backgroundDepth[b] : 1.0f;
           if (reproject && bg.a > 0.0f)
-            bgZ = gpu::compositeClipDepth(gpu::compositeClipOf(in.view.sliceToCurrent, glm::vec2(bx, by) + 0.5f, bgZ, size));
+            bgZ = gpu::compositeClipDepth(gpu::compositeClipOf(in.view.sliceToCurrent, glm::vec2(bx, by) + 0.5f, searched, size));
         }
       }
       if (bgZ >= sceneZ) {
@@ -123,7 +129,8 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           g = gpu::gridSample(pc, s);
         }
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
-        if (reproject && !depthSearch(i, d, &s)) continue;
+        float searched = 1.0f;
+        if (reproject && !depthSearch(i, d, &s, &searched)) continue;
         const glm::vec2 q = s - d;
         // Texel space: centres at integer + 0.5; a layer at half resolution holds pixel q at q / 2.
         const glm::vec2 tq = q * gpu::layerTexelScale(pc.halfResolution, i);
@@ -142,6 +149,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
           c = tex.color(i, xn, yn);
           z = tex.depth(i, xn, yn);
         }
+        if (reproject) z = searched;  // the depth the search found
         if (c.a < COMPOSITE_MIN_ALPHA) continue;
         if (reproject && bilinear) {
           c = gpu::compositeSharpenEdge(c, glm::vec4(tex.color(i, x0, y0).a, tex.color(i, x0 + 1, y0).a, tex.color(i, x0, y0 + 1).a,

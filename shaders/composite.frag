@@ -93,19 +93,19 @@ void main() {
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
     ivec2 is = ip + ivec2(origin);
     bool inside = true;
+    float bgSearched = 1.0;  // the depth search's depth (reprojected)
     if (reproject) {
       vec3 h = planePoint(COMPOSITE_VIEW_BACKGROUND, p);
       vec2 s = h.xy / h.z;
       // The depth search (composite_search.glsl) from the background plane's point.
-      float zs;
-      inside = h.z > 0.0 && compositeDepthSearch(true, 0u, rayA, rayB, vec2(0.0), size, s, zs);
+      inside = h.z > 0.0 && compositeDepthSearch(true, 0u, rayA, rayB, vec2(0.0), size, s, bgSearched);
       is = ivec2(floor(s));
       inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
     }
     if (inside) {
       bg = texelFetch(backgroundColor, is, 0);
       bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
-      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, bgZ, size));
+      if (reproject && bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, bgSearched, size));
     }
   }
   if (bgZ >= sceneZ) { bg = vec4(0.0); bgZ = 1.0; }  // the host's scene hides the trunk
@@ -152,6 +152,7 @@ void main() {
     } else {
       z = texture(layerDepth, uvw).r;
     }
+    if (reproject) z = zSearch;  // the depth the search found
     vec4 clip = vec4(0.0);
     float zSlice = z;
     if (reproject) {

@@ -27,24 +27,26 @@ float searchDepthAt(bool background, uint i, vec2 q) { return background ? backg
 // Layer i (or the rigid background: `background`, d = 0) along the ray (rayA, rayB) of the current
 // pixel (shared/composite.h compositeRaySearch), the displacement d read at the plane's point (it
 // varies over warp cells, not pixels): the first sample whose texels hold a surface the ray meets
-// before the next sample, and that meeting point. Returns false where nothing is found or the
-// meeting point's own texels are empty (the ray passes beside the surface: this layer shows
-// nothing at this pixel); s is the plane's point on entry, the layer pixel shown on return, z the
-// slice depth there (layerDepthAt at s - d: the composite's depth read, done once here). No search
-// set for the layer (view.search.z = 0, the short path: the plane's homography alone): s unchanged,
-// true. The samples read one depth each; the meeting point is read once, after the loop.
+// before the next sample, and that meeting point. Returns false where nothing is found (this layer
+// shows nothing at this pixel); s is the plane's point on entry, the layer pixel shown on return,
+// z the slice depth shown there: the sample's, the surface taken flat in depth between the sample
+// and the meeting point, as the meeting point's own solve takes it (the colour read at the meeting
+// point tells whether it holds the surface). No search set for the layer (view.search.z = 0, the
+// short path: the plane's homography alone): the depth at the plane's point. One depth read per
+// sample, the composite's depth read included.
 bool compositeDepthSearch(bool background, uint i, vec4 rayA, vec4 rayB, vec2 d, vec2 size, inout vec2 s, out float z) {
   CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[background ? COMPOSITE_VIEW_BACKGROUND : i]);
-  bool found = false;
-  for (uint k = 0u; k < ray.steps && !found; ++k) {
-    vec4 x = compositeRaySample(ray, k, size);
+  bool plane = ray.steps == 0u, found = false;
+  z = 1.0;
+  for (uint k = 0u; k < max(ray.steps, 1u) && !found; ++k) {
+    vec4 x = plane ? vec4(s, 0.0, 1.0) : compositeRaySample(ray, k, size);
     float zt = x.w > 0.0 ? searchDepthAt(background, i, x.xy - d) : 1.0;
-    vec3 c = compositeRayCrossing(ray, k, zt, size);
+    vec3 c = plane ? vec3(s, 1.0) : compositeRayCrossing(ray, k, zt, size);
     if (zt < 1.0 && c.z > 0.0) {
       s = c.xy;
+      z = zt;
       found = true;
     }
   }
-  z = searchDepthAt(background, i, s - d);
-  return ray.steps == 0u || (found && z < 1.0);
+  return found;
 }

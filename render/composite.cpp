@@ -62,7 +62,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .write(tileList, rg::Use::TransferDst)
       .when(computePath);
   rg::addSlotPass(g, "composite: classify",
-                  {rg::slot(displacement, Use::ComputeStorageRead), rg::slot(occupancy, Use::ComputeStorageRead),
+                  {rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler), rg::slot(occupancy, Use::ComputeStorageRead),
                    rg::slot(tileList, Use::ComputeStorageReadWrite), rg::slot(view, Use::ComputeUniform)},
                   [cp](rg::PassContext& x, const rg::Slots& s) {
                     const gpu::CompositePush& p = cp->push;

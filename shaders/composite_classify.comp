@@ -12,7 +12,9 @@
 #include "shared/composite.h"
 
 layout(local_size_x = COMPOSITE_CLASSIFY_GROUP) in;
-layout(binding = 0, scalar) readonly buffer DispBuf { vec2 disp[]; };
+// The warp grid's corners as the displacement image holds them (composite_displacement.comp): a
+// texel fetch is one vector read on a CPU driver, where a storage buffer is read lane by lane.
+layout(binding = 0) uniform sampler2DArray dispImage;
 layout(binding = 1, scalar) readonly buffer OccBuf { uint occupancy[]; };
 layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
 layout(binding = 3, std140) uniform ViewBuf { CompositeView view; };  // reprojection
@@ -75,7 +77,6 @@ void main() {
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
     mask = compositeLayerBits(pc.layerCount);
   } else {
-    uint corners = pc.gridX * pc.gridY;
     for (uint i = 0u; i < pc.layerCount; ++i) {
       // The tile in layer i's pixels (the slice camera's), where its warp grid lies.
       vec2 slo = lo + origin, shi = hi + origin;
@@ -97,7 +98,7 @@ void main() {
       vec2 dmin = vec2(1e30), dmax = vec2(-1e30);
       for (uint gy = gy0; gy <= gy1; ++gy)
         for (uint gx = gx0; gx <= gx1; ++gx) {
-          vec2 d = disp[i * corners + gy * pc.gridX + gx];
+          vec2 d = texelFetch(dispImage, ivec3(gx, gy, i), 0).xy;
           dmin = min(dmin, d);
           dmax = max(dmax, d);
         }

@@ -64,7 +64,7 @@ echo "== counters"
   echo '## Device'; echo; sed 's/^/    /' "$out/device.txt"; echo
   echo '## Correctness subset'; echo; sed 's/^/    /' "$out/correctness.txt"; echo
   echo '## Table 1 (canopy-bench table1)'; echo; grep -E '^ *[0-9]+(K|M)? ' "$out/table1.txt" | head -20 | sed 's/^/    /'; echo
-  echo '## Moving camera (canopy-bench camera)'; echo; grep -E 'still camera|^  path|^  (orbit|dolly|strafe|turn|zoom|walk) ' "$out/camera.txt" | sed 's/^/    /'; echo
+  echo '## Moving camera (canopy-bench camera)'; echo; grep -E 'still camera|^  path|^  Reprojected frames|^  (orbit|dolly|strafe|turn|zoom|walk) ' "$out/camera.txt" | sed 's/^/    /'; echo
   echo '## Work per frame, counted (canopy-bench counters)'; echo; grep -E '^  [0-9]' "$out/counters.txt" | sed 's/^/    /'
 } >"$out/summary.md"
 echo "wrote $out/summary.md ($(( $(date +%s) - start )) s)"

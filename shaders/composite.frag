@@ -144,15 +144,9 @@ void main() {
       if (c.a < COMPOSITE_MIN_ALPHA) continue;
     }
     // Depth of the sample: the nearest texel of the footprint (bilinear reads four texels, and a
-    // leaf edge must not be hidden because one of them is empty).
-    float z;
-    if (bilinear) {
-      vec4 z4 = textureGather(layerDepth, uvw, 0);
-      z = min(min(z4.x, z4.y), min(z4.z, z4.w));
-    } else {
-      z = texture(layerDepth, uvw).r;
-    }
-    if (reproject) z = zSearch;  // the depth the search found
+    // leaf edge must not be hidden because one of them is empty); reprojected, the depth the search
+    // found.
+    float z = reproject ? zSearch : layerDepthAt(i, q);
     vec4 clip = vec4(0.0);
     float zSlice = z;
     if (reproject) {

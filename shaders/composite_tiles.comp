@@ -51,8 +51,8 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       const uint b = 3u * COMPOSITE_VIEW_BACKGROUND;
       vec3 h = compositeHomogeneous(view.homography[b], view.homography[b + 1u], view.homography[b + 2u], p);
       vec2 s = h.xy / h.z;
-      // The depth search (composite_search.glsl) from the background plane's point; its depth read
-      // is the texel's shown.
+      // The depth search (composite_search.glsl) from the background plane's point; the depth it
+      // found is the one shown.
       float zs;
       bool inside = h.z > 0.0 && compositeDepthSearch(true, 0u, rayA, rayB, vec2(0.0), size, s, zs);
       inside = inside && all(greaterThanEqual(s, vec2(0.0))) && all(lessThan(s, size));
@@ -91,8 +91,8 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       uvGrid = gridTexcoord(pc, gridSample(pc, s));
     }
     vec4 dd = textureLod(dispImage, vec3(uvGrid, float(i)), 0.0);
-    // The depth search (composite_search.glsl): the layer pixel the ray meets, or nothing here; its
-    // last read is the depth at that pixel.
+    // The depth search (composite_search.glsl): the layer pixel the ray meets and the depth shown
+    // there, or nothing here.
     float z = 1.0;
     if (reproject && !compositeDepthSearch(false, i, rayA, rayB, dd.xy, size, s, z)) continue;
     vec2 q = s - dd.xy;
@@ -104,14 +104,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
       c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
       if (c.a < COMPOSITE_MIN_ALPHA) continue;
     }
-    if (!reproject) {
-      if (bilinear) {
-        vec4 z4 = textureGather(layerDepth, uvw, 0);
-        z = min(min(z4.x, z4.y), min(z4.z, z4.w));
-      } else {
-        z = textureLod(layerDepth, uvw, 0.0).r;
-      }
-    }
+    if (!reproject) z = layerDepthAt(i, q);  // the footprint's nearest depth (composite_search.glsl)
     vec4 clip = vec4(0.0);
     float zSlice = z;
     if (reproject) {

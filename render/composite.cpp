@@ -29,7 +29,7 @@ Status makeSampler(Device& d, VkFilter filter, VkBorderColor border, VkSampler* 
 // The compute path (CompositePath::Compute; docs/performance.md): displacement image, tile list
 // reset, classification, the tile kernel (indirect dispatch) and the resolve draw (indirect).
 Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l, rg::ResourceId displacement,
-                      rg::ResourceId previous, const CompositeTargets& t, rg::ResourceId occupancy, rg::ResourceId view) {
+                      rg::ResourceId previous, const CompositeTargets& t, rg::ResourceId sums, rg::ResourceId view) {
   // Every frame rewrites these images before reading them: they enter with their contents
   // discarded (UNDEFINED), ordered after the previous frame's reads.
   const rg::State fs = rg::stateOf(rg::Use::FragmentSampled), indirect = rg::stateOf(rg::Use::IndirectBuffer);
@@ -62,7 +62,7 @@ Status addComputePath(Compositor& c, rg::RenderGraph& g, const LayerResources& l
       .write(tileList, rg::Use::TransferDst)
       .when(computePath);
   rg::addSlotPass(g, "composite: classify",
-                  {rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler), rg::slot(occupancy, Use::ComputeStorageRead),
+                  {rg::slot(dispImage, Use::ComputeSampled, c.displacementSampler), rg::slot(sums, Use::ComputeStorageRead),
                    rg::slot(tileList, Use::ComputeStorageReadWrite), rg::slot(view, Use::ComputeUniform)},
                   [cp](rg::PassContext& x, const rg::Slots& s) {
                     const gpu::CompositePush& p = cp->push;
@@ -208,11 +208,16 @@ Status createCompositor(Device& d, const CompositorDesc& desc, Compositor* out) 
     CANOPY_TRY(createComputePipeline(d, cp, &out->sceneDepthPipeline));
     cp.shader = "composite_occupancy.comp";
     CANOPY_TRY(createComputePipeline(d, cp, &out->occupancyPipeline));
+    cp.shader = "composite_occupancy_sums.comp";
+    CANOPY_TRY(createComputePipeline(d, cp, &out->occupancySumsPipeline));
     const uint32_t layerW = compositorLayerWidth(desc), layerH = compositorLayerHeight(desc);
     const VkDeviceSize tiles = VkDeviceSize(tilesFor(desc.width)) * tilesFor(desc.height);
     const VkDeviceSize layerTiles = VkDeviceSize(tilesFor(layerW)) * tilesFor(layerH);
     CANOPY_TRY(createBuffer(d, layerTiles * (desc.maxLayers + 1) * 4, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
                             &out->occupancy, "composite: occupancy"));
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(gpu::compositeSumsEntries(tilesFor(layerW), tilesFor(layerH), desc.maxLayers + 1)) * 4,
+                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal, &out->occupancySums,
+                            "composite: occupancy sums"));
     // Compute path: needs RGBA32F as a linearly filtered storage image (the displacement image).
     VkFormatProperties df{};
     d.vk.GetPhysicalDeviceFormatProperties(d.physical, VK_FORMAT_R32G32B32A32_SFLOAT, &df);
@@ -273,6 +278,7 @@ void destroyCompositor(Compositor& c) {
   Device& d = *c.device;
   destroyGraphicsPipeline(d, c.composite);
   destroyComputePipeline(d, c.occupancyPipeline);
+  destroyComputePipeline(d, c.occupancySumsPipeline);
   destroyComputePipeline(d, c.sceneDepthPipeline);
   destroyComputePipeline(d, c.displacementPipeline);
   destroyComputePipeline(d, c.classifyPipeline);
@@ -281,6 +287,7 @@ void destroyCompositor(Compositor& c) {
   for (Image* img : {&c.displacementImage, &c.composed}) destroyImage(d, *img);
   destroyBuffer(d, c.tileList);
   destroyBuffer(d, c.occupancy);
+  destroyBuffer(d, c.occupancySums);
   destroyBuffer(d, c.sceneDepth);
   destroyBuffer(d, c.debugStandIn);
   destroyBuffer(d, c.viewBuffer);
@@ -391,11 +398,13 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
                                 : "addCompositePasses: a motion target was given but the compositor has no motion format");
   const rg::State storageRead = rg::stateOf(rg::Use::ComputeStorageRead);
   const auto occupancy = g.importBuffer("composite: occupancy", c.occupancy.size, storageRead, storageRead);
+  const auto sums = g.importBuffer("composite: occupancy sums", c.occupancySums.size, storageRead, storageRead);
   const auto scene = g.importBuffer("composite: scene depth", c.sceneDepth.size, storageRead, storageRead);
   // A uniform buffer: its reads are the same for every lane (CPU drivers load storage buffers lane by lane).
   const rg::State uniformRead = rg::stateOf(rg::Use::ComputeUniform);
   const auto view = g.importBuffer("composite: view", c.viewBuffer.size, uniformRead, uniformRead);
   CANOPY_TRY(g.bindBuffer(occupancy, c.occupancy.buffer));
+  CANOPY_TRY(g.bindBuffer(sums, c.occupancySums.buffer));
   CANOPY_TRY(g.bindBuffer(scene, c.sceneDepth.buffer));
   CANOPY_TRY(g.bindBuffer(view, c.viewBuffer.buffer));
   Compositor* cp = &c;
@@ -427,6 +436,15 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
     if (!unite) now[3] = s[0], now[4] = s[2];
     return rg::dispatchSlots(x, cp->occupancyPipeline, now, p.layerTilesX * p.layerTilesY, p.layerCount + 1, 1, p);
   }).when([cp, hasNext] { return cp->occupancyPending || (cp->occupancyUnitePending && hasNext); });
+  // Whenever the occupancy changes (the graph reads every pass's condition before recording, so
+  // this one sees the flags the occupancy pass clears).
+  rg::addSlotPass(g, "composite: occupancy sums",
+                  {rg::slot(occupancy, Use::ComputeStorageRead), rg::slot(sums, Use::ComputeStorageWrite)},
+                  [cp](rg::PassContext& x, const rg::Slots& s) {
+                    const gpu::CompositePush& p = cp->push;
+                    return rg::dispatchSlots(x, cp->occupancySumsPipeline, s, COMPOSITE_SUMS_GROUP, p.layerCount + 1, 1, p);
+                  })
+      .when([cp, hasNext] { return cp->occupancyPending || (cp->occupancyUnitePending && hasNext); });
   rg::addSlotPass(g, "composite: scene depth",
                   {rg::slot(t.depth, Use::ComputeSampled, c.depthSampler), rg::slot(scene, Use::ComputeStorageWrite)},
                   [cp](rg::PassContext& x, const rg::Slots& s) {
@@ -473,7 +491,7 @@ Status addCompositePasses(Compositor& c, rg::RenderGraph& g, const LayerResource
   pass.write(t.color, rg::Use::ColorAttachmentReadWrite).write(t.depth, rg::Use::DepthAttachmentWrite);
   if (motion) pass.write(t.motion, rg::Use::ColorAttachmentReadWrite);
   pass.when([cp] { return !cp->computeThisFrame; });
-  if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, occupancy, view));
+  if (c.computeAvailable) CANOPY_TRY(addComputePath(c, g, layers, displacement, previous, t, sums, view));
   return Status();
 }
 

@@ -60,7 +60,7 @@ struct Compositor {
   Device* device = nullptr;
   CompositorDesc desc;
   GraphicsPipeline composite;
-  ComputePipeline occupancyPipeline, sceneDepthPipeline;
+  ComputePipeline occupancyPipeline, occupancySumsPipeline, sceneDepthPipeline;
   // Compute path (CompositePath::Compute): displacement image, classification, tile kernel, resolve.
   bool computeAvailable = false;  // RGBA32F storage + linear filtering on this device
   bool computeThisFrame = false;  // prepareComposite's choice (debug views use the fragment path)
@@ -75,6 +75,7 @@ struct Compositor {
   VkSampler displacementSampler = VK_NULL_HANDLE;  // linear, clamp to edge
   Buffer occupancy;   // (maxLayers + 1) x layer tiles uint: 1 where the tile (+1 px) holds foliage;
                       // slot layerCount: the rigid background
+  Buffer occupancySums;  // its summed-area table per slot (compositeSumsEntries), read by the classification
   Buffer sceneDepth;  // width x height float: the host's depth before the composite
   Buffer viewBuffer;    // gpu::CompositeView (reprojection), rewritten by the frames that reproject
   gpu::CompositeView view{};
@@ -121,7 +122,7 @@ struct CompositeDebugSources {
 void beginHostRendering(rg::PassContext& pass, const CompositeTargets& targets, uint32_t width, uint32_t height,
                         bool motion);
 
-// Adds "composite: occupancy", then the fragment path ("composite: scene depth", "composite: warp +
+// Adds "composite: occupancy" and "composite: occupancy sums", then the fragment path ("composite: scene depth", "composite: warp +
 // composite") and the compute path ("composite: displacement image", "composite: tile list reset",
 // "composite: classify", "composite: warp + composite (tiles)", "composite: resolve"); each frame
 // records one of the two (prepareComposite).

@@ -2,38 +2,40 @@
 #extension GL_GOOGLE_include_directive : require
 // Compute path, tile classification (docs/performance.md): for every COMPOSITE_TILE screen tile, which
 // layers can reach it under q = s - d_i(s), s = H_i p (the reprojection, shared/composite.h; s = p
-// for a still camera; the depth search reads within CompositeView.search[i].w of H_i p). d_i is
-// bilinear between warp-grid corners, so over the tile it stays within the per-axis min/max of the
-// corners of the grid cells the tile touches; the layer reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source
-// rectangle [tile - dmax, tile - dmin]. Tiles with any layer or the background append themselves
-// (position with the background bit, layer mask) to the list that sizes the composite's indirect dispatch and the
-// resolve's indirect draw. Without COMPOSITE_SKIP_EMPTY every tile lists every layer (the
-// unclassified kernel, kept for tests and the benchmark).
+// for a still camera; the depth search reads within CompositeView.search[i].w of H_i p, with d_i
+// taken at H_i p). d_i is bilinear between warp-grid corners, so over the tile it stays within the
+// per-axis min/max of the corners of the grid cells the tile's plane rectangle touches; the layer
+// reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source rectangle
+// [tile - dmax - reach, tile - dmin + reach], asked of the occupancy's summed-area table
+// (composite_occupancy_sums.comp: four reads whatever its width). Tiles with any layer or the
+// background append themselves (position with the background bit, layer mask) to the list that
+// sizes the composite's indirect dispatch and the resolve's indirect draw. Without
+// COMPOSITE_SKIP_EMPTY every tile lists every layer (the unclassified kernel, kept for tests and
+// the benchmark).
 #include "shared/composite.h"
 
 layout(local_size_x = COMPOSITE_CLASSIFY_GROUP) in;
 // The warp grid's corners as the displacement image holds them (composite_displacement.comp): a
 // texel fetch is one vector read on a CPU driver, where a storage buffer is read lane by lane.
 layout(binding = 0) uniform sampler2DArray dispImage;
-layout(binding = 1, scalar) readonly buffer OccBuf { uint occupancy[]; };
+layout(binding = 1, scalar) readonly buffer SumBuf { uint sums[]; };  // the occupancy's summed-area table
 layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 tiles[]; };
 layout(binding = 3, std140) uniform ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
 // Whether an occupancy tile of `slot` (a layer, or layerCount: the background) meets the layer-pixel
-// rectangle [qlo, qhi] (the composite reads within [-1, size + 1]); a rectangle too wide to search
-// counts as reached.
+// rectangle [qlo, qhi] (the composite reads within [-1, size + 1]).
 bool reaches(uint slot, vec2 qlo, vec2 qhi, vec2 size) {
   qlo = max(qlo, vec2(-1.0));
   qhi = min(qhi, size + 1.0);
   if (any(greaterThan(qlo, qhi))) return false;
   uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-  uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-  if (t1.x - t0.x >= COMPOSITE_CLASSIFY_MAX_SPAN || t1.y - t0.y >= COMPOSITE_CLASSIFY_MAX_SPAN) return true;
-  for (uint ty = t0.y; ty <= t1.y; ++ty)
-    for (uint tx = t0.x; tx <= t1.x; ++tx)
-      if (occupancy[(slot * pc.layerTilesY + ty) * pc.layerTilesX + tx] != 0u) return true;
-  return false;
+  uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE + 1u;  // exclusive
+  uint base = compositeSumsBase(pc, slot), stride = pc.layerTilesX + 1u;
+  // Unsigned wrap-around cancels: the four-corner sum is the rectangle's count.
+  uint n = sums[base + t1.y * stride + t1.x] - sums[base + t0.y * stride + t1.x] - sums[base + t1.y * stride + t0.x] +
+           sums[base + t0.y * stride + t0.x];
+  return n != 0u;
 }
 
 // The layer-pixel bounds of the screen rectangle [lo, hi] through plane `plane`'s homography (the
@@ -84,15 +86,12 @@ void main() {
         mask |= 1u << i;
         continue;
       }
-      if (reproject && view.search[i].z > 0.0) {  // the depth search reads this far from the plane's point
-        slo -= view.search[i].w;
-        shi += view.search[i].w;
-      }
       if (shi.x - slo.x > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN) ||
           shi.y - slo.y > float(COMPOSITE_TILE * COMPOSITE_CLASSIFY_MAX_SPAN)) {
         mask |= 1u << i;
         continue;
       }
+      // d_i is read at the plane's point (composite_search.glsl): its bounds over the plane's rectangle.
       GridSample g0 = gridSample(pc, slo), g1 = gridSample(pc, shi);
       uint gx0 = uint(g0.cell.x), gy0 = uint(g0.cell.y), gx1 = uint(g1.cell.x) + 1u, gy1 = uint(g1.cell.y) + 1u;
       vec2 dmin = vec2(1e30), dmax = vec2(-1e30);
@@ -102,6 +101,11 @@ void main() {
           dmin = min(dmin, d);
           dmax = max(dmax, d);
         }
+      // The depth search reads this far from the plane's point.
+      if (reproject && view.search[i].z > 0.0) {
+        slo -= view.search[i].w;
+        shi += view.search[i].w;
+      }
       // The composite samples layer i at q = s - d in [-1, size + 1] (bilinear reach included by the
       // occupancy's one-pixel dilation).
       if (reaches(i, slo - dmax, shi - dmin, size)) mask |= 1u << i;

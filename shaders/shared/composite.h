@@ -13,12 +13,15 @@
 #define COMPOSITE_SCENE_GROUP 64u        // scene-depth copy workgroup (one pixel per invocation)
 #define COMPOSITE_CLASSIFY_GROUP 64u     // classification workgroup (one screen tile per invocation)
 #define COMPOSITE_DISP_GROUP 64u         // displacement-image workgroup (one warp-grid corner per invocation)
+#define COMPOSITE_SUMS_GROUP 64u         // occupancy sums: a workgroup per slot, a row then a column per invocation
 // Compute path, a tile-list entry: (position, layer mask). The mask has bit i for layer i (all 32
 // layers fit); the position word holds the tile's x in bits 0-14, its y in bits 15-29 and this bit
 // when the rigid background (trunks) reaches the tile.
 #define COMPOSITE_TILE_BACKGROUND 0x80000000u
-// Classification searches at most this many occupancy tiles per axis for one layer; a wider source
-// rectangle (a displacement of more than ~COMPOSITE_TILE * this pixels across a tile) counts as reached.
+// Classification reads the warp grid's corners under at most this many occupancy tiles per axis of
+// a screen tile's source rectangle (a plane mapping it wider than ~COMPOSITE_TILE * this pixels:
+// a steep plane); a wider one counts as reached. Its occupancy is read from the summed-area table
+// (composite_occupancy_sums.comp), four reads however wide the rectangle.
 #define COMPOSITE_CLASSIFY_MAX_SPAN 16u
 
 // CompositePush.flags
@@ -260,6 +263,11 @@ CANOPY_INLINE GridSample gridSample(CompositePush c, vec2 p) {
 CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
   return vec2((s.cell.x + s.t.x + 0.5f) / float(c.dispWidth), (s.cell.y + s.t.y + 0.5f) / float(c.dispHeight));
 }
+
+// The occupancy's summed-area table (composite_occupancy_sums.comp): slot k's (layerTilesX + 1) x
+// (layerTilesY + 1) entries start here; entries for `slots` slots of a tilesX x tilesY layer grid.
+CANOPY_INLINE uint compositeSumsBase(CompositePush c, uint slot) { return slot * (c.layerTilesX + 1u) * (c.layerTilesY + 1u); }
+CANOPY_INLINE uint compositeSumsEntries(uint tilesX, uint tilesY, uint slots) { return (tilesX + 1u) * (tilesY + 1u) * slots; }
 
 // The tile kernel's variant for a frame's flags (COMPOSITE_VARIANT_*).
 CANOPY_INLINE uint compositeTileVariant(uint flags) {

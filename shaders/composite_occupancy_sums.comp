@@ -1,0 +1,38 @@
+#version 460
+#extension GL_GOOGLE_include_directive : require
+// The occupancy's summed-area table (run after composite_occupancy.comp, whenever it runs): per slot
+// (a layer, or layerCount: the background), S[y][x] = occupied tiles in rows < y and columns < x,
+// (layerTilesX + 1) x (layerTilesY + 1) entries. The classification then asks whether any tile of
+// a rectangle holds foliage with four reads, however wide the rectangle (a moving camera's depth
+// search widens it; compositeOccupiedTiles, shared/composite.h).
+#include "shared/composite.h"
+
+layout(local_size_x = COMPOSITE_SUMS_GROUP) in;
+layout(binding = 0, scalar) readonly buffer OccBuf { uint occupancy[]; };
+layout(binding = 1, scalar) buffer SumBuf { uint sums[]; };
+layout(push_constant, scalar) uniform Push { CompositePush pc; };
+
+// One workgroup per slot: its rows summed (an invocation per row), then its columns.
+void main() {
+  uint slot = gl_WorkGroupID.y;
+  if (slot > pc.layerCount) return;  // uniform over the workgroup
+  uint tx = pc.layerTilesX, ty = pc.layerTilesY, stride = tx + 1u;
+  uint flags = slot * tx * ty, base = compositeSumsBase(pc, slot);
+  for (uint y = gl_LocalInvocationID.x; y <= ty; y += COMPOSITE_SUMS_GROUP) {
+    uint run = 0u;
+    sums[base + y * stride] = 0u;
+    for (uint x = 0u; x < tx; ++x) {
+      if (y > 0u) run += occupancy[flags + (y - 1u) * tx + x] != 0u ? 1u : 0u;
+      sums[base + y * stride + x + 1u] = run;
+    }
+  }
+  memoryBarrierBuffer();
+  barrier();
+  for (uint x = gl_LocalInvocationID.x; x <= tx; x += COMPOSITE_SUMS_GROUP) {
+    uint run = 0u;
+    for (uint y = 1u; y <= ty; ++y) {
+      run += sums[base + y * stride + x];
+      sums[base + y * stride + x] = run;
+    }
+  }
+}

@@ -465,6 +465,46 @@ TEST_F(CompositeTest, TileListsNeverDropALayerCarriedAcrossTileBorders) {
   EXPECT_LE(differFragment, sc.pixels() / 200) << "compute and fragment paths disagree";
 }
 
+// A warp whose corners differ by up to 150 px between neighbours: each screen tile's source
+// rectangle spans most of the layer (up to 19 occupancy tiles across, clamped at the image's
+// edges), which the classification asks of the occupancy's summed-area table in four reads. The
+// classified image is the unclassified one, pixel for pixel.
+TEST_F(CompositeTest, TileListsStayExactWhenAWarpSpansMostOfTheLayer) {
+  Scene sc;
+  sc.w = 200;
+  sc.h = 40;
+  sc.resize(2);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (uint32_t l = 0; l < sc.n; ++l)
+    for (int leaf = 0; leaf < 5; ++leaf) {
+      const uint32_t cx = 4 + uint32_t(u(rng) * 190), cy = 4 + uint32_t(u(rng) * 30);
+      for (uint32_t y = cy - 2; y <= cy + 2; ++y)
+        for (uint32_t x = cx - 2; x <= cx + 2; ++x) {
+          sc.color(l, x, y) = glm::vec4(0.3f + 0.4f * float(l), 0.5f, 0.2f, 1.0f);
+          sc.depth(l, x, y) = 0.3f + 0.3f * float(l);
+        }
+    }
+  for (uint32_t l = 0; l < sc.n; ++l)
+    for (uint32_t gy = 0; gy < sc.gridY(); ++gy)
+      for (uint32_t gx = 0; gx < sc.gridX(); ++gx)
+        sc.disp[(size_t(l) * sc.gridY() + gy) * sc.gridX() + gx] =
+            glm::vec2(((gx + gy + l) % 2 ? 75.0f : -75.0f) * u(rng), 6.0f * (u(rng) - 0.5f));
+  sc.prev = sc.disp;
+  sc.params.path = CompositePath::Compute;
+  sc.params.skipEmptyTiles = true;
+  const Result classified = run(sc);
+  sc.params.skipEmptyTiles = false;
+  const Result unclassified = run(sc);
+  size_t covered = 0, differ = 0;
+  for (size_t i = 0; i < sc.pixels(); ++i) {
+    covered += unclassified.color[i].a > 0.0f && unclassified.color[i] != glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+    differ += maxDiff(classified.color[i], unclassified.color[i]) > 0.0f || classified.depth[i] != unclassified.depth[i];
+  }
+  EXPECT_GT(covered, 200u) << "the warped leaves must cover pixels for the test to mean anything";
+  EXPECT_EQ(differ, 0u) << "the tile lists dropped a layer somewhere";
+}
+
 // All 32 layers (the most a context allows) with the rigid background: the compute path's tile
 // lists carry layer 31 and the background apart, and match the fragment path.
 TEST_F(CompositeTest, ThirtyTwoLayersAndTheBackgroundKeepTheirOwnBitsInTheTileLists) {

@@ -71,7 +71,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
       // nothing is found; *s the plane's point on entry, the layer pixel shown on return, *z the
       // slice depth shown there (the found sample's; the plane's point's without a search).
       auto depthSearch = [&](uint32_t i, const glm::vec2& d, glm::vec2* s, float* z) {
-        const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i]);
+        const gpu::CompositeRay ray = gpu::compositeRaySearch(rayA, rayB, in.view.search[i], *s, size);
         const float scale = i == COMPOSITE_VIEW_BACKGROUND ? 1.0f : gpu::layerTexelScale(pc.halfResolution, i);
         *z = 1.0f;
         if (ray.steps == 0) {

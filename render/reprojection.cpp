@@ -5,9 +5,9 @@
 
 namespace canopy {
 namespace {
-// The depth search's samples are this many layer pixels apart along a pixel's ray; a surface
-// narrower than that along the ray's direction can be stepped over.
-constexpr double kSearchSpacingPx = 2.0;
+// The depth search's samples are this many layer pixels apart along a pixel's ray (the kernel's
+// own per-pixel count uses the same, shared/composite.h).
+constexpr double kSearchSpacingPx = COMPOSITE_SEARCH_SPACING_PX;
 glm::dmat4 viewProj(const LayerView& v) { return glm::dmat4(v.proj) * glm::dmat4(v.view); }
 
 // The world point shown at pixel s of camera v at view depth z (a point on the pixel's ray).

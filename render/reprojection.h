@@ -68,7 +68,7 @@ struct PixelExtent {
 // A layer whose every texel lands within this many layer pixels of its plane's mapping is shown by
 // the plane's homography alone, without the depth search (compositeView; docs/design.md "Layers:
 // reprojection", the short path).
-constexpr double kShortPathPx = 0.25;
+constexpr double kShortPathPx = COMPOSITE_SHORT_PATH_PX;
 // Depths averaged over a slab's range by estimateReprojectionError (midpoints).
 constexpr int kDepthSamples = 8;
 // Zooming in beyond this many current pixels per layer texel re-slices (the reprojected layers blur).

@@ -55,6 +55,35 @@ bool layerBounds(uint plane, vec2 lo, vec2 hi, out vec2 slo, out vec2 shi) {
   return true;
 }
 
+// Where the depth search of `slot` (a layer, or COMPOSITE_VIEW_BACKGROUND) can read for the screen
+// rectangle [lo, hi]: the box [slo, shi] (the plane's points) grown to hold the ray's points at the
+// search range's two ends at the rectangle's corners, and a pixel (the samples lie between those
+// ends; the parallax is smooth over a tile); by the view's bound on the whole image
+// (CompositeView.search[slot].w) where an end is behind a camera. Nothing where it takes no samples.
+void searchBounds(uint slot, vec2 lo, vec2 hi, inout vec2 slo, inout vec2 shi) {
+  vec4 search = view.search[slot];
+  if (search.z <= 0.0) return;
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight), outSize = vec2(pc.width, pc.height);
+  vec4 b = view.currentToSlice[2];
+  vec2 nlo = slo, nhi = shi;
+  for (uint k = 0u; k < 4u; ++k) {
+    vec2 p = vec2((k & 1u) != 0u ? hi.x : lo.x, (k & 2u) != 0u ? hi.y : lo.y);
+    vec4 a = compositeRayOrigin(view.currentToSlice, p, outSize);
+    vec2 tn = compositeRayT(a, b, search.x), tf = compositeRayT(a, b, search.y);
+    vec4 xn = a + tn.x * b, xf = a + tf.x * b;
+    if (tn.y == 0.0 || tf.y == 0.0 || xn.w <= 0.0 || xf.w <= 0.0) {
+      slo -= search.w;
+      shi += search.w;
+      return;
+    }
+    vec2 pn = (xn.xy / xn.w + 1.0) * 0.5 * size, pf = (xf.xy / xf.w + 1.0) * 0.5 * size;
+    nlo = min(nlo, min(pn, pf));
+    nhi = max(nhi, max(pn, pf));
+  }
+  slo = nlo - 1.0;
+  shi = nhi + 1.0;
+}
+
 void main() {
   uint tileCount = pc.tilesX * pc.tilesY;
   uint id = gl_GlobalInvocationID.x;
@@ -72,8 +101,8 @@ void main() {
     // dilated by a pixel).
     vec2 slo = lo + origin, shi = hi + origin;
     bool unbounded = reproject && !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi);
-    float reach = reproject ? view.search[COMPOSITE_VIEW_BACKGROUND].w : 0.0;  // the depth search's (0: none)
-    bool reached = unbounded || reaches(pc.layerCount, slo - reach, shi + reach, size);
+    if (reproject && !unbounded) searchBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi);
+    bool reached = unbounded || reaches(pc.layerCount, slo, shi, size);
     if (reached) position |= COMPOSITE_TILE_BACKGROUND;
   }
   if ((pc.flags & COMPOSITE_SKIP_EMPTY) == 0u) {
@@ -101,11 +130,8 @@ void main() {
           dmin = min(dmin, d);
           dmax = max(dmax, d);
         }
-      // The depth search reads this far from the plane's point.
-      if (reproject && view.search[i].z > 0.0) {
-        slo -= view.search[i].w;
-        shi += view.search[i].w;
-      }
+      // Where the depth search reads from the plane's points.
+      if (reproject) searchBounds(i, lo, hi, slo, shi);
       // The composite samples layer i at q = s - d in [-1, size + 1] (bilinear reach included by the
       // occupancy's one-pixel dilation).
       if (reaches(i, slo - dmax, shi - dmin, size)) mask |= 1u << i;

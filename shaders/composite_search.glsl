@@ -35,7 +35,7 @@ float searchDepthAt(bool background, uint i, vec2 q) { return background ? backg
 // short path: the plane's homography alone): the depth at the plane's point. One depth read per
 // sample, the composite's depth read included.
 bool compositeDepthSearch(bool background, uint i, vec4 rayA, vec4 rayB, vec2 d, vec2 size, inout vec2 s, out float z) {
-  CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[background ? COMPOSITE_VIEW_BACKGROUND : i]);
+  CompositeRay ray = compositeRaySearch(rayA, rayB, view.search[background ? COMPOSITE_VIEW_BACKGROUND : i], s, size);
   bool plane = ray.steps == 0u, found = false;
   z = 1.0;
   for (uint k = 0u; k < max(ray.steps, 1u) && !found; ++k) {

@@ -163,8 +163,19 @@ CANOPY_INLINE vec2 compositeRayT(vec4 a, vec4 b, float z) {
   if (abs(den) < 1e-20f) return vec2(0.0f);
   return vec2((z * a.w - a.z) / den, 1.0f);
 }
-// Layer `search` (CompositeView.search) along the ray (a, b).
-CANOPY_INLINE CompositeRay compositeRaySearch(vec4 a, vec4 b, vec4 search) {
+// The search's samples are this many layer pixels apart along a pixel's ray (a surface narrower
+// than that along the ray's direction can be stepped over); a ray whose range lands within
+// COMPOSITE_SHORT_PATH_PX of the plane's point takes the plane alone (docs/design.md "Layers:
+// reprojection", the short path). render/reprojection.cpp picks each layer's most samples with the same two.
+#define COMPOSITE_SEARCH_SPACING_PX 2.0f
+#define COMPOSITE_SHORT_PATH_PX 0.25f
+// Layer `search` (CompositeView.search) along the ray (a, b) of the pixel whose plane point is
+// `plane` (layer pixels of `size`): search.z samples at most, fewer where this pixel's ray spans
+// less — the range's two ends seen from this pixel, the parallax being smooth but not uniform over
+// the image (a dolly's is zero at its centre): none where both ends land within
+// COMPOSITE_SHORT_PATH_PX of the plane's point, one where they lie within one spacing, else one a
+// spacing apart, the ends included.
+CANOPY_INLINE CompositeRay compositeRaySearch(vec4 a, vec4 b, vec4 search, vec2 plane, vec2 size) {
   CompositeRay r;
   r.a = a;
   r.b = b;
@@ -172,6 +183,16 @@ CANOPY_INLINE CompositeRay compositeRaySearch(vec4 a, vec4 b, vec4 search) {
   r.pad0 = 0u;
   vec2 tNear = compositeRayT(a, b, search.x), tFar = compositeRayT(a, b, search.y);
   if (tNear.y == 0.0f || tFar.y == 0.0f) r.steps = 0u;
+  vec4 xn = a + tNear.x * b, xf = a + tFar.x * b;
+  if (r.steps > 0u && xn.w > 0.0f && xf.w > 0.0f) {
+    vec2 pn = vec2((xn.x / xn.w + 1.0f) * 0.5f * size.x, (xn.y / xn.w + 1.0f) * 0.5f * size.y);
+    vec2 pf = vec2((xf.x / xf.w + 1.0f) * 0.5f * size.x, (xf.y / xf.w + 1.0f) * 0.5f * size.y);
+    float stretch = length(pn - pf), reach = max(length(pn - plane), length(pf - plane));
+    uint need = reach < COMPOSITE_SHORT_PATH_PX ? 0u
+                : stretch <= COMPOSITE_SEARCH_SPACING_PX ? 1u
+                                                        : uint(ceil(stretch / COMPOSITE_SEARCH_SPACING_PX)) + 1u;
+    r.steps = min(r.steps, need);
+  }
   // One sample: the range's middle (a thin range's secant step from about the plane's point).
   r.t0 = r.steps == 1u ? 0.5f * (tNear.x + tFar.x) : min(tNear.x, tFar.x);
   r.dt = r.steps > 1u ? (max(tNear.x, tFar.x) - r.t0) / float(r.steps - 1u) : 0.0f;

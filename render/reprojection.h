@@ -38,9 +38,10 @@ struct LayerSearch {
 // The composite's view block: layer i's plane at slice-camera view depth `layerDepths[i]`, the
 // rigid background's at `backgroundDepth`; the output of `outSize` pixels, the layer images of
 // `layerSize` (the slice camera's, guard band included). `search` (one per layer, or empty) and
-// `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search, a sample
-// every two layer pixels the ray crosses between the range's ends, at most maxSteps, none where the
-// range lands within kShortPathPx of the plane (the short path);
+// `maxSteps` (CompositeParams.depthSearchSteps; 0: the planes alone): the depth search's most
+// samples per layer over the image, a sample every two layer pixels the ray crosses between the
+// range's ends, at most maxSteps, none where the range lands within kShortPathPx of the plane (the
+// short path) — each pixel then takes what its own ray needs (shared/composite.h compositeRaySearch);
 // `backgroundSearch` the rigid background's (its vertices' depths).
 gpu::CompositeView compositeView(const LayerView& slice, const LayerView& current, const LayerView& previous,
                                  const std::vector<float>& layerDepths, float backgroundDepth, const glm::dvec2& outSize,

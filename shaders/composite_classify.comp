@@ -56,19 +56,18 @@ bool layerBounds(uint plane, vec2 lo, vec2 hi, out vec2 slo, out vec2 shi) {
 }
 
 // Where the depth search of `slot` (a layer, or COMPOSITE_VIEW_BACKGROUND) can read for the screen
-// rectangle [lo, hi]: the box [slo, shi] (the plane's points) grown to hold the ray's points at the
+// rectangle whose corners' rays (compositeRayOrigin, the same for every layer) are `rays`: the box [slo, shi] (the plane's points) grown to hold the ray's points at the
 // search range's two ends at the rectangle's corners, and a pixel (the samples lie between those
 // ends; the parallax is smooth over a tile); by the view's bound on the whole image
 // (CompositeView.search[slot].w) where an end is behind a camera. Nothing where it takes no samples.
-void searchBounds(uint slot, vec2 lo, vec2 hi, inout vec2 slo, inout vec2 shi) {
+void searchBounds(uint slot, vec4 rays[4], inout vec2 slo, inout vec2 shi) {
   vec4 search = view.search[slot];
   if (search.z <= 0.0) return;
-  vec2 size = vec2(pc.layerWidth, pc.layerHeight), outSize = vec2(pc.width, pc.height);
+  vec2 size = vec2(pc.layerWidth, pc.layerHeight);
   vec4 b = view.currentToSlice[2];
   vec2 nlo = slo, nhi = shi;
   for (uint k = 0u; k < 4u; ++k) {
-    vec2 p = vec2((k & 1u) != 0u ? hi.x : lo.x, (k & 2u) != 0u ? hi.y : lo.y);
-    vec4 a = compositeRayOrigin(view.currentToSlice, p, outSize);
+    vec4 a = rays[k];
     vec2 tn = compositeRayT(a, b, search.x), tf = compositeRayT(a, b, search.y);
     vec4 xn = a + tn.x * b, xf = a + tf.x * b;
     if (tn.y == 0.0 || tf.y == 0.0 || xn.w <= 0.0 || xf.w <= 0.0) {
@@ -96,12 +95,17 @@ void main() {
   bool reproject = (pc.flags & COMPOSITE_REPROJECT) != 0u;
   uint mask = 0u;
   uint position = compositeTilePosition(tile.x, tile.y);
+  vec4 rays[4];
+  for (uint k = 0u; k < 4u; ++k)
+    rays[k] = reproject ? compositeRayOrigin(view.currentToSlice, vec2((k & 1u) != 0u ? hi.x : lo.x, (k & 2u) != 0u ? hi.y : lo.y),
+                                             vec2(pc.width, pc.height))
+                        : vec4(0.0);
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
     // The background is read at the nearest texel of H p, or p + origin (the occupancy tiles are
     // dilated by a pixel).
     vec2 slo = lo + origin, shi = hi + origin;
     bool unbounded = reproject && !layerBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi);
-    if (reproject && !unbounded) searchBounds(COMPOSITE_VIEW_BACKGROUND, lo, hi, slo, shi);
+    if (reproject && !unbounded) searchBounds(COMPOSITE_VIEW_BACKGROUND, rays, slo, shi);
     bool reached = unbounded || reaches(pc.layerCount, slo, shi, size);
     if (reached) position |= COMPOSITE_TILE_BACKGROUND;
   }
@@ -131,7 +135,7 @@ void main() {
           dmax = max(dmax, d);
         }
       // Where the depth search reads from the plane's points.
-      if (reproject) searchBounds(i, lo, hi, slo, shi);
+      if (reproject) searchBounds(i, rays, slo, shi);
       // The composite samples layer i at q = s - d in [-1, size + 1] (bilinear reach included by the
       // occupancy's one-pixel dilation).
       if (reaches(i, slo - dmax, shi - dmin, size)) mask |= 1u << i;

@@ -112,9 +112,9 @@ struct CompositeView {
   // background's plane is i = COMPOSITE_VIEW_BACKGROUND.
   vec4 homography[3u * (CANOPY_MAX_LAYERS + 1u)];
   // Layer i's depth search (compositeRaySearch; the background's at i = COMPOSITE_VIEW_BACKGROUND):
-  // x, y the slice camera's NDC depths of the two ends of the range its texels lie in, z the samples
-  // along a pixel's ray (0: the plane alone), w how far (layer pixels) a sample may land from the
-  // plane's point (the classification widens its boxes by it).
+  // x, y the slice camera's NDC depths of the two ends of the range its texels lie in, z the most
+  // samples along a pixel's ray (each pixel takes what its own ray needs; 0: the plane alone), w how far (layer pixels) a sample may land from the
+  // plane's point (the classification widens its boxes by it where a ray end is behind a camera).
   vec4 search[CANOPY_MAX_LAYERS + 1u];
 };
 CANOPY_SIZE_CHECK(CompositeView, 192 + 64 * (CANOPY_MAX_LAYERS + 1))

@@ -3,7 +3,8 @@
 // so they differ only by the method: one re-slices by its policy ("auto", spread over frames with
 // --budget ms, 0: at once), the other every frame (the reference). Each frame of the path is drawn
 // by both and compared (tools/world_lock.h: coverage IoU, silhouette distance, colour), and each
-// one's frame time is kept; the still camera of the same run is the baseline.
+// one's frame time is kept; the still camera of the same run is the baseline, and for each frame
+// that only reprojected, a still frame at the same camera (a third context re-sliced there).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -169,6 +170,10 @@ struct PathResult {
   std::vector<double> autoMs, everyMs;
   std::vector<double> stillMs;        // the still camera's frames, one drawn before each of this path's
   std::vector<double> reprojectedMs;  // the policy side's frames that only reprojected (no re-slice work)
+  // For each of those, a still frame at the same camera: a third context re-sliced there at once,
+  // then drawn again (the camera moved the vegetation's size on screen: a dolly's frames cover up to
+  // a third more pixels than the path's start).
+  std::vector<double> stillHereMs;
   WorldLockError worst;          // min IoU, max of the distances and colour
   WorldLockError worstDepth;     // the same over depth coverage (alpha >= depthAlpha)
   double silhouetteMeanAvg = 0;  // the silhouette mean over the frames
@@ -237,10 +242,11 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       path.radiiPerFrame = o.radiiPerFrame;
       path.amplitudeDegrees = o.swingDegrees;
       // Fresh contexts per path, each settled on the path's first view (two frames: the first slices).
-      Side autoSide(d, o.halfResolutionLayers), every(d, o.halfResolutionLayers);
+      Side autoSide(d, o.halfResolutionLayers), every(d, o.halfResolutionLayers), here(d, o.halfResolutionLayers);
       autoSide.depthSearchSteps = o.depthSearchSteps;
       s = autoSide.init(model, o.width, o.height, ReslicePolicy::OnViewChange, o.budgetMs, o.errorPixels, o.guardBand);
       if (s.ok()) s = every.init(model, o.width, o.height, ReslicePolicy::EveryFrame, 0.0f);
+      if (s.ok()) s = here.init(model, o.width, o.height, ReslicePolicy::OnViewChange, 0.0f, o.errorPixels, o.guardBand);
       const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);
       for (int k = 0; k < 2 && s.ok(); ++k) {
         double ms = 0;
@@ -253,16 +259,25 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       uint32_t lastRebuilds = before;
       for (int i = 0; i < o.frames && s.ok(); ++i) {
         const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
-        double ms0 = 0, ma = 0, mb = 0;
-        s = still.frame(view0, &ms0, nullptr);
+        // The reference first, and the third context re-sliced at v; then the three timed frames back to
+        // back, each after the same kinds of work: the still camera's, the policy side's, the still
+        // frame at v.
+        double ms0 = 0, ma = 0, mb = 0, mr = 0, mh = 0;
+        s = every.frame(v, &mb, &b, &cb);
+        if (s.ok()) s = requestCanopyRebuild(here.ctx, true);
+        if (s.ok()) s = here.frame(v, &mr, nullptr);
+        if (s.ok()) s = still.frame(view0, &ms0, nullptr);
         if (s.ok()) s = autoSide.frame(v, &ma, &a, &ca);
-        if (s.ok()) s = every.frame(v, &mb, &b, &cb);
+        if (s.ok()) s = here.frame(v, &mh, nullptr);
         if (!s.ok()) break;
         stillMs.push_back(ms0);
         r.stillMs.push_back(ms0);
         r.autoMs.push_back(ma);
         r.everyMs.push_back(mb);
-        if (autoSide.lastKind == FrameKind::Reprojected) r.reprojectedMs.push_back(ma);
+        if (autoSide.lastKind == FrameKind::Reprojected) {
+          r.reprojectedMs.push_back(ma);
+          r.stillHereMs.push_back(mh);
+        }
         if (csv) std::fprintf(csv, "%llu,still,%d,%.3f,%.3f,0,1,0,0,0,1\n", (unsigned long long)faces, int(stillMs.size()) - 1, ms0, ms0);
         const uint32_t rebuilds = uint32_t(canopyStats(autoSide.ctx).layers.rebuilds);
         const WorldLockError e = compareFrames(a, b, o.width, o.height, clear);
@@ -318,11 +333,13 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
     }
     // The issue-56 figure: the frames that only reprojected, against the still frames drawn alternately.
     std::printf("\n  Reprojected frames (the policy side's frames with no re-slice work: not re-sliced at once, no step of a\n"
-                "  spread re-slice) against the still camera's frames drawn alternately with them, medians:\n");
-    std::printf("  %-7s %7s %12s %9s %11s\n", "path", "frames", "reproj. ms", "still ms", "x still");
+                "  spread re-slice) against the still camera's frames drawn alternately with them (the path's start\n"
+                "  view), and against a still frame at the same camera (re-sliced there, then drawn again), medians:\n");
+    std::printf("  %-7s %7s %12s %9s %11s %11s %9s\n", "path", "frames", "reproj. ms", "still ms", "x still", "here ms", "x here");
     for (const PathResult& r : results) {
-      const double rm = quantile(r.reprojectedMs, 0.5), sm = quantile(r.stillMs, 0.5);
-      std::printf("  %-7s %7zu %12.2f %9.2f %11.2f\n", r.name.c_str(), r.reprojectedMs.size(), rm, sm, rm / std::max(sm, 1e-9));
+      const double rm = quantile(r.reprojectedMs, 0.5), sm = quantile(r.stillMs, 0.5), hm = quantile(r.stillHereMs, 0.5);
+      std::printf("  %-7s %7zu %12.2f %9.2f %11.2f %11.2f %9.2f\n", r.name.c_str(), r.reprojectedMs.size(), rm, sm,
+                  rm / std::max(sm, 1e-9), hm, rm / std::max(hm, 1e-9));
     }
     if (!fades.empty()) {
       std::printf("\n  Cross-fade at one camera (spread re-slice, %u frames of fade): coverage of each frame of the re-slice\n"

@@ -23,15 +23,15 @@ layout(binding = 2, scalar) buffer TileBuf { CompositeTileHeader header; uvec2 t
 layout(binding = 3, std140) uniform ViewBuf { CompositeView view; };  // reprojection
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
-// Whether an occupancy tile of `slot` (a layer, or layerCount: the background) meets the layer-pixel
-// rectangle [qlo, qhi] (the composite reads within [-1, size + 1]).
+// Whether an occupied cell of an occupancy tile of `slot` (a layer, or layerCount: the
+// background) meets the layer-pixel rectangle [qlo, qhi] (the composite reads within [-1, size + 1]).
 bool reaches(uint slot, vec2 qlo, vec2 qhi, vec2 size) {
   qlo = max(qlo, vec2(-1.0));
   qhi = min(qhi, size + 1.0);
   if (any(greaterThan(qlo, qhi))) return false;
-  uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
-  uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_TILE + 1u;  // exclusive
-  uint base = compositeSumsBase(pc, slot), stride = pc.layerTilesX + 1u;
+  uvec2 t0 = uvec2(clamp(qlo, vec2(0.0), size - 1.0)) / COMPOSITE_OCCUPANCY_CELL;
+  uvec2 t1 = uvec2(clamp(qhi, vec2(0.0), size - 1.0)) / COMPOSITE_OCCUPANCY_CELL + 1u;  // exclusive
+  uint base = compositeSumsBase(pc, slot), stride = compositeSumsStride(pc);
   // Unsigned wrap-around cancels: the four-corner sum is the rectangle's count.
   uint n = sums[base + t1.y * stride + t1.x] - sums[base + t0.y * stride + t1.x] - sums[base + t1.y * stride + t0.x] +
            sums[base + t0.y * stride + t0.x];
@@ -79,8 +79,8 @@ void searchBounds(uint slot, vec4 rays[4], inout vec2 slo, inout vec2 shi) {
     nlo = min(nlo, min(pn, pf));
     nhi = max(nhi, max(pn, pf));
   }
-  slo = nlo - 1.0;
-  shi = nhi + 1.0;
+  slo = nlo - 0.0625;
+  shi = nhi + 0.0625;
 }
 
 void main() {

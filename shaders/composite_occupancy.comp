@@ -1,6 +1,7 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
-// Which COMPOSITE_TILE-sized tiles of each layer hold any foliage (run after a layer rebuild), and,
+// Which COMPOSITE_TILE-sized tiles of each layer hold any foliage, cell by cell (a bit per cell,
+// COMPOSITE_OCCUPANCY_SPLIT a side; run after a layer rebuild), and,
 // in slot layerCount, which tiles the rigid background covers (the compute path's classification).
 // With COMPOSITE_OCCUPANCY_UNION the next layer set of a spread re-slice (bindings 3, 4) is read
 // and ORed into the occupancy, so it covers every step of the cross-fade (render/layers.cpp).
@@ -23,7 +24,7 @@ void main() {
   if (id >= tiles || layer > pc.layerCount) return;
   bool background = layer == pc.layerCount;
   bool unite = (pc.flags & COMPOSITE_OCCUPANCY_UNION) != 0u;
-  if (unite && occupancy[layer * tiles + id] != 0u) return;  // already occupied
+  if (unite && occupancy[layer * tiles + id] == COMPOSITE_OCCUPANCY_FULL) return;  // every cell already occupied
   if (background && (pc.flags & COMPOSITE_BACKGROUND) == 0u) {
     occupancy[layer * tiles + id] = 0u;
     return;
@@ -34,25 +35,32 @@ void main() {
     if (!unite) occupancy[layer * tiles + id] = 0u;
     return;
   }
-  // The tile and one texel around it, 2x2 texels per gather: a gather at the corner shared by
-  // texels (x, y) and (x + 1, y + 1) returns those four (the border sampler reads outside texels
-  // as transparent; a clamped read would land on an edge texel of this tile, read anyway). A
-  // quarter of the texel reads of one fetch each, which is what this pass costs on CPU devices.
-  // A layer at half resolution (shared/layers.h layerTexelScale) holds the tile's pixels in half
-  // as many texels per side; the margin stays one texel of its own (a bilinear footprint's).
+  // Each cell of the tile (COMPOSITE_OCCUPANCY_SPLIT a side, a bit each) with one texel around it,
+  // 2x2 texels per gather: a gather at the corner shared by texels (x, y) and (x + 1, y + 1)
+  // returns those four (the border sampler reads outside texels as transparent; a clamped read
+  // would land on an edge texel of this tile, read anyway). A quarter of the texel reads of one
+  // fetch each, which is what this pass costs on CPU devices. The classification asks the cells;
+  // the fragment path asks the tile (any bit). A layer at half resolution (shared/layers.h
+  // layerTexelScale) holds the tile's pixels in half as many texels per side (a cell then at
+  // least one texel); the margin stays one texel of its own (a bilinear footprint's).
   const float scale = background ? 1.0 : layerTexelScale(pc.halfResolution, layer);
-  const int extent = int(float(COMPOSITE_TILE) * scale);
+  const int extent = int(float(COMPOSITE_TILE) * scale), side = max(extent / int(COMPOSITE_OCCUPANCY_SPLIT), 1);
   ivec2 t0 = ivec2(tile) * extent;
   vec2 size = vec2(pc.layerWidth, pc.layerHeight);
-  uint any = 0u;
-  for (int y = -1; y <= extent && any == 0u; y += 2)
-    for (int x = -1; x <= extent; x += 2) {
-      vec2 uv = vec2(t0 + ivec2(x + 1, y + 1)) / size;
-      vec4 a = background ? (unite ? textureGather(nextBackgroundColor, uv, 3) : textureGather(backgroundColor, uv, 3))
-                          : (unite ? textureGather(nextLayerColor, vec3(uv, float(layer)), 3)
-                                   : textureGather(layerColor, vec3(uv, float(layer)), 3));
-      float m = max(max(a.x, a.y), max(a.z, a.w));
-      if (m > 0.0 && (background || m >= COMPOSITE_MIN_ALPHA)) { any = 1u; break; }
-    }
-  occupancy[layer * tiles + id] = any;
+  uint bits = 0u;
+  for (uint c = 0u; c < COMPOSITE_OCCUPANCY_SPLIT * COMPOSITE_OCCUPANCY_SPLIT; ++c) {
+    ivec2 c0 = t0 + ivec2(int(c % COMPOSITE_OCCUPANCY_SPLIT), int(c / COMPOSITE_OCCUPANCY_SPLIT)) * side;
+    bool any = false;
+    for (int y = -1; y <= side && !any; y += 2)
+      for (int x = -1; x <= side; x += 2) {
+        vec2 uv = vec2(c0 + ivec2(x + 1, y + 1)) / size;
+        vec4 a = background ? (unite ? textureGather(nextBackgroundColor, uv, 3) : textureGather(backgroundColor, uv, 3))
+                            : (unite ? textureGather(nextLayerColor, vec3(uv, float(layer)), 3)
+                                     : textureGather(layerColor, vec3(uv, float(layer)), 3));
+        float m = max(max(a.x, a.y), max(a.z, a.w));
+        if (m > 0.0 && (background || m >= COMPOSITE_MIN_ALPHA)) { any = true; break; }
+      }
+    if (any) bits |= 1u << c;
+  }
+  occupancy[layer * tiles + id] = unite ? (occupancy[layer * tiles + id] | bits) : bits;
 }

@@ -1,8 +1,8 @@
 #version 460
 #extension GL_GOOGLE_include_directive : require
 // The occupancy's summed-area table (run after composite_occupancy.comp, whenever it runs): per slot
-// (a layer, or layerCount: the background), S[y][x] = occupied tiles in rows < y and columns < x,
-// (layerTilesX + 1) x (layerTilesY + 1) entries. The classification then asks whether any tile of
+// (a layer, or layerCount: the background), S[y][x] = occupied cells (COMPOSITE_OCCUPANCY_SPLIT a
+// tile's side) in rows < y and columns < x, compositeSumsEntries entries per slot. The classification then asks whether any tile of
 // a rectangle holds foliage with four reads, however wide the rectangle (a moving camera's depth
 // search widens it; compositeOccupiedTiles, shared/composite.h).
 #include "shared/composite.h"
@@ -12,25 +12,27 @@ layout(binding = 0, scalar) readonly buffer OccBuf { uint occupancy[]; };
 layout(binding = 1, scalar) buffer SumBuf { uint sums[]; };
 layout(push_constant, scalar) uniform Push { CompositePush pc; };
 
-// One workgroup per slot: its rows summed (an invocation per row), then its columns.
+// One workgroup per slot: its rows summed (an invocation per row), then its columns; a cell is one
+// of an occupancy tile's (COMPOSITE_OCCUPANCY_SPLIT a side).
 void main() {
   uint slot = gl_WorkGroupID.y;
   if (slot > pc.layerCount) return;  // uniform over the workgroup
-  uint tx = pc.layerTilesX, ty = pc.layerTilesY, stride = tx + 1u;
+  uint tx = pc.layerTilesX, ty = pc.layerTilesY, cx = COMPOSITE_OCCUPANCY_SPLIT * tx, cy = COMPOSITE_OCCUPANCY_SPLIT * ty, stride = compositeSumsStride(pc);
   uint flags = slot * tx * ty, base = compositeSumsBase(pc, slot);
-  for (uint y = gl_LocalInvocationID.x; y <= ty; y += COMPOSITE_SUMS_GROUP) {
+  for (uint y = gl_LocalInvocationID.x; y <= cy; y += COMPOSITE_SUMS_GROUP) {
     uint run = 0u;
     sums[base + y * stride] = 0u;
-    for (uint x = 0u; x < tx; ++x) {
-      if (y > 0u) run += occupancy[flags + (y - 1u) * tx + x] != 0u ? 1u : 0u;
+    for (uint x = 0u; x < cx; ++x) {
+      const uint S = COMPOSITE_OCCUPANCY_SPLIT;
+      if (y > 0u) run += (occupancy[flags + ((y - 1u) / S) * tx + x / S] >> (((y - 1u) % S) * S + x % S)) & 1u;
       sums[base + y * stride + x + 1u] = run;
     }
   }
   memoryBarrierBuffer();
   barrier();
-  for (uint x = gl_LocalInvocationID.x; x <= tx; x += COMPOSITE_SUMS_GROUP) {
+  for (uint x = gl_LocalInvocationID.x; x <= cx; x += COMPOSITE_SUMS_GROUP) {
     uint run = 0u;
-    for (uint y = 1u; y <= ty; ++y) {
+    for (uint y = 1u; y <= cy; ++y) {
       run += sums[base + y * stride + x];
       sums[base + y * stride + x] = run;
     }

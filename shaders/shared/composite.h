@@ -285,10 +285,22 @@ CANOPY_INLINE vec2 gridTexcoord(CompositePush c, GridSample s) {
   return vec2((s.cell.x + s.t.x + 0.5f) / float(c.dispWidth), (s.cell.y + s.t.y + 0.5f) / float(c.dispHeight));
 }
 
-// The occupancy's summed-area table (composite_occupancy_sums.comp): slot k's (layerTilesX + 1) x
-// (layerTilesY + 1) entries start here; entries for `slots` slots of a tilesX x tilesY layer grid.
-CANOPY_INLINE uint compositeSumsBase(CompositePush c, uint slot) { return slot * (c.layerTilesX + 1u) * (c.layerTilesY + 1u); }
-CANOPY_INLINE uint compositeSumsEntries(uint tilesX, uint tilesY, uint slots) { return (tilesX + 1u) * (tilesY + 1u) * slots; }
+// An occupancy entry (composite_occupancy.comp) holds a bit per cell of its tile, the tile split
+// COMPOSITE_OCCUPANCY_SPLIT times a side: bit cy * SPLIT + cx for the cell (cx, cy) of
+// COMPOSITE_OCCUPANCY_CELL layer pixels a side, each counting the texels one pixel around it;
+// nonzero: the tile holds foliage. The classification asks the cells (a moving camera's boxes do
+// not align with the tiles: a whole tile's flag would list a layer up to a tile away).
+#define COMPOSITE_OCCUPANCY_SPLIT 4u
+#define COMPOSITE_OCCUPANCY_CELL (COMPOSITE_TILE / COMPOSITE_OCCUPANCY_SPLIT)
+#define COMPOSITE_OCCUPANCY_FULL ((1u << (COMPOSITE_OCCUPANCY_SPLIT * COMPOSITE_OCCUPANCY_SPLIT)) - 1u)
+// The occupancy's summed-area table (composite_occupancy_sums.comp), over the cells: slot k's
+// (SPLIT layerTilesX + 1) x (SPLIT layerTilesY + 1) entries start here; entries for `slots` slots of
+// a tilesX x tilesY layer grid.
+CANOPY_INLINE uint compositeSumsStride(CompositePush c) { return COMPOSITE_OCCUPANCY_SPLIT * c.layerTilesX + 1u; }
+CANOPY_INLINE uint compositeSumsEntries(uint tilesX, uint tilesY, uint slots) {
+  return (COMPOSITE_OCCUPANCY_SPLIT * tilesX + 1u) * (COMPOSITE_OCCUPANCY_SPLIT * tilesY + 1u) * slots;
+}
+CANOPY_INLINE uint compositeSumsBase(CompositePush c, uint slot) { return compositeSumsEntries(c.layerTilesX, c.layerTilesY, slot); }
 
 // The tile kernel's variant for a frame's flags (COMPOSITE_VARIANT_*).
 CANOPY_INLINE uint compositeTileVariant(uint flags) {

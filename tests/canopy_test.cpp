@@ -965,12 +965,15 @@ TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
     CompositeReferenceOutputs ref;
     gpu::CompositeView view{};
   };
-  // Frames at camera a, then one at b, shown reprojected (the policy's thresholds lifted).
+  // Frames at camera a, then one at b, shown reprojected (the policy's thresholds lifted); the
+  // compute path's tile lists from the classification unless `classify` is cleared.
+  bool classify = true;
   auto run = [&](const VegetationModel& model, uint32_t w, uint32_t h, const LayerView& a, const LayerView& b, CompositePath path,
                  uint32_t steps, float wind, ReslicePolicy policy, bool reference, Run* out) {
     CanopyContext* ctx = nullptr;
     ASSERT_TRUE(createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx).ok());
     CanopyParams p = canopyParams(ctx);
+    p.composite.skipEmptyTiles = classify;
     p.simulation.wind.strength = wind;
     p.composite.path = path;
     p.composite.depthSearchSteps = steps;
@@ -1012,6 +1015,22 @@ TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
       for (uint32_t i = 0; i < 5; ++i) EXPECT_GE(r.view.search[i].z, 1.0f) << "layer " << i << " searched";
       EXPECT_GE(r.view.search[COMPOSITE_VIEW_BACKGROUND].z, 1.0f) << "the trunk searched";
       expectNearReference(r.color, r.depth, r.ref, "an 8 degree orbit, reprojected with the depth search");
+      if (path != CompositePath::Compute) continue;
+      // The classification's boxes (each tile's corners through the homographies, grown to the
+      // search's ray ends, asked of the occupancy's 2-pixel cells) drop no layer a pixel reads:
+      // the image of every tile listing every layer, pixel for pixel.
+      Run all;
+      classify = false;
+      run(model, w, h, a, b, path, 16, 1.0f, ReslicePolicy::OnViewChange, false, &all);
+      classify = true;
+      if (HasFailure()) return;
+      size_t differ = 0, covered = 0;
+      for (size_t i = 0; i < all.color.size(); ++i) {
+        differ += all.color[i] != r.color[i] || all.depth[i] != r.depth[i];
+        covered += all.depth[i] < 1.0f;
+      }
+      EXPECT_GT(covered, all.depth.size() / 20) << "the leaves must cover pixels for the comparison to mean anything";
+      EXPECT_EQ(differ, 0u) << "a reprojected frame's tile lists dropped a layer";
     }
   }
   auto mask = [](const std::vector<float>& z) {

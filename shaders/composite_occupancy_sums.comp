@@ -19,13 +19,18 @@ void main() {
   if (slot > pc.layerCount) return;  // uniform over the workgroup
   uint tx = pc.layerTilesX, ty = pc.layerTilesY, cx = COMPOSITE_OCCUPANCY_SPLIT * tx, cy = COMPOSITE_OCCUPANCY_SPLIT * ty, stride = compositeSumsStride(pc);
   uint flags = slot * tx * ty, base = compositeSumsBase(pc, slot);
+  const uint S = COMPOSITE_OCCUPANCY_SPLIT;
   for (uint y = gl_LocalInvocationID.x; y <= cy; y += COMPOSITE_SUMS_GROUP) {
-    uint run = 0u;
-    sums[base + y * stride] = 0u;
-    for (uint x = 0u; x < cx; ++x) {
-      const uint S = COMPOSITE_OCCUPANCY_SPLIT;
-      if (y > 0u) run += (occupancy[flags + ((y - 1u) / S) * tx + x / S] >> (((y - 1u) % S) * S + x % S)) & 1u;
-      sums[base + y * stride + x + 1u] = run;
+    uint run = 0u, at = base + y * stride;
+    sums[at] = 0u;
+    // Row y - 1 of cells: each tile's entry read once, its S cells of that row from its bits.
+    uint shift = y > 0u ? ((y - 1u) % S) * S : 0u, row = y > 0u ? flags + ((y - 1u) / S) * tx : 0u;
+    for (uint t = 0u; t < tx; ++t) {
+      uint cells = y > 0u ? occupancy[row + t] >> shift : 0u;
+      for (uint k = 0u; k < S; ++k) {
+        run += (cells >> k) & 1u;
+        sums[at + t * S + k + 1u] = run;
+      }
     }
   }
   memoryBarrierBuffer();

@@ -5,7 +5,7 @@
 // for a still camera; the depth search reads within CompositeView.search[i].w of H_i p, with d_i
 // taken at H_i p). d_i is bilinear between warp-grid corners, so over the tile it stays within the
 // per-axis min/max of the corners of the grid cells the tile's plane rectangle touches; the layer
-// reaches the tile when any occupancy tile (foliage, dilated by a pixel) meets the source rectangle
+// reaches the tile when any occupancy cell (foliage, dilated by a pixel) meets the source rectangle
 // [tile - dmax - reach, tile - dmin + reach], asked of the occupancy's summed-area table
 // (composite_occupancy_sums.comp: four reads whatever its width). Tiles with any layer or the
 // background append themselves (position with the background bit, layer mask) to the list that
@@ -56,9 +56,11 @@ bool layerBounds(uint plane, vec2 lo, vec2 hi, out vec2 slo, out vec2 shi) {
 }
 
 // Where the depth search of `slot` (a layer, or COMPOSITE_VIEW_BACKGROUND) can read for the screen
-// rectangle whose corners' rays (compositeRayOrigin, the same for every layer) are `rays`: the box [slo, shi] (the plane's points) grown to hold the ray's points at the
-// search range's two ends at the rectangle's corners, and a pixel (the samples lie between those
-// ends; the parallax is smooth over a tile); by the view's bound on the whole image
+// rectangle whose corners' rays (compositeRayOrigin, the same for every layer) are `rays`: the box
+// [slo, shi] (the plane's points) grown to hold the ray's points at the search range's two ends at
+// the rectangle's corners, and 1/16 pixel for rounding (a range end is projective in the pixel, so
+// the ends of the rectangle's pixels lie in the hull of its corners' ends, and the samples and
+// meeting points between them); by the view's bound on the whole image
 // (CompositeView.search[slot].w) where an end is behind a camera. Nothing where it takes no samples.
 void searchBounds(uint slot, vec4 rays[4], inout vec2 slo, inout vec2 shi) {
   vec4 search = view.search[slot];

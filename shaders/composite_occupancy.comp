@@ -39,8 +39,9 @@ void main() {
   // texels (2i - 1, 2j - 1) and (2i, 2j) of the tile returns those four (the border sampler reads
   // outside texels as transparent; a clamped read would land on an edge texel of this tile, read
   // anyway) — a quarter of the texel reads of one fetch each, which is what this pass costs on CPU
-  // devices. Every gather is read (no early exit): each cell (COMPOSITE_OCCUPANCY_SPLIT a side, a
-  // bit each) is occupied when a gather over its texels and one texel around it holds foliage. The
+  // devices. Each cell (COMPOSITE_OCCUPANCY_SPLIT a side, a bit each) is occupied when a gather
+  // over its texels and one texel around it holds foliage, so a tile reads all its gathers (the
+  // tile's flag used to stop at the first holding foliage), but for the shortcut below. The
   // classification asks the cells; the fragment path asks the tile (any bit). A layer at half
   // resolution (shared/layers.h layerTexelScale) holds the tile's pixels in half as many texels per
   // side (a cell then one texel); the margin stays one texel of its own (a bilinear footprint's).
@@ -54,7 +55,7 @@ void main() {
   // The gathers at odd (i, j) first: every cell's gathers include one of them, so when all hold
   // foliage every cell is occupied and the rest are not read (a tile inside the foliage).
   const int odd = n / 2, oddCount = odd * odd;
-  const uint oddRow = (n == 5) ? 0xAu : 0x2u;  // bits of the odd i
+  const uint oddRow = 0xAAAAAAAAu & ((1u << uint(n)) - 1u);  // bits of the odd i
   for (int k = 0; k < n * n; ++k) {
     ivec2 g;
     if (k < oddCount) {

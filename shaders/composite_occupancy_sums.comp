@@ -2,9 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // The occupancy's summed-area table (run after composite_occupancy.comp, whenever it runs): per slot
 // (a layer, or layerCount: the background), S[y][x] = occupied cells (COMPOSITE_OCCUPANCY_SPLIT a
-// tile's side) in rows < y and columns < x, compositeSumsEntries entries per slot. The classification then asks whether any tile of
-// a rectangle holds foliage with four reads, however wide the rectangle (a moving camera's depth
-// search widens it; compositeOccupiedTiles, shared/composite.h).
+// tile's side) in rows < y and columns < x, compositeSumsEntries entries per slot. The
+// classification then asks whether any cell of a rectangle holds foliage with four reads, however
+// wide the rectangle (a moving camera's depth search widens it; reaches(), composite_classify.comp).
 #include "shared/composite.h"
 
 layout(local_size_x = COMPOSITE_SUMS_GROUP) in;

@@ -3,6 +3,7 @@
 // PNG of each (hue = direction, brightness = magnitude). `canopy-sim --help` lists the options.
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -44,7 +45,7 @@ int usage(const std::string& why) {
       "  --cycles C             multigrid V-cycles per projection, [1, 64] (default 2)\n"
       "  --motor X,Y,R,S        point motor (domain units; S: outward speed at the rim), repeatable, at most 8\n"
       "  --stiffness K          oscillator k, 1/s^2 (default 40)\n"
-      "  --wave-speed C         oscillator c, domain units/s (default 0.05)\n"
+      "  --wave-speed C         oscillator c, domain units/s (default 0.5)\n"
       "  --damping Z            oscillator zeta, 1/s (default 2)\n"
       "  --gain G               oscillator drive gain g (default 1)\n"
       "  --zoom Z               PNG pixels per cell, 1..64 (default 4)\n"
@@ -131,8 +132,11 @@ int main(int argc, char** argv) {
   if (s.ok()) s = runSimulationSteps(sim, p, dt, steps);
   if (s.ok()) s = readSimulationFields(sim, &f);
   const uint32_t n = desc.gridSize;
+  // The tiled buffer holds the tiled V_s, then the tiled V_wind and the pushers' bend fields
+  // (shared/sim.h tiledVec2s): the plants' field is its first N^2 vectors.
+  const std::vector<float> tiledVs(f.tiled.begin(), f.tiled.begin() + std::min<size_t>(f.tiled.size(), 2 * size_t(n) * n));
   struct Field { const char* name; const std::vector<float>* data; } fields[] = {
-      {"wind", &f.wind}, {"vs", &f.vs}, {"tiled", &f.tiled}};
+      {"wind", &f.wind}, {"vs", &f.vs}, {"tiled", &tiledVs}};
   if (s.ok()) {
     std::printf("canopy-sim: %u steps of %.4f s on %s, N = %u, t = %.3f s\n", steps, dt, dev.properties.deviceName, n, sim.time);
     for (const Field& x : fields) {

@@ -63,6 +63,7 @@ struct Side {
     CANOPY_TRY(createCanopy(d, model, desc, &ctx));
     CanopyParams p = canopyParams(ctx);
     CANOPY_TRY(parseLayerLayout("5(3-1-1)", &p.layers.layout));
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = 0.0f;  // both sides then differ only by the method
     p.layers.policy = policy;
     p.layers.rebuildBudgetMs = policy == ReslicePolicy::EveryFrame ? 0.0f : budgetMs;

@@ -40,6 +40,7 @@ Status runFrames(Device& d, const VegetationModel& model, const std::string& lay
   Status s = [&]() -> Status {
     CanopyParams p = canopyParams(ctx);
     CANOPY_TRY(parseLayerLayout(layout, &p.layers.layout));
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = strength;
     CANOPY_TRY(setCanopyParams(ctx, p));
     CANOPY_TRY(createHostTargets(d, o.width, o.height, VK_FORMAT_R8G8B8A8_UNORM, &host));

@@ -101,6 +101,7 @@ int runLeafSheet(Device& d, const std::string& outPath) {
       std::vector<uint8_t> px(size_t(tile) * tile * 4);
       if (s.ok()) {
         CanopyParams p = canopyParams(ctx);
+        p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
         p.simulation.wind.strength = 0.0f;
         p.layers.translucencyModel = row == 0 ? TranslucencyModel::Habel : TranslucencyModel::DiffuseBtdf;
         const float e = elevations[col] * 3.14159265f / 180.0f;

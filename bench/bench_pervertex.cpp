@@ -64,6 +64,7 @@ struct Context {
     desc.allowPerVertex = true;
     desc.deviceMemoryBudget = budget;
     // The demo's wind (demo/demo_app.h): the same for both methods.
+    desc.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     desc.params.simulation.wind.strength = 2.0f;
     desc.params.simulation.wind.frequency = 0.5f;
     desc.params.simulation.wind.modulation = 0.8f;

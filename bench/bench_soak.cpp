@@ -79,6 +79,7 @@ int runSoakBench(Device& dev, int frames, int rebuildEvery, bool check) {
     const double t0 = nowMs();
     for (int i = 0; i < frames; ++i) {
       CanopyParams p = base;
+      p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
       p.simulation.wind.strength = uni(0.0f, 3.0f);
       p.simulation.wind.frequency = uni(0.0f, 2.0f);
       p.simulation.wind.gust = uni(0.0f, 1.0f);

@@ -65,6 +65,11 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   if (!(dt > 0.0f && std::isfinite(dt)))
     return Status::error("dynamics: DynamicsParams.dt = 0 asks for the simulation's nominal step, and none was given");
   f.lambda = glm::vec4(toGlm(p.lambda) * lambdaScale, dt);
+  if (d.heightSway > 0.0f) {
+    const float lx = std::max(p.lambda.x, 1e-12f);
+    f.lambda = glm::vec4(toGlm(p.lambda) / lx * (d.heightSway * tileSize / (std::max(d.unitsPerMetre, 1e-12f) * dt)), dt);
+    f.heightRelative = 1u;
+  }
   f.time = d.time;
   // Eq. 5's s: the wave's propagation speed (the paper's meaning) unless the host gives one.
   f.propagation = p.propagationSpeed > 0.0f ? p.propagationSpeed : d.waveSpeed;
@@ -85,6 +90,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.width = float(d.width);
   f.height = float(d.height);
   f.maxDelay = p.maxDelay;
+  f.maxShrink = p.maxShrink;
   if (d.newestSlot != ANIM_RING_UNORDERED && d.newestSlot >= d.ringSize)
     return Status::error("dynamics: newestSlot = " + std::to_string(d.newestSlot) + " is outside the ring of " +
                          std::to_string(d.ringSize) + " slots");

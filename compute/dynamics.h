@@ -48,6 +48,11 @@ struct DynamicsFrameDesc {
   uint32_t newestSlot = ANIM_RING_UNORDERED;  // ring slot of the newest field, when written in step order
   uint32_t halfResolution = 0;        // the layers' LayerFrame.halfResolution, passed to the composite
   bool bend = false;                  // the pushers' bend field may be non-zero: the corners add it
+  // World wind (docs/design.md "World wind"): eq. 6 scaled by each plant's on-screen height h and
+  // lambda in shares of h per metre of motion: lambda = lambda_i / lambda_x * sway * tileSize /
+  // (unitsPerMetre * Delta t) (DynamicsParams.lambda's ratios; sway = WorldWind.sway). 0: off.
+  float heightSway = 0.0f;
+  float unitsPerMetre = 1.0f;
   glm::vec4 bendOrigin{0.0f, 0.0f, 0.0f, 1.0f}, bendX{1.0f, 0.0f, 0.0f, 0.0f}, bendZ{0.0f, 0.0f, 1.0f, 0.0f};  // AnimFrame's
 };
 // Corners per row and column of the warp grid: ceil(size / cell) + 1.

@@ -231,14 +231,14 @@ std::string timingReport(const Options& o, const std::string& label, const Devic
                          const std::vector<double>& pngMs, const SwayMeter* sway, const ShadowMeter* shadow = nullptr) {
   char head[2048];
   std::snprintf(head, sizeof head,
-                "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %.2f units/s at %.2f Hz (modulation %.2f, gust %.2f), "
+                "canopy-demo: %s, %ux%u, layers %s, %s delay, wind %s, "
                 "%.2f s warm-up, %u frames at dt = 1/%g s, camera %s\ndevice: %s; %u layer re-slices (%u spread over frames "
                 "with a %.1f ms budget, the last over %u frames, largest slice %llu triangles; %u at once for a moving "
                 "camera a spread one would fall behind; the last for: %s)\n"
                 "On a CPU driver (lavapipe) timestamps around compute passes read near zero once anything was drawn "
                 "(docs/design.md): the wall-clock line is the figure to trust there.\n",
                 label.c_str(), o.width, o.height, o.layout.c_str(), o.delay == DelayMode::Exact ? "exact" : "approximate",
-                o.windStrength, o.windFrequency, o.windModulation, o.windGust, double(warmup) / o.fps, o.frames, o.fps, cameraMotionName(o.camera),
+                windText(o).c_str(), double(warmup) / o.fps, o.frames, o.fps, cameraMotionName(o.camera),
                 dev.properties.deviceName, uint32_t(st.layers.rebuilds), uint32_t(st.layers.spreadRebuilds), o.rebuildBudgetMs,
                 st.layers.lastSpreadFrames, (unsigned long long)st.layers.maxSliceTriangles, uint32_t(st.layers.outrunSpreads),
                 st.layers.lastRebuildReason.c_str());
@@ -479,7 +479,7 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     auto pushersFor = [&](int64_t index, const CanopyFrame& f) -> Status {
       if (o.pusher == PusherPath::None) return Status();
       if (index < 0) return setCanopyPushers(host.canopy, {});
-      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps, o.windStrength);
+      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps, domainWindSpeed(o));
       const glm::mat4 view = toGlm(f.camera.view), proj = toGlm(f.camera.proj);
       const glm::vec4 q = proj * view * glm::vec4(toGlm(p.a), 1.0f);
       const float depth = -(view * glm::vec4(toGlm(p.a), 1.0f)).z;

@@ -58,6 +58,12 @@ void printHelp() {
       "  --foliage M1,M2     materials forced to be foliage (default rule: render/material_split.h)\n"
       "Method:\n"
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
+      "  --wind-dir X,Y,Z    the world direction the wind blows toward, y up (default %g,%g,%g)\n"
+      "%s%s%s%s%s"
+      "  --yaw DEG           the camera's start around the vertical through the vegetation's centre, degrees\n"
+      "                      (0: the default view; also the orbit's start) (default 0)\n"
+      "  Advanced, the wind as sides of the simulation plane fixed by the first camera (before 0.8;\n"
+      "  any of these selects it):\n"
       "  --wind SIDES        wind source sides, comma-separated: left,right,top,bottom, or none (default left)\n"
       "%s%s%s"
       "                      the inflow speed is strength * (1 + b sin(2 pi f t)) * (1 + G * noise\n"
@@ -87,6 +93,7 @@ void printHelp() {
       "  --light-color R,G,B linear light colour, each [0, 1000] (default %g,%g,%g)\n"
       "%s%s%s%s"
       "  --no-translucency   unlit leaf sides get the ambient term only\n"
+      "  --nearest           the warp reads each layer's nearest texel instead of a bilinear sample (CompositeParams.bilinear)\n"
       "  --light-sheet       headless: after the frames, write light_sheet.png: the last frame lit by --light,\n"
       "                      by the light turned 180 degrees about the vertical (from behind), and by that\n"
       "                      light without translucency\n"
@@ -141,6 +148,12 @@ void printHelp() {
       "  --help              this text\n",
       sceneName(d.scene), (unsigned long long)kMinSceneFaces, (unsigned long long)kMaxSceneFaces,
       (unsigned long long)(d.faces / 1000), d.seed, d.layout.c_str(),
+      double(d.windDirection.x), double(d.windDirection.y), double(d.windDirection.z),
+      mirrored("--wind-speed M", "WorldWind.speed", d.windSpeed).c_str(),
+      mirrored("--gust-intensity G", "WorldWind.gustIntensity", d.gustIntensity).c_str(),
+      mirrored("--gust-frequency F", "WorldWind.gustFrequency", d.gustFrequency).c_str(),
+      mirrored("--turbulence T", "WorldWind.turbulence", d.turbulence).c_str(),
+      mirrored("--sway S", "WorldWind.sway", d.sway).c_str(),
       mirrored("--strength V", "WindParams.strength", d.windStrength).c_str(),
       mirrored("--frequency F", "WindParams.frequency", d.windFrequency).c_str(),
       mirrored("--modulation B", "WindParams.modulation", d.windModulation).c_str(),
@@ -183,6 +196,12 @@ struct NumberOption {
   float high() const { return param && findParam(param) ? float(findParam(param)->max) : hi; }
 };
 const NumberOption kNumberOptions[] = {
+    {"--wind-speed", 0, 0, &Options::windSpeed, "a number", "WorldWind.speed"},
+    {"--gust-intensity", 0, 0, &Options::gustIntensity, "a number", "WorldWind.gustIntensity"},
+    {"--gust-frequency", 0, 0, &Options::gustFrequency, "a number", "WorldWind.gustFrequency"},
+    {"--turbulence", 0, 0, &Options::turbulence, "a number", "WorldWind.turbulence"},
+    {"--sway", 0, 0, &Options::sway, "a number", "WorldWind.sway"},
+    {"--yaw", -3600, 3600, &Options::yawDegrees, "a number"},
     {"--strength", 0, 0, &Options::windStrength, "a number", "WindParams.strength"},
     {"--frequency", 0, 0, &Options::windFrequency, "a number", "WindParams.frequency"},
     {"--modulation", 0, 0, &Options::windModulation, "a number", "WindParams.modulation"},
@@ -214,6 +233,7 @@ const SwitchOption kSwitchOptions[] = {
     {"--impostor-debug", &Options::impostorDebug, true},
     {"--shadows", &Options::shadows, true},
     {"--no-translucency", &Options::translucency, false},
+    {"--nearest", &Options::bilinear, false},
     {"--light-sheet", &Options::lightSheet, true},
     {"--window", &Options::window, true},
     {"--validate", &Options::validate, true},
@@ -299,6 +319,7 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (a == c.name) choice = &c;
     if (num) {
       if (const int rc = number(num->low(), num->high(), &(o->*(num->field)), num->what)) return rc;
+      if (num->param && std::strncmp(num->param, "WindParams.", 11) == 0) o->planeSides = true;
       if (num->field == &Options::halfResolutionLayers && o->halfResolutionLayers != std::floor(o->halfResolutionLayers))
         return bad("needs a whole number of layers");
       if (num->field == &Options::depthSearchSteps && o->depthSearchSteps != std::floor(o->depthSearchSteps))
@@ -357,6 +378,14 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
           else return bad("side '" + side + "' is not left, right, top or bottom");
         }
       o->windSides = sides;
+      o->planeSides = true;
+    } else if (a == "--wind-dir") {
+      const std::vector<std::string> parts = takes() ? cli::splitList(v) : std::vector<std::string>();
+      float x[3] = {0, 0, 0};
+      bool good = parts.size() == 3;
+      for (size_t k = 0; good && k < 3; ++k) good = cli::parseFloat(parts[k].c_str(), &x[k]) && std::abs(x[k]) <= 1e6f;
+      if (!good || x[0] * x[0] + x[1] * x[1] + x[2] * x[2] <= 0.0f) return bad("needs X,Y,Z, three finite numbers, not all 0");
+      o->windDirection = Float3{x[0], x[1], x[2]};
     } else if (a == "--light" || a == "--light-color") {
       const bool colour = a == "--light-color";
       const std::vector<std::string> parts = takes() ? cli::splitList(v) : std::vector<std::string>();
@@ -551,8 +580,25 @@ CanopyPusher pusherAt(PusherPath path, const glm::vec3& lo, const glm::vec3& hi,
   return out;
 }
 
+std::string windText(const Options& o) {
+  char t[256];
+  if (o.planeSides)
+    std::snprintf(t, sizeof t, "plane sides %u at %.2f domain units/s, %.2f Hz (modulation %.2f, gust %.2f)", o.windSides,
+                  double(o.windStrength), double(o.windFrequency), double(o.windModulation), double(o.windGust));
+  else
+    std::snprintf(t, sizeof t, "%.2f m/s toward (%.2f, %.2f, %.2f), gusts %.2f at %.2f Hz, turbulence %.2f", double(o.windSpeed),
+                  double(o.windDirection.x), double(o.windDirection.y), double(o.windDirection.z), double(o.gustIntensity),
+                  double(o.gustFrequency), double(o.turbulence));
+  return t;
+}
+
+float domainWindSpeed(const Options& o) {
+  return o.planeSides ? o.windStrength : o.windSpeed / WorldWind{}.tileMetres;
+}
+
 CameraRig defaultRig(const Options& o) {
   CameraRig r;
+  r.yaw += o.yawDegrees;
   if (!o.sceneFile.empty()) {
     r.pitch = 14.0f;
     r.distance = 0.7f;
@@ -594,6 +640,13 @@ glm::vec3 skySrgb(const Options& o) {
 CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   CanopyParams p = base;
   if (!parseLayerLayout(o.layout, &p.layers.layout).ok()) p.layers.layout = base.layers.layout;  // checked by parseOptions
+  p.windMode = o.planeSides ? WindMode::PlaneSides : WindMode::World;
+  p.wind.direction = o.windDirection;
+  p.wind.speed = o.windSpeed;
+  p.wind.gustIntensity = o.gustIntensity;
+  p.wind.gustFrequency = o.gustFrequency;
+  p.wind.turbulence = o.turbulence;
+  p.wind.sway = o.sway;
   p.simulation.wind.sides = o.windSides;
   p.simulation.wind.strength = o.windStrength;
   p.simulation.wind.frequency = o.windFrequency;
@@ -619,7 +672,8 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.impostors.debugView = o.impostorDebug;
   p.layers.impostors.shape = o.impostorShape;
   p.composite.debugView = o.debug;
-  p.composite.debugVelocityScale = std::max(0.05f, o.windStrength);
+  p.composite.bilinear = o.bilinear;
+  p.composite.debugVelocityScale = std::max(0.05f, domainWindSpeed(o));
   return p;
 }
 

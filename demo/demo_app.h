@@ -43,11 +43,21 @@ struct Options {
   uint32_t seed = 1;
   // Method
   std::string layout = "5(3-1-1)";
-  uint32_t windSides = kWindFromLeft;
-  float windStrength = 2.0f;           // domain units/s
-  float windFrequency = 0.5f;          // Hz
-  float windModulation = 0.8f;         // b of strength * (a + b sin(2 pi f t)), a = 1
-  float windGust = 0.3f;               // relative gust amplitude
+  // The wind: the library's defaults (one set). The world wind (CanopyParams.wind) unless one of
+  // --wind, --strength, --frequency, --modulation, --gust asks for the plane's sides (PlaneSides).
+  Float3 windDirection = WorldWind{}.direction;  // --wind-dir: where it blows toward, world space
+  float windSpeed = WorldWind{}.speed;           // --wind-speed, m/s
+  float gustIntensity = WorldWind{}.gustIntensity;
+  float gustFrequency = WorldWind{}.gustFrequency;
+  float turbulence = WorldWind{}.turbulence;
+  float sway = WorldWind{}.sway;                 // --sway: share of a plant's height per m/s
+  bool planeSides = false;                       // WindMode::PlaneSides (the options below)
+  uint32_t windSides = WindParams{}.sides;
+  float windStrength = WindParams{}.strength;    // domain units/s
+  float windFrequency = WindParams{}.frequency;  // Hz
+  float windModulation = WindParams{}.modulation;  // b of strength * (a + b sin(2 pi f t)), a = 1
+  float windGust = WindParams{}.gust;            // relative gust amplitude
+  float yawDegrees = 0.0f;             // --yaw: the camera's start around the vegetation's vertical (0: the default view)
   float warmupSeconds = 2.0f;          // headless: simulation time run before the first written frame
   DelayMode delay = DelayMode::Exact;
   CompositeDebugView debug = CompositeDebugView::None;
@@ -70,6 +80,7 @@ struct Options {
   float leafRoughness = LayerSettings{}.leafRoughness;
   float leafTransmission = LayerSettings{}.leafTransmission;
   bool translucency = true;
+  bool bilinear = true;                // CompositeParams.bilinear (--nearest: false)
   bool lightSheet = false;             // also write light_sheet.png: lit from the front, from behind, from behind without translucency
   // The vegetation's shadow (recordCanopyShadow; docs/design.md "Shadows"): a grey ground under the
   // scene lit by the sun (--light) through a shadow map Canopy draws every frame; with
@@ -138,6 +149,10 @@ struct CameraRig {
   float yaw = 20.0f, pitch = 12.0f, distance = 1.0f, fov = 40.0f;
 };
 CameraRig defaultRig(const Options& o);
+// The wind the options set, in words (the run's summary), and its speed in the simulation's domain
+// units/s (the pusher's bend and the velocity view's scale).
+std::string windText(const Options& o);
+float domainWindSpeed(const Options& o);
 LayerView cameraView(const CameraRig& rig, const VegetationModel& model, uint32_t width, uint32_t height);
 // The headless run's camera path (--camera and its speeds), starting at `rig`.
 CameraPath cameraPathOf(const Options& o, const CameraRig& rig);

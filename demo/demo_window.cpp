@@ -149,18 +149,35 @@ void onKey(GLFWwindow* win, int key, int, int action, int) {
     case GLFW_KEY_Q: l.close = true; changed = false; break;
     case GLFW_KEY_LEFT:
     case GLFW_KEY_RIGHT:
+      if (l.params.windMode == WindMode::World) {  // 45 degrees about the vertical, eased in (WorldWind.easeSeconds)
+        const float a = glm::radians(key == GLFW_KEY_RIGHT ? 45.0f : -45.0f);
+        const Float3 d = l.params.wind.direction;
+        l.params.wind.direction = Float3{d.x * std::cos(a) - d.z * std::sin(a), d.y, d.x * std::sin(a) + d.z * std::cos(a)};
+        std::printf("wind toward (%.2f, %.2f, %.2f)\n", l.params.wind.direction.x, l.params.wind.direction.y, l.params.wind.direction.z);
+        break;
+      }
       l.sideIndex = (l.sideIndex + (key == GLFW_KEY_RIGHT ? 1 : 3)) % 4;
       wind.sides = kSides[l.sideIndex];
       std::printf("wind from the %s\n", kSideNames[l.sideIndex]);
       break;
     case GLFW_KEY_UP:
     case GLFW_KEY_DOWN:
+      if (l.params.windMode == WindMode::World) {
+        l.params.wind.speed = std::clamp(l.params.wind.speed * (key == GLFW_KEY_UP ? 1.25f : 0.8f), 0.01f, 100.0f);
+        std::printf("wind speed %.2f m/s\n", l.params.wind.speed);
+        break;
+      }
       wind.strength = std::clamp(wind.strength * (key == GLFW_KEY_UP ? 1.25f : 0.8f), 0.01f, 1000.0f);
       l.params.composite.debugVelocityScale = std::max(0.05f, wind.strength);
       std::printf("wind strength %.3f units/s\n", wind.strength);
       break;
     case GLFW_KEY_F:
     case GLFW_KEY_G:
+      if (l.params.windMode == WindMode::World) {
+        l.params.wind.gustFrequency = std::clamp(l.params.wind.gustFrequency * (key == GLFW_KEY_F ? 1.25f : 0.8f), 0.01f, 100.0f);
+        std::printf("gust frequency %.3f Hz\n", l.params.wind.gustFrequency);
+        break;
+      }
       wind.frequency = std::clamp(wind.frequency * (key == GLFW_KEY_F ? 1.25f : 0.8f), 0.01f, 100.0f);
       std::printf("wind frequency %.3f Hz\n", wind.frequency);
       break;

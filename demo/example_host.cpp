@@ -360,7 +360,7 @@ bool run(Host& h, int frames, const std::string& outDir, bool validate, canopy::
     desc.colorFormat = kColorFormat;
     desc.depthFormat = kDepthFormat;
     desc.depthConvention = canopy::DepthConvention::Reverse;
-    desc.params.simulation.wind.strength = 1.5f;
+    desc.params.wind.speed = 5.0f;  // m/s, a moderate breeze along the world's +X (CanopyParams.wind)
     const canopy::Status s = canopy::createCanopy(*adopted, plant, desc, ctx);
     canopy::destroyModel(plant);  // Canopy keeps what it needs
     if (!s.ok()) {

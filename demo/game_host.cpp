@@ -1044,7 +1044,7 @@ int main(int argc, char** argv) {
   desc.height = kH;
   desc.colorFormat = kColorFormat;
   desc.depthFormat = g.depthFormat;
-  desc.params.simulation.wind.strength = 1.5f;
+  desc.params.wind.speed = 5.0f;  // m/s, a moderate breeze along the world's +X (CanopyParams.wind)
   std::vector<canopy::Model*> models;
   std::vector<canopy::CanopySpecies> species;
   if (ok) ok = sceneFile.empty() ? makeScene(model, plants, &desc, &scene) : makeSceneFromFile(sceneFile, &models, &species, &desc, &scene);

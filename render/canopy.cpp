@@ -473,9 +473,14 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
   });
 }
 
-// docs/design.md: unless the host set one, the plane of the first view, one tile over the region
+// docs/design.md "World wind": the wind's own plane, fixed in the world (no camera chooses it);
+// PlaneSides: unless the host set one, the plane of the first view, one tile over the region
 // visible at the vegetation's centre depth.
 static void chooseSimulationPlane(CanopyContext& c, const LayerView& view) {
+  if (c.params.windMode == WindMode::World) {
+    c.plane = worldWindPlane(c.params.wind, c.worldWind.direction, c.layers.instances.boundsMin, c.layers.instances.boundsMax);
+    return;
+  }
   if (c.planeChosen) return;
   if (c.params.customPlane) {  // CanopyDesc.params' plane (setCanopyParams sets it as it is given)
     c.plane = c.params.plane;
@@ -507,11 +512,19 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   // 0: the next frame (one context per host frame); otherwise the host's own counter.
   const uint64_t frameNumber = f.frameNumber ? f.frameNumber : (d.anyFrame ? d.frameNumber + 1 : 1);
   CANOPY_TRY(beginDeviceFrame(d, frameNumber));
+  stepWorldWind(c->worldWind, c->params.wind, f.dt);
+  chooseSimulationPlane(*c, standardView(*c, f.camera));  // before the step: the pushers are mapped through it
+  // The simulation's inflow: the world wind as it stands (World), or the host's sides (PlaneSides).
+  CanopyParams stepParams = c->params;
+  if (c->params.windMode == WindMode::World) {
+    stepParams.simulation = worldWindSimulation(c->params.simulation, c->params.wind, c->plane, c->worldWind.speed);
+    // The baseline's reference speed (domain units/s at tileMetres) on this tile: it bends by m/s.
+    stepParams.perVertex.referenceSpeed *= c->params.wind.tileMetres * c->params.wind.unitsPerMetre / c->plane.tileSize;
+  }
   if (c->params.animation == AnimationMode::PerVertex) {
     // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's
-    // direction comes from the simulation plane, fixed as the 2D method fixes it.
-    chooseSimulationPlane(*c, standardView(*c, f.camera));
-    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, c->params, c->plane, f.camera, f.dt, f.cameraCut));
+    // direction comes from the simulation plane, as the 2D method's.
+    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, stepParams, c->plane, f.camera, f.dt, f.cameraCut));
     c->layersRebuilt = false;
     c->frames++;
     return Status();
@@ -519,7 +532,6 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   SharedSimulation& sh = *c->shared;
   Simulation& sim = sh.sim;
   const LayerView view = standardView(*c, f.camera);
-  chooseSimulationPlane(*c, view);  // before the step: the pushers are mapped through it
   // One step per host frame for a shared simulation, by the first context recorded in it.
   const bool stepHere = !sh.everStepped || sh.lastStepFrame != frameNumber;
   c->skipSimulationStep = !stepHere || f.dt == 0.0f;
@@ -529,7 +541,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     sh.lastStepFrame = frameNumber;
     if (f.dt > 0.0f) {
       mapPushers(c->pushers, c->plane, view, &sim.pushers, &c->pusherCounts);
-      CANOPY_TRY(prepareSimulationStep(sim, c->params.simulation, f.dt));
+      CANOPY_TRY(prepareSimulationStep(sim, stepParams.simulation, f.dt));
       // The step's readback slot maps by this frame's plane (sampleCanopyWind).
       sim.windSlots[sim.windSlotNext].frame = frameNumber;
       sim.windSlots[sim.windSlotNext].plane = c->plane;
@@ -562,7 +574,11 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.bendX = glm::vec4(bp.x, 0.0f);
   fd.bendZ = glm::vec4(bp.z, 0.0f);
   fd.newestSlot = sim.stats.steps > 0 ? uint32_t((sim.stats.steps - 1) % sim.ringSize) : 0u;
-  CANOPY_TRY(makeAnimFrame(c->params.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
+  if (c->params.windMode == WindMode::World) {
+    fd.heightSway = c->params.wind.sway;
+    fd.unitsPerMetre = c->params.wind.unitsPerMetre;
+  }
+  CANOPY_TRY(makeAnimFrame(stepParams.dynamics, fd, &c->dynamics.current, &c->dynamics.plantRects));
   const gpu::AnimFrame& a = c->dynamics.current;
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->previousAnimFrame.gridX && a.gridY == c->previousAnimFrame.gridY &&
                            a.layerCount == c->previousAnimFrame.layerCount;

@@ -12,6 +12,7 @@
 #include "render/per_vertex.h"
 #include "render/pushers.h"
 #include "render/shadow.h"
+#include "render/world_wind.h"
 
 namespace canopy {
 
@@ -49,6 +50,7 @@ struct CanopyContext {
   PerVertexAnimation perVertex;  // CanopyDesc.allowPerVertex only
   bool planeChosen = false;  // `plane` holds the host's or the first view's (chooseSimulationPlane)
   SimulationPlane plane;
+  WorldWindState worldWind;  // CanopyParams.wind as it stands while a change eases in
   uint64_t generation = 0;
   uint64_t frames = 0;
   bool layersRebuilt = false;

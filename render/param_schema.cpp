@@ -34,6 +34,7 @@ namespace {
   S(SimulationPlane, CANOPY_SIMULATION_PLANE)              \
   S(CanopyPusher, CANOPY_PUSHER_PARAMS)                    \
   S(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)             \
+  S(WorldWind, CANOPY_WORLD_WIND)                          \
   S(CanopyParams, CANOPY_PARAMS)                           \
   S(CanopyDesc, CANOPY_DESC)
 

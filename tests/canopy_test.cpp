@@ -195,6 +195,7 @@ class CanopyTest : public GpuTest {
     Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
     ASSERT_TRUE(s.ok()) << s.message();
     CanopyParams p = canopyParams(ctx);
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = windStrength;
     p.dynamics.cellSize = cellSize;
     p.composite.debugView = view;
@@ -402,6 +403,7 @@ TEST_F(CanopyTest, ParameterChangesRebuildOnlyWhatDependsOnThem) {
   CanopyParams p = canopyParams(ctx);
   p.dynamics.cellSize = 8;
   p.dynamics.delay = DelayMode::Approximate;
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.sides = kWindFromRight | kWindFromTop;
   ASSERT_TRUE(setCanopyParams(ctx, p).ok());
   ASSERT_TRUE(host.frame(ctx, f).ok());
@@ -447,6 +449,7 @@ TEST_F(CanopyTest, ResizeKeepsTheSimulationAndWarpsAtTheNewSize) {
   Status s = createCanopy(dev, model, smallDesc(96, 64, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
   ASSERT_TRUE(s.ok()) << s.message();
   CanopyParams p = canopyParams(ctx);
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 2.0f;
   p.dynamics.cellSize = 8;
   ASSERT_TRUE(setCanopyParams(ctx, p).ok());
@@ -547,6 +550,7 @@ TEST_P(GoldenTest, MatchesTheCheckedInImage) {
   CanopyParams p = canopyParams(ctx);
   ASSERT_TRUE(parseLayerLayout(sc.layout, &p.layers.layout).ok());
   p.dynamics.delay = sc.delay;
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 1.5f;
   ASSERT_TRUE(setCanopyParams(ctx, p).ok());
   Host host;
@@ -630,6 +634,7 @@ ScaleRun renderScaled(Device& dev, VegetationModel model, float scale, DelayDist
   Host host;
   Status s = openScene(dev, model, w, h, [&](CanopyParams& p) {
     p.dynamics.delayUnits = units;
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = 1.5f;
   }, &ctx, &host);
   EXPECT_TRUE(s.ok()) << s.message();
@@ -727,6 +732,7 @@ std::map<uint32_t, PlantSway> plantSway(Device& dev, const VegetationModel& fiel
   Host host;
   Status s = openScene(dev, field, w, h, [&](CanopyParams& p) {
     p.dynamics.roots = roots;
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = 3.0f;
   }, &ctx, &host);
   EXPECT_TRUE(s.ok()) << s.message();
@@ -892,6 +898,7 @@ TEST_F(CanopyTest, ReprojectedLayersMatchLayersDrawnAtTheNewCamera) {
     ASSERT_TRUE(createCanopy(dev, model, smallDesc(w, h, fmt), &held).ok());
     ASSERT_TRUE(createCanopy(dev, model, smallDesc(w, h, fmt), &fresh).ok());
     CanopyParams p = canopyParams(held);
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = 0.0f;
     p.layers.rebuildBudgetMs = 0.0f;
     if (!k.defaultPolicy) {
@@ -974,6 +981,7 @@ TEST_F(CanopyTest, TheDepthSearchShowsEachTexelWhereItsDepthPutsIt) {
     ASSERT_TRUE(createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx).ok());
     CanopyParams p = canopyParams(ctx);
     p.composite.skipEmptyTiles = classify;
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = wind;
     p.composite.path = path;
     p.composite.depthSearchSteps = steps;
@@ -1092,6 +1100,7 @@ TEST_F(CanopyTest, SpreadReslicingKeepsAnimatingAsTheCpuReferenceDoes) {
   Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
   ASSERT_TRUE(s.ok()) << s.message();
   CanopyParams p = canopyParams(ctx);
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 2.0f;
   p.dynamics.cellSize = 8;
   p.layers.rebuildBudgetMs = 0.5f;
@@ -1205,6 +1214,7 @@ TEST_F(CanopyTest, CrossFadeNeverLowersCoverageBelowTheSmallerSet) {
   Status s = createCanopy(dev, model, smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT), &ctx);
   ASSERT_TRUE(s.ok()) << s.message();
   CanopyParams p = canopyParams(ctx);
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 0.0f;
   p.layers.rebuildBudgetMs = 0.5f;
   p.layers.crossFadeFrames = 8;
@@ -1278,6 +1288,7 @@ TEST_F(CanopyTest, StreamedMeshWithinTheDeviceBudget) {
   ASSERT_TRUE(generateScene(sd, &model).ok());
   CanopyDesc rd = smallDesc(w, h, VK_FORMAT_R16G16B16A16_SFLOAT);
   rd.deviceMemoryBudget = 0;
+  rd.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   rd.params.simulation.wind.strength = 0.0f;
   rd.params.layers.rebuildBudgetMs = 1.0f;  // both layer sets, as the budget plans for
   const uint64_t before = dev.allocator->liveBytes;

@@ -51,6 +51,7 @@ class EmbeddingTest : public GpuTest {
     d.colorFormat = host.colorFormat;
     d.depthFormat = host.depthFormat;
     d.depthConvention = host.reverse ? DepthConvention::Reverse : DepthConvention::Standard;
+    d.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     d.params.simulation.wind.strength = wind;
     d.params.composite.exposure = exposure;
     d.shareSimulationWith = share;
@@ -381,6 +382,7 @@ void expectSameFramesThreeWays(Device& target, const VegetationModel& model, con
     d.height = host.h;
     d.colorFormat = host.colorFormat;
     d.depthFormat = host.depthFormat;
+    d.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     d.params.simulation.wind.strength = 2.0f;
     configure(d);
     CanopyContext* ctx = nullptr;

@@ -85,6 +85,7 @@ void changeValue(T& v) {
   else if constexpr (std::is_same_v<T, DynamicsParams>) v.vd += 1.0f;
   else if constexpr (std::is_same_v<T, CompositeParams>) v.bilinear = !v.bilinear;
   else if constexpr (std::is_same_v<T, SimulationPlane>) v.tileSize += 1.0f;
+  else if constexpr (std::is_same_v<T, WorldWind>) v.speed += 1.0f;
   else static_assert(std::is_void_v<T>, "a parameter field type the test cannot change");
 }
 
@@ -149,6 +150,7 @@ DEFINE_CASES(CompositeParams, CANOPY_COMPOSITE_PARAMS)
 DEFINE_CASES(SimulationPlane, CANOPY_SIMULATION_PLANE)
 DEFINE_CASES(CanopyPusher, CANOPY_PUSHER_PARAMS)
 DEFINE_CASES(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
+DEFINE_CASES(WorldWind, CANOPY_WORLD_WIND)
 DEFINE_CASES(CanopyParams, CANOPY_PARAMS)
 
 template <class... S>
@@ -169,7 +171,7 @@ TEST(ParamSchema, DefaultsPassTheirOwnChecks) {
 TEST(ParamSchema, EveryCheckedFieldRefusesAValueOutsideItsRange) {
   size_t checked = 0;
   forEachStruct<WindParams, Motor, FluidParams, WaveParams, PushParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
-                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, CanopyParams>(
+                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, WorldWind, CanopyParams>(
       [](const char* type, std::vector<Refusal> refusals, std::vector<std::string>) {
         for (const Refusal& r : refusals) {
           EXPECT_TRUE(r.refused) << type << "." << r.field << " accepted a value outside its range";
@@ -201,7 +203,7 @@ TEST(ParamSchema, EveryCheckedFieldRefusesAValueOutsideItsRange) {
 // one over 17 fields that a new field could silently miss).
 TEST(ParamSchema, EqualitySeesEveryField) {
   forEachStruct<WindParams, Motor, FluidParams, WaveParams, PushParams, SimulationParams, SimulationDesc, RegionSplit, ImpostorSettings,
-                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, CanopyParams>(
+                ImpostorDesc, LayerSettings, DynamicsParams, CompositeParams, SimulationPlane, CanopyPusher, PerVertexParams, WorldWind, CanopyParams>(
       [](const char* type, std::vector<Refusal>, std::vector<std::string> unseen) {
         for (const std::string& f : unseen) ADD_FAILURE() << type << "::operator== does not see " << f;
       });

@@ -180,6 +180,7 @@ CanopyDesc perVertexDesc(uint32_t w, uint32_t h, VkFormat color) {
   desc.colorFormat = color;
   desc.allowPerVertex = true;
   desc.params.animation = AnimationMode::PerVertex;
+  desc.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   desc.params.simulation.wind.strength = 0.0f;
   return desc;
 }
@@ -341,6 +342,7 @@ TEST_F(PerVertexTest, TheModeRendersThroughThePublicApiAndSwitchesBack) {
     for (const glm::vec4& p : a) drawn += glm::length(glm::vec3(p) - glm::vec3(test::kSky)) > 0.05f;
     EXPECT_GT(drawn, a.size() / 20) << "the plant covers the frame";
     CanopyParams p = canopyParams(ctx);
+    p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
     p.simulation.wind.strength = 3.0f;
     ASSERT_TRUE(setCanopyParams(ctx, p).ok());
     run(2, &c);
@@ -484,6 +486,7 @@ TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
   frame(&still);
   EXPECT_EQ(still, 0.0f) << "no wind, no motion";
   CanopyParams p = canopyParams(ctx);
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 4.0f;
   ASSERT_TRUE(setCanopyParams(ctx, p).ok());
   frame(&windy);
@@ -495,6 +498,7 @@ TEST_F(PerVertexTest, MotionVectorsFollowTheBend) {
   // this frame's depth through the inverse of this frame's camera). Vertex motion interpolated over
   // a triangle differs from the per-pixel value by the perspective of the triangle's span: bounds
   // 0.05 px (median) and 0.3 px (90th percentile), against a motion of over a pixel.
+  p.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   p.simulation.wind.strength = 0.0f;
   ASSERT_TRUE(setCanopyParams(ctx, p).ok());
   float turning = -1.0f;

@@ -313,6 +313,7 @@ void swayOf(Device& dev, uint64_t& frameNumber, float left, float right, Sway* l
   d.colorFormat = host.colorFormat;
   d.instances = {copyOf(glm::translate(glm::mat4(1.0f), glm::vec3(-dx, 0, 0)), 0),
                  copyOf(glm::translate(glm::mat4(1.0f), glm::vec3(dx, 0, 0)), 1)};
+  d.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   d.params.simulation.wind.strength = 1.5f;
   CanopyContext* ctx = nullptr;
   const Status made = createCanopy(dev, {{&plant, left}, {&plant, right}}, d, &ctx);

@@ -265,6 +265,7 @@ inline Status createHostContext(Device& dev, Host& host, const std::vector<Speci
   d.height = host.h;
   d.colorFormat = host.colorFormat;
   d.instances = instances;
+  d.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   d.params.simulation.wind.strength = wind;
   d.allowPerVertex = perVertex;
   if (perVertex) d.params.animation = AnimationMode::PerVertex;

@@ -175,6 +175,7 @@ TEST_F(WindTest, HostShaderAndCpuSamplerReadTheSimulationsWind) {
   d.height = host.h;
   d.colorFormat = host.colorFormat;
   d.simulation.gridSize = 32;
+  d.params.windMode = WindMode::PlaneSides;  // the wind as the plane's sides (domain units/s)
   d.params.simulation.wind.sides = kWindFromLeft | kWindFromBottom;
   d.params.customPlane = true;
   d.params.plane = tiltedPlane(m, 25.0f, 20.0f, glm::vec3(0.0f));

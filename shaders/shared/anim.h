@@ -69,8 +69,8 @@ struct AnimFrame {
   uint newestSlot;
   uint offsetMode;    // ANIM_OFFSET_*: eq. 5's offset along V's direction or V itself
   uint bend;          // 1: add the pushers' bend field (the tiled buffer after V_s and V_wind: shared/sim.h)
-  float pad1;
-  float pad2;
+  float maxShrink;    // eq. 6's lambda_z |V_z| at most this share of a corner's height above its root (DynamicsParams.maxShrink)
+  uint heightRelative;  // 1: eq. 6 times the plant's height h (World wind: lambda in shares of h per metre)
   AnimLayer layers[CANOPY_MAX_LAYERS];
 };
 CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 8 + 4 * 20 + 32 * CANOPY_MAX_LAYERS)
@@ -137,8 +137,13 @@ CANOPY_INLINE float speciesDelay(float maxDelay, float gamma, float responseSpee
 // Eq. 6 (docs/design.md's reading) in pixels, y pointing down the image (view y points up).
 CANOPY_INLINE vec2 displacementPixels(AnimFrame f, AnimLayer layer, float pixelY, vec3 vi) {
   float k = rigidityFactor(f, layer, pixelY) * layer.attenuation * f.lambda.w;
+  if (f.heightRelative != 0u) k *= layer.height;
   float dx = k * f.lambda.x * vi.x;
-  float dyUp = k * (f.lambda.y * vi.y - f.lambda.z * abs(vi.z));
+  // The shrink along the view (the paper's Figure 9) is bounded by a share of the height above the
+  // root: with the wind along the view the whole of V is V_z, and the unbounded term would pull a
+  // crown's top down by more than the crown (docs/design.md "World wind").
+  float shrink = min(k * f.lambda.z * abs(vi.z), f.maxShrink * max(layer.rootLineY - pixelY, 0.0f));
+  float dyUp = k * f.lambda.y * vi.y - shrink;
   return vec2(dx, -dyUp);
 }
 

@@ -376,7 +376,8 @@ enum class RootMode { PerPlant, Vegetation };
   X(float, vdJitter, 0.0f, Closed, 0, 1000, "domain units/s", "per-layer random part of V_D, uniform in [-vdJitter, vdJitter]") \
   X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
   X(ApproximateOffset, approximateOffset, ApproximateOffset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
-  X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)")
+  X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)") \
+  X(float, maxShrink, 0.05f, Closed, 0, 1e6, "of the height above the root", "eq. 6's lambda_z |V_z| shrink at most this share of a corner's height above its root (1e6: unbounded, before 0.8)")
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
@@ -469,8 +470,35 @@ enum class PerVertexWind {
   X(float, integralScale, 1.0f, AboveMin, 0, 1000, "domain units", "KaimalField: the turbulence's length scale L")
 CANOPY_PARAM_STRUCT(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
 
-// customPlane unset: the plane is fixed from the first frame's camera, one tile over the visible
-// region at the vegetation's centre depth (plane is then not read).
+// How a host sets the wind (docs/design.md "World wind").
+enum class WindMode : uint32_t {
+  World = 0,       // CanopyParams.wind: a world direction and a speed in m/s (default); the simulation
+                   // plane is horizontal through the vegetation, its x axis along the wind, fixed in the
+                   // world (no camera chooses it); SimulationParams.wind's sides, strength, frequency,
+                   // baseline, modulation and gust are derived from it each frame
+  PlaneSides = 1,  // advanced (before 0.8): SimulationParams.wind's source sides and strength on the plane
+                   // fixed by the first frame's camera, or on CanopyParams.plane with customPlane
+};
+// The wind in the world, as a game sets it (Unity's WindZone, SpeedTree's wind): a direction and a
+// mean speed, the speed swelling in gusts, noise along the gust front. A change eases in over
+// easeSeconds (the direction turns along the shortest arc, both with a smoothstep in time), so a
+// host may set it every frame. The simulation's domain speed is speed / tileMetres (one tile is one
+// domain unit: docs/design.md "World wind").
+#define CANOPY_WORLD_WIND(X)                                                                                            \
+  X(Float3, direction, (Float3{1.0f, 0.0f, 0.0f}), Finite, 0, 0, "world space", "where the wind blows toward (any length > 0; y is up)") \
+  X(float, speed, 3.0f, Closed, 0, 100, "m/s", "mean wind speed (3: a light breeze, Beaufort 2)")                      \
+  X(float, unitsPerMetre, 1.0f, AboveMin, 0, 1e6, "world units per m", "the model's scale (100: authored in centimetres)") \
+  X(float, gustIntensity, 0.4f, Closed, 0, 4, "", "gust swell: the speed is speed * (1 + gustIntensity sin(2 pi gustFrequency t))") \
+  X(float, gustFrequency, 0.3f, Closed, 0, 100, "Hz", "how often the gusts come")                                      \
+  X(float, turbulence, 0.3f, Closed, 0, 1, "", "noise travelling along the gust front, relative to the speed")         \
+  X(float, easeSeconds, 2.0f, Closed, 0, 600, "s", "a change of direction or speed eases in over this time (0: at once)") \
+  X(float, tileMetres, 2.0f, Closed, 0.01, 1e4, "m", "the simulation tile's least side in the world (it spans the vegetation seen from above)") \
+  X(float, sway, 0.03f, Closed, 0, 10, "of its height per m/s", "how far a plant's top moves in the wind: eq. 6 in shares of the plant's on-screen height")
+CANOPY_PARAM_STRUCT(WorldWind, CANOPY_WORLD_WIND)
+
+// windMode World: `wind` sets the wind and the plane (customPlane and plane are not read).
+// windMode PlaneSides: customPlane unset, the plane is fixed from the first frame's camera, one tile
+// over the visible region at the vegetation's centre depth (plane is then not read).
 #define CANOPY_PARAMS(X)                                                                                                \
   X(AnimationMode, animation, AnimationMode::Layers2D, Enum, 0, 1, "Layers2D | PerVertex", "PerVertex needs CanopyDesc.allowPerVertex") \
   X(PerVertexParams, perVertex, {}, Nested, 0, 0, "", "the per-vertex baseline")                                       \
@@ -478,7 +506,9 @@ CANOPY_PARAM_STRUCT(PerVertexParams, CANOPY_PER_VERTEX_PARAMS)
   X(SimulationParams, simulation, {}, Nested, 0, 0, "", "ignored by a context that shares another's simulation")      \
   X(DynamicsParams, dynamics, {}, Nested, 0, 0, "", "the paper's eq. 1-7")                                              \
   X(CompositeParams, composite, {}, Nested, 0, 0, "", "inverse warp and compositing")                                 \
-  X(bool, customPlane, false, None, 0, 0, "", "use `plane` instead of the one fixed from the first camera")           \
+  X(WindMode, windMode, WindMode::World, Enum, 0, 1, "World | PlaneSides", "how the wind is set (PlaneSides: before 0.8)") \
+  X(WorldWind, wind, {}, Nested, 0, 0, "", "the wind in the world (windMode World)")                                   \
+  X(bool, customPlane, false, None, 0, 0, "", "PlaneSides: use `plane` instead of the one fixed from the first camera") \
   X(SimulationPlane, plane, {}, None, 0, 0, "", "checked (as a SimulationPlane) with customPlane only")
 CANOPY_PARAM_STRUCT(CanopyParams, CANOPY_PARAMS)
 
@@ -577,6 +607,7 @@ Status checkParams(const CompositeParams& params, const std::string& prefix = "C
 Status checkParams(const SimulationPlane& params, const std::string& prefix = "SimulationPlane.");
 Status checkParams(const CanopyPusher& params, const std::string& prefix = "CanopyPusher.");
 Status checkParams(const PerVertexParams& params, const std::string& prefix = "PerVertexParams.");
+Status checkParams(const WorldWind& params, const std::string& prefix = "WorldWind.");
 Status checkParams(const CanopyParams& params, const std::string& prefix = "CanopyParams.");
 Status checkParams(const CanopyDesc& params, const std::string& prefix = "CanopyDesc.");
 

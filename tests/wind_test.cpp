@@ -477,3 +477,68 @@ TEST_F(WindTest, APusherPartsTheGrassWhereItWalksAndItSpringsBack) {
   EXPECT_LE(pushed.settled, 1.5) << "within 1.5 s";
   EXPECT_LT(airOnly.peak, pushed.peak) << "the bend, not the fluid motor, parts the grass";
 }
+
+// The world wind (issue 66; docs/design.md "World wind"): the plane a host reads the wind through
+// is the wind's, whichever camera came first (two contexts, the first seen from yaw 0, the second
+// from yaw 180), and the wind at the vegetation blows along the world direction at about the
+// speed given (world units/s = m/s here), before and after the direction is changed and eased in.
+TEST_F(WindTest, TheWorldWindIsTheSameWhicheverCameraCameFirst) {
+  VegetationModel m = scene(SceneKind::Shrub, 6000);
+  Host host;
+  host.w = 96;
+  host.h = 64;
+  ASSERT_TRUE(host.create(dev, 2).ok());
+  CanopyDesc d;
+  d.width = host.w;
+  d.height = host.h;
+  d.colorFormat = host.colorFormat;
+  d.simulation.gridSize = 32;
+  d.params.wind.direction = {0.0f, 0.0f, -2.0f};
+  d.params.wind.speed = 4.0f;
+  d.params.wind.easeSeconds = 0.5f;
+  CanopyContext* ctx[2] = {nullptr, nullptr};
+  const float yaw[2] = {0.0f, 180.0f};
+  CanopyWindInfo info[2];
+  const glm::vec3 centre = 0.5f * (m.boundsMin + m.boundsMax);
+  const Float3 at[1] = {toFloat3(centre)};
+  for (int k = 0; k < 2; ++k) {
+    Status s = createCanopy(dev, m, d, &ctx[k]);
+    ASSERT_TRUE(s.ok()) << s.message();
+    const LayerView view = orbitView(m.boundsMin, m.boundsMax, yaw[k], 15.0f, 40.0f, 96.0f / 64.0f, 1.0f);
+    for (int i = 0; i < 45; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx[k]}, view, 1.0f / 30.0f).ok());
+    CanopyWind cw;
+    ASSERT_TRUE(canopyWind(ctx[k], &cw).ok());
+    info[k] = cw.info;
+    Float3 v;
+    ASSERT_TRUE(sampleCanopyWind(ctx[k], at, 1, &v).ok());
+    const glm::vec3 w = toGlm(v);
+    EXPECT_GT(glm::dot(w, glm::vec3(0, 0, -1)), 0.8f * glm::length(w)) << "blows toward -Z from yaw " << yaw[k];
+    EXPECT_GT(glm::length(w), 0.25f * 4.0f) << "about the speed given";
+    EXPECT_LT(glm::length(w), 3.0f * 4.0f);
+  }
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_FLOAT_EQ(info[0].origin[i], info[1].origin[i]);
+    EXPECT_FLOAT_EQ(info[0].right[i], info[1].right[i]);
+    EXPECT_FLOAT_EQ(info[0].up[i], info[1].up[i]);
+  }
+  // Turned to +X: eased in over 0.5 s, then the wind at the centre blows that way.
+  CanopyParams p = canopyParams(ctx[1]);
+  p.wind.direction = {1.0f, 0.0f, 0.0f};
+  ASSERT_TRUE(setCanopyParams(ctx[1], p).ok());
+  const LayerView view = orbitView(m.boundsMin, m.boundsMax, 180.0f, 15.0f, 40.0f, 96.0f / 64.0f, 1.0f);
+  ASSERT_TRUE(host.frame(++frameNumber, {ctx[1]}, view, 1.0f / 30.0f).ok());
+  CanopyWind early;
+  ASSERT_TRUE(canopyWind(ctx[1], &early).ok());
+  EXPECT_GT(-early.info.right[2], 0.95f) << "one frame in, the plane has barely turned (no pop)";
+  for (int i = 0; i < 60; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx[1]}, view, 1.0f / 30.0f).ok());
+  CanopyWind turned;
+  ASSERT_TRUE(canopyWind(ctx[1], &turned).ok());
+  EXPECT_NEAR(turned.info.right[0], 1.0f, 1e-4f);
+  Float3 v;
+  ASSERT_TRUE(sampleCanopyWind(ctx[1], at, 1, &v).ok());
+  EXPECT_GT(glm::dot(toGlm(v), glm::vec3(1, 0, 0)), 0.8f * glm::length(toGlm(v)));
+  ASSERT_TRUE(host.finish().ok());
+  destroyCanopy(ctx[0]);
+  destroyCanopy(ctx[1]);
+  host.destroy();
+}

@@ -67,16 +67,16 @@ echo "turn 1 deg/frame, policy vs every frame: $(tail -1 "$out/cmp")"
 "$demo" --compare-frames "$out/turn" "$out/absent" >/dev/null 2>"$out/err" && fail "--compare-frames with a missing folder passed"
 
 # The per-vertex baseline on the same scene (validation on): it sways in the wind and stands still without.
-"$demo" --method per-vertex --frames 24 --size 320x240 --warmup 1 --validate --no-mp4 --out "$out/pv" >/dev/null 2>"$out/stderr4" ||
+"$demo" --method per-vertex --frames 16 --size 320x240 --warmup 1 --validate --no-mp4 --out "$out/pv" >/dev/null 2>"$out/stderr4" ||
   fail "per-vertex run: exit $? ($(tail -5 "$out/stderr4"))"
-"$demo" --method per-vertex --frames 24 --size 320x240 --warmup 1 --strength 0 --no-mp4 --out "$out/pvcalm" >/dev/null 2>&1 ||
+"$demo" --method per-vertex --frames 6 --size 320x240 --warmup 0.5 --strength 0 --no-mp4 --out "$out/pvcalm" >/dev/null 2>&1 ||
   fail "per-vertex calm run: exit $?"
 pv=$(sway_range "$out/pv") pvcalm=$(sway_range "$out/pvcalm")
 awk -v w="$pv" -v c="$pvcalm" 'BEGIN { exit !(w >= 1.0 && c == 0) }' ||
   fail "per-vertex sway: wind $pv px (expected >= 1), no wind $pvcalm px (expected 0)"
-echo "per-vertex sway over 24 frames at 320x240: wind $pv px, no wind $pvcalm px"
+echo "per-vertex sway over 16 frames at 320x240 (no wind: 6 frames): wind $pv px, no wind $pvcalm px"
 # The uniform wind of before 0.7 is still reachable and sways too.
-"$demo" --method per-vertex --per-vertex-wind uniform --frames 24 --size 320x240 --warmup 1 --no-mp4 --out "$out/pvu" >/dev/null 2>&1 ||
+"$demo" --method per-vertex --per-vertex-wind uniform --frames 16 --size 320x240 --warmup 1 --no-mp4 --out "$out/pvu" >/dev/null 2>&1 ||
   fail "per-vertex uniform run: exit $?"
 pvu=$(sway_range "$out/pvu")
 awk -v w="$pvu" 'BEGIN { exit !(w >= 1.0) }' || fail "per-vertex uniform sway: $pvu px (expected >= 1)"

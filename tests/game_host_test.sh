@@ -33,10 +33,12 @@ grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host'
 grep -q "^338 copies of six_species.json (.* of its 6 species)" "$out/stdout_six" || { echo "FAIL: six species: not 338 copies of 6 species"; exit 1; }
 # The character parts the grass: the six species without leaves, with and without its push; the
 # frames' difference inside the band where it walked (the host's band masks), at most 25 % beyond.
+# Without the validation layers: the run above checked this scene with them, and these two only
+# compare pictures.
 for run in push nopush; do
   extra="--no-leaves"
   [ "$run" = nopush ] && extra="--no-leaves --no-push"
-  xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 --validate $extra \
+  xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 $extra \
     --out "$out/$run" --write-every 1 >"$out/stdout_$run" 2>"$out/stderr_$run" || { echo "FAIL: $run: exit $? ($(tail -5 "$out/stderr_$run"))"; exit 1; }
 done
 python3 "$(dirname "$0")/game_host_push.py" "$out/push" "$out/nopush" 25 || { echo "FAIL: the character's push"; exit 1; }

@@ -213,8 +213,6 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     if (species[i].model->triangleCount() == 0)
       return Status::error(Result::InvalidModel, "createCanopy: " + nameOf(i) +
                                                      " has no triangles (no TRIANGLES mesh primitive is reachable from its scene)");
-  const VegetationModel& model = *species[0].model;  // the per-vertex baseline's (one species)
-  const std::string what = nameOf(0);
   auto* c = new (std::nothrow) CanopyContext();
   if (!c) return Status::error(Result::OutOfHostMemory, "createCanopy: out of host memory");
   c->device = &d;
@@ -254,7 +252,10 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     ld.impostors = desc.impostors;
     ld.copies = instanceInputs(desc.instances);
     if (desc.allowPerVertex) {
-      CANOPY_TRY(validateBendHierarchy(model.bend, model.branches, model.positions.size(), what));
+      for (size_t i = 0; i < species.size(); ++i) {
+        const VegetationModel& m = *species[i].model;
+        CANOPY_TRY(validateBendHierarchy(m.bend, m.branches, m.positions.size(), nameOf(i)));
+      }
       ld.keepBend = true;
     }
     // The split is cheap; knowing there is nothing to animate before leaf roots and the mesh
@@ -276,7 +277,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
       }
     }
     if (foliage == 0)
-      return Status::error(Result::InvalidModel, (species.size() > 1 ? std::string("the species have") : what + " has") +
+      return Status::error(Result::InvalidModel, (species.size() > 1 ? std::string("the species have") : nameOf(0) + " has") +
                                                      " no foliage: every material is rigid (" + names +
                                                      "); name the leaf materials in CanopyDesc.split.foliage");
     if (desc.shareSimulationWith) {
@@ -301,7 +302,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     CANOPY_TRY(createLayeredVegetation(d, species, ld, &c->layers));
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
-      CANOPY_TRY(createPerVertex(d, c->layers, model.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
+      CANOPY_TRY(createPerVertex(d, c->layers, c->layers.mesh.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
     releaseLeafRootPositions(c->layers.mesh);  // uploaded (or not needed)
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
     // written, motion) are among them.

@@ -270,9 +270,6 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
                         Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
   *rootKey = 0;
   CANOPY_TRY(checkSpecies(species));
-  if (species.size() > 1 && desc.keepBend)
-    return Status::error(Result::InvalidArgument, "the per-vertex wind baseline (CanopyDesc.allowPerVertex) reads one model's "
-                                                  "branch hierarchy: not yet with " + std::to_string(species.size()) + " species");
   const auto t0 = std::chrono::steady_clock::now();
   // Each species on its own (its split rule reads its own materials, its leaf roots have its own
   // cache file), then laid end to end (render/species.h).
@@ -291,7 +288,10 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
   VegetationModel merged;
   SpeciesParts all;
   CANOPY_TRY(mergeSpecies(species, parts, &merged, &all, &mesh.species));
+  // The per-vertex baseline's hierarchy: each species' own, or its own fallback trunk.
+  if (desc.keepBend && species.size() > 1) CANOPY_TRY(mergeBendHierarchies(species, &merged));
   const VegetationModel& m = species.size() == 1 ? *species[0].model : merged;
+  if (desc.keepBend) mesh.branches = m.branches;
   mesh.split = std::move(all.split);
   mesh.plants = std::move(all.plants);
   LeafRoots& roots = all.roots;
@@ -319,7 +319,10 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<
   return Status();
 }
 
-void releaseLeafRootPositions(LayerMesh& mesh) { std::vector<glm::vec4>().swap(mesh.leafRootPositions); }
+void releaseLeafRootPositions(LayerMesh& mesh) {
+  std::vector<glm::vec4>().swap(mesh.leafRootPositions);
+  std::vector<gpu::BendBranch>().swap(mesh.branches);
+}
 
 void destroyLayerMesh(Device& d, LayerMesh& mesh) {
   dropPreparedWork(d, mesh.pendingUploads);  // uploads never recorded: nothing waits for them
@@ -416,7 +419,7 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
       CANOPY_TRY(bindGraphics(*md.device, cmd, pipe,
                               {frame, roots, base, normal, trans, transColor, bindBuffer(perVertex->bendFrame),
                                bindBuffer(perVertex->branches), bindBuffer(perVertex->bendVertices),
-                               bindBuffer(perVertex->tips)},
+                               bindBuffer(perVertex->tips), bindBuffer(perVertex->trunks)},
                               push));
     else if (!o.extra.empty()) {
       std::vector<Binding> all = {frame, roots, base, normal, trans, transColor};

@@ -81,6 +81,9 @@ struct LayerMesh {
   // With desc.keepBend: each leaf's root position (xyz), for the per-vertex baseline's wind field
   // (render/per_vertex.cpp uploads it at creation; releaseLeafRootPositions then drops it).
   std::vector<glm::vec4> leafRootPositions;
+  // With desc.keepBend: the branch table the per-vertex hierarchy indexes (the species' tables laid
+  // end to end, render/species.h mergeBendHierarchies); released with leafRootPositions.
+  std::vector<gpu::BendBranch> branches;
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
@@ -175,6 +178,7 @@ struct PerVertexBindings {
   VkBuffer branches = VK_NULL_HANDLE;      // gpu::BendBranch table (BranchBuf)
   VkBuffer bendVertices = VK_NULL_HANDLE;  // gpu::BendVertex per compact-mesh vertex (BendVertexBuf)
   VkBuffer tips = VK_NULL_HANDLE;          // the motion table (TipBuf)
+  VkBuffer trunks = VK_NULL_HANDLE;        // gpu::BendTrunk per species (TrunkBuf)
 };
 // Draws every chunk of the (resident) mesh, foliage then rigid, for the placed copies in `runs`,
 // with `pipe` inside the caller's rendering: the per-vertex baseline's frame.

@@ -64,6 +64,14 @@ gpu::BendChain bendChainOf(const std::vector<gpu::BendBranch>& branches, uint32_
   return c;
 }
 
+gpu::BendTrunk bendTrunkOf(const glm::vec3& boundsMin, const glm::vec3& boundsMax) {
+  const glm::vec3 centre = 0.5f * (boundsMin + boundsMax);
+  const glm::vec2 halfXZ(0.5f * (boundsMax.x - boundsMin.x), 0.5f * (boundsMax.z - boundsMin.z));
+  // glTF's up is the trunk's axis.
+  return gpu::BendTrunk{glm::vec4(centre.x, boundsMin.y, centre.z, std::max(glm::length(halfXZ), 1e-6f)),
+                        glm::vec4(0.0f, 1.0f, 0.0f, std::max(boundsMax.y - boundsMin.y, 1e-6f))};
+}
+
 gpu::BendFrame makeBendFrame(const PerVertexParams& p, const WindParams& wind, const SimulationPlane& plane,
                              const glm::vec3& boundsMin, const glm::vec3& boundsMax, float time, float previousTime) {
   gpu::BendFrame f{};
@@ -83,10 +91,10 @@ gpu::BendFrame makeBendFrame(const PerVertexParams& p, const WindParams& wind, c
   lateral = glm::length(lateral) > 1e-4f ? glm::normalize(lateral) : toGlm(plane.right);
   f.wind = glm::vec4(dir, wind.strength * wind.baseline);
   f.lateral = glm::vec4(lateral, p.lateral);
-  const glm::vec3 centre = 0.5f * (boundsMin + boundsMax);
-  const glm::vec2 halfXZ(0.5f * (boundsMax.x - boundsMin.x), 0.5f * (boundsMax.z - boundsMin.z));
-  f.up = glm::vec4(up, std::max(boundsMax.y - boundsMin.y, 1e-6f));
-  f.root = glm::vec4(centre.x, boundsMin.y, centre.z, std::max(glm::length(halfXZ), 1e-6f));
+  const gpu::BendTrunk trunk = bendTrunkOf(boundsMin, boundsMax);
+  f.up = trunk.up;
+  f.root = trunk.root;
+  f.trunkCount = 1;
   f.flexibility = glm::vec4(p.flexibility[0], p.flexibility[1], p.flexibility[2], p.flexibility[3]);
   f.frequency = glm::vec4(p.frequency[0], p.frequency[1], p.frequency[2], p.frequency[3]);
   f.leafFlexibility = p.leafFlexibility;
@@ -152,6 +160,16 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   const VkDeviceSize leafBytes = leafPositions.size() * sizeof(glm::vec4);
   CANOPY_TRY(createBuffer(d, leafBytes, usage, MemoryUsage::DeviceLocal, &pv.leafPositions, "per-vertex: leaf roots"));
   CANOPY_TRY(uploadBuffer(d, deferred, pv.leafPositions, leafPositions.data(), leafBytes, kFrameRead));
+  // Each species' fallback trunk (entry 0 the vegetation's for one species: BendFrame's own).
+  std::vector<gpu::BendTrunk> trunks;
+  if (lv.mesh.species.size() > 1)
+    for (const MeshSpecies& s : lv.mesh.species) trunks.push_back(bendTrunkOf(s.boundsMin, s.boundsMax));
+  else
+    trunks.push_back(bendTrunkOf(lv.mesh.boundsMin, lv.mesh.boundsMax));
+  pv.trunkCount = uint32_t(trunks.size());
+  const VkDeviceSize trunkBytes = trunks.size() * sizeof(gpu::BendTrunk);
+  CANOPY_TRY(createBuffer(d, trunkBytes, usage, MemoryUsage::DeviceLocal, &pv.trunks, "per-vertex: trunks"));
+  CANOPY_TRY(uploadBuffer(d, deferred, pv.trunks, trunks.data(), trunkBytes, rg::stateOf(rg::Use::VertexStorageRead)));
   if (!pv.hierarchy) {
     CANOPY_TRY(createBuffer(d, 16, usage, MemoryUsage::DeviceLocal, &pv.dummy, "per-vertex: no hierarchy"));
     const uint32_t zero[4] = {};
@@ -179,7 +197,7 @@ void destroyPerVertex(PerVertexAnimation& pv) {
   Device& d = *pv.device;
   destroyGraphicsPipeline(d, pv.pipeline);
   destroyComputePipeline(d, pv.tipsPipeline);
-  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy, &pv.tips, &pv.leafPositions}) destroyBuffer(d, *b);
+  for (Buffer* b : {&pv.frame, &pv.bendFrame, &pv.branches, &pv.dummy, &pv.tips, &pv.leafPositions, &pv.trunks}) destroyBuffer(d, *b);
   pv = PerVertexAnimation{};
 }
 
@@ -208,6 +226,7 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.current.branchCount = pv.branchCount;
   pv.current.tipCount = pv.branchCount + pv.leafCount;
   pv.current.copyCount = pv.copies;
+  pv.current.trunkCount = pv.trunkCount;
   // The copies in view (drawn every frame: culled every frame).
   pv.runs = visibleInstanceRuns(lv.instances, lv.mesh.species, viewProj);
   pv.frames++;
@@ -252,6 +271,7 @@ Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::Ren
     b.branches = p->branches.buffer;
     b.bendVertices = p->hierarchy ? l->mesh.bendVertices.buffer : p->dummy.buffer;
     b.tips = p->tips.buffer;
+    b.trunks = p->trunks.buffer;
     Status s = drawWholeMesh(meshDraw(*l), x.cmd, p->pipeline, b, p->runs);
     x.device->cmdEndRendering(x.cmd);
     return s;

@@ -28,7 +28,8 @@ struct PerVertexAnimation {
   Buffer frame, bendFrame, branches, dummy;  // dummy: BendVertexBuf when the model has no hierarchy
   Buffer tips;                               // the motion table: per copy, a vec3 per branch and leaf (twice with motion)
   Buffer leafPositions;                      // a vec4 per leaf: its root (the wind field's sample point)
-  uint32_t branchCount = 0, leafCount = 0;
+  Buffer trunks;                             // gpu::BendTrunk per species (a model without a hierarchy bends about it)
+  uint32_t branchCount = 0, leafCount = 0, trunkCount = 1;
   uint32_t copies = 1;                       // the placed copies the motion table holds (CanopyDesc.instances)
   std::vector<InstanceRun> runs;             // the copies this frame's camera sees
   bool hierarchy = false;
@@ -56,6 +57,9 @@ void destroyPerVertex(PerVertexAnimation& pv);
 // flight; a graph holding it must be rebuilt).
 Status resizePerVertexCopies(PerVertexAnimation& pv, uint32_t copies);
 
+// The fallback trunk of a model without a hierarchy: the vertical through its bounds' centre from
+// their bottom, crown radius the bounds' horizontal half-diagonal.
+gpu::BendTrunk bendTrunkOf(const glm::vec3& boundsMin, const glm::vec3& boundsMax);
 // The bend frame for the wind and parameters at time t (the model's bounds give the fallback
 // trunk: the vertical through the bounds' centre, from their bottom).
 gpu::BendFrame makeBendFrame(const PerVertexParams& params, const WindParams& wind, const SimulationPlane& plane,

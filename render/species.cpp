@@ -127,6 +127,41 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
   return Status();
 }
 
+Status mergeBendHierarchies(const std::vector<SpeciesModel>& species, VegetationModel* merged) {
+  size_t vertices = 0, branches = 0;
+  for (const SpeciesModel& sp : species) {
+    vertices += sp.model->positions.size();
+    branches += sp.model->branches.size();
+  }
+  if (merged->positions.size() != vertices)
+    return Status::error("species: the merged model holds " + std::to_string(merged->positions.size()) + " vertices, the species " +
+                         std::to_string(vertices));
+  if (branches >= BEND_LEAF_ONLY)
+    return Status::error(Result::InvalidArgument, "species: together " + std::to_string(branches) + " branches, more than 32-bit indices hold");
+  merged->bend.clear();
+  merged->branches.clear();
+  merged->bend.reserve(vertices);
+  merged->branches.reserve(branches);
+  for (uint32_t s = 0; s < species.size(); ++s) {
+    const VegetationModel& m = *species[s].model;
+    const uint32_t base = uint32_t(merged->branches.size());
+    for (gpu::BendBranch b : m.branches) {
+      if (b.parent != BEND_NO_PARENT) b.parent += base;
+      merged->branches.push_back(b);
+    }
+    if (m.bend.empty()) {
+      merged->bend.insert(merged->bend.end(), m.positions.size(), gpu::BendVertex{BEND_NO_BRANCH, s});
+      continue;
+    }
+    for (gpu::BendVertex v : m.bend) {
+      if (v.branch == BEND_NO_BRANCH) v.w = s;
+      else if (v.branch != BEND_LEAF_ONLY) v.branch += base;
+      merged->bend.push_back(v);
+    }
+  }
+  return Status();
+}
+
 std::vector<uint32_t> materialSpecies(const std::vector<MeshSpecies>& species) {
   std::vector<uint32_t> out;
   for (uint32_t s = 0; s < species.size(); ++s) out.insert(out.end(), species[s].materialCount, s);

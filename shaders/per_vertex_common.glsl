@@ -1,6 +1,6 @@
 // The per-vertex wind baseline's inputs (render/per_vertex.cpp binds them after the six layer
 // bindings of layers_common.glsl): the bend frame, the branch table, the per-vertex branch index
-// and w, and the motion table of tip bends (shared/bend.h); the walk from a vertex's branch up to
+// and w, the motion table of tip bends and the species' fallback trunks (shared/bend.h); the walk from a vertex's branch up to
 // its trunk and the gathering of its tips.
 #include "shared/bend.h"
 
@@ -8,6 +8,7 @@ layout(binding = PER_VERTEX_BINDING_BASE, scalar) readonly buffer BendFrameBuf {
 layout(binding = PER_VERTEX_BINDING_BASE + 1, scalar) readonly buffer BranchBuf { BendBranch branches[]; };
 layout(binding = PER_VERTEX_BINDING_BASE + 2, scalar) readonly buffer BendVertexBuf { BendVertex bendVertex[]; };
 layout(binding = PER_VERTEX_BINDING_BASE + 3, scalar) readonly buffer TipBuf { vec3 tipTable[]; };
+layout(binding = PER_VERTEX_BINDING_BASE + 4, scalar) readonly buffer TrunkBuf { BendTrunk trunks[]; };
 
 // The chain of `branch`, trunk first (render/per_vertex.cpp's bendChainOf is the CPU twin).
 BendChain fetchChain(uint branch) {

@@ -23,6 +23,8 @@ void main() {
     bv.branch = bendVertex[gl_VertexIndex].branch;
     bv.w = bendVertex[gl_VertexIndex].w;
   }
+  // A vertex without a branch bends about its species' trunk (BendTrunk; w names the species).
+  if (bv.branch == BEND_NO_BRANCH && bv.w < bf.trunkCount) bf = bendFrameForTrunk(bf, trunks[bv.w]);
   BendChain chain = fetchChain(bv.branch);
   bool leaf = hasLeaf();
   // Field by field: a buffer struct and a constructed one are different SPIR-V types.

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstring>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/packing.hpp>
 
 #include "engine/pipeline.h"
@@ -98,6 +99,8 @@ class PerVertexTest : public GpuTest {
     f.branchCount = uint32_t(m.branches.size());
     f.tipCount = f.branchCount + leaves;
     f.copyCount = 1;  // one copy at the model's origin
+    f.trunkCount = 1;  // the model's own fallback trunk (render/per_vertex.cpp's single species)
+    const gpu::BendTrunk trunk{f.root, f.up};
     gpu::LayerInstance origin{};
     origin.model = glm::mat4(1.0f);
     origin.normalColumn0 = glm::vec4(1, 0, 0, 0);
@@ -110,7 +113,7 @@ class PerVertexTest : public GpuTest {
     EXPECT_TRUE(s.ok()) << s.message();
     const VkBufferUsageFlags usage =
         VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
-    Buffer frame, branches, bend, input, output, tips, copies;
+    Buffer frame, branches, bend, input, output, tips, copies, trunks;
     const rg::State read = rg::stateOf(rg::Use::ComputeStorageRead), write = rg::stateOf(rg::Use::ComputeStorageWrite);
     std::vector<gpu::BendBranch> table = m.branches;
     if (table.empty()) table.push_back(gpu::BendBranch{});
@@ -127,6 +130,7 @@ class PerVertexTest : public GpuTest {
     make(output, nullptr, in.size() * sizeof(glm::vec4), "probe output");
     make(tips, nullptr, std::max<size_t>(f.tipCount, 1) * sizeof(glm::vec3), "probe motion table");
     make(copies, &origin, sizeof origin, "probe copies");
+    make(trunks, &trunk, sizeof trunk, "probe trunks");
     // Each leaf's root, as render/per_vertex.cpp uploads it (the wind field's sample point).
     std::vector<glm::vec4> leafRoots(std::max<uint32_t>(leaves, 1), glm::vec4(0.0f));
     for (const gpu::BendProbeVertex& v : in)
@@ -148,7 +152,7 @@ class PerVertexTest : public GpuTest {
       g.addPass("probe", [&](rg::PassContext& c) {
          return dispatch(dev, c.cmd, pipe, count, 1, 1,
                          {bindBuffer(frame.buffer), bindBuffer(branches.buffer), bindBuffer(bend.buffer),
-                          bindBuffer(c.buffer(table)), bindBuffer(input.buffer), bindBuffer(c.buffer(id))},
+                          bindBuffer(c.buffer(table)), bindBuffer(trunks.buffer), bindBuffer(input.buffer), bindBuffer(c.buffer(id))},
                          count);
        })
           .read(table, rg::Use::ComputeStorageRead)
@@ -161,7 +165,7 @@ class PerVertexTest : public GpuTest {
       if (s.ok()) s = readbackBuffer(dev, output, out.data(), out.size() * sizeof(glm::vec4), write);
     }
     EXPECT_TRUE(s.ok()) << s.message();
-    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips, &copies, &leafBuf}) destroyBuffer(dev, *b);
+    for (Buffer* b : {&frame, &branches, &bend, &input, &output, &tips, &copies, &leafBuf, &trunks}) destroyBuffer(dev, *b);
     destroyComputePipeline(dev, pipe);
     destroyComputePipeline(dev, tipsPipe);
     std::vector<glm::vec3> p;
@@ -744,4 +748,86 @@ TEST(PerVertexWindField, TheBranchesOfOnePlantSwayApartAndTheUniformWindDoesNot)
   EXPECT_GT(cu, 0.999);
   EXPECT_LT(cf, 0.9);
   EXPECT_LT(cl, 0.9);  // leaves feel the field at their roots too
+}
+
+// Issue 66, several species: a tree with its branch hierarchy and a leaf cloud without one (its own
+// fallback trunk, BendTrunk), one copy of each side by side in one vegetation, in the wind. Each
+// species bends as it does alone: the two-species frame is the two single-species frames laid
+// together within the golden tolerance (uniform wind and still leaves, whose noise is seeded by the
+// model-wide branch and leaf numbers, so both runs draw the same motion), and the wind moves both.
+TEST_F(PerVertexTest, SeveralSpeciesEachBendThroughTheirOwnHierarchyOrTrunk) {
+  const VegetationModel tree = treeWithHierarchy(6000);
+  const VegetationModel cloud = makeLeafCloud(3000, 7, true);
+  ASSERT_FALSE(tree.bend.empty());
+  ASSERT_TRUE(cloud.bend.empty());
+  // The cloud scaled to the tree's size, the two a little more than a size apart (model-space
+  // centres moved to x = -+gap/2).
+  const float size = extent(tree), gap = 0.7f * size;
+  const float k = size / extent(cloud);
+  const glm::vec3 tc = 0.5f * (tree.boundsMin + tree.boundsMax), cc = 0.5f * (cloud.boundsMin + cloud.boundsMax);
+  const glm::mat4 left = glm::translate(glm::mat4(1.0f), glm::vec3(-0.5f * gap - tc.x, 0.0f, -tc.z));
+  const glm::mat4 right = glm::translate(glm::mat4(1.0f), glm::vec3(0.5f * gap, 0.0f, 0.0f)) *
+                          glm::scale(glm::mat4(1.0f), glm::vec3(k)) * glm::translate(glm::mat4(1.0f), glm::vec3(-cc.x, 0.0f, -cc.z));
+  auto copyOf = [](const glm::mat4& t, uint32_t species) {
+    CanopyInstance i;
+    i.transform = toFloat4x4(t);
+    i.species = species;
+    return i;
+  };
+  const glm::vec3 lo = glm::min(glm::vec3(left * glm::vec4(tree.boundsMin, 1.0f)), glm::vec3(right * glm::vec4(cloud.boundsMin, 1.0f)));
+  const glm::vec3 hi = glm::max(glm::vec3(left * glm::vec4(tree.boundsMax, 1.0f)), glm::vec3(right * glm::vec4(cloud.boundsMax, 1.0f)));
+  const LayerView view = orbitView(lo, hi, 0.0f, 8.0f, 40.0f, 160.0f / 120.0f, 1.0f);
+  uint64_t frame = 1;
+  auto run = [&](const std::vector<SpeciesModel>& species, const std::vector<CanopyInstance>& copies, float wind,
+                 std::vector<glm::vec4>* out) {
+    test::Host host;
+    host.w = 160;
+    host.h = 120;
+    CanopyContext* ctx = nullptr;
+    Status s = test::createHostContext(dev, host, species, copies, wind, true, &ctx);
+    ASSERT_TRUE(s.ok()) << s.message();
+    CanopyParams p = canopyParams(ctx);
+    p.perVertex.wind = PerVertexWind::UniformNoise;
+    p.perVertex.leafFlexibility = 0.0f;
+    ASSERT_TRUE(setCanopyParams(ctx, p).ok());
+    std::vector<float> z;
+    for (int i = 0; i < 8 && s.ok(); ++i) s = host.frame(frame++, {ctx}, view, 1.0f / 30.0f);
+    if (s.ok()) s = host.read(out, &z);
+    EXPECT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(canopyStats(ctx).layers.species, uint32_t(species.size()));
+    destroyCanopy(ctx);
+    host.destroy();
+  };
+  std::vector<glm::vec4> both, still, treeAlone, cloudAlone;
+  run({{&tree}, {&cloud}}, {copyOf(left, 0), copyOf(right, 1)}, 3.0f, &both);
+  run({{&tree}, {&cloud}}, {copyOf(left, 0), copyOf(right, 1)}, 0.0f, &still);
+  run({{&tree}}, {copyOf(left, 0)}, 3.0f, &treeAlone);
+  run({{&cloud}}, {copyOf(right, 0)}, 3.0f, &cloudAlone);
+  ASSERT_EQ(both.size(), size_t(160 * 120));
+  // The single-species frames laid together: the tree's where it drew, else the cloud's.
+  auto sky = [](const glm::vec4& c) { return glm::length(glm::vec3(c) - glm::vec3(test::kSky)) < 1e-3f; };
+  std::vector<glm::vec4> together(both.size());
+  size_t treePixels = 0, cloudPixels = 0;
+  for (size_t i = 0; i < both.size(); ++i) {
+    together[i] = sky(treeAlone[i]) ? cloudAlone[i] : treeAlone[i];
+    treePixels += !sky(treeAlone[i]);
+    cloudPixels += !sky(cloudAlone[i]);
+  }
+  ASSERT_GT(treePixels, both.size() / 50) << "the tree is in view";
+  ASSERT_GT(cloudPixels, both.size() / 50) << "the cloud is in view";
+  // Moved by the wind, each half on its own.
+  double movedLeft = 0, movedRight = 0;
+  for (size_t y = 0; y < 120; ++y)
+    for (size_t x = 0; x < 160; ++x) {
+      const size_t i = y * 160 + x;
+      const bool moved = test::maxDiff(both[i], still[i]) > 3.0f / 255.0f;
+      (x < 80 ? movedLeft : movedRight) += moved;
+    }
+  const double off = test::differing(both, together, 3.0f / 255.0f);
+  std::printf("  two species (tree with its hierarchy, leaf cloud on its own trunk): %.3f %% of pixels off the single-species "
+              "frames laid together; the wind moved %.1f %% of the left half, %.1f %% of the right\n",
+              100.0 * off, 100.0 * movedLeft / (80 * 120), 100.0 * movedRight / (80 * 120));
+  EXPECT_LE(off, 0.005) << "golden tolerance: <= 0.5 % of pixels off by > 3/255";
+  EXPECT_GT(movedLeft / (80 * 120), 0.01) << "the tree sways";
+  EXPECT_GT(movedRight / (80 * 120), 0.01) << "the cloud sways";
 }

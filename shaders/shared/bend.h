@@ -104,7 +104,9 @@ struct BendFrame {
   float leafDamping;     // the leaf level's zeta
   float integralScale;   // Kaimal's length scale L, domain units
   uint windModel;        // BEND_WIND_*
-  uint pad0;
+  // Entries of the trunk table (BendTrunk; at least 1): a BEND_NO_BRANCH vertex's w names its
+  // species' entry (bendFrameForTrunk), so each species of a vegetation bends about its own trunk.
+  uint trunkCount;
 };
 CANOPY_SIZE_CHECK(BendFrame, 16 * 6 + 4 * 12 + 8 + 16 + 4 + 64 + 32 + 16)
 
@@ -120,6 +122,24 @@ CANOPY_INLINE BendFrame bendFrameForCopy(BendFrame f, vec3 n0, vec3 n1, vec3 n2,
   if (ll > 0.0f) f.lateral = vec4(l / ll, f.lateral.w);
   f.time = f.time + phase;
   f.previousTime = f.previousTime + phase;
+  return f;
+}
+
+// The fallback trunk of one species (a model without a branch hierarchy: BEND_NO_BRANCH): the
+// vertical through its bounds' centre from their bottom, in its model space. Entry 0 is the
+// vegetation's own (BendFrame.root and up.w); with several species, entry s is species s's and its
+// BEND_NO_BRANCH vertices carry s in BendVertex.w.
+struct BendTrunk {
+  vec4 root;  // xyz: the trunk's root; w: crown radius R (half the bounds' horizontal diagonal)
+  vec4 up;    // xyz: the trunk's axis (world up); w: its height H
+};
+CANOPY_SIZE_CHECK(BendTrunk, 32)
+
+// The bend frame for a BEND_NO_BRANCH vertex of species `t` (its trunk in place of the frame's;
+// the wind field's origin stays the vegetation's, so neighbouring species feel the same field).
+CANOPY_INLINE BendFrame bendFrameForTrunk(BendFrame f, BendTrunk t) {
+  f.root = t.root;
+  f.up = t.up;
   return f;
 }
 

@@ -6,8 +6,8 @@
 #include "per_vertex_common.glsl"
 
 layout(local_size_x = 64) in;
-layout(binding = 4, scalar) readonly buffer InBuf { BendProbeVertex probeIn[]; };
-layout(binding = 5, scalar) writeonly buffer OutBuf { vec4 probeOut[]; };
+layout(binding = 5, scalar) readonly buffer InBuf { BendProbeVertex probeIn[]; };
+layout(binding = 6, scalar) writeonly buffer OutBuf { vec4 probeOut[]; };
 layout(push_constant, scalar) uniform Push { uint count; };
 
 void main() {
@@ -20,6 +20,7 @@ void main() {
     bv.branch = bendVertex[i].branch;
     bv.w = bendVertex[i].w;
   }
+  if (bv.branch == BEND_NO_BRANCH && bv.w < bf.trunkCount) bf = bendFrameForTrunk(bf, trunks[bv.w]);
   // As the vertex shader does: the tips from the motion table the motion kernel wrote.
   vec3 n = v.normal;
   bool leaf = v.leaf != BEND_NO_LEAF;

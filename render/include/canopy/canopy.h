@@ -83,8 +83,8 @@ struct CanopySpecies {
 // A context animating copies of several species in one set of layers, one simulation and one
 // composite (CanopyInstance.species picks each copy's): each species' mesh, leaf roots, materials
 // and textures are stored once however many copies (with CanopyDesc.impostors, each species' views
-// are baked once). 1..256 species (kMaxSceneSpecies). Not yet with allowPerVertex when there is
-// more than one species.
+// are baked once). 1..256 species (kMaxSceneSpecies). With allowPerVertex, each species bends
+// through its own branch hierarchy, or about its own trunk when it has none.
 Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out);
 // Releases the context. Its GPU objects are freed framesInFlight host frames later (or at
 // releaseDevice), so the host may destroy it while frames that used it still execute.

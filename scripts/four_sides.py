@@ -10,27 +10,18 @@ Usage: scripts/four_sides.py DEMO OUT.png [--scene field] [--size 320x240] [--fr
 Reads and writes PNGs with numpy + matplotlib (Debian's python3-numpy, python3-matplotlib)."""
 import argparse
 import os
-import subprocess
-import sys
 import tempfile
 
-import numpy as np
 from matplotlib import image as mpimg
 from matplotlib import pyplot as plt
 
+from wind_views import foliage_of as foliage, run_demo  # the same measure and runner as the table's
+
 
 def frame(demo, out, args, index):
-    cmd = [demo, "--out", out, "--no-mp4", "--frames", str(index + 1)] + args
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        sys.exit(f"four_sides: {' '.join(cmd)} exited {r.returncode}:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
+    """Frame `index` of a canopy-demo run (RGB in [0, 1])."""
+    run_demo(demo, out, ["--frames", str(index + 1)] + args)
     return mpimg.imread(os.path.join(out, f"frame_{index:04d}.png"))[..., :3]
-
-
-def foliage(img):
-    rgb = (img * 255.0).astype(np.int32)
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    return (g > r + 15) & (g > b + 15)
 
 
 def main():

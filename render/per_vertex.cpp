@@ -129,7 +129,7 @@ Status createPerVertex(Device& d, const LayeredVegetation& lv, const std::vector
   pv.desc = desc;
   pv.hierarchy = lv.mesh.bendVertices.buffer != VK_NULL_HANDLE;
   const bool motion = desc.motionFormat != VK_FORMAT_UNDEFINED;
-  // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's four.
+  // shaders/layers_common.glsl's six bindings, then shaders/per_vertex_common.glsl's five.
   GraphicsPipelineDesc p = layerMeshPipelineDesc(desc.colorFormat, desc.depthFormat);
   if (motion) p.colorFormats.push_back(desc.motionFormat);
   p.blendedAttachments = 1;

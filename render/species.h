@@ -66,13 +66,13 @@ struct SpeciesParts {
 Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesParts>& parts, VegetationModel* merged,
                     SpeciesParts* out, std::vector<MeshSpecies>* species);
 
-// The species of each material (materials are numbered species after species).
 // The per-vertex baseline's branch hierarchy of several species (`merged` holds their vertices laid
 // end to end, as mergeSpecies writes them): the branch tables one after the other (branch and parent
 // indices renumbered), each vertex's BendVertex; a species without a hierarchy gets BEND_NO_BRANCH
 // with its species index in w, so it bends about its own fallback trunk (shared/bend.h BendTrunk).
 Status mergeBendHierarchies(const std::vector<SpeciesModel>& species, VegetationModel* merged);
 
+// The species of each material (materials are numbered species after species).
 std::vector<uint32_t> materialSpecies(const std::vector<MeshSpecies>& species);
 
 }  // namespace canopy

@@ -18,13 +18,7 @@ void main() {
   BendFrame bf = bendFrameForCopy(bendIn, inst.normalColumn0.xyz, inst.normalColumn1.xyz, inst.normalColumn2.xyz, inst.tint.w);
   uint copy = uint(gl_InstanceIndex);
   vec3 rest = vertexPosition();
-  BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
-  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) {
-    bv.branch = bendVertex[gl_VertexIndex].branch;
-    bv.w = bendVertex[gl_VertexIndex].w;
-  }
-  // A vertex without a branch bends about its species' trunk (BendTrunk; w names the species).
-  if (bv.branch == BEND_NO_BRANCH && bv.w < bf.trunkCount) bf = bendFrameForTrunk(bf, trunks[bv.w]);
+  BendVertex bv = fetchBendVertex(bf, uint(gl_VertexIndex));
   BendChain chain = fetchChain(bv.branch);
   bool leaf = hasLeaf();
   // Field by field: a buffer struct and a constructed one are different SPIR-V types.

@@ -15,12 +15,7 @@ void main() {
   if (i >= count) return;
   BendProbeVertex v = probeIn[i];
   BendFrame bf = bendIn;
-  BendVertex bv = BendVertex(BEND_NO_BRANCH, 0u);
-  if ((bf.flags & BEND_FLAG_HIERARCHY) != 0u) {
-    bv.branch = bendVertex[i].branch;
-    bv.w = bendVertex[i].w;
-  }
-  if (bv.branch == BEND_NO_BRANCH && bv.w < bf.trunkCount) bf = bendFrameForTrunk(bf, trunks[bv.w]);
+  BendVertex bv = fetchBendVertex(bf, i);
   // As the vertex shader does: the tips from the motion table the motion kernel wrote.
   vec3 n = v.normal;
   bool leaf = v.leaf != BEND_NO_LEAF;

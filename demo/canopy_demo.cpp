@@ -19,6 +19,7 @@ extern char** environ;
 
 #include "demo/cli.h"
 #include "demo/demo_app.h"
+#include "demo/foliage_folders.h"
 #include "demo/frame_writer.h"
 #include "tools/fault_loader.h"
 #include "tools/image_io.h"
@@ -738,6 +739,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!o.compareA.empty()) return compareFolders(o);
+  if (!o.foliageWind.empty()) return measureFoliageFolders(o.foliageWind, o.foliageStill);
   if (o.cache.clear) return cli::clearCacheCommand("canopy-demo", o.cache, o.gltf);
   if (!o.gltf.empty() || !o.sceneFile.empty()) {
     const Status where = cli::resolveCacheFolder(o.cache, o.gltf.empty() ? o.sceneFile : o.gltf, &o.cacheFolder);

@@ -119,6 +119,8 @@ void printHelp() {
       "%s"
       "  --compare-frames A B  the world-lock error of folder A's frame_NNNN.png against folder B's (coverage\n"
       "                      IoU, silhouette distance, colour; tools/world_lock.h), then exit\n"
+      "  --measure-foliage W S  folder W's frame_NNNN.png (wind) against S's (the same run without wind):\n"
+      "                      foliage coverage, the crown's sideways offset, sharpness (tools/foliage_measure.h), then exit\n"
       "%s"
       "                      (a re-slice after a camera move is spread over frames, then cross-faded in; one a\n"
       "                      moving camera would outrun is made at once)\n"
@@ -416,6 +418,10 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
       if (i + 2 >= argc || !*argv[i + 1] || !*argv[i + 2]) return bad("needs two folders");
       o->compareA = argv[++i];
       o->compareB = argv[++i];
+    } else if (a == "--measure-foliage") {
+      if (i + 2 >= argc || !*argv[i + 1] || !*argv[i + 2]) return bad("needs two folders");
+      o->foliageWind = argv[++i];
+      o->foliageStill = argv[++i];
     } else if (a == "--out") {
       if (!takes() || !*v) return bad("needs a folder");
       o->outDir = v;

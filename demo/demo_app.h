@@ -103,6 +103,7 @@ struct Options {
   float swingDegrees = 5.0f;           // turn, zoom, walk: either side of the start
   ReslicePolicy reslice = ReslicePolicy::OnViewChange;  // --reslice auto | every-frame
   std::string compareA, compareB;      // --compare-frames: two output folders measured against each other
+  std::string foliageWind, foliageStill;  // --measure-foliage: a run with wind and the same run without
   float resliceErrorPixels = LayerSettings{}.errorThresholdPixels;  // LayerSettings.errorThresholdPixels: the reprojection error that re-slices
   float rebuildBudgetMs = 4.0f;        // LayerSettings.rebuildBudgetMs: re-slices spread over frames (0: at once)
   float guardBand = 0.1f;              // CanopyDesc.guardBand: the layers reach this fraction beyond each edge

@@ -519,8 +519,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   CanopyParams stepParams = c->params;
   if (c->params.windMode == WindMode::World) {
     stepParams.simulation = worldWindSimulation(c->params.simulation, c->params.wind, c->plane, c->worldWind.speed);
-    // The baseline's reference speed (domain units/s at tileMetres) on this tile: it bends by m/s.
-    stepParams.perVertex.referenceSpeed *= c->params.wind.tileMetres * c->params.wind.unitsPerMetre / c->plane.tileSize;
+    // The baseline's reference speed in m/s on this tile: it bends by m/s, whatever the tile.
+    stepParams.perVertex.referenceSpeed = c->params.perVertex.worldReferenceSpeed * c->params.wind.unitsPerMetre / c->plane.tileSize;
   }
   if (c->params.animation == AnimationMode::PerVertex) {
     // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's

@@ -151,7 +151,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
         }
         if (reproject) z = searched;  // the depth the search found
         if (c.a < COMPOSITE_MIN_ALPHA) continue;
-        if (reproject && bilinear) {
+        if (bilinear && c.a < 1.0f - COMPOSITE_EDGE_TOLERANCE) {  // an edge: cut at 1/2 (composite.h)
           c = gpu::compositeSharpenEdge(c, glm::vec4(tex.color(i, x0, y0).a, tex.color(i, x0 + 1, y0).a, tex.color(i, x0, y0 + 1).a,
                                                      tex.color(i, x0 + 1, y0 + 1).a));
           if (c.a < COMPOSITE_MIN_ALPHA) continue;

@@ -3,11 +3,11 @@
 "The wind from every side"): canopy-demo at --yaw 0, 90, 180 and 270 with the library's default wind
 and with --wind-speed 0, the same frame of each; one picture, the wind's row above the still row,
 and under each pair the share of foliage pixels the wind kept (foliage: green above red and blue by
-15 levels, scripts/wind_views.py's measure).
+15 levels: canopy-demo --measure-foliage, as scripts/wind_views.py measures).
 
 Usage: scripts/four_sides.py DEMO OUT.png [--scene field] [--size 320x240] [--frame 29]
        [--method 2d] [--extra "--wind-dir 0,0,1"]
-Reads and writes PNGs with numpy + matplotlib (Debian's python3-numpy, python3-matplotlib)."""
+Reads and writes PNGs with matplotlib (Debian's python3-matplotlib)."""
 import argparse
 import os
 import tempfile
@@ -15,7 +15,7 @@ import tempfile
 from matplotlib import image as mpimg
 from matplotlib import pyplot as plt
 
-from wind_views import foliage_of as foliage, run_demo  # the same measure and runner as the table's
+from wind_views import measure_folders, run_demo  # the same measure and runner as the table's
 
 
 def frame(demo, out, args, index):
@@ -40,7 +40,7 @@ def main():
         for k, yaw in enumerate((0, 90, 180, 270)):
             wind = frame(a.demo, os.path.join(tmp, f"w{yaw}"), base + ["--yaw", str(yaw)], a.frame)
             still = frame(a.demo, os.path.join(tmp, f"s{yaw}"), base + ["--yaw", str(yaw), "--wind-speed", "0"], a.frame)
-            kept = foliage(wind).sum() / max(foliage(still).sum(), 1)
+            kept = measure_folders(a.demo, os.path.join(tmp, f"w{yaw}"), os.path.join(tmp, f"s{yaw}"))[a.frame]["coverage"]
             axes[0, k].imshow(wind)
             axes[0, k].set_title(f"yaw {yaw}°, wind")
             axes[1, k].imshow(still)

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The wind seen from every side (issue 66): runs canopy-demo on a scene with the wind and without it
-(--strength 0 as the demo's still reference: the same cameras and times) and measures each frame.
+(--wind-speed 0 as the still reference: the same cameras and times) and measures each frame.
 
   coverage  foliage pixels with wind / without, the same frame (foliage: green above red and blue by
             15 levels, the issue's measure)
@@ -15,16 +15,19 @@ Cases (each for the 2D method and the per-vertex baseline):
   breeze    the default shrub, still camera, 120 frames (4 s at 30 fps): the sway
 
 Usage: scripts/wind_views.py DEMO OUT_DIR [--scenes shrub,field,gltf:PATH] [--size 320x240]
-       [--methods 2d,per-vertex] [--extra "--wind-speed 9"] [--json FILE]
-Reads PNGs with numpy + matplotlib (Debian's python3-numpy, python3-matplotlib)."""
+       [--methods 2d,per-vertex] [--cases orbit,mirror,yaw90,breeze] [--extra="--wind-speed 9"]
+       [--quick] [--check] [--json FILE]
+  --quick  fewer frames (orbit 12 at 30 degrees, mirror 30, yaw90 10, breeze 60): the ctest's run
+  --check  exit 1 unless every orbit and yaw-90 frame keeps coverage >= 0.9 and the mirror
+           correlation is <= -0.6 (issue 66's bounds)
+The frames are measured by the demo itself (canopy-demo --measure-foliage, tools/foliage_measure.h):
+plain Python, no numpy."""
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
-
-import numpy as np
-from matplotlib import image as mpimg
 
 
 def run_demo(demo, out, args):
@@ -35,57 +38,49 @@ def run_demo(demo, out, args):
     return sorted(f for f in os.listdir(out) if f.startswith("frame_") and f.endswith(".png"))
 
 
-def foliage_of(img):
-    """The foliage pixels of an RGB(A) image in [0, 1]: green above red and blue by 15 levels."""
-    rgb = (img[..., :3] * 255.0).astype(np.int32)
-    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
-    return (g > r + 15) & (g > b + 15)
-
-
-def foliage(path):
-    return foliage_of(mpimg.imread(path))
-
-
-def top_centroid(mask, rows):
-    lo, hi = rows
-    m = mask[lo:hi]
-    ys, xs = np.nonzero(m)
-    return float(xs.mean()) if len(xs) else float("nan")
+def measure_folders(demo, wind_dir, still_dir):
+    """Per frame of the two folders: canopy-demo --measure-foliage's columns as dicts."""
+    cmd = [demo, "--measure-foliage", wind_dir, still_dir]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"wind_views: {' '.join(cmd)} exited {r.returncode}:\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
+    lines = r.stdout.splitlines()
+    names = lines[1].split()
+    rows = []
+    for line in lines[2:]:
+        parts = line.split()
+        if len(parts) != len(names) or not parts[0].isdigit():
+            continue
+        rows.append({n: float(v) for n, v in zip(names, parts)})
+    return rows
 
 
 def measure(demo, out, scene_args, case_args, frames):
     wind_dir = os.path.join(out, "wind")
     still_dir = os.path.join(out, "still")
     common = scene_args + case_args + ["--frames", str(frames)]
-    fw = run_demo(demo, wind_dir, common)
-    fs = run_demo(demo, still_dir, common + ["--wind-speed", "0"])
-    cov, off, cx = [], [], []
-    height_px = None
-    for a, b in zip(fw, fs):
-        mw, ms = foliage(os.path.join(wind_dir, a)), foliage(os.path.join(still_dir, b))
-        n_still = int(ms.sum())
-        cov.append(float(mw.sum()) / max(n_still, 1))
-        rows = np.nonzero(ms.any(axis=1))[0]
-        if len(rows) == 0:
-            off.append(float("nan"))
-            cx.append(float("nan"))
-            continue
-        top, bottom = int(rows[0]), int(rows[-1]) + 1
-        third = (top, top + max(1, (bottom - top) // 3))
-        if height_px is None:
-            height_px = bottom - top
-        w, s = top_centroid(mw, third), top_centroid(ms, third)
-        off.append(w - s)
-        cx.append(w)
-    return {"coverage": cov, "offset": off, "centroid": cx, "height_px": height_px}
+    run_demo(demo, wind_dir, common)
+    run_demo(demo, still_dir, common + ["--wind-speed", "0"])
+    rows = measure_folders(demo, wind_dir, still_dir)
+    return {"coverage": [r["coverage"] for r in rows], "offset": [r["offset_px"] for r in rows],
+            "centroid": [r["top_x"] for r in rows], "sharpness": [r["sharpness"] for r in rows],
+            "height_px": int(rows[0]["height"]) if rows else None}
+
+
+def finite(v):
+    return [x for x in v if math.isfinite(x)]
 
 
 def corr(a, b):
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    ok = np.isfinite(a) & np.isfinite(b)
-    a, b = a[ok] - a[ok].mean(), b[ok] - b[ok].mean()
-    d = np.sqrt((a * a).sum() * (b * b).sum())
-    return float((a * b).sum() / d) if d > 0 else float("nan")
+    """Pearson's correlation of two series over the frames where both are finite."""
+    pairs = [(x, y) for x, y in zip(a, b) if math.isfinite(x) and math.isfinite(y)]
+    if len(pairs) < 2:
+        return float("nan")
+    ma = sum(p[0] for p in pairs) / len(pairs)
+    mb = sum(p[1] for p in pairs) / len(pairs)
+    sab = sum((x - ma) * (y - mb) for x, y in pairs)
+    d = math.sqrt(sum((x - ma) ** 2 for x, _ in pairs) * sum((y - mb) ** 2 for _, y in pairs))
+    return sab / d if d > 0 else float("nan")
 
 
 def main():
@@ -97,10 +92,14 @@ def main():
     ap.add_argument("--size", default="320x240")
     ap.add_argument("--cases", default="orbit,mirror,yaw90,breeze")
     ap.add_argument("--extra", default="")
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--check", action="store_true")
     ap.add_argument("--json", default="")
     o = ap.parse_args()
     extra = o.extra.split() if o.extra else []
-    results = []
+    # Frames per case: (orbit frames, degrees a frame), mirror, yaw90, breeze.
+    orbit, mirror, yaw90, breeze = ((12, 30), 30, 10, 60) if o.quick else ((40, 9), 60, 60, 120)
+    results, failures = [], []
     for scene in o.scenes.split(","):
         scene_args = ["--gltf", scene[5:]] if scene.startswith("gltf:") else ["--scene", scene]
         name = os.path.basename(scene[5:]) if scene.startswith("gltf:") else scene
@@ -109,22 +108,29 @@ def main():
             row = {"scene": name, "method": method}
             tag = os.path.join(o.out, f"{name}_{method}")
             if "orbit" in o.cases:
-                m = measure(o.demo, tag + "_orbit", base, ["--camera", "orbit", "--degrees-per-frame", "9"], 40)
+                m = measure(o.demo, tag + "_orbit", base, ["--camera", "orbit", "--degrees-per-frame", str(orbit[1])], orbit[0])
                 row["orbit_coverage_min"] = min(m["coverage"])
                 row["orbit_coverage"] = m["coverage"]
+                row["orbit_sharpness_min"] = min(m["sharpness"])
+                if row["orbit_coverage_min"] < 0.9:
+                    failures.append(f"{name} {method}: orbit coverage {row['orbit_coverage_min']:.3f} < 0.9")
             if "mirror" in o.cases:
-                m0 = measure(o.demo, tag + "_yaw0", base, ["--yaw", "0"], 60)
-                m1 = measure(o.demo, tag + "_yaw180", base, ["--yaw", "180"], 60)
+                m0 = measure(o.demo, tag + "_yaw0", base, ["--yaw", "0"], mirror)
+                m1 = measure(o.demo, tag + "_yaw180", base, ["--yaw", "180"], mirror)
                 row["mirror_correlation"] = corr(m0["offset"], m1["offset"])
-                row["yaw0_offset_mean"] = float(np.nanmean(m0["offset"]))
-                row["yaw180_offset_mean"] = float(np.nanmean(m1["offset"]))
+                row["yaw0_offset_mean"] = sum(finite(m0["offset"])) / max(len(finite(m0["offset"])), 1)
+                row["yaw180_offset_mean"] = sum(finite(m1["offset"])) / max(len(finite(m1["offset"])), 1)
+                if not row["mirror_correlation"] <= -0.6:
+                    failures.append(f"{name} {method}: mirror correlation {row['mirror_correlation']:.3f} > -0.6")
             if "yaw90" in o.cases:
-                m = measure(o.demo, tag + "_yaw90", base, ["--yaw", "90"], 60)
+                m = measure(o.demo, tag + "_yaw90", base, ["--yaw", "90"], yaw90)
                 row["yaw90_coverage_min"] = min(m["coverage"])
+                if row["yaw90_coverage_min"] < 0.9:
+                    failures.append(f"{name} {method}: yaw 90 coverage {row['yaw90_coverage_min']:.3f} < 0.9")
             if "breeze" in o.cases:
-                m = measure(o.demo, tag + "_breeze", base, [], 120)
-                c = np.asarray(m["centroid"], float)
-                row["breeze_sway"] = float((np.nanmax(c) - np.nanmin(c)) / max(m["height_px"] or 1, 1))
+                m = measure(o.demo, tag + "_breeze", base, [], breeze)
+                c = finite(m["centroid"])
+                row["breeze_sway"] = (max(c) - min(c)) / max(m["height_px"] or 1, 1) if c else float("nan")
                 row["breeze_height_px"] = m["height_px"]
             results.append(row)
             short = {k: (round(v, 3) if isinstance(v, float) else v) for k, v in row.items() if not isinstance(v, list)}
@@ -132,6 +138,11 @@ def main():
     if o.json:
         with open(o.json, "w") as fh:
             json.dump(results, fh, indent=1)
+    if o.check:
+        for f in failures:
+            print(f"wind_views: {f}")
+        print(f"wind_views: {'FAILED' if failures else 'all within'} issue 66's bounds ({len(results)} runs)")
+        sys.exit(1 if failures else 0)
 
 
 if __name__ == "__main__":

@@ -139,7 +139,7 @@ void main() {
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
     vec4 c = texture(layerColor, uvw);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
-    if (reproject && bilinear) {
+    if (bilinear && c.a < 1.0 - COMPOSITE_EDGE_TOLERANCE) {  // an edge: cut it (composite.h)
       c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
       if (c.a < COMPOSITE_MIN_ALPHA) continue;
     }

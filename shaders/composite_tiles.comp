@@ -100,7 +100,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
     vec4 c = textureLod(layerColor, uvw, 0.0);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;
-    if (reproject && bilinear) {
+    if (bilinear && c.a < 1.0 - COMPOSITE_EDGE_TOLERANCE) {  // an edge: cut it (composite.h)
       c = compositeSharpenEdge(c, textureGather(layerColor, uvw, 3));
       if (c.a < COMPOSITE_MIN_ALPHA) continue;
     }

@@ -23,7 +23,7 @@ TEST(WorldWind, ThePlaneIsTheWindsHorizontalAndSpansTheVegetation) {
     EXPECT_LT(angleBetween(toGlm(p.right), d), 1e-5f);
     EXPECT_NEAR(glm::dot(toGlm(p.up), glm::vec3(0, 1, 0)), 0.0f, 1e-6f) << "the plane's y axis is horizontal";
     EXPECT_NEAR(std::abs(glm::cross(toGlm(p.right), toGlm(p.up)).y), 1.0f, 1e-5f) << "a horizontal wind: the ground plane";
-    EXPECT_FLOAT_EQ(p.tileSize, 2.0f) << "at least tileMetres";
+    EXPECT_FLOAT_EQ(p.tileSize, 4.0f) << "at least tileMetres";
     // Centred on the vegetation: its centre maps to the tile's middle.
     const glm::vec3 rel = 0.5f * (lo + hi) - toGlm(p.origin);
     EXPECT_NEAR(glm::dot(rel, toGlm(p.right)) / p.tileSize, 0.5f, 1e-5f);
@@ -32,11 +32,11 @@ TEST(WorldWind, ThePlaneIsTheWindsHorizontalAndSpansTheVegetation) {
   // A field wider than tileMetres: one tile over it; a world in centimetres: tileMetres in its units.
   EXPECT_FLOAT_EQ(worldWindPlane(w, glm::vec3(1, 0, 0), glm::vec3(-6, 0, -4), glm::vec3(6, 2, 4)).tileSize, 12.0f);
   w.unitsPerMetre = 100.0f;
-  EXPECT_FLOAT_EQ(worldWindPlane(w, glm::vec3(1, 0, 0), 100.0f * lo, 100.0f * hi).tileSize, 200.0f);
+  EXPECT_FLOAT_EQ(worldWindPlane(w, glm::vec3(1, 0, 0), 100.0f * lo, 100.0f * hi).tileSize, 400.0f);
   // The inflow: from the plane's left (toward +x, the wind), the wind's speed in tiles/s.
   const SimulationParams sp = worldWindSimulation(SimulationParams{}, w, worldWindPlane(w, glm::vec3(1, 0, 0), 100.0f * lo, 100.0f * hi), 3.0f);
   EXPECT_EQ(sp.wind.sides, uint32_t(kWindFromLeft));
-  EXPECT_FLOAT_EQ(sp.wind.strength, 3.0f * 100.0f / 200.0f);
+  EXPECT_FLOAT_EQ(sp.wind.strength, 3.0f * 100.0f / 400.0f);
   EXPECT_FLOAT_EQ(sp.wind.modulation, w.gustIntensity);
   EXPECT_FLOAT_EQ(sp.wind.frequency, w.gustFrequency);
   EXPECT_FLOAT_EQ(sp.wind.gust, w.turbulence);
@@ -110,6 +110,18 @@ TEST(WorldWind, TheShrinkAlongTheViewIsBoundedByAShareOfTheHeightAboveTheRoot) {
   // World wind: eq. 6 times the plant's height (a plant twice as tall on screen moves twice as far).
   f.heightRelative = 1u;
   f.lambda = glm::vec4(0.9f, 0.9f, 0.45f, 1.0f / 30.0f);
+  // ...and the shrink is the lean's own foreshortening: a corner l above its root leaning e along
+  // the view (the lean it shows seen across, k lambda_x |V_z|) shows l - sqrt(l^2 - e^2) shorter,
+  // well under the paper's linear k lambda_z |V_z| for a breeze's lean.
+  for (float vz : {0.3f, 1.0f, 2.0f}) {
+    const float l = layer.rootLineY - 100.0f;
+    const float k = (l / layer.height) * layer.height * f.lambda.w;  // R = l/h (rigidity 1), times h
+    const float e = k * f.lambda.x * vz;
+    const float want = std::min(l - std::sqrt(std::max(l * l - e * e, 0.0f)), 0.05f * l);
+    const glm::vec2 d = gpu::displacementPixels(f, layer, 100.0f, glm::vec3(0.0f, 0.0f, vz));
+    EXPECT_NEAR(d.y, want, 1e-3f * l) << "V_z " << vz;
+    EXPECT_LT(d.y, k * f.lambda.z * vz) << "V_z " << vz << ": less than the paper's linear shrink";
+  }
   const float a = gpu::displacementPixels(f, layer, 100.0f, glm::vec3(1.0f, 0.0f, 0.0f)).x;
   layer.height = 200.0f;
   layer.rootLineY = 300.0f;

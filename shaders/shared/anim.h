@@ -141,8 +141,14 @@ CANOPY_INLINE vec2 displacementPixels(AnimFrame f, AnimLayer layer, float pixelY
   float dx = k * f.lambda.x * vi.x;
   // The shrink along the view (the paper's Figure 9) is bounded by a share of the height above the
   // root: with the wind along the view the whole of V is V_z, and the unbounded term would pull a
-  // crown's top down by more than the crown (docs/design.md "World wind").
-  float shrink = min(k * f.lambda.z * abs(vi.z), f.maxShrink * max(layer.rootLineY - pixelY, 0.0f));
+  // crown's top down by more than the crown (docs/design.md "World wind"). World wind: the
+  // foreshortening of the lean itself, l - sqrt(l^2 - e^2) for a corner l above its root leaning
+  // e = k lambda_x |V_z| along the view (the lean it shows when seen across), not the paper's
+  // linear term, which shrank a crown in a breeze ten times more than the lean can.
+  float l = max(layer.rootLineY - pixelY, 0.0f);
+  float e = k * f.lambda.x * abs(vi.z);
+  float shrink = f.heightRelative != 0u ? l - sqrt(max(l * l - e * e, 0.0f)) : k * f.lambda.z * abs(vi.z);
+  shrink = min(shrink, f.maxShrink * l);
   float dyUp = k * f.lambda.y * vi.y - shrink;
   return vec2(dx, -dyUp);
 }

@@ -215,10 +215,10 @@ CANOPY_INLINE vec3 compositeRayCrossing(CompositeRay r, uint k, float z, vec2 si
   return vec3((x.x / x.w + 1.0f) * 0.5f * size.x, (x.y / x.w + 1.0f) * 0.5f * size.y, 1.0f);
 }
 
-// Reprojection resamples the layers at fractional texel positions (a still camera reads texel
-// centres), where bilinear filtering turns an alpha-tested leaf edge (texels of alpha 0 and 1)
-// into a faint ramp about a pixel wide that neither a still camera nor layers drawn at the new
-// camera have. Where the four footprint texels (alphas `a`) are each empty or opaque, the sample is
+// The wind's inverse warp and reprojection resample the layers at fractional texel positions,
+// where bilinear filtering turns an alpha-tested leaf edge (texels of alpha 0 and 1) into a faint
+// ramp about a pixel wide that the layers drawn still have not, and a one-pixel grass blade into
+// two half-alpha pixels that no longer read as foliage. Where the four footprint texels (alphas `a`) are each empty or opaque, the sample is
 // cut at alpha 1/2 — the edge at the sub-texel position the bilinear ramp puts it — and shown
 // opaque in the footprint's mean colour; footprints with partial alpha (blended materials, parts
 // fading to impostors, a cross-fade) keep the bilinear sample (docs/design.md "Layers:

@@ -449,17 +449,19 @@ enum class PerVertexWind {
 // profile strength * (baseline + modulation sin(2 pi frequency t)) as the mean wind, its direction
 // from the source sides on the simulation plane, its gust as the turbulence intensity (the
 // fluctuation's standard deviation over the mean speed). Levels: 0 trunk, 1 branch, 2 twig,
-// 3 finer; then each leaf about its root. Tip bends are given at referenceSpeed (drag makes them
-// grow with the speed squared); with KaimalField each level responds as a damped oscillator of
-// natural frequency `frequency` and damping ratio `damping`. The defaults sway the demo's shrub as
-// much as the 2D method does in the same wind (docs/performance.md "The 2D method against the
-// per-vertex baseline").
+// 3 finer; then each leaf about its root. Tip bends are given at referenceSpeed (WindMode::World:
+// worldReferenceSpeed; drag makes them grow with the speed squared); with KaimalField each level
+// responds as a damped oscillator of natural frequency `frequency` and damping ratio `damping`. The
+// defaults sway the default shrub within a factor 1.5 of the 2D method in the default world wind
+// (docs/performance.md "The wind from every side"), and as much in 0.7's demo wind (PlaneSides:
+// "The 2D method against the per-vertex baseline").
 #define CANOPY_PER_VERTEX_PARAMS(X)                                                                                     \
   X(Float4, flexibility, (Float4{{0.045f, 0.079f, 0.1125f, 0.135f}}), Closed, 0, 100, "rad", "tip bend per level (0.036, 0.063, 0.09, 0.108 before 0.7)") \
   X(float, leafFlexibility, 0.3375f, Closed, 0, 100, "rad", "a leaf's bend about its root (0.27 before 0.7)")        \
   X(Float4, frequency, (Float4{{0.35f, 0.8f, 1.6f, 2.6f}}), Closed, 0, 100, "Hz", "natural (sway) frequency per level") \
   X(float, leafFrequency, 4.0f, Closed, 0, 100, "Hz", "a leaf's natural frequency")                                    \
-  X(float, referenceSpeed, 2.0f, AboveMin, 0, 1000, "domain units/s", "the mean wind speed the two above are given at") \
+  X(float, referenceSpeed, 2.0f, AboveMin, 0, 1000, "domain units/s", "WindMode::PlaneSides: the mean wind speed the two above are given at") \
+  X(float, worldReferenceSpeed, 6.0f, AboveMin, 0, 1000, "m/s", "WindMode::World: the mean wind speed the two above are given at") \
   X(float, lateral, 0.4f, Closed, 0, 1, "", "sway across the wind relative to the sway along it")                      \
   X(float, maxAngle, 0.5f, AboveMin, 0, 1.5, "rad", "saturation of any one bend")                                      \
   X(float, taper, 1.5f, Closed, 0.5, 4, "", "the rotation at coordinate x along a branch is tip * x^taper")            \
@@ -492,7 +494,7 @@ enum class WindMode : uint32_t {
   X(float, gustFrequency, 0.3f, Closed, 0, 100, "Hz", "how often the gusts come")                                      \
   X(float, turbulence, 0.3f, Closed, 0, 1, "", "noise travelling along the gust front, relative to the speed")         \
   X(float, easeSeconds, 2.0f, Closed, 0, 600, "s", "a change of direction or speed eases in over this time (0: at once)") \
-  X(float, tileMetres, 2.0f, Closed, 0.01, 1e4, "m", "the simulation tile's least side in the world (it spans the vegetation seen from above)") \
+  X(float, tileMetres, 4.0f, Closed, 0.01, 1e4, "m", "the simulation tile's least side in the world (it spans the vegetation seen from above: a plant smaller than it sways as one)") \
   X(float, sway, 0.03f, Closed, 0, 10, "of its height per m/s", "how far a plant's top moves in the wind: eq. 6 in shares of the plant's on-screen height")
 CANOPY_PARAM_STRUCT(WorldWind, CANOPY_WORLD_WIND)
 

@@ -32,7 +32,9 @@ grep -q "self-check: 24 frames checked, 24 with vegetation in front of the host'
   { echo "FAIL: six species: the self-check line"; exit 1; }
 grep -q "^338 copies of six_species.json (.* of its 6 species)" "$out/stdout_six" || { echo "FAIL: six species: not 338 copies of 6 species"; exit 1; }
 # The character parts the grass: the six species without leaves, with and without its push; the
-# frames' difference inside the band where it walked (the host's band masks), at most 25 % beyond.
+# frames' difference inside the band where it walked (the host's band masks), at most 40 % beyond
+# (16.8 % before the warp cut leaf edges at alpha 1/2 on every frame: an edge's sub-pixel move now
+# shows as a whole pixel, as drawn geometry does, inside and beyond alike; 33.3 % since).
 # Without the validation layers: the run above checked this scene with them, and these two only
 # compare pictures.
 for run in push nopush; do
@@ -41,5 +43,5 @@ for run in push nopush; do
   xvfb-run -a -s "-screen 0 1024x768x24" "$host" --scene-file "$scenes/six_species.json" --frames 24 $extra \
     --out "$out/$run" --write-every 1 >"$out/stdout_$run" 2>"$out/stderr_$run" || { echo "FAIL: $run: exit $? ($(tail -5 "$out/stderr_$run"))"; exit 1; }
 done
-python3 "$(dirname "$0")/game_host_push.py" "$out/push" "$out/nopush" 25 || { echo "FAIL: the character's push"; exit 1; }
+python3 "$(dirname "$0")/game_host_push.py" "$out/push" "$out/nopush" 40 || { echo "FAIL: the character's push"; exit 1; }
 echo "PASS"

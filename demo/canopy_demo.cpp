@@ -633,22 +633,11 @@ int compareFolders(const Options& o) {
     crop = glm::ivec4(int(std::floor(lo.x)), int(std::floor(lo.y)), int(std::ceil(hi.x)), int(std::ceil(hi.y)));
   }
   for (;; ++n) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/frame_%04u.png", n);
-    const std::string fa = o.compareA + name, fb = o.compareB + name;
-    const bool haveA = access(fa.c_str(), F_OK) == 0, haveB = access(fb.c_str(), F_OK) == 0;
-    if (!haveA && !haveB) break;
-    uint32_t wa = 0, ha = 0, wb = 0, hb = 0;
+    uint32_t wa = 0, ha = 0;
     std::vector<uint8_t> a, b;
-    Status s = haveA && haveB ? readPng(fa, &wa, &ha, &a) : Status::error((haveA ? fb : fa) + " is missing");
-    if (s.ok()) s = readPng(fb, &wb, &hb, &b);
-    if (s.ok() && (wa != wb || ha != hb))
-      s = Status::error(fa + " is " + std::to_string(wa) + "x" + std::to_string(ha) + ", " + fb + " " + std::to_string(wb) + "x" +
-                        std::to_string(hb));
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
-      return 1;
-    }
+    const int rc = readFramePair(o.compareA, o.compareB, n, &wa, &ha, &a, &b);
+    if (rc == 1) break;
+    if (rc == 2) return 1;
     const WorldLockError e = compareFrames(a, b, wa, ha, clear);
     if (!path.empty()) {
       const uint32_t frames = uint32_t(path.size());

@@ -10,6 +10,24 @@
 
 namespace canopy::demo {
 
+int readFramePair(const std::string& a, const std::string& b, uint32_t n, uint32_t* width, uint32_t* height,
+                  std::vector<uint8_t>* pixelsA, std::vector<uint8_t>* pixelsB) {
+  char name[32];
+  std::snprintf(name, sizeof name, "/frame_%04u.png", n);
+  const std::string fa = a + name, fb = b + name;
+  const bool haveA = access(fa.c_str(), F_OK) == 0, haveB = access(fb.c_str(), F_OK) == 0;
+  if (!haveA && !haveB) return 1;
+  uint32_t wb = 0, hb = 0;
+  Status s = haveA && haveB ? readPng(fa, width, height, pixelsA) : Status::error((haveA ? fb : fa) + " is missing");
+  if (s.ok()) s = readPng(fb, &wb, &hb, pixelsB);
+  if (s.ok() && (*width != wb || *height != hb))
+    s = Status::error(fa + " is " + std::to_string(*width) + "x" + std::to_string(*height) + ", " + fb + " " + std::to_string(wb) +
+                      "x" + std::to_string(hb));
+  if (s.ok()) return 0;
+  std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
+  return 2;
+}
+
 int measureFoliageFolders(const std::string& wind, const std::string& still) {
   // One line per frame, machine-read by scripts/wind_views.py: keep the columns.
   std::printf("foliage of %s (wind) against %s (still)\n", wind.c_str(), still.c_str());
@@ -18,22 +36,11 @@ int measureFoliageFolders(const std::string& wind, const std::string& still) {
   double leastCoverage = 1e30, leastSharpness = 1e30;
   uint32_t n = 0;
   for (;; ++n) {
-    char name[32];
-    std::snprintf(name, sizeof name, "/frame_%04u.png", n);
-    const std::string fw = wind + name, fs = still + name;
-    const bool haveW = access(fw.c_str(), F_OK) == 0, haveS = access(fs.c_str(), F_OK) == 0;
-    if (!haveW && !haveS) break;
-    uint32_t ww = 0, hw = 0, ws = 0, hs = 0;
+    uint32_t ww = 0, hw = 0;
     std::vector<uint8_t> a, b;
-    Status s = haveW && haveS ? readPng(fw, &ww, &hw, &a) : Status::error((haveW ? fs : fw) + " is missing");
-    if (s.ok()) s = readPng(fs, &ws, &hs, &b);
-    if (s.ok() && (ww != ws || hw != hs))
-      s = Status::error(fw + " is " + std::to_string(ww) + "x" + std::to_string(hw) + ", " + fs + " " + std::to_string(ws) + "x" +
-                        std::to_string(hs));
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-demo: %s\n", s.message().c_str());
-      return 1;
-    }
+    const int rc = readFramePair(wind, still, n, &ww, &hw, &a, &b);
+    if (rc == 1) break;
+    if (rc == 2) return 1;
     const FoliageMeasure m = measureFoliage(a, b, ww, hw);
     std::printf("%6u %8llu %8llu %9.4f %10.3f %10.3f %7u %10.4f\n", n, (unsigned long long)m.windPixels,
                 (unsigned long long)m.stillPixels, m.coverage, m.offsetPx, m.windTopX, m.heightPx, m.sharpness);

@@ -218,11 +218,11 @@ CANOPY_INLINE vec3 compositeRayCrossing(CompositeRay r, uint k, float z, vec2 si
 // The wind's inverse warp and reprojection resample the layers at fractional texel positions,
 // where bilinear filtering turns an alpha-tested leaf edge (texels of alpha 0 and 1) into a faint
 // ramp about a pixel wide that the layers drawn still have not, and a one-pixel grass blade into
-// two half-alpha pixels that no longer read as foliage. Where the four footprint texels (alphas `a`) are each empty or opaque, the sample is
-// cut at alpha 1/2 — the edge at the sub-texel position the bilinear ramp puts it — and shown
-// opaque in the footprint's mean colour; footprints with partial alpha (blended materials, parts
-// fading to impostors, a cross-fade) keep the bilinear sample (docs/design.md "Layers:
-// reprojection", edges).
+// two half-alpha pixels that no longer read as foliage. Where the four footprint texels (alphas
+// `a`) are each empty or opaque, the sample is cut at alpha 1/2 — the edge at the sub-texel
+// position the bilinear ramp puts it — and shown opaque in the footprint's mean colour; footprints
+// with partial alpha (blended materials, parts fading to impostors, a cross-fade) keep the bilinear
+// sample (docs/design.md "Layers: reprojection", edges).
 CANOPY_INLINE vec4 compositeSharpenEdge(vec4 c, vec4 a) {
   float partial = max(max(min(a.x, 1.0f - a.x), min(a.y, 1.0f - a.y)), max(min(a.z, 1.0f - a.z), min(a.w, 1.0f - a.w)));
   if (partial > COMPOSITE_EDGE_TOLERANCE) return c;

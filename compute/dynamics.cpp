@@ -91,6 +91,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.height = float(d.height);
   f.maxDelay = p.maxDelay;
   f.maxShrink = p.maxShrink;
+  f.maxStretch = p.maxStretch;
   if (d.newestSlot != ANIM_RING_UNORDERED && d.newestSlot >= d.ringSize)
     return Status::error("dynamics: newestSlot = " + std::to_string(d.newestSlot) + " is outside the ring of " +
                          std::to_string(d.ringSize) + " slots");
@@ -129,7 +130,8 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
         for (size_t j = 0; j < dl.plants.size(); ++j) {
           const glm::vec2 r = j < dl.plantResponse.size() ? dl.plantResponse[j] : glm::vec2(1.0f);
           plantRects->push_back(dl.plants[j]);
-          plantRects->push_back(glm::vec4(r, ownRoot, 0.0f));
+          const float h = j < dl.plantHeight.size() ? dl.plantHeight[j] : 0.0f;
+          plantRects->push_back(glm::vec4(r, ownRoot, h));
         }
       }
   }
@@ -149,6 +151,10 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
     ComputePipelineDesc pd;
     pd.shader = "anim_displace.comp";
     CANOPY_TRY(createComputePipeline(d, pd, &out->pipeline));
+    pd.shader = "anim_stretch_cols.comp";
+    CANOPY_TRY(createComputePipeline(d, pd, &out->stretchCols));
+    pd.shader = "anim_stretch_rows.comp";
+    CANOPY_TRY(createComputePipeline(d, pd, &out->stretchRows));
     static_assert(sizeof(gpu::AnimFrame) % 4 == 0 && sizeof(gpu::AnimFrame) <= 65536,
                   "the frame block is written with one vkCmdUpdateBuffer");
     CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + 2 * ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
@@ -159,6 +165,12 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
                             &out->displacement, "dynamics: displacement"));
     CANOPY_TRY(createBuffer(d, out->displacement.size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                             MemoryUsage::DeviceLocal, &out->previous, "dynamics: previous displacement"));
+    CANOPY_TRY(createBuffer(d, out->displacement.size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
+                            MemoryUsage::DeviceLocal, &out->raw, "dynamics: displacement before the stretch bound"));
+    CANOPY_TRY(createBuffer(d, out->displacement.size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, MemoryUsage::DeviceLocal,
+                            &out->bendShare, "dynamics: the pushers' share"));
+    CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(float), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                            MemoryUsage::DeviceLocal, &out->envelope, "dynamics: stretch envelope"));
     return Status();
   }();
   if (!s.ok()) destroyLayerDynamics(*out);
@@ -168,6 +180,11 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
 void destroyLayerDynamics(LayerDynamics& x) {
   if (!x.device) return;
   destroyComputePipeline(*x.device, x.pipeline);
+  destroyComputePipeline(*x.device, x.stretchCols);
+  destroyComputePipeline(*x.device, x.stretchRows);
+  destroyBuffer(*x.device, x.raw);
+  destroyBuffer(*x.device, x.envelope);
+  destroyBuffer(*x.device, x.bendShare);
   destroyBuffer(*x.device, x.frame);
   destroyBuffer(*x.device, x.displacement);
   destroyBuffer(*x.device, x.previous);
@@ -181,6 +198,9 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   const auto frame = g.importBuffer("dynamics: frame", x.frame.size, kComputeRead, kComputeRead);
   const auto disp = g.importBuffer("dynamics: displacement", x.displacement.size, kComputeRead, kComputeRead);
   const auto prev = g.importBuffer("dynamics: previous displacement", x.previous.size, kComputeRead, kComputeRead);
+  const auto raw = g.importBuffer("dynamics: displacement before the stretch bound", x.raw.size, kComputeRead, kComputeRead);
+  const auto env = g.importBuffer("dynamics: stretch envelope", x.envelope.size, kComputeRead, kComputeRead);
+  const auto share = g.importBuffer("dynamics: the pushers' share", x.bendShare.size, kComputeRead, kComputeRead);
   LayerDynamics* p = &x;
   g.addPass("dynamics: frame", [p](rg::PassContext& c) {
      c.device->vk.CmdUpdateBuffer(c.cmd, p->frame.buffer, 0, sizeof(gpu::AnimFrame), &p->current);
@@ -194,7 +214,8 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
   using rg::Use;
   const rg::Slots slots = {rg::slot(frame, Use::ComputeStorageRead),     rg::slot(tiled, Use::ComputeStorageRead),
                            rg::slot(ring, Use::ComputeStorageRead),      rg::slot(ringTimes, Use::ComputeStorageRead),
-                           rg::slot(disp, Use::ComputeStorageReadWrite), rg::slot(prev, Use::ComputeStorageWrite)};
+                           rg::slot(disp, Use::ComputeStorageRead),      rg::slot(prev, Use::ComputeStorageWrite),
+                           rg::slot(raw, Use::ComputeStorageWrite),      rg::slot(share, Use::ComputeStorageWrite)};
   rg::addSlotPass(g, "dynamics: displacement", slots, [p](rg::PassContext& c, const rg::Slots& s) {
     const gpu::AnimFrame& f = p->current;
     const uint32_t corners = f.gridX * f.gridY;
@@ -203,9 +224,24 @@ Status addDynamicsPasses(LayerDynamics& x, rg::RenderGraph& g, rg::ResourceId ti
                            ", " + std::to_string(f.layerCount) + " layers) exceeds what the dynamics were created for");
     return rg::dispatchSlots(c, p->pipeline, s, corners, f.layerCount, 1, nullptr, 0);
   });
+  // The warp's stretch bound (docs/design.md "Layers: the warp's stretch"): along the columns, then the rows.
+  const rg::Slots cols = {rg::slot(frame, Use::ComputeStorageRead), rg::slot(raw, Use::ComputeStorageRead),
+                          rg::slot(env, Use::ComputeStorageWrite)};
+  rg::addSlotPass(g, "dynamics: stretch columns", cols, [p](rg::PassContext& c, const rg::Slots& s) {
+    return rg::dispatchSlots(c, p->stretchCols, s, p->current.gridX, p->current.layerCount, 1, nullptr, 0);  // a column each
+  });
+  const rg::Slots rows = {rg::slot(frame, Use::ComputeStorageRead), rg::slot(raw, Use::ComputeStorageRead),
+                          rg::slot(env, Use::ComputeStorageReadWrite), rg::slot(disp, Use::ComputeStorageWrite),
+                          rg::slot(share, Use::ComputeStorageRead)};
+  rg::addSlotPass(g, "dynamics: stretch rows", rows, [p](rg::PassContext& c, const rg::Slots& s) {
+    return rg::dispatchSlots(c, p->stretchRows, s, p->current.gridY, p->current.layerCount, 1, nullptr, 0);  // a row each
+  });
   CANOPY_TRY(g.bindBuffer(frame, x.frame.buffer));
   CANOPY_TRY(g.bindBuffer(disp, x.displacement.buffer));
   CANOPY_TRY(g.bindBuffer(prev, x.previous.buffer));
+  CANOPY_TRY(g.bindBuffer(raw, x.raw.buffer));
+  CANOPY_TRY(g.bindBuffer(env, x.envelope.buffer));
+  CANOPY_TRY(g.bindBuffer(share, x.bendShare.buffer));
   if (displacement) *displacement = disp;
   if (previous) *previous = prev;
   if (frameOut) *frameOut = frame;

@@ -34,6 +34,7 @@ struct DynamicsLayer {
   float height = 1;     // pixels
   std::vector<glm::vec4> plants;  // per-plant roots: rects (x lo, x hi, top, root row), LayerInfo::plants
   std::vector<glm::vec2> plantResponse;  // per rect: its species' flexibility and response speed; empty: 1, 1
+  std::vector<float> plantHeight;        // per rect: eq. 7's h, pixels (LayerInfo::plantHeight); empty or 0: the rect's rows
 };
 
 struct DynamicsFrameDesc {
@@ -66,9 +67,13 @@ Status makeAnimFrame(const DynamicsParams& params, const DynamicsFrameDesc& desc
 struct LayerDynamics {
   Device* device = nullptr;
   ComputePipeline pipeline;
+  ComputePipeline stretchCols, stretchRows;  // the warp's stretch bound (DynamicsParams.maxStretch)
   Buffer frame;         // AnimFrame
   Buffer displacement;  // layers x gridY x gridX vec2, pixels (y down)
   Buffer previous;      // the displacement of the frame before (motion vectors)
+  Buffer raw;           // eq. 6-7 before the stretch bound, as displacement
+  Buffer envelope;      // the stretch bound's column pass: a float per corner
+  Buffer bendShare;     // the pushers' share of the displacement, added after the bound, as displacement
   gpu::AnimFrame current{};
   std::vector<glm::vec4> plantRects;  // uploaded after `current` (per-plant roots)
   uint32_t maxCorners = 0, maxLayers = 0;
@@ -78,7 +83,7 @@ Status createLayerDynamics(Device& device, uint32_t width, uint32_t height, uint
                            LayerDynamics* out);
 void destroyLayerDynamics(LayerDynamics& dynamics);
 
-// Adds "dynamics: frame" and "dynamics: displacement". `tiled`, `ring` and `ringTimes` are the
+// Adds "dynamics: frame", "dynamics: displacement" and the stretch bound's two passes. `tiled`, `ring` and `ringTimes` are the
 // simulation's buffers (SimulationResources); the frame used is dynamics.current at record time.
 // Returns the ids of the displacement buffer, of the previous frame's and of the AnimFrame block
 // (`previous` and `frame` may be null).

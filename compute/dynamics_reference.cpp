@@ -61,7 +61,7 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
           bestD = gpu::plantRectDistance2(r, pixel);
           bestA = (r.y - r.x) * (r.w - r.z);
           const glm::vec4 species = plantRects[2 * j + 1];
-          rooted = species.z > 0.0f ? gpu::withPlantRoot(f.layers[layer], r) : f.layers[layer];
+          rooted = species.z > 0.0f ? gpu::withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
           response = glm::vec2(species);
         }
       }
@@ -72,6 +72,26 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
                                              : gpu::simToView(f, sampleTiledReference(tiled.data(), f.n, gpu::approximateLookup(f, a, gamma, vs)));
       }
       out[size_t(layer) * corners + id] = response.x * gpu::displacementPixels(f, rooted, pixel.y, vi);
+    }
+  return boundStretchReference(f, out);
+}
+
+std::vector<glm::vec2> boundStretchReference(const gpu::AnimFrame& f, const std::vector<glm::vec2>& raw) {
+  // The largest L-Lipschitz magnitude under |d| in the grid's L1 metric, by brute force over every
+  // corner pair (the shaders separate it into a column and a row pass; the two are equal).
+  if (f.maxStretch <= 0.0f) return raw;
+  std::vector<glm::vec2> out(raw.size());
+  const uint32_t corners = f.gridX * f.gridY;
+  const float step = f.maxStretch * f.cellSize;
+  for (uint32_t layer = 0; layer < f.layerCount; ++layer)
+    for (uint32_t id = 0; id < corners; ++id) {
+      const int gx = int(id % f.gridX), gy = int(id / f.gridX);
+      float m = 3.0e38f;
+      for (uint32_t n = 0; n < corners; ++n) {
+        const int nx = int(n % f.gridX), ny = int(n / f.gridX);
+        m = std::min(m, glm::length(raw[size_t(layer) * corners + n]) + step * float(std::abs(nx - gx) + std::abs(ny - gy)));
+      }
+      out[size_t(layer) * corners + id] = gpu::stretchBounded(raw[size_t(layer) * corners + id], m);
     }
   return out;
 }

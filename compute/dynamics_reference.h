@@ -15,6 +15,10 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
                                              const std::vector<glm::vec2>& ring, const std::vector<float>& ringTimes,
                                              const std::vector<glm::vec4>& plantRects = {});
 
+// The warp's stretch bound (AnimFrame.maxStretch; anim_stretch_cols/rows.comp): each corner's
+// displacement shortened to the largest L-Lipschitz magnitude (L1 grid metric) under |d|.
+std::vector<glm::vec2> boundStretchReference(const gpu::AnimFrame& f, const std::vector<glm::vec2>& raw);
+
 // The simulation-plane coordinate (tile units) of warp-grid corner (gx, gy) of a layer.
 glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy);
 

@@ -94,6 +94,7 @@ void printHelp() {
       "%s%s%s%s"
       "  --no-translucency   unlit leaf sides get the ambient term only\n"
       "  --nearest           the warp reads each layer's nearest texel instead of a bilinear sample (CompositeParams.bilinear)\n"
+      "%s%s"
       "  --light-sheet       headless: after the frames, write light_sheet.png: the last frame lit by --light,\n"
       "                      by the light turned 180 degrees about the vertical (from behind), and by that\n"
       "                      light without translucency\n"
@@ -164,7 +165,8 @@ void printHelp() {
       d.light.z, d.lightColor.x, d.lightColor.y, d.lightColor.z, mirrored("--ambient A", "LayerSettings.ambient", d.ambient).c_str(),
       mirrored("--leaf-ior N", "LayerSettings.leafRefractiveIndex", d.leafIor).c_str(),
       mirrored("--leaf-roughness S", "LayerSettings.leafRoughness", d.leafRoughness).c_str(),
-      mirrored("--leaf-transmission T", "LayerSettings.leafTransmission", d.leafTransmission).c_str(), d.width, d.height,
+      mirrored("--leaf-transmission T", "LayerSettings.leafTransmission", d.leafTransmission).c_str(), mirrored("--sharpness K", "CompositeParams.sharpness", d.sharpness).c_str(),
+      mirrored("--max-stretch L", "DynamicsParams.maxStretch", d.maxStretch).c_str(), d.width, d.height,
       d.frames, d.warmupSeconds, d.fps, d.orbitDegrees,
       mirrored("--reslice-error PX", "LayerSettings.errorThresholdPixels", d.resliceErrorPixels).c_str(),
       mirrored("--guard-band F", "CanopyDesc.guardBand", d.guardBand).c_str(),
@@ -223,6 +225,8 @@ const NumberOption kNumberOptions[] = {
     {"--guard-band", 0, 0, &Options::guardBand, "a number", "CanopyDesc.guardBand"},
     {"--half-res-layers", 0, 0, &Options::halfResolutionLayers, "a number", "LayerSettings.halfResolutionLayers"},
     {"--depth-search", 0, 0, &Options::depthSearchSteps, "a number", "CompositeParams.depthSearchSteps"},
+    {"--sharpness", 0, 0, &Options::sharpness, "a number", "CompositeParams.sharpness"},
+    {"--max-stretch", 0, 0, &Options::maxStretch, "a number", "DynamicsParams.maxStretch"},
     {"--device-budget", 0, 1048576, &Options::deviceBudgetMiB, "a number"},
     {"--ring", 1, 4096, &Options::ringMiB, "a number"},
 };
@@ -679,6 +683,8 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.impostors.shape = o.impostorShape;
   p.composite.debugView = o.debug;
   p.composite.bilinear = o.bilinear;
+  p.composite.sharpness = o.sharpness;
+  p.dynamics.maxStretch = o.maxStretch;
   p.composite.debugVelocityScale = std::max(0.05f, domainWindSpeed(o));
   return p;
 }

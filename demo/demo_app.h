@@ -81,6 +81,8 @@ struct Options {
   float leafTransmission = LayerSettings{}.leafTransmission;
   bool translucency = true;
   bool bilinear = true;                // CompositeParams.bilinear (--nearest: false)
+  float sharpness = CompositeParams{}.sharpness;  // CompositeParams.sharpness
+  float maxStretch = DynamicsParams{}.maxStretch;  // DynamicsParams.maxStretch
   bool lightSheet = false;             // also write light_sheet.png: lit from the front, from behind, from behind without translucency
   // The vegetation's shadow (recordCanopyShadow; docs/design.md "Shadows"): a grey ground under the
   // scene lit by the sun (--light) through a shadow map Canopy draws every frame; with

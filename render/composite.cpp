@@ -339,6 +339,7 @@ Status prepareComposite(Compositor& c, const CompositeParams& params, const gpu:
   p.debugView = uint32_t(params.debugView);
   p.debugScale = params.debugVelocityScale;
   p.exposure = params.exposure;
+  p.sharpness = params.bilinear ? params.sharpness : 1.0f;
   p.flags = COMPOSITE_SCENE_DEPTH;
   if (c.desc.reverseZ) p.flags |= COMPOSITE_REVERSE_Z;
   if (params.earlyExit) p.flags |= COMPOSITE_EARLY_EXIT;

@@ -131,8 +131,9 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
         const glm::vec2 d = displacementAt(in.displacement, i * corners, g);
         float searched = 1.0f;
         if (reproject && !depthSearch(i, d, &s, &searched)) continue;
-        const glm::vec2 q = s - d;
+        glm::vec2 q = s - d;
         // Texel space: centres at integer + 0.5; a layer at half resolution holds pixel q at q / 2.
+        if (bilinear) q = gpu::compositeSharpPoint(q, pc.sharpness);  // the warp's sharp filter (composite.h)
         const glm::vec2 tq = q * gpu::layerTexelScale(pc.halfResolution, i);
         const glm::vec2 t = tq - 0.5f;
         const int x0 = int(std::floor(t.x)), y0 = int(std::floor(t.y));

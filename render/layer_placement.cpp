@@ -75,12 +75,24 @@ void placePlants(PlacementJob& job, const Plants& plants, const std::vector<Mesh
         bottom = std::max(bottom, y);
       }
       if (behind) continue;
+      bottom = std::min(bottom, 2.0f * h);  // as the layers' root line (finish)
+      // Eq. 7's h: the box's vertical extent at its centre on screen (model y is up). A grass patch
+      // seen from above spans its depth in rows, its blades a few: with the rect's rows the patch
+      // leaned as a whole about its nearest row, a sawtooth from patch to patch that compressed
+      // the layer (docs/lab/performance-notebook.md "The picture in wind").
+      const glm::vec3 mid = 0.5f * (plants.boundsMin[p] + plants.boundsMax[p]);
+      const glm::vec4 foot(mid.x, plants.boundsMin[p].y, mid.z, 1.0f), head(mid.x, plants.boundsMax[p].y, mid.z, 1.0f);
+      const float fw = glm::dot(job.rowsW[k], foot), hw = glm::dot(job.rowsW[k], head);
+      const float upright = fw > 1e-6f && hw > 1e-6f
+                                ? std::clamp((glm::dot(job.rowsY[k], foot) / fw - glm::dot(job.rowsY[k], head) / hw) * 0.5f * h, 0.0f, 2.0f * h)
+                                : 0.0f;
       for (uint32_t i = 0; i < layers; ++i) {
-        const float top = job.plantTop[slot * layers + i];
+        const float top = std::max(job.plantTop[slot * layers + i], -h);
         if (!std::isfinite(top)) continue;
         job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
         job.layers[i].plantKeys.push_back(uint32_t(slot));
         job.layers[i].plantResponse.push_back(glm::vec2(sp.flexibility, sp.responseSpeed));
+        job.layers[i].plantHeight.push_back(upright);
       }
     }
   }
@@ -277,10 +289,14 @@ size_t PlacementPass::trianglesPerLayer() {
 }
 
 void PlacementPass::finish() {
-  float bottom = job.bottom;
+  // A vertex just in front of the camera's plane (a first-person camera inside the vegetation)
+  // projects hundreds of image heights away: eq. 7's root line and h are held within an image
+  // height of the image, or eq. 6 (h times the sway) moved every corner by thousands of pixels.
+  float bottom = std::min(job.bottom, 2.0f * height);
   if (!std::isfinite(bottom)) bottom = height;
   for (LayerInfo& li : job.layers) {
     li.rootLineY = bottom;
+    li.top = std::max(li.top, -height);
     if (!std::isfinite(li.top)) li.top = bottom;
     li.height = std::max(bottom - li.top, 1.0f);
   }

@@ -54,6 +54,9 @@ struct LayerInfo {
   // Per plant rect, its species' wind response (docs/design.md "Species: wind response"):
   // flexibility, response speed.
   std::vector<glm::vec2> plantResponse;
+  // Per plant rect, eq. 7's h (pixels): the plant's box's vertical extent projected at its centre
+  // (a grass patch's blades, not the depth its rect spans seen from above; docs/design.md "Per-plant roots").
+  std::vector<float> plantHeight;
 };
 
 // The placement's stages, in order (advancePlacement runs them until a deadline and resumes).

@@ -19,9 +19,15 @@ AnimFrame f;
 layout(binding = 1, scalar) readonly buffer TiledBuf { vec2 tiled[]; };
 layout(binding = 2, scalar) readonly buffer RingBuf { vec2 ring[]; };
 layout(binding = 3, scalar) readonly buffer RingTimesBuf { float ringTimes[]; };
-layout(binding = 4, scalar) buffer DispBuf { vec2 disp[]; };
+layout(binding = 4, scalar) readonly buffer DispBuf { vec2 disp[]; };
 // Last frame's displacement, kept for motion vectors (each invocation moves its own corner).
 layout(binding = 5, scalar) writeonly buffer PrevBuf { vec2 prevDisp[]; };
+// Eq. 6-7 of the wind before the stretch bound (anim_stretch_cols.comp, anim_stretch_rows.comp
+// write disp), and the pushers' share added after it: the bound smooths the wind's field between
+// plants, a pusher parts the grass where it walks (a hole it made in the wind's magnitude would
+// spread as a cone of the bound's slope: docs/design.md "Layers: the warp's stretch").
+layout(binding = 6, scalar) writeonly buffer RawBuf { vec2 raw[]; };
+layout(binding = 7, scalar) writeonly buffer BendShareBuf { vec2 bendShare[]; };
 
 // Bilinear, periodic sample of an n*n field (cell centres at (i + 0.5) / n, row 0 at the bottom)
 // at tile coordinates a (any real; the field repeats with period 1). base: offset of the field.
@@ -164,7 +170,7 @@ void main() {
       bestD = plantRectDistance2(r, pixel);
       bestA = (r.y - r.x) * (r.w - r.z);
       vec4 species = plantRects[2u * j + 1u];
-      rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r) : f.layers[layer];
+      rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
       response = species.xy;
     }
   }
@@ -180,5 +186,8 @@ void main() {
   }
   uint at = layer * corners + id;
   prevDisp[at] = disp[at];
-  disp[at] = response.x * displacementPixels(f, rooted, pixel.y, vi);
+  vec2 full = response.x * displacementPixels(f, rooted, pixel.y, vi);
+  vec2 wind = f.bend != 0u ? response.x * displacementPixels(f, rooted, pixel.y, vi - bend) : full;
+  raw[at] = wind;
+  bendShare[at] = full - wind;
 }

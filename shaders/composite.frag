@@ -132,6 +132,7 @@ void main() {
     if (reproject && !compositeDepthSearch(false, i, rayA, rayB, d, size, s, zSearch)) continue;
     vec2 q = s - d;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
+    if (bilinear) q = compositeSharpPoint(q, pc.sharpness);  // composite.h
     if ((pc.flags & COMPOSITE_SKIP_EMPTY) != 0u) {
       uvec2 tile = uvec2(clamp(q, vec2(0.0), size - 1.0)) / COMPOSITE_TILE;
       if (occupancy[(i * pc.layerTilesY + tile.y) * pc.layerTilesX + tile.x] == 0u) continue;

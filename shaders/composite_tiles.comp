@@ -97,6 +97,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
     if (reproject && !compositeDepthSearch(false, i, rayA, rayB, dd.xy, size, s, z)) continue;
     vec2 q = s - dd.xy;
     if (any(lessThan(q, vec2(-1.0))) || any(greaterThan(q, size + 1.0))) continue;
+    if (bilinear) q = compositeSharpPoint(q, pc.sharpness);  // composite.h
     vec3 uvw = vec3(q * layerTexelScale(pc.halfResolution, i) / size, float(i));  // half resolution: the quarter
     vec4 c = textureLod(layerColor, uvw, 0.0);
     if (c.a < COMPOSITE_MIN_ALPHA) continue;

@@ -718,7 +718,9 @@ TEST_F(CanopyTest, ThePlantInMetresCentimetresAndInchesSwaysTheSame) {
 // 3 x 3 grid, each a plant of VegetationModel::trianglePlant) seen from above at 25 degrees, 300
 // frames of strong wind. Per plant, the largest displacement over the frames at the warp-grid
 // corner nearest its base (the bottom of its projected box, at its middle) and at its leaves' top,
-// in every layer it has leaves in: each base moves less than a fifth of its top. With the paper's
+// in every layer it has leaves in: each base moves less than a quarter of its top (eq. 7's h is the
+// plant's upright height on screen, so the corner just above a root line reaches R sooner than with
+// the rect's rows: 2-20 % measured, 2-10 % before). With the paper's
 // single root (RootMode::Vegetation) the plants standing behind the front row bend about the front
 // row's base line, so their bases move with their tops: the measure can fail.
 struct PlantSway {
@@ -807,7 +809,7 @@ TEST_F(CanopyTest, EachPlantOfAFieldBendsAboutItsOwnBase) {
   for (const auto& [key, ps] : own) {
     std::printf("plant %u: base %.2f px, top %.2f px (%.3f)\n", key, ps.base, ps.top, ps.top > 0 ? ps.base / ps.top : 0.0f);
     EXPECT_GT(ps.top, 1.0f) << "plant " << key << " sways";
-    EXPECT_LT(ps.base, 0.2f * ps.top) << "plant " << key;
+    EXPECT_LT(ps.base, 0.25f * ps.top) << "plant " << key;
   }
   const std::map<uint32_t, PlantSway> one = plantSway(dev, field, RootMode::Vegetation);
   uint32_t moved = 0;

@@ -397,6 +397,23 @@ TEST_F(CompositeTest, MatchesTheCpuReferenceAndTheLeversLeaveTheImageAlone) {
   EXPECT_LE(colourOff, sc.pixels() / 200) << "pixels more than 3/255 off the CPU reference";
   EXPECT_LE(depthOff, sc.pixels() / 100) << "pixels whose depth differs from the CPU reference";
   EXPECT_LE(motionOff, sc.pixels() / 100) << "pixels whose motion differs from the CPU reference";
+  // The warp's filter at both ends of its range (issue 67: 1 is plain bilinear, 8 nearly nearest):
+  // each against its reference, and the two must differ (the sharpening is not a no-op).
+  for (float k : {1.0f, 8.0f}) {
+    SCOPED_TRACE(k);
+    sc.params.sharpness = k;
+    const Result sharp = run(sc);
+    EXPECT_FLOAT_EQ(sharp.push.sharpness, k);
+    const CompositeReferenceOutputs refSharp = reference(sc, sharp.push);
+    size_t sharpOff = 0, fromDefault = 0;
+    for (size_t i = 0; i < sc.pixels(); ++i) {
+      sharpOff += maxDiff(sharp.color[i], refSharp.color[i]) > 3.0f / 255.0f;
+      fromDefault += maxDiff(sharp.color[i], fast.color[i]) > 3.0f / 255.0f;
+    }
+    EXPECT_LE(sharpOff, sc.pixels() / 100);
+    EXPECT_GE(fromDefault, sc.pixels() / 100) << "a filter of " << k << " gave the default filter's image";
+  }
+  sc.params.sharpness = CompositeParams{}.sharpness;
   // Nearest sampling: the other sampling mode against its reference.
   sc.params.bilinear = false;
   const Result nearest = run(sc);
@@ -554,6 +571,12 @@ TEST_F(CompositeTest, RefusesBadFormatsAndParameters) {
   p.depthAlpha = 0.0f;
   s = validateCompositeParams(p);
   EXPECT_NE(s.message().find("depthAlpha"), std::string::npos) << s.message();
+  for (float k : {0.5f, 9.0f, std::nanf("")}) {
+    p = CompositeParams{};
+    p.sharpness = k;
+    s = validateCompositeParams(p);
+    EXPECT_NE(s.message().find("sharpness"), std::string::npos) << k << ": " << s.message();
+  }
 }
 
 }  // namespace

@@ -71,9 +71,11 @@ struct AnimFrame {
   uint bend;          // 1: add the pushers' bend field (the tiled buffer after V_s and V_wind: shared/sim.h)
   float maxShrink;    // eq. 6's lambda_z |V_z| at most this share of a corner's height above its root (DynamicsParams.maxShrink)
   uint heightRelative;  // 1: eq. 6 times the plant's height h (World wind: lambda in shares of h per metre)
+  float maxStretch;   // the displacement's largest change across one warp cell, in cells (DynamicsParams.maxStretch; 0: unbounded)
+  uint pad0, pad1, pad2;
   AnimLayer layers[CANOPY_MAX_LAYERS];
 };
-CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 8 + 4 * 20 + 32 * CANOPY_MAX_LAYERS)
+CANOPY_SIZE_CHECK(AnimFrame, 64 * 2 + 16 * 8 + 4 * 24 + 32 * CANOPY_MAX_LAYERS)
 
 // Eq. 1-2 in general: simulation-plane velocity -> world -> view.
 CANOPY_INLINE vec3 simToView(AnimFrame f, vec2 vs) {
@@ -121,10 +123,10 @@ CANOPY_INLINE bool plantRectBetter(vec4 r, vec2 p, float bestDistance2, float be
   float d = plantRectDistance2(r, p), a = (r.y - r.x) * (r.w - r.z);
   return d < bestDistance2 || (d == bestDistance2 && a < bestArea);
 }
-// The layer's record with eq. 7's root line and height of plant rect r.
-CANOPY_INLINE AnimLayer withPlantRoot(AnimLayer layer, vec4 r) {
+// The layer's record with eq. 7's root line of plant rect r and height h (pixels; 0: the rect's rows).
+CANOPY_INLINE AnimLayer withPlantRoot(AnimLayer layer, vec4 r, float h) {
   layer.rootLineY = r.w;
-  layer.height = max(r.w - r.z, 1.0f);
+  layer.height = max(h > 0.0f ? h : r.w - r.z, 1.0f);
   return layer;
 }
 
@@ -151,6 +153,13 @@ CANOPY_INLINE vec2 displacementPixels(AnimFrame f, AnimLayer layer, float pixelY
   shrink = min(shrink, f.maxShrink * l);
   float dyUp = k * f.lambda.y * vi.y - shrink;
   return vec2(dx, -dyUp);
+}
+
+// The warp's stretch bound (docs/design.md "Layers: the warp's stretch"): d shortened to the
+// bounded magnitude m of its corner, its direction kept (anim_stretch_rows.comp and the reference).
+CANOPY_INLINE vec2 stretchBounded(vec2 d, float m) {
+  float l = length(d);
+  return l > m ? d * (m / l) : d;
 }
 
 CANOPY_NAMESPACE_END

@@ -93,7 +93,7 @@ struct CompositePush {
   uint layerTilesX;    // occupancy tiles per row: ceil(layerWidth / COMPOSITE_TILE)
   uint layerTilesY;
   uint halfResolution; // LayerFrame.halfResolution: layer i read at texel s x layerTexelScale(halfResolution, i)
-  uint pad0;
+  float sharpness;     // the bilinear ramp's steepness between texel centres (compositeSharpPoint), 1..8
 };
 CANOPY_SIZE_CHECK(CompositePush, 112)
 
@@ -227,6 +227,23 @@ CANOPY_INLINE vec4 compositeSharpenEdge(vec4 c, vec4 a) {
   float partial = max(max(min(a.x, 1.0f - a.x), min(a.y, 1.0f - a.y)), max(min(a.z, 1.0f - a.z), min(a.w, 1.0f - a.w)));
   if (partial > COMPOSITE_EDGE_TOLERANCE) return c;
   return c.a >= 0.5f ? c / c.a : vec4(0.0f);
+}
+
+// The warp's reconstruction filter (docs/design.md "Layers: reprojection", sharp resampling): the
+// inverse warp reads every layer at a fractional position that changes each frame, and the
+// bilinear tent averages neighbouring texels there — a leaf's veins and its neighbours' shading fade
+// by up to half as the position sweeps through a pixel (issue 67: 0.72 of a still frame's luminance
+// gradient on the shrub). The fraction f between two layer-pixel centres is steepened about 1/2 to
+// clamp((f - 1/2) k + 1/2, 0, 1): k = 1 is the bilinear tent, k -> infinity the nearest pixel; k
+// between keeps a pixel whole for most of the sweep and blends only over 1/k of it, so sub-pixel
+// motion still moves continuously (unlike the nearest pixel's whole-pixel jumps). In layer pixels,
+// not texels: a pixel centre (a still frame) stays where it is, so a half-resolution layer keeps
+// its bilinear upsampling. The same point feeds the colour, the edge cut's footprint and the depth.
+CANOPY_INLINE vec2 compositeSharpPoint(vec2 q, float k) {
+  vec2 t = q - vec2(0.5f);
+  vec2 base = floor(t);
+  vec2 f = clamp((t - base - vec2(0.5f)) * k + vec2(0.5f), vec2(0.0f), vec2(1.0f));
+  return base + f + vec2(0.5f);
 }
 
 // Compute path: the tile list the classification appends to. The header doubles as the indirect

@@ -377,7 +377,8 @@ enum class RootMode { PerPlant, Vegetation };
   X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
   X(ApproximateOffset, approximateOffset, ApproximateOffset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
   X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)") \
-  X(float, maxShrink, 0.05f, Closed, 0, 1e6, "of the height above the root", "eq. 6's lambda_z |V_z| shrink at most this share of a corner's height above its root (1e6: unbounded, before 0.8)")
+  X(float, maxShrink, 0.05f, Closed, 0, 1e6, "of the height above the root", "eq. 6's lambda_z |V_z| shrink at most this share of a corner's height above its root (1e6: unbounded, before 0.8)")  \
+  X(float, maxStretch, 0.4f, Closed, 0, 4, "cells per cell", "the displacement's largest change across one warp cell (the warp draws a texel at most 1 / (1 - maxStretch) wide; 0: unbounded, before 0.8)")
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
@@ -400,6 +401,7 @@ enum class CompositePath : uint32_t {
   X(bool, earlyExit, true, None, 0, 0, "", "front to back, stop at accumulated alpha >= 1 - 1/1024")                   \
   X(bool, skipEmptyTiles, true, None, 0, 0, "", "skip layers that cannot reach a pixel")                              \
   X(bool, bilinear, true, None, 0, 0, "", "bilinear layer colour (false: nearest texel)")                              \
+  X(float, sharpness, 3.0f, Closed, 1, 8, "", "the warp's filter: the bilinear ramp between texel centres steepened k times (1: bilinear; design.md, sharp resampling)") \
   X(uint32_t, depthSearchSteps, 16, Closed, 0, 64, "samples", "reprojection: at most this many samples of a layer's depth along a pixel's ray (two layer pixels apart; 0: the slab's plane alone)") \
   X(float, depthAlpha, 0.5f, AboveMin, 0, 1, "", "alpha at which a layer writes the depth output")                    \
   X(float, exposure, 1.0f, Closed, 0, 65504, "", "multiplies the vegetation's linear colour")                          \

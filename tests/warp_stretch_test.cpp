@@ -121,7 +121,7 @@ TEST_F(WarpStretchTest, AWalkThroughGrassInAGaleStretchesNoLayerIntoStreaks) {
   // magnitude's change to maxStretch; the direction's turn across a cell adds the rest.
   EXPECT_LE(st.worst, 0.5f) << "a layer stretched into streaks";
   EXPECT_GT(st.worst, 0.1f) << "the wind moved nothing";
-  EXPECT_GT(free.worst, 1.0f) << "without the bound the walk should streak (the test can fail)";
+  EXPECT_GT(free.worst, 0.5f) << "without the bound the walk passes the bound above (the test could not fail)";
 }
 
 }  // namespace

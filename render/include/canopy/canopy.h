@@ -1,8 +1,10 @@
 #pragma once
 // Canopy: real-time animation of dense vegetation in wind with view-dependent 2D layers
-// (docs/design.md). This header and the three it includes are the whole public API (the entry
-// points here, the plain types in <canopy/canopy_params.h>): C++17, no header of Canopy's source
-// tree, no third-party header but Vulkan's.
+// (docs/design.md). This header and the three it brings in (<canopy/canopy_core.h>,
+// <canopy/canopy_params.h> and its <canopy/canopy_schema.h>) are the API a host calls: the entry
+// points here, the plain types there. Two more public files are opt-in: <canopy/canopy_graph.h>
+// (Canopy as one pass of the host's render graph) and <canopy/canopy_wind.glsl> (the wind for the
+// host's own shaders). C++17, no header of Canopy's source tree, no third-party header but Vulkan's.
 //
 // A host
 //   1. asks queryDeviceRequirements() what its VkDevice needs, enables it (enableDeviceFeatures()),
@@ -48,8 +50,10 @@ void modelBounds(const Model* model, Float3* min, Float3* max);
 // a refusal names the file and the JSON pointer ("/instances/3/scale: ..."); a species' glTF path
 // must name a regular file (it is loaded by loadModel, not here). Never throws.
 Status readCanopyScene(const std::string& path, CanopyScene* out);
-// The same from the file's text (`name` for messages; relative glTF paths resolve against
-// `folder`, and are not opened): the fuzz target's and a host's embedded scenes.
+// Parses a scene file's text with readCanopyScene's checks but one: the species' glTF paths are
+// resolved against `folder` (relative ones) and not checked to name a regular file (nothing is
+// opened; loadModel reports a missing one when the host loads the species). `name` is used in
+// messages. For the fuzz target and a host's embedded scenes.
 Status parseCanopyScene(const std::string& name, const std::string& text, const std::string& folder, CanopyScene* out);
 // The scene's copies for createCanopy with the species' models loaded (`models[i]` for
 // scene.species[i], in the CanopySpecies list given to createCanopy in the same order): each copy's

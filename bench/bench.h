@@ -120,6 +120,24 @@ int runCounterBench(Device& dev, const std::vector<uint64_t>& faceCounts, const 
                     const std::string& jsonPath);
 // canopy-bench pushers: 32 pushers against none on the field scene (bench/bench_pushers.cpp).
 int runPusherBench(Device& dev, uint64_t faces, int frames, uint32_t width, uint32_t height);
+// canopy-bench picture (issue 67): each frame with wind against the same frame without, 2D and
+// per-vertex, per scene x camera path x size x wind (bench/bench_picture.cpp).
+struct PictureOptions {
+  // "field", "shrub", ... (generated), "tree:PATH" (a glTF plant), "file:PATH" (a scene file); a
+  // missing file is skipped with a message.
+  std::vector<std::string> scenes = {"field", "shrub", "tree:../shared/assets/quaternius_CommonTree_1/CommonTree_1.glb",
+                                     "file:demo/scenes/six_species.json"};
+  std::vector<CameraMotion> paths = {CameraMotion::Still, CameraMotion::Walk, CameraMotion::Orbit};
+  std::vector<std::pair<uint32_t, uint32_t>> sizes = {{640, 480}, {1280, 720}};
+  std::vector<std::string> winds = {"breeze", "gale"};  // WorldWind.speed's default, galeFactor x it
+  std::vector<AnimationMode> methods = {AnimationMode::Layers2D, AnimationMode::PerVertex};
+  uint32_t frames = 10;               // measured frames per run (after the demo's 2 s warm-up)
+  float orbitDegreesPerFrame = 9.0f;  // the orbit path's turn
+  float galeFactor = 3.0f;
+  std::string json = "bench_picture.json", table;  // "" none
+  bool check = false;                 // exit 1 when a 2D run is outside issue 67's bounds
+};
+int runPictureBench(Device& dev, const PictureOptions& options);
 int runShadowBench(Device& dev, const std::vector<uint64_t>& faceCounts, int frames, uint32_t width, uint32_t height, uint32_t mapSize);
 }
 }  // namespace canopy

@@ -16,9 +16,12 @@
 //   canopy-bench shadows [--faces 80000,1000000] [--frames N] [--size WxH] [--map N]
 //   canopy-bench pushers [--faces 80000] [--frames N] [--size WxH]
 //   canopy-bench counters [--faces 80000,1000000,10000000] [--size WxH] [--json FILE]
+//   canopy-bench picture [--scenes LIST] [--paths LIST] [--picture-sizes LIST] [--winds LIST] [--methods LIST]
+//                [--frames N] [--json FILE] [--table FILE] [--check]
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -77,6 +80,14 @@ static int usage(const char* why) {
                "  pushers        32 pushers (setCanopyPushers) against none on the field scene: the frame and the GPU\n"
                "                 time of the passes they touch (--faces, default 80000; --frames per variant, default\n"
                "                 40; --size default 640x480)\n"
+               "  picture        the picture in wind: each frame with wind against the same frame without, the 2D method\n"
+               "                 beside the per-vertex baseline: sharpness and coverage ratios per scene (--scenes, default\n"
+               "                 field,shrub,tree:../shared/assets/quaternius_CommonTree_1/CommonTree_1.glb,\n"
+               "                 file:demo/scenes/six_species.json), camera (--paths, default still,walk,orbit), size\n"
+               "                 (--picture-sizes, default 640x480,1280x720), wind (--winds, default breeze,gale; gale = 3x\n"
+               "                 the default speed), method (--methods, default 2d,per-vertex); --frames default 10; --json\n"
+               "                 default bench_picture.json; --table FILE: the markdown table; --check: exit 1 when a 2D\n"
+               "                 run is outside issue 67's bounds\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"
@@ -89,7 +100,7 @@ static int usage(const char* why) {
                "  --pair-frames N  table1: still frames per context in the face-count comparison, frames of the two\n"
                "                 contexts alternated, 3..100000 (default 150)\n"
                "  --rebuild-every N  soak: frames between re-slicings, 1..100000 (default 100)\n"
-               "  --check        soak: exit 1 on NaN/Inf, device-allocation growth or RSS growth over 64 MiB\n"
+               "  --check        soak: exit 1 on NaN/Inf, device-allocation growth or RSS growth over 64 MiB; picture: see above\n"
                "  --faces        layers, anim: leaf-cloud face counts, 2..100000000 (default 80000,10000000)\n"
                "  --scene NAME   anim: a generated scene (shrub, tree, grass, kelp, field) instead of leaf clouds\n"
                "  --rebuilds N   layers: rebuilds measured per configuration, 1..1000 (default 5)\n"
@@ -145,6 +156,17 @@ int main(int argc, char** argv) {
   std::string layout = "5(3-1-1)";
   std::string scene;
   bool runSpecies = false, runShadows = false, runPushers = false, runCounters = false, jsonGiven = false;
+  bool runPicture = false, pathsGiven = false;
+  bench::PictureOptions picture;
+  // A comma-separated list, each item through `each` (false: refused).
+  auto forEachItem = [](const char* v, const std::function<bool(const std::string&)>& each) {
+    if (!v || !*v) return false;
+    std::stringstream ss(v);
+    std::string item;
+    while (std::getline(ss, item, ','))
+      if (!each(item)) return false;
+    return true;
+  };
   uint32_t mapSize = 1024;
   uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
@@ -160,6 +182,41 @@ int main(int argc, char** argv) {
     else if (a == "table1") runTable1 = true;
     else if (a == "rebuild") runRebuild = true;
     else if (a == "pervertex") runPerVertex = true;
+    else if (a == "picture") runPicture = true;
+    else if (a == "--scenes") {
+      picture.scenes.clear();
+      if (!forEachItem(next(), [&](const std::string& it) { picture.scenes.push_back(it); return true; }))
+        return usage("--scenes needs a list: field, shrub, ..., tree:FILE.glb, file:SCENE.json");
+    } else if (a == "--picture-sizes") {
+      picture.sizes.clear();
+      if (!forEachItem(next(), [&](const std::string& it) {
+            unsigned w = 0, h = 0;
+            char tail = 0;
+            if (std::sscanf(it.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) return false;
+            picture.sizes.push_back({w, h});
+            return true;
+          }))
+        return usage("--picture-sizes needs a list of WxH, each in [16, 8192]");
+    } else if (a == "--winds") {
+      picture.winds.clear();
+      if (!forEachItem(next(), [&](const std::string& it) {
+            picture.winds.push_back(it);
+            return it == "breeze" || it == "gale";
+          }))
+        return usage("--winds needs a list of breeze, gale");
+    } else if (a == "--methods") {
+      picture.methods.clear();
+      if (!forEachItem(next(), [&](const std::string& it) {
+            if (it != "2d" && it != "per-vertex") return false;
+            picture.methods.push_back(it == "2d" ? AnimationMode::Layers2D : AnimationMode::PerVertex);
+            return true;
+          }))
+        return usage("--methods needs a list of 2d, per-vertex");
+    } else if (a == "--table") {
+      const char* v = next();
+      if (!v) return usage("--table needs a file");
+      picture.table = v;
+    }
     else if (a == "impostors") runImpostors = true;
     else if (a == "camera") runCamera = true;
     else if (a == "layercount") runLayerCount = true;
@@ -196,6 +253,7 @@ int main(int argc, char** argv) {
         if (!ps.ok()) return usage(("--paths: " + ps.message()).c_str());
         cam.paths.push_back(m);
       }
+      pathsGiven = true;
     } else if (a == "--reslice-error") {
       if (!parseNumber(next(), 0, 1000, &cam.errorPixels)) return usage("--reslice-error needs pixels in [0, 1000]");
     } else if (a == "--degrees-per-frame") {
@@ -333,7 +391,7 @@ int main(int argc, char** argv) {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters)
+      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters && !runPicture)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -389,6 +447,13 @@ int main(int argc, char** argv) {
   if (rc == 0 && runPushers)
     rc = bench::runPusherBench(dev, facesGiven ? faces.front() : 80000, frames ? frames : 40, sizeGiven ? t1.width : 640u,
                                sizeGiven ? t1.height : 480u);
+  if (rc == 0 && runPicture) {
+    if (pathsGiven) picture.paths = cam.paths;
+    if (frames) picture.frames = uint32_t(frames);
+    if (jsonGiven) picture.json = t1.json;
+    picture.check = check;
+    rc = bench::runPictureBench(dev, picture);
+  }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;

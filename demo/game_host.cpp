@@ -973,7 +973,7 @@ void shutdown(Game& g) {
 
 int main(int argc, char** argv) {
   uint32_t frames = 48, plants = 64, writeEvery = 1;
-  bool validate = false;
+  bool validate = false, load = true;
   std::string gltf = CANOPY_DEFAULT_PLANT, sceneFile;
   Game g;
   for (int i = 1; i < argc; ++i) {
@@ -990,7 +990,8 @@ int main(int argc, char** argv) {
       std::printf("usage: canopy-game-host [--frames N (1..10000, default 48)] [--plants N (1..4096, default 64)] [--gltf FILE]\n"
                   "                        [--scene-file FILE (a scene of glTF species instead of --gltf's copies)]\n"
                   "                        [--out DIR] [--write-every K (default 1)] [--validate]\n"
-                  "                        [--no-push (the character not given to Canopy)] [--no-leaves (none drawn)]\n");
+                  "                        [--no-push (the character not given to Canopy)] [--no-leaves (none drawn)]\n"
+                  "                        [--no-load (no loading screen: recordCanopyLoad not called, the first frame slices)]\n");
       return 0;
     } else if (a == "--frames") {
       if (!number(1, 10000, &frames)) return std::fprintf(stderr, "canopy-game-host: --frames needs an integer in [1, 10000]\n"), 2;
@@ -1010,6 +1011,8 @@ int main(int argc, char** argv) {
       g.push = false;
     } else if (a == "--no-leaves") {
       g.drawLeaves = false;
+    } else if (a == "--no-load") {
+      load = false;
     } else {
       std::fprintf(stderr, "canopy-game-host: unknown or incomplete argument '%s'\n", a.c_str());
       return 2;
@@ -1057,7 +1060,7 @@ int main(int argc, char** argv) {
   canopy::destroyModel(model);
   for (canopy::Model* m : models) canopy::destroyModel(m);
   g.light = sunViewProj(scene);
-  if (ok) ok = loadVegetation(g, scene, frames);
+  if (ok && load) ok = loadVegetation(g, scene, frames);
   if (ok) ok = createLeaves(g, glm::vec4(0.0f, 0.0f, scene.half + 0.5f * scene.spacing, scene.plantMax.y - scene.plantMin.y));
   for (uint32_t f = 0; ok && f < frames && !glfwWindowShouldClose(g.window); ++f) {
     glfwPollEvents();

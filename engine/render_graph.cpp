@@ -25,6 +25,10 @@ struct Track {
   VkPipelineStageFlags2 readStages = 0;    // reads since that write (for write-after-read)
   VkPipelineStageFlags2 visibleStages = 0; // (stage, access) already synchronized with the write
   VkAccessFlags2 visibleAccess = 0;
+  // An imported resource that enters in a read state: the stages its earlier writes and layout
+  // transition were made visible to (the barrier that put it there named only those). A read at
+  // another stage chains a barrier from them; no write of this graph's is pending.
+  VkPipelineStageFlags2 chainStage = 0;
   VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
   bool touched = false;
 };
@@ -37,6 +41,9 @@ Track trackFrom(const State& s) {
     t.writeAccess = s.access & kWriteBits;
   } else {
     t.readStages = s.stage;
+    t.chainStage = s.stage;
+    t.visibleStages = s.stage;
+    t.visibleAccess = s.access;
   }
   return t;
 }
@@ -408,6 +415,8 @@ void RenderGraph::planBarriers(const std::vector<bool>& skip, std::vector<Step>&
             const VkAccessFlags2 missAccess = a.state.access & ~t.visibleAccess;
             if (t.writeStage && (missStage || missAccess))
               addBarrier(batch, {a.id, t.writeStage, t.writeAccess, a.state.stage, a.state.access, oldLayout, newLayout});
+            else if (t.chainStage && (missStage || missAccess))
+              addBarrier(batch, {a.id, t.chainStage, 0, a.state.stage, a.state.access, oldLayout, newLayout});
             t.visibleStages |= a.state.stage;
             t.visibleAccess |= a.state.access;
             t.readStages |= a.state.stage;
@@ -418,6 +427,7 @@ void RenderGraph::planBarriers(const std::vector<bool>& skip, std::vector<Step>&
             t.writeStage = a.state.stage;
             t.writeAccess = a.state.access & kWriteBits;
             t.readStages = 0;
+            t.chainStage = 0;
             // A pure layout transition is visible to the barrier's destination scope already.
             t.visibleStages = t.writeAccess ? 0 : a.state.stage;
             t.visibleAccess = t.writeAccess ? 0 : a.state.access;
@@ -437,8 +447,11 @@ void RenderGraph::planBarriers(const std::vector<bool>& skip, std::vector<Step>&
       const bool layoutChange = res.isImage && finalLayout != t.layout;
       const bool pending = t.writeAccess != 0 || (t.readStages && isWriteAccess(res.final.access));
       const bool callerSynchronizes = res.isImage && res.final.stage == 0 && !layoutChange;
+      // Reads at stages the final state does not name are waited for too: the next frame's first
+      // write starts from the final state's stages alone.
+      const bool otherReaders = t.touched && res.final.stage && (t.readStages & ~res.final.stage) != 0;
       if (!callerSynchronizes &&
-          (layoutChange || (t.touched && pending) || (t.touched && t.writeStage && res.final.stage))) {
+          (layoutChange || (t.touched && pending) || (t.touched && t.writeStage && res.final.stage) || otherReaders)) {
         if (finOut)
           finOut->push_back({ResourceId(r), t.writeStage | t.readStages, t.writeAccess, res.final.stage, res.final.access,
                           res.isImage ? t.layout : VK_IMAGE_LAYOUT_UNDEFINED, finalLayout});

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "engine/shader_registry.h"
+#include "engine/transfer.h"
 #include "tests/gpu_test.h"
 #include "tests/host_device.h"
 #include "tests/test_host.h"
@@ -116,6 +117,148 @@ TEST(HostContract, EnableDeviceFeaturesForVulkan12MakesADeviceWithoutValidationM
   desc.colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT;
   ASSERT_TRUE(createCanopy(*h.adopted, makeLeafCloud(500, 3, true), desc, &ctx).ok());
   destroyCanopy(ctx);
+  test::destroyHostDevice(h);
+  EXPECT_EQ(messages.text(), "") << "validation messages";
+}
+
+// Issue 68's host: an engine on Vulkan 1.2 (synchronization2 as an extension) that never calls
+// recordCanopyLoad, clears its 640x480 RGBA8 colour and D32 depth in its own classic render pass
+// before Canopy and takes the colour over in TRANSFER_SRC. Its first frame slices the layers and
+// composites them in one command buffer; synchronization validation must say nothing about it.
+TEST(HostContract, AVulkan12HostWithoutTheLoadCallRendersItsFirstFramesWithoutAHazard) {
+  Messages messages;
+  HostDevice h;
+  messages.attach(h);
+  const Status made = test::createHostDevice(2, &h, VK_API_VERSION_1_2);
+  ASSERT_TRUE(made.ok()) << made.message();
+  Device& d = *h.adopted;
+  const uint32_t w = 640, hgt = 480;
+  Image color, depth;
+  ImageDesc cd;
+  cd.format = VK_FORMAT_R8G8B8A8_UNORM;
+  cd.width = w;
+  cd.height = hgt;
+  cd.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+  ASSERT_TRUE(createImage(d, cd, &color, "host colour").ok());
+  ImageDesc dd = cd;
+  dd.format = VK_FORMAT_D32_SFLOAT;
+  dd.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
+  ASSERT_TRUE(createImage(d, dd, &depth, "host depth").ok());
+  // The host's render pass: clears both, leaves them as attachments. Its dependency waits for the
+  // previous frame's use of the targets (Canopy's and the host's transfer).
+  VkAttachmentDescription att[2] = {};
+  att[0].format = cd.format;
+  att[0].samples = VK_SAMPLE_COUNT_1_BIT;
+  att[0].loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+  att[0].storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+  att[0].stencilLoadOp = VK_ATTACHMENT_LOAD_OP_DONT_CARE;
+  att[0].stencilStoreOp = VK_ATTACHMENT_STORE_OP_DONT_CARE;
+  att[0].initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
+  att[0].finalLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
+  att[1] = att[0];
+  att[1].format = dd.format;
+  att[1].finalLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+  const VkAttachmentReference cref{0, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+  const VkAttachmentReference dref{1, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+  VkSubpassDescription sub{};
+  sub.pipelineBindPoint = VK_PIPELINE_BIND_POINT_GRAPHICS;
+  sub.colorAttachmentCount = 1;
+  sub.pColorAttachments = &cref;
+  sub.pDepthStencilAttachment = &dref;
+  VkSubpassDependency dep{};
+  dep.srcSubpass = VK_SUBPASS_EXTERNAL;
+  dep.dstSubpass = 0;
+  dep.srcStageMask = VK_PIPELINE_STAGE_ALL_COMMANDS_BIT;
+  dep.dstStageMask = VK_PIPELINE_STAGE_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_EARLY_FRAGMENT_TESTS_BIT |
+                     VK_PIPELINE_STAGE_LATE_FRAGMENT_TESTS_BIT;
+  dep.srcAccessMask = VK_ACCESS_MEMORY_WRITE_BIT;
+  dep.dstAccessMask = VK_ACCESS_COLOR_ATTACHMENT_WRITE_BIT | VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT |
+                      VK_ACCESS_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_COLOR_ATTACHMENT_READ_BIT;
+  VkRenderPassCreateInfo rpi{VK_STRUCTURE_TYPE_RENDER_PASS_CREATE_INFO};
+  rpi.attachmentCount = 2;
+  rpi.pAttachments = att;
+  rpi.subpassCount = 1;
+  rpi.pSubpasses = &sub;
+  rpi.dependencyCount = 1;
+  rpi.pDependencies = &dep;
+  VkRenderPass pass = VK_NULL_HANDLE;
+  ASSERT_EQ(vkCreateRenderPass(h.device, &rpi, nullptr, &pass), VK_SUCCESS);
+  const VkImageView views[2] = {color.view, depth.view};
+  VkFramebufferCreateInfo fbi{VK_STRUCTURE_TYPE_FRAMEBUFFER_CREATE_INFO};
+  fbi.renderPass = pass;
+  fbi.attachmentCount = 2;
+  fbi.pAttachments = views;
+  fbi.width = w;
+  fbi.height = hgt;
+  fbi.layers = 1;
+  VkFramebuffer fb = VK_NULL_HANDLE;
+  ASSERT_EQ(vkCreateFramebuffer(h.device, &fbi, nullptr, &fb), VK_SUCCESS);
+  VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pci.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pci.queueFamilyIndex = h.family;
+  VkCommandPool pool = VK_NULL_HANDLE;
+  ASSERT_EQ(vkCreateCommandPool(h.device, &pci, nullptr, &pool), VK_SUCCESS);
+  VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  ai.commandPool = pool;
+  ai.commandBufferCount = 1;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  ASSERT_EQ(vkAllocateCommandBuffers(h.device, &ai, &cmd), VK_SUCCESS);
+
+  const VegetationModel model = makeLeafCloud(3000, 3, false);
+  CanopyDesc desc;
+  desc.width = w;
+  desc.height = hgt;
+  desc.colorFormat = cd.format;
+  desc.depthFormat = dd.format;
+  CanopyContext* ctx = nullptr;
+  const Status created = createCanopy(d, model, desc, &ctx);
+  ASSERT_TRUE(created.ok()) << created.message();
+  const LayerView view = orbitView(model.boundsMin, model.boundsMax, 20.0f, 10.0f, 40.0f, float(w) / float(hgt), 1.05f);
+  const ResourceState colorAfterPass{VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+                                     VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL};
+  const ResourceState depthAfterPass{VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT,
+                                     VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL};
+  const ResourceState transferSrc{VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL};
+  for (uint64_t frame = 1; frame <= 3; ++frame) {
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    ASSERT_EQ(vkBeginCommandBuffer(cmd, &bi), VK_SUCCESS);
+    VkClearValue clears[2] = {};
+    clears[0].color = {{0.45f, 0.6f, 0.8f, 1.0f}};
+    clears[1].depthStencil = {1.0f, 0};
+    VkRenderPassBeginInfo rb{VK_STRUCTURE_TYPE_RENDER_PASS_BEGIN_INFO};
+    rb.renderPass = pass;
+    rb.framebuffer = fb;
+    rb.renderArea = {{0, 0}, {w, hgt}};
+    rb.clearValueCount = 2;
+    rb.pClearValues = clears;
+    vkCmdBeginRenderPass(cmd, &rb, VK_SUBPASS_CONTENTS_INLINE);
+    vkCmdEndRenderPass(cmd);
+    CanopyFrameInputs in;
+    in.frame = makeCanopyFrame(view, 1.0f / 30.0f, frame);
+    in.color = canopyImage(color.image, color.view, cd.usage, cd.format, colorAfterPass, transferSrc);
+    in.depth = canopyImage(depth.image, depth.view, dd.usage, dd.format, depthAfterPass, depthAfterPass);
+    const Status s = recordCanopy(ctx, cmd, in);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_EQ(vkEndCommandBuffer(cmd), VK_SUCCESS);
+    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd;
+    ASSERT_EQ(vkQueueSubmit(h.queue, 1, &si, VK_NULL_HANDLE), VK_SUCCESS);
+    ASSERT_EQ(vkQueueWaitIdle(h.queue), VK_SUCCESS);
+    EXPECT_EQ(messages.text(), "") << "frame " << frame << " without recordCanopyLoad";
+  }
+  // The vegetation is in the picture: pixels other than the host's clear.
+  std::vector<uint8_t> px(size_t(w) * hgt * 4);
+  ASSERT_TRUE(readbackImage(d, color, 0, 4, px.data(), rg::stateOf(rg::Use::TransferSrc)).ok());
+  size_t drawn = 0;
+  for (size_t i = 0; i < size_t(w) * hgt; ++i) drawn += std::abs(int(px[4 * i + 2]) - 204) > 8;
+  EXPECT_GT(drawn, size_t(w) * hgt / 50) << "the leaves were composited";
+  destroyCanopy(ctx);
+  vkDestroyCommandPool(h.device, pool, nullptr);
+  vkDestroyFramebuffer(h.device, fb, nullptr);
+  vkDestroyRenderPass(h.device, pass, nullptr);
+  destroyImage(d, color);
+  destroyImage(d, depth);
   test::destroyHostDevice(h);
   EXPECT_EQ(messages.text(), "") << "validation messages";
 }

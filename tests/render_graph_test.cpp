@@ -114,6 +114,22 @@ TEST(RenderGraphBarriers, ImportedImageInitialAndFinalState) {
   EXPECT_BARRIERS(g.finalBarriers(), B(img, CS, 0, FS, SAMPLED, SRO, SRO), B(out, CS, SW, HOST, HR));
 }
 
+// An imported image that arrives sampled by the fragment stage (the barrier that transitioned it
+// named only that stage: a layer image at rest, a host's depth its own pass samples) and is read by
+// compute: the read chains a barrier from the fragment stage, else the layout transition before it
+// is not visible to compute (issue 68's first-frame SYNC-HAZARD-READ-AFTER-WRITE). A second read by
+// the fragment stage needs none.
+TEST(RenderGraphBarriers, AReadAtAnotherStageOfAnImportedReadStateChainsABarrier) {
+  RenderGraph g;
+  auto img = g.importImage("at rest", image64(), stateOf(Use::FragmentSampled), stateOf(Use::FragmentSampled));
+  auto out = g.importBuffer("out", 64, {}, stateOf(Use::HostRead));
+  g.addPass("fragment read", noop()).read(img, Use::FragmentSampled).sideEffect();
+  g.addPass("compute read", noop()).read(img, Use::ComputeSampled).write(out, Use::ComputeStorageWrite);
+  ASSERT_TRUE(g.compile().ok());
+  ASSERT_EQ(g.steps().size(), 1u);
+  EXPECT_BARRIERS(g.steps()[0].barriers, B(img, FS, 0, CS, SAMPLED, SRO, SRO));
+}
+
 // An imported image no pass touches still reaches its final layout.
 TEST(RenderGraphBarriers, UntouchedImportGetsFinalTransition) {
   RenderGraph g;
@@ -272,10 +288,11 @@ TEST(RenderGraphBarriers, ConditionalPassesLeaveOutTheirBarriers) {
   const RenderGraph::Plan& off = g.currentPlan();
   ASSERT_EQ(off.skipped, (std::vector<bool>{true, false}));
   EXPECT_BARRIERS(off.steps[0].barriers);
-  // Only the read remains: the image arrives sampled by fragment shaders, compute samples it
-  // (no layout change, no write to wait for), and no final barrier is needed for it.
-  EXPECT_BARRIERS(off.steps[1].barriers);
-  EXPECT_BARRIERS(off.final, B(out, CS, SW, HOST, HR));
+  // Only the read remains: the image arrives sampled by fragment shaders (the transition before
+  // it was made visible to them alone), so compute's read chains a barrier from that stage, and
+  // the final barrier hands the compute read back to the fragment stage the next frame starts from.
+  EXPECT_BARRIERS(off.steps[1].barriers, B(layers, FS, 0, CS, SAMPLED, SRO, SRO));
+  EXPECT_BARRIERS(off.final, B(layers, FS | CS, 0, FS, SAMPLED, SRO, SRO), B(out, CS, SW, HOST, HR));
   on = true;
   const RenderGraph::Plan& full = g.currentPlan();
   EXPECT_EQ(full.skipped, (std::vector<bool>{false, false}));

@@ -15,7 +15,7 @@ namespace {
 // byteLength its buffer declares (which tinygltf then enforces on the loaded bytes).
 class JsonCheck {
  public:
-  Status run(const nlohmann::json& doc) {
+  Status run(nlohmann::json& doc) {
     if (!doc.is_object()) return Status();  // tinygltf reports what is wrong with the document
     const int64_t kIndex = 0x7fffffff;
     const int64_t kSize = int64_t(1) << 53;  // exact in a double; far beyond any file
@@ -142,6 +142,10 @@ class JsonCheck {
     else if (v.is_number_float()) {
       const double d = v.get<double>();
       ok = std::isfinite(d) && d == std::floor(d) && d >= double(lo) && d <= double(hi);
+      // JSON has one number type: 1.0 and 1e0 are the integer 1 (the glTF validator's
+      // integer_written_as_float), which tinygltf refuses. Written back as an integer in the
+      // caller's own (mutable) document.
+      if (ok) const_cast<nlohmann::json&>(v) = int64_t(d);
     }
     if (!ok)
       error_ = name + " = " + v.dump() + " is not an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
@@ -212,6 +216,6 @@ Status checkJsonDepth(const unsigned char* p, size_t n, uint32_t maxDepth) {
 }
 
 
-Status checkGltfJsonFields(const nlohmann::json& doc) { return JsonCheck().run(doc); }
+Status checkGltfJsonFields(nlohmann::json& doc) { return JsonCheck().run(doc); }
 
 }  // namespace canopy

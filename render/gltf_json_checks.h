@@ -25,7 +25,8 @@ inline bool rangeFits(uint64_t offset, uint64_t length, uint64_t size) { return 
 Status checkGlb(const std::vector<unsigned char>& bytes);
 // The JSON nests at most maxDepth arrays/objects (tinygltf's parser recurses on them).
 Status checkJsonDepth(const unsigned char* json, size_t bytes, uint32_t maxDepth);
-// The fields tinygltf reads without a range check, checked on the parsed document.
-Status checkGltfJsonFields(const nlohmann::json& doc);
+// The fields tinygltf reads without a range check, checked on the parsed document; an integer
+// written as a float (1.0, 1e0) is written back as an integer.
+Status checkGltfJsonFields(nlohmann::json& doc);
 
 }  // namespace canopy

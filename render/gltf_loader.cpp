@@ -21,6 +21,7 @@
 
 #include "engine/files.h"
 #include "render/gltf_json_checks.h"
+#include "render/gltf_prune.h"
 
 // Our own decoder, private to this file (the tinygltf library carries its own copy).
 #define STB_IMAGE_STATIC
@@ -329,28 +330,83 @@ struct Load {
   const ImageContext& images;
   VegetationModel* out;
   Reader reader;
+  const GltfReadParts& parts;
   uint32_t nextPlant = 0;  // the next plant ordinal past the scene roots' (each instance of EXT_mesh_gpu_instancing)
 };
 
-// The file through Canopy's checks of its framing and JSON, then tinygltf (external files through
-// `fs`, images kept encoded in `images`). A parse warning goes to `warnings`.
+// The file through Canopy's checks of its framing and JSON, the parts the vegetation does not read
+// replaced (render/gltf_prune.h), then tinygltf (external files through `fs`, images kept encoded
+// in `images`). A parse warning goes to `warnings`.
 Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const GltfLoadOptions& opt,
-                 tinygltf::Model* m, ImageContext* images, std::vector<std::string>* warnings) {
+                 tinygltf::Model* m, ImageContext* images, GltfReadParts* parts, std::vector<std::string>* warnings) {
   Status s;
   if (bytes.size() > std::numeric_limits<uint32_t>::max())
     return Status::error(std::to_string(bytes.size()) + " bytes: glTF files are limited to 4 GiB");
+  if (bytes.empty()) return Status::error("the file is empty");
   const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  const size_t json = glb ? 20 : 0;
+  // glTF JSON is UTF-8 without a byte-order mark (tinygltf would accept one).
+  if (bytes.size() >= json + 3 && bytes[json] == 0xEF && bytes[json + 1] == 0xBB && bytes[json + 2] == 0xBF)
+    return Status::error("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
+  if (!glb) {
+    // A .gltf is a JSON object; anything else is not glTF (a .glb starts with the magic "glTF").
+    size_t first = 0;
+    while (first < bytes.size() && (bytes[first] == ' ' || bytes[first] == '\t' || bytes[first] == '\r' || bytes[first] == '\n')) ++first;
+    if (first < bytes.size() && std::strchr("[\"-0123456789tfn", bytes[first]) && bytes[first] != 0)
+      if (bytes[first] != '{') return Status::error("the JSON document is not an object (a glTF file is one JSON object)");
+    if (first == bytes.size() || bytes[first] != '{') {
+      char head[64];
+      std::snprintf(head, sizeof head, "%02x %02x %02x %02x", bytes[0], bytes.size() > 1 ? bytes[1] : 0,
+                    bytes.size() > 2 ? bytes[2] : 0, bytes.size() > 3 ? bytes[3] : 0);
+      return Status::error(std::string("not a glTF file: a .glb starts with the magic 'glTF' and a .gltf with a JSON object "
+                                       "('{'); this file starts with the bytes ") + head);
+    }
+  }
   if (glb && !(s = checkGlb(bytes)).ok()) return s;
+  uint32_t jsonLength = uint32_t(bytes.size());
+  if (glb) std::memcpy(&jsonLength, bytes.data() + 12, 4);  // checkGlb: inside the file
+  if (!(s = checkJsonDepth(bytes.data() + json, jsonLength, opt.maxJsonDepth)).ok()) return s;
+  nlohmann::json doc;
+  try {
+    doc = nlohmann::json::parse(bytes.data() + json, bytes.data() + json + jsonLength);
+  } catch (const nlohmann::json::exception& e) {
+    // The parser's own words, without its "[json.exception.parse_error.101]" tag.
+    std::string why = e.what();
+    if (why.size() > 0 && why[0] == '[' && why.find("] ") != std::string::npos) why = why.substr(why.find("] ") + 2);
+    return Status::error("the JSON is not well-formed: " + why);
+  }
+  if (!(s = checkGltfJsonFields(doc)).ok()) return s;
+  uint64_t binBytes = 0;
+  size_t binAt = json + jsonLength;  // the chunk after the JSON's (checkGlb: its header inside the file)
+  if (glb && bytes.size() >= binAt + 8 && std::memcmp(bytes.data() + binAt + 4, "BIN\0", 4) == 0) {
+    uint32_t n;
+    std::memcpy(&n, bytes.data() + binAt, 4);
+    binBytes = n;
+  }
+  if (!(s = keepReadParts(doc, glb, binBytes, parts)).ok()) return s;
+  // The document tinygltf parses: the rewritten JSON (in a .glb, its JSON chunk, the rest as it was).
+  std::vector<unsigned char> file;
   {
-    // glTF JSON is UTF-8 without a byte-order mark (tinygltf would accept one).
-    const size_t json = glb ? 20 : 0;
-    if (bytes.size() >= json + 3 && bytes[json] == 0xEF && bytes[json + 1] == 0xBB && bytes[json + 2] == 0xBF)
-      return Status::error("the JSON starts with a byte-order mark (glTF requires UTF-8 without one)");
-    uint32_t jsonLength = uint32_t(bytes.size());
-    if (glb) std::memcpy(&jsonLength, bytes.data() + 12, 4);  // checkGlb: inside the file
-    if (!(s = checkJsonDepth(bytes.data() + json, jsonLength, opt.maxJsonDepth)).ok()) return s;
-    const nlohmann::json doc = nlohmann::json::parse(bytes.data() + json, bytes.data() + json + jsonLength, nullptr, false);
-    if (!doc.is_discarded() && !(s = checkGltfJsonFields(doc)).ok()) return s;
+    std::string text = doc.dump();
+    if (glb) {
+      while (text.size() % 4) text += ' ';
+      // The chunks after the JSON's, up to the header's length (bytes past it are not the file's).
+      uint32_t declared;
+      std::memcpy(&declared, bytes.data() + 8, 4);  // checkGlb: within the file, past the JSON chunk
+      const size_t rest = declared > binAt ? declared - binAt : 0;
+      const uint64_t total = 20 + uint64_t(text.size()) + rest;
+      if (total > std::numeric_limits<uint32_t>::max()) return Status::error("glTF files are limited to 4 GiB");
+      file.resize(size_t(total));
+      std::memcpy(file.data(), bytes.data(), 8);  // magic and version
+      const uint32_t len32 = uint32_t(total), jsonLen = uint32_t(text.size());
+      std::memcpy(file.data() + 8, &len32, 4);
+      std::memcpy(file.data() + 12, &jsonLen, 4);
+      std::memcpy(file.data() + 16, "JSON", 4);
+      std::memcpy(file.data() + 20, text.data(), text.size());
+      if (rest) std::memcpy(file.data() + 20 + text.size(), bytes.data() + binAt, rest);
+    } else {
+      file.assign(text.begin(), text.end());
+    }
   }
 
   tinygltf::TinyGLTF loader;
@@ -359,9 +415,9 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
   std::string err, warn;
   bool parsed = false;
   try {
-    parsed = glb ? loader.LoadBinaryFromMemory(m, &err, &warn, bytes.data(), unsigned(bytes.size()), fs.baseDir)
-                 : loader.LoadASCIIFromString(m, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
-                                              unsigned(bytes.size()), fs.baseDir);
+    parsed = glb ? loader.LoadBinaryFromMemory(m, &err, &warn, file.data(), unsigned(file.size()), fs.baseDir)
+                 : loader.LoadASCIIFromString(m, &err, &warn, reinterpret_cast<const char*>(file.data()),
+                                              unsigned(file.size()), fs.baseDir);
   } catch (const std::bad_alloc&) {
     return Status::error(Result::OutOfHostMemory, "out of host memory while parsing the JSON");
   } catch (const std::exception& e) {
@@ -381,7 +437,7 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
 
 // The extensions the loader reads (a file may require these and no others).
 constexpr const char* kImplementedExtensions[] = {"EXT_mesh_gpu_instancing", "KHR_materials_diffuse_transmission",
-                                                  "KHR_materials_transmission", "KHR_materials_volume"};
+                                                  "KHR_materials_transmission", "KHR_materials_volume", "KHR_mesh_quantization"};
 
 // The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded, no
 // required extension the loader lacks.
@@ -479,8 +535,9 @@ Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world
   const tinygltf::Mesh& mesh = m.meshes[size_t(meshIndex)];
   const tinygltf::Primitive& pr = mesh.primitives[pi];
   const std::string pw = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(pi) + "]";
+  // Points and lines are not vegetation's faces: left out (keepReadParts warned).
   if (pr.mode != TINYGLTF_MODE_TRIANGLES && pr.mode != TINYGLTF_MODE_TRIANGLE_STRIP && pr.mode != TINYGLTF_MODE_TRIANGLE_FAN && pr.mode != -1)
-    return Status::error(pw + ": mode " + std::to_string(pr.mode) + " is not a triangle primitive");
+    return Status();
   auto pos = pr.attributes.find("POSITION");
   if (pos == pr.attributes.end()) {
     out->warnings.push_back(pw + ": no POSITION attribute, nothing to draw (skipped)");
@@ -493,20 +550,28 @@ Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world
   const uint64_t vertexBudget = opt.maxVertices > out->positions.size() ? opt.maxVertices - out->positions.size() : 0;
   const uint64_t triangleBudget = opt.maxTriangles > out->triangleCount() ? opt.maxTriangles - out->triangleCount() : 0;
   const uint64_t indexBudget = triangleBudget > (UINT64_MAX - 2) / 3 ? UINT64_MAX : triangleBudget * 3 + 2;
-  CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &P, &nc, &vcount).context(pw + ".POSITION"));
+  // KHR_mesh_quantization's types beside glTF's float: positions in (normalized) integers,
+  // normals in normalized bytes or shorts, texture coordinates in any of them (Reader::read
+  // converts each by its normalized flag; the node transform carries the dequantization).
+  constexpr uint32_t kByte = TINYGLTF_COMPONENT_TYPE_BYTE, kUByte = TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                     kShort = TINYGLTF_COMPONENT_TYPE_SHORT, kUShort = TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                     kFloat = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  CANOPY_TRY(reader.read(pos->second, {TINYGLTF_TYPE_VEC3}, {kFloat, kByte, kUByte, kShort, kUShort}, vertexBudget, &P, &nc, &vcount)
+                 .context(pw + ".POSITION"));
   if (auto it = pr.attributes.find("NORMAL"); it != pr.attributes.end()) {
-    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {TINYGLTF_COMPONENT_TYPE_FLOAT}, vertexBudget, &N, &nc, &count).context(pw + ".NORMAL"));
+    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC3}, {kFloat, kByte, kShort}, vertexBudget, &N, &nc, &count).context(pw + ".NORMAL"));
     if (count != vcount) return Status::error(pw + ".NORMAL: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
   }
   if (auto it = pr.attributes.find("TEXCOORD_0"); it != pr.attributes.end()) {
-    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2},
-                           {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT},
-                           vertexBudget, &T, &nc, &count).context(pw + ".TEXCOORD_0"));
+    CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2}, {kFloat, kByte, kUByte, kShort, kUShort}, vertexBudget, &T, &nc, &count)
+                   .context(pw + ".TEXCOORD_0"));
     if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
   }
   std::vector<uint32_t> idx;
-  if (pr.indices >= 0) {
-    CANOPY_TRY(reader.read(pr.indices, {TINYGLTF_TYPE_SCALAR},
+  int indices = pr.indices;
+  if (auto z = L.parts.indicesWithoutView.find({meshIndex, int(pi)}); z != L.parts.indicesWithoutView.end()) indices = z->second;
+  if (indices >= 0) {
+    CANOPY_TRY(reader.read(indices, {TINYGLTF_TYPE_SCALAR},
                            {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT},
                            indexBudget, &I, &nc, &count).context(pw + ".indices"));
     idx.resize(I.size());
@@ -711,8 +776,12 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
   if (tex < 0) return Status();
   if (size_t(tex) >= m.textures.size()) return Status::error(what + ": " + role + " texture " + std::to_string(tex) + " does not exist");
   const int img = m.textures[size_t(tex)].source;
-  if (img < 0 || size_t(img) >= m.images.size())
-    return Status::error(what + ": textures[" + std::to_string(tex) + "] has no valid image source");
+  if (img < 0) {  // glTF allows it (an extension may supply the image): drawn without this texture
+    out->warnings.push_back(what + ": " + role + " textures[" + std::to_string(tex) + "] has no source image (not used)");
+    return Status();
+  }
+  if (size_t(img) >= m.images.size())
+    return Status::error(what + ": textures[" + std::to_string(tex) + "] names images[" + std::to_string(img) + "], which does not exist");
   if (texCoord != 0)
     out->warnings.push_back(what + ": " + role + " uses TEXCOORD_" + std::to_string(texCoord) + "; TEXCOORD_0 is used");
   if (!opt.decodeImages) return Status();
@@ -904,11 +973,13 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
   };
   ImageContext images;
   tinygltf::Model m;
-  Status s = parseFile(bytes, fs, opt, &m, &images, &out->warnings);
+  GltfReadParts parts;
+  Status s = parseFile(bytes, fs, opt, &m, &images, &parts, &out->warnings);
+  out->warnings.insert(out->warnings.end(), parts.warnings.begin(), parts.warnings.end());
   if (s.ok()) s = checkDocument(m, fs);
   std::vector<int> roots;
   if (s.ok()) s = sceneRoots(m, out, &roots);
-  Load L{m, opt, fs, images, out, Reader(m)};
+  Load L{m, opt, fs, images, out, Reader(m), parts};
   if (s.ok()) s = walkNodes(L, roots);
   if (s.ok()) s = loadMaterials(L);
   if (!s.ok()) return fail(s);

@@ -18,21 +18,6 @@ namespace canopy {
 
 namespace {
 
-// CanopyDesc.guardBand in pixels for a target side of `size`: a multiple of 16 (whole occupancy
-// tiles and default warp cells, so a still camera's layer pixel is its output pixel plus whole
-// cells), at most what keeps the layers within 16384 pixels.
-uint32_t guardPixels(float fraction, uint32_t size) {
-  const uint32_t g = 16u * uint32_t(std::lround(double(fraction) * size / 16.0));
-  return std::min(g, (16384u - std::min(size, 16384u)) / 32u * 16u);
-}
-
-Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi) {
-  if (v < lo || v > hi)
-    return Status::error(std::string(name) + " = " + std::to_string(v) + " is outside [" + std::to_string(lo) + ", " +
-                         std::to_string(hi) + "]");
-  return Status();
-}
-
 // The plane's axes, checked together (its fields one by one: the schema).
 Status validatePlane(const SimulationPlane& p) {
   CANOPY_TRY(checkParams(p, "CanopyParams.plane."));
@@ -72,22 +57,6 @@ LayerView standardView(const CanopyContext& c, const CanopyCamera& cam) {
     v.proj = mirror * v.proj;
   }
   return v;
-}
-
-// The size-dependent parts (compositor, dynamics) and the graphs recorded from them, freed once no
-// frame in flight reads them.
-void retireSizeDependentParts(CanopyContext& c) {
-  Device* d = c.device;
-  retireRecordGraphs(c, std::move(c.recordGraphs));
-  c.recordGraphs.clear();
-  auto comp = std::make_shared<Compositor>();
-  auto dyn = std::make_shared<LayerDynamics>();
-  std::swap(*comp, c.compositor);
-  std::swap(*dyn, c.dynamics);
-  deferRelease(*d, [comp, dyn] {
-    destroyCompositor(*comp);
-    destroyLayerDynamics(*dyn);
-  });
 }
 
 void destroyNow(CanopyContext* c) {
@@ -177,18 +146,6 @@ Status createCanopy(Device& d, const VegetationModel& model, const CanopyDesc& d
   return createCanopy(d, std::vector<SpeciesModel>{SpeciesModel{&model}}, desc, out);
 }
 
-// The copies as the layers take them (CanopyInstance's fields side by side).
-static InstanceInputs instanceInputs(const std::vector<CanopyInstance>& instances) {
-  InstanceInputs in;
-  for (const CanopyInstance& i : instances) {
-    in.models.push_back(toGlm(i.transform));
-    in.tints.push_back(toGlm(i.tint));
-    in.windPhases.push_back(i.windPhase);
-    in.species.push_back(i.species);
-  }
-  return in;
-}
-
 Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const CanopyDesc& desc, CanopyContext** out) {
   if (!out) return Status::error("createCanopy: out is null");
   *out = nullptr;
@@ -236,6 +193,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     cd.maxLayers = desc.maxLayers;
     cd.minCellSize = desc.minCellSize;
     CANOPY_TRY(createCompositor(d, cd, &c->compositor));
+    c->compositorDesc = cd;
     LayeredVegetationDesc ld;
     ld.width = desc.width + 2 * guardX;
     ld.height = desc.height + 2 * guardY;
@@ -330,19 +288,6 @@ Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, 
   });
 }
 
-// The species as the layers take them; a species without a model or triangles is refused by its
-// index (checkSpecies checks the response ranges).
-static Status speciesModels(const char* call, const std::vector<CanopySpecies>& species, std::vector<SpeciesModel>* out) {
-  for (size_t i = 0; i < species.size(); ++i) {
-    if (!species[i].model)
-      return Status::error(Result::InvalidArgument, std::string(call) + ": species #" + std::to_string(i) + " has no model");
-    if (species[i].model->data.triangleCount() == 0)
-      return Status::error(Result::InvalidModel, std::string(call) + ": species #" + std::to_string(i) + " has no triangles");
-    out->push_back({&species[i].model->data, species[i].flexibility, species[i].responseSpeed});
-  }
-  return Status();
-}
-
 Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out) {
   return guardApi("createCanopy", [&]() -> Status {
     if (out) *out = nullptr;
@@ -399,81 +344,6 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
 
 const CanopyParams& canopyParams(const CanopyContext* c) { return c->params; }
 
-Status setCanopyInstances(CanopyContext* c, const std::vector<CanopyInstance>& instances) {
-  return guardApi("setCanopyInstances", [&]() -> Status {
-    if (!c) return Status::error("setCanopyInstances: null context");
-    const InstanceInputs copies = instanceInputs(instances);
-    CANOPY_TRY(setLayerInstances(c->layers, copies).context("setCanopyInstances"));
-    // The default simulation plane stands at the vegetation's depth and its tile spans the view
-    // there (eq. 4's domain units): taken again from the next frame for the copies' new bounds.
-    if (!c->params.customPlane) c->planeChosen = false;
-    // The per-vertex baseline's motion table holds one block per copy: sized again, graphs rebuilt.
-    if (c->desc.allowPerVertex) CANOPY_TRY(resizePerVertexCopies(c->perVertex, uint32_t(copies.models.size())).context("setCanopyInstances"));
-    // The per-vertex motion table and the impostor list may have been replaced: graphs rebuilt.
-    if (c->desc.allowPerVertex || c->layers.impostors.enabled) c->generation++;
-    return Status();
-  });
-}
-
-Status setCanopySpecies(CanopyContext* c, const std::vector<CanopySpecies>& species, const std::vector<CanopyInstance>& instances) {
-  return guardApi("setCanopySpecies", [&]() -> Status {
-    if (!c) return Status::error("setCanopySpecies: null context");
-    if (c->desc.allowPerVertex)
-      return Status::error(Result::InvalidArgument, "setCanopySpecies: the per-vertex baseline (CanopyDesc.allowPerVertex) keeps "
-                                                    "the first mesh's hierarchy; create a new context instead");
-    std::vector<SpeciesModel> models;
-    CANOPY_TRY(speciesModels("setCanopySpecies", species, &models));
-    // The vegetation as it stands (size, guard band, formats, budget, settings in force) with the
-    // new species and copies; the old one stays until the new one exists.
-    LayeredVegetationDesc ld = c->layers.desc;
-    ld.settings = c->layers.settings;
-    ld.progress = {};
-    ld.copies = instanceInputs(instances);
-    if (ld.copies.models.empty()) return Status::error(Result::InvalidArgument, "setCanopySpecies: at least one instance is needed");
-    LayeredVegetation next;
-    CANOPY_TRY(createLayeredVegetation(*c->device, models, ld, &next).context("setCanopySpecies"));
-    auto old = std::make_shared<LayeredVegetation>(std::move(c->layers));
-    c->layers = std::move(next);
-    deferRelease(*c->device, [old] { destroyLayeredVegetation(*old); });
-    c->generation++;  // new layer images and mesh: graphs rebuilt
-    c->previousAnimFrame = gpu::AnimFrame{};
-    if (!c->params.customPlane) c->planeChosen = false;
-    return Status();
-  });
-}
-
-Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
-  return guardApi("resizeCanopy", [&]() -> Status {
-    if (!c) return Status::error("resizeCanopy: null context");
-    CANOPY_TRY(checkRange("resizeCanopy width", width, 1, 16384));
-    CANOPY_TRY(checkRange("resizeCanopy height", height, 1, 16384));
-    if (width == c->desc.width && height == c->desc.height) return Status();
-    Device& d = *c->device;
-    const CompositorDesc before = c->compositor.desc;
-    retireSizeDependentParts(*c);  // no wait: the old objects go once the frames using them completed
-    c->desc.width = width;
-    c->desc.height = height;
-    c->perVertex.desc.width = width;
-    c->perVertex.desc.height = height;
-    Status s = [&]() -> Status {
-      CompositorDesc cd = before;
-      cd.width = width;
-      cd.height = height;
-      cd.guardX = guardPixels(c->desc.guardBand, width);
-      cd.guardY = guardPixels(c->desc.guardBand, height);
-      CANOPY_TRY(setLayerTargetSize(c->layers, compositorLayerWidth(cd), compositorLayerHeight(cd), cd.guardX, cd.guardY));
-      CANOPY_TRY(createCompositor(d, cd, &c->compositor));
-      // The warp grid's corners are in pixels: a new grid, and no previous displacement to take
-      // motion vectors against (beginCanopyFrame sees the grid change).
-      c->previousAnimFrame = gpu::AnimFrame{};
-      return createLayerDynamics(d, compositorLayerWidth(cd), compositorLayerHeight(cd), c->desc.minCellSize, c->desc.maxLayers,
-                                 &c->dynamics);
-    }();
-    c->generation++;
-    return s.context("resizeCanopy to " + std::to_string(width) + "x" + std::to_string(height));
-  });
-}
-
 // docs/design.md "World wind": the wind's own plane, fixed in the world (no camera chooses it);
 // PlaneSides: unless the host set one, the plane of the first view, one tile over the region
 // visible at the vegetation's centre depth.
@@ -498,6 +368,9 @@ static void chooseSimulationPlane(CanopyContext& c, const LayerView& view) {
 
 Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (!c) return Status::error("beginCanopyFrame: null context");
+  if (!c->sized)
+    return Status::error(Result::InvalidArgument, "the last resizeCanopy failed: call resizeCanopy again (the same size is "
+                                                  "enough) before recording a frame");
   if (!std::isfinite(f.dt) || f.dt < 0.0f || f.dt > 10.0f)
     return Status::error("CanopyFrame.dt = " + std::to_string(f.dt) + " s is outside [0, 10]");
   // Everything downstream inverts these (eye position, slab planes, the simulation plane).
@@ -621,6 +494,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
 
 Status addCanopyPasses(CanopyContext* c, rg::RenderGraph& g, const CompositeTargets& targets) {
   if (!c) return Status::error("addCanopyPasses: null context");
+  if (!c->sized) return Status::error(Result::InvalidArgument, "addCanopyPasses: the last resizeCanopy failed: call it again first");
   if (!c->perVertexUploads.empty() || !c->shared->firstClear.empty() || layerWorkPending(c->layers))
     return Status::error("addCanopyPasses: this context has uploads waiting for recordCanopy (a device that defers "
                          "uploads is embedded through recordCanopy only)");
@@ -662,6 +536,7 @@ Status recordCanopyShadow(CanopyContext* c, VkCommandBuffer cmd, const CanopySha
     if (!c) return Status::error("recordCanopyShadow: null context");
     if (!cmd) return Status::error("recordCanopyShadow: null command buffer");
     CANOPY_TRY(checkShadowInputs(in));
+    if (!c->sized) return Status::error(Result::InvalidArgument, "recordCanopyShadow: the last resizeCanopy failed: call it again first");
     if (c->frames == 0)
       return Status::error(Result::InvalidArgument, "recordCanopyShadow: record a frame first (recordCanopy): the shadow follows "
                                                     "that frame's layers and wind");
@@ -671,91 +546,6 @@ Status recordCanopyShadow(CanopyContext* c, VkCommandBuffer cmd, const CanopySha
     src.displaced = c->params.animation == AnimationMode::Layers2D;
     src.generation = c->generation;
     return recordShadow(c->shadow, src, cmd, in, updated);
-  });
-}
-
-namespace {
-// The load frame's own targets (recordCanopyLoad): the host's formats and size, contents never read
-// by anyone; freed once the frames after it are done.
-struct LoadTargets {
-  Image color, depth, motion;
-  VkImageView depthOnly = VK_NULL_HANDLE;
-};
-void destroyLoadTargets(Device& d, LoadTargets& t) {
-  if (t.depthOnly) d.vk.DestroyImageView(d.device, t.depthOnly, d.allocationCallbacks);
-  destroyImage(d, t.color);
-  destroyImage(d, t.depth);
-  destroyImage(d, t.motion);
-  t = LoadTargets{};
-}
-Status createLoadTargets(Device& d, const CanopyDesc& desc, LoadTargets* t) {
-  ImageDesc i;
-  i.width = desc.width;
-  i.height = desc.height;
-  i.format = desc.colorFormat;
-  i.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-  CANOPY_TRY(createImage(d, i, &t->color, "load frame: colour"));
-  i.format = desc.depthFormat;
-  i.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT;
-  CANOPY_TRY(createImage(d, i, &t->depth, "load frame: depth"));
-  VkImageViewCreateInfo vi{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
-  vi.image = t->depth.image;
-  vi.viewType = VK_IMAGE_VIEW_TYPE_2D;
-  vi.format = desc.depthFormat;
-  vi.subresourceRange = {VK_IMAGE_ASPECT_DEPTH_BIT, 0, 1, 0, 1};
-  CANOPY_VK(d.vk.CreateImageView(d.device, &vi, d.allocationCallbacks, &t->depthOnly));
-  if (desc.motionFormat != VK_FORMAT_UNDEFINED) {
-    i.format = desc.motionFormat;
-    i.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
-    CANOPY_TRY(createImage(d, i, &t->motion, "load frame: motion"));
-  }
-  return Status();
-}
-}  // namespace
-
-Status recordCanopyLoad(CanopyContext* c, VkCommandBuffer cmd, const CanopyCamera& camera) {
-  return guardApi("recordCanopyLoad", [&]() -> Status {
-    if (!c) return Status::error("recordCanopyLoad: null context");
-    if (!cmd) return Status::error("recordCanopyLoad: null command buffer");
-    Device& d = *c->device;
-    // A whole frame at `camera` with the simulation held (dt 0), into targets of its own: the
-    // uploads, the first re-slice, the composite's occupancy and every pass's first use happen
-    // here, and the first frame of play at that camera finds the layers current.
-    auto targets = std::make_shared<LoadTargets>();
-    Status s = createLoadTargets(d, c->desc, targets.get());
-    if (s.ok()) {
-      const ResourceState none{};
-      CanopyFrameInputs in;
-      in.frame.camera = camera;
-      in.frame.dt = 1.0f / 30.0f;
-      in.frame.frameNumber = d.anyFrame ? d.frameNumber : 0;
-      in.color = canopyImage(targets->color.image, targets->color.view, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, c->desc.colorFormat, none,
-                             {VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                              VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL});
-      in.depth = canopyImage(targets->depth.image, targets->depthOnly,
-                             VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT, c->desc.depthFormat, none,
-                             {VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT, VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT,
-                              VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL});
-      if (targets->motion.image)
-        in.motion = canopyImage(targets->motion.image, targets->motion.view, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT, c->desc.motionFormat,
-                                none, {VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-                                       VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL});
-      // The load is no host frame: the first frame of play steps the simulation whatever its number.
-      SharedSimulation& sh = *c->shared;
-      const bool everStepped = sh.everStepped;
-      const uint64_t lastStep = sh.lastStepFrame;
-      s = recordCanopy(c, cmd, in);
-      sh.everStepped = everStepped;
-      sh.lastStepFrame = lastStep;
-      // Its graph names these targets only: retired with them, never found for a host's images.
-      std::vector<RecordGraph> keep, drop;
-      for (RecordGraph& g : c->recordGraphs) (g.inputs.color.image == targets->color.image ? drop : keep).push_back(std::move(g));
-      c->recordGraphs = std::move(keep);
-      retireRecordGraphs(*c, std::move(drop));
-    }
-    Device* dev = &d;
-    deferRelease(d, [dev, targets] { destroyLoadTargets(*dev, *targets); });
-    return s;
   });
 }
 
@@ -779,93 +569,5 @@ Status recordCanopyPassGroup(CanopyContext* c, VkCommandBuffer cmd, const Canopy
   }
   return recordCanopy(c, cmd, in).context("recordCanopyPassGroup");
 }
-
-CanopyStats canopyStats(const CanopyContext* c) {
-  CanopyStats s;
-  if (!c) return s;
-  s.frames = c->frames;
-  s.layersRebuilt = c->layersRebuilt;
-  s.resourceGeneration = c->generation;
-  s.shadowUpdates = c->shadow.updates;
-  s.shadowSkips = c->shadow.skips;
-  s.pushersMapped = c->pusherCounts.mapped;
-  s.pushersOutside = c->pusherCounts.outside;
-  s.pushersBehind = c->pusherCounts.behind;
-  s.internalGraphBuilds = c->recordGraphBuilds;
-  s.pendingReleases = c->device->pendingReleases.size();
-  s.deviceBytes = c->device->allocator->liveBytes;
-  s.peakDeviceBytes = c->device->allocator->peakLiveBytes;
-  s.deviceBlockBytes = c->device->allocator->blockBytes;
-  s.layers = c->layers.stats;
-  s.layers.layerWidth = c->layers.desc.width;
-  s.layers.layerHeight = c->layers.desc.height;
-  s.layers.guardX = c->layers.desc.guardX;
-  s.layers.guardY = c->layers.desc.guardY;
-  s.layers.instances = uint32_t(c->layers.instances.models.size());
-  s.simulation = c->shared->sim.stats;
-  return s;
-}
-
-Status setCanopyPushers(CanopyContext* c, const std::vector<CanopyPusher>& pushers) {
-  return guardApi("setCanopyPushers", [&]() -> Status {
-    if (!c) return Status::error(Result::InvalidArgument, "setCanopyPushers: null context");
-    CANOPY_TRY(checkPushers(pushers));
-    c->pushers = pushers;
-    return Status();
-  });
-}
-
-// The mapping the wind is read through: the context's plane (canopy_wind.glsl's CanopyWindInfo).
-static CanopyWindInfo windInfo(const SimulationPlane& p, uint32_t n) {
-  const glm::vec3 normal = glm::cross(toGlm(p.right), toGlm(p.up));
-  return CanopyWindInfo{{p.origin.x, p.origin.y, p.origin.z, p.tileSize},
-                        {p.right.x, p.right.y, p.right.z, float(n)},
-                        {p.up.x, p.up.y, p.up.z, 0.0f},
-                        {normal.x, normal.y, normal.z, 0.0f}};
-}
-
-Status canopyWind(const CanopyContext* c, CanopyWind* out) {
-  return guardApi("canopyWind", [&]() -> Status {
-    if (!c || !out) return Status::error(Result::InvalidArgument, "canopyWind: context and out are required");
-    const Simulation& sim = c->shared->sim;
-    *out = CanopyWind{};
-    out->image = sim.windImage.image;
-    out->view = sim.windImage.view;
-    out->format = kWindImageFormat;
-    out->size = sim.n;
-    const rg::State rest = windImageRest();
-    out->state = ResourceState{rest.stage, rest.access, rest.layout};
-    // Before the first frame chose it, the plane the host gave or a placeholder (the field is zero).
-    out->info = windInfo(c->plane, sim.n);
-    return Status();
-  });
-}
-
-Status sampleCanopyWind(const CanopyContext* c, const Float3* points, size_t count, Float3* out, uint64_t* fieldFrame) {
-  return guardApi("sampleCanopyWind", [&]() -> Status {
-    if (fieldFrame) *fieldFrame = 0;
-    if (!c) return Status::error(Result::InvalidArgument, "sampleCanopyWind: null context");
-    if (count > 0 && (!points || !out)) return Status::error(Result::InvalidArgument, "sampleCanopyWind: points and out are required");
-    const Simulation& sim = c->shared->sim;
-    const Device& d = *c->device;
-    // Frames at most frameNumber - framesInFlight have completed (CanopyFrame.frameNumber).
-    const uint64_t completed = d.frameNumber >= d.framesInFlight ? d.frameNumber - d.framesInFlight : 0;
-    uint32_t slot = 0;
-    const WindSlot* w = d.anyFrame ? completedWindSlot(sim, completed, &slot) : nullptr;
-    const float* field = w ? static_cast<const float*>(sim.windReadback.allocation.mapped) : nullptr;
-    for (size_t i = 0; i < count; ++i) {
-      if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y) || !std::isfinite(points[i].z))
-        return Status::error(Result::InvalidArgument, "sampleCanopyWind: points[" + std::to_string(i) + "] is not finite");
-      out[i] = field ? toFloat3(windAtWorld(field + size_t(slot) * 2 * sim.n * sim.n, sim.n, w->plane, toGlm(points[i]))) : Float3{};
-    }
-    if (fieldFrame && field) *fieldFrame = w->frame;
-    return Status();
-  });
-}
-
-LayeredVegetation& canopyLayers(CanopyContext* c) { return c->layers; }
-LayerDynamics& canopyDynamics(CanopyContext* c) { return c->dynamics; }
-Simulation& canopySimulation(CanopyContext* c) { return c->shared->sim; }
-Compositor& canopyCompositor(CanopyContext* c) { return c->compositor; }
 
 }  // namespace canopy

@@ -47,6 +47,10 @@ struct CanopyContext {
   bool skipSimulationStep = false;  // this frame's step is recorded by another context, or dt is 0 (see SharedSimulation)
   LayerDynamics dynamics;
   Compositor compositor;
+  CompositorDesc compositorDesc;  // what the compositor was created from (resizeCanopy starts from it)
+  // False from a resizeCanopy that failed until one succeeds: the size-dependent parts are missing,
+  // frames are refused, and the same size again recreates them.
+  bool sized = true;
   PerVertexAnimation perVertex;  // CanopyDesc.allowPerVertex only
   bool planeChosen = false;  // `plane` holds the host's or the first view's (chooseSimulationPlane)
   SimulationPlane plane;
@@ -78,5 +82,12 @@ RecordGraph* findRecordGraph(CanopyContext& context, const CanopyFrameInputs& in
 Status buildRecordGraph(CanopyContext& context, const CanopyFrameInputs& inputs, RecordGraph** out);
 // Releases `graphs` once no frame in flight records from them.
 void retireRecordGraphs(CanopyContext& context, std::vector<RecordGraph> graphs);
+
+// Shared by createCanopy (render/canopy.cpp) and the calls after it (render/canopy_scene.cpp).
+uint32_t guardPixels(float fraction, uint32_t size);
+Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi);
+void retireSizeDependentParts(CanopyContext& c);
+InstanceInputs instanceInputs(const std::vector<CanopyInstance>& instances);
+Status speciesModels(const char* call, const std::vector<CanopySpecies>& species, std::vector<SpeciesModel>* out);
 
 }  // namespace canopy

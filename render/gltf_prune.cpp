@@ -114,6 +114,55 @@ void materialTextures(const json& v, const std::string& key, std::set<size_t>* o
   }
 }
 
+// The buffers the model reads checked (Canopy's messages), their data: URIs made base64 for
+// tinygltf; the others a one-byte stub.
+Status keepReadBuffers(json& doc, bool glb, uint64_t binBytes, const std::vector<bool>& bufferUsed) {
+  const size_t buffers = bufferUsed.size();
+  for (size_t b = 0; b < buffers; ++b) {
+    json& buf = doc["buffers"][b];
+    const std::string what = "buffers[" + std::to_string(b) + "]";
+    if (!bufferUsed[b]) {
+      buf = json{{"byteLength", 1}, {"uri", "data:application/octet-stream;base64,AA=="}};
+      continue;
+    }
+    const json* uri = child(buf, "uri");
+    const json* len = child(buf, "byteLength");
+    const uint64_t declared = len && len->is_number_unsigned() ? len->get<uint64_t>() : 0;
+    if (!uri) {
+      if (!glb)
+        return Status::error(what + " has no 'uri': in a .gltf every buffer the model reads names its data (a file or a data: URI)");
+      if (b != 0) return Status::error(what + " has no 'uri': only a .glb's first buffer is its BIN chunk");
+      if (binBytes == 0) return Status::error(what + " has no 'uri' and the .glb has no BIN chunk");
+      if (declared > binBytes)
+        return Status::error(what + ": byteLength " + std::to_string(declared) + " is more than the .glb's BIN chunk (" +
+                             std::to_string(binBytes) + " bytes)");
+      continue;
+    }
+    if (!uri->is_string()) return Status::error(what + ": 'uri' is not a string");
+    const std::string u = uri->get<std::string>();
+    if (u.empty()) return Status::error(what + ": 'uri' is empty");
+    if (u.compare(0, 5, "data:") == 0) {
+      std::vector<unsigned char> bytes;
+      bool wasBase64 = false;
+      if (!decodeDataUri(u, &bytes, &wasBase64))
+        return Status::error(what + ": the data: URI is not data:[<mediatype>][;base64],<data> (RFC 2397)");
+      if (wasBase64) {
+        // tinygltf reads base64 only under the octet-stream and gltf-buffer media types.
+        buf["uri"] = "data:application/octet-stream;base64," + u.substr(u.find(',') + 1);
+      } else {
+        if (bytes.size() < declared)
+          return Status::error(what + ": the data: URI holds " + std::to_string(bytes.size()) + " bytes, byteLength says " +
+                               std::to_string(declared));
+        buf["uri"] = "data:application/octet-stream;base64," + base64(bytes);
+      }
+      continue;
+    }
+    if (isRemote(u))
+      return Status::error(what + ": uri '" + u + "' is remote; Canopy reads only files beside the model and never fetches one");
+  }
+  return Status();
+}
+
 }  // namespace
 
 Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out) {
@@ -235,49 +284,7 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
   }
   doc.erase("animations");  // they and skins name accessors; the vegetation reads neither
   doc.erase("skins");
-  for (size_t b = 0; b < buffers; ++b) {
-    json& buf = doc["buffers"][b];
-    const std::string what = "buffers[" + std::to_string(b) + "]";
-    if (!bufferUsed[b]) {
-      buf = json{{"byteLength", 1}, {"uri", "data:application/octet-stream;base64,AA=="}};
-      continue;
-    }
-    const json* uri = child(buf, "uri");
-    const json* len = child(buf, "byteLength");
-    const uint64_t declared = len && len->is_number_unsigned() ? len->get<uint64_t>() : 0;
-    if (!uri) {
-      if (!glb)
-        return Status::error(what + " has no 'uri': in a .gltf every buffer the model reads names its data (a file or a data: URI)");
-      if (b != 0) return Status::error(what + " has no 'uri': only a .glb's first buffer is its BIN chunk");
-      if (binBytes == 0) return Status::error(what + " has no 'uri' and the .glb has no BIN chunk");
-      if (declared > binBytes)
-        return Status::error(what + ": byteLength " + std::to_string(declared) + " is more than the .glb's BIN chunk (" +
-                             std::to_string(binBytes) + " bytes)");
-      continue;
-    }
-    if (!uri->is_string()) return Status::error(what + ": 'uri' is not a string");
-    const std::string u = uri->get<std::string>();
-    if (u.empty()) return Status::error(what + ": 'uri' is empty");
-    if (u.compare(0, 5, "data:") == 0) {
-      std::vector<unsigned char> bytes;
-      bool wasBase64 = false;
-      if (!decodeDataUri(u, &bytes, &wasBase64))
-        return Status::error(what + ": the data: URI is not data:[<mediatype>][;base64],<data> (RFC 2397)");
-      if (wasBase64) {
-        // tinygltf reads base64 only under the octet-stream and gltf-buffer media types.
-        buf["uri"] = "data:application/octet-stream;base64," + u.substr(u.find(',') + 1);
-      } else {
-        if (bytes.size() < declared)
-          return Status::error(what + ": the data: URI holds " + std::to_string(bytes.size()) + " bytes, byteLength says " +
-                               std::to_string(declared));
-        buf["uri"] = "data:application/octet-stream;base64," + base64(bytes);
-      }
-      continue;
-    }
-    if (isRemote(u))
-      return Status::error(what + ": uri '" + u + "' is remote; Canopy reads only files beside the model and never fetches one");
-  }
-  return Status();
+  return keepReadBuffers(doc, glb, binBytes, bufferUsed);
 }
 
 }  // namespace canopy

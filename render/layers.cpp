@@ -396,14 +396,19 @@ Status setLayerTargetSize(LayeredVegetation& lv, uint32_t width, uint32_t height
   if (2ull * guardX >= width || 2ull * guardY >= height)
     return Status::error("layers: a guard band of " + std::to_string(guardX) + "x" + std::to_string(guardY) +
                          " px leaves no output in " + std::to_string(width) + "x" + std::to_string(height));
-  if (width == lv.desc.width && height == lv.desc.height && guardX == lv.desc.guardX && guardY == lv.desc.guardY) return Status();
+  // The same size keeps the targets, unless a failed call left none (then they are made again).
+  if (width == lv.desc.width && height == lv.desc.height && guardX == lv.desc.guardX && guardY == lv.desc.guardY &&
+      lv.targets.color.image)
+    return Status();
   destroyLayerTargets(*lv.device, lv.targets);
   lv.desc.width = width;
   lv.desc.height = height;
   lv.desc.guardX = guardX;
   lv.desc.guardY = guardY;
   rescheduleAfterChange(lv.reslice, true, true, false);  // the placement is in pixels of the old size
-  return createTargets(lv);
+  const Status s = createTargets(lv);
+  if (!s.ok()) destroyLayerTargets(*lv.device, lv.targets);  // none rather than some
+  return s;
 }
 
 Status setLayerInstances(LayeredVegetation& lv, const InstanceInputs& copies) {

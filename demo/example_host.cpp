@@ -278,18 +278,8 @@ bool recordFrame(Host& h, canopy::CanopyContext* ctx, Frame& f, uint64_t frameNu
     c.bufferOffset = VkDeviceSize(kW) * kH * 4;
     c.imageSubresource.aspectMask = VK_IMAGE_ASPECT_DEPTH_BIT;
     vkCmdCopyImageToBuffer(f.cmd, h.depth.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, f.readback, 1, &c);
-    VkBufferMemoryBarrier2 bb{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
-    bb.srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT;
-    bb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    bb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-    bb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-    bb.srcQueueFamilyIndex = bb.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    bb.buffer = f.readback;
-    bb.size = VK_WHOLE_SIZE;
-    VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    di.bufferMemoryBarrierCount = 1;
-    di.pBufferMemoryBarriers = &bb;
-    vkCmdPipelineBarrier2(f.cmd, &di);
+    host::bufferBarrier(f.cmd, f.readback, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_HOST_BIT,
+                        VK_ACCESS_2_HOST_READ_BIT);
   }
   HOST_CHECK(vkEndCommandBuffer(f.cmd));
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};

@@ -20,29 +20,7 @@
 //   canopy-game-host [--frames N] [--plants N] [--gltf FILE | --scene-file FILE] [--out DIR] [--write-every K] [--validate]
 //                    [--no-push] [--no-leaves]
 // Exit 0 when every check passes, 1 on a failure, 2 on bad arguments, 77 without a display.
-#include <canopy/canopy.h>
-
-#define GLFW_INCLUDE_VULKAN
-#include <GLFW/glfw3.h>
-
-#include <algorithm>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <string>
-#include <vector>
-
-#include <glm/glm.hpp>
-#include <glm/gtc/matrix_transform.hpp>
-#include <glm/gtc/type_ptr.hpp>
-
-#include "host_vk.h"  // the example hosts' Vulkan helpers and box shaders
-#include "host_leaves.comp.h"
-#include "host_leaves.frag.h"
-#include "host_leaves.vert.h"
+#include "game_host.h"
 #include "host_shadowed.frag.h"
 #include "host_shadowed.vert.h"
 
@@ -50,93 +28,7 @@ namespace host {
 const char* const kProgram = "canopy-game-host";
 }  // namespace host
 
-namespace {
-
-constexpr uint32_t kW = 320, kH = 240, kFrames = 3;
-using host::kColorFormat;
-using host::kColorUsage;
-using host::kDepthUsage;
-constexpr uint8_t kOutlined = 1;  // the stencil value of the outlined box
-constexpr uint32_t kShadowSize = 1024;  // the sun's shadow map, texels a side
-constexpr uint32_t kLeaves = 4096;      // falling leaves carried by Canopy's wind (host_leaves.*)
-
-using host::BoxPush;
-using host::barrier;
-
-struct Readback {
-  VkBuffer buffer = VK_NULL_HANDLE;
-  VkDeviceMemory memory = VK_NULL_HANDLE;
-  uint8_t* mapped = nullptr;
-};
-
-struct Slot {
-  VkCommandBuffer cmd = VK_NULL_HANDLE;
-  VkFence fence = VK_NULL_HANDLE;
-  VkSemaphore acquired = VK_NULL_HANDLE;
-  // Depth and stencil before and after Canopy's passes, and the colour: [zBefore|zAfter|sBefore|sAfter|rgba].
-  Readback readback;
-  bool pending = false, write = false;
-  uint64_t frame = 0;
-  glm::mat4 invViewProj{1.0f};  // the frame's camera (the band mask: each pixel's world point)
-  size_t walked = 0;            // how much of the character's path that frame had walked
-};
-
-struct Game {
-  GLFWwindow* window = nullptr;
-  VkInstance instance = VK_NULL_HANDLE;
-  VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
-  VkSurfaceKHR surface = VK_NULL_HANDLE;
-  host::HostDevice dev;  // its physical device, device, queue family, queue and memory types
-  VkSwapchainKHR swapchain = VK_NULL_HANDLE;
-  VkFormat swapFormat = VK_FORMAT_UNDEFINED;
-  std::vector<VkImage> swapImages;
-  std::vector<VkSemaphore> presentReady;  // per swapchain image
-  VkFormat depthFormat = VK_FORMAT_UNDEFINED;
-  host::Image color, depth;
-  VkCommandPool pool = VK_NULL_HANDLE;
-  Slot slots[kFrames];
-  VkPipelineLayout layout = VK_NULL_HANDLE;
-  VkPipeline outline = VK_NULL_HANDLE;
-  // The sun's shadow map (D32, depth only): the host's boxes, then the forest (recordCanopyShadow);
-  // sampled by the next frame's shadowed pipeline (host_shadowed.*, descriptor set 0: the map).
-  host::Image shadowMap;
-  VkSampler shadowSampler = VK_NULL_HANDLE;
-  VkDescriptorSetLayout shadowSetLayout = VK_NULL_HANDLE;
-  VkDescriptorPool shadowPool = VK_NULL_HANDLE;
-  VkDescriptorSet shadowSet = VK_NULL_HANDLE;
-  VkPipelineLayout shadedLayout = VK_NULL_HANDLE;
-  VkPipeline shaded = VK_NULL_HANDLE, casters = VK_NULL_HANDLE;
-  glm::mat4 light{1.0f};
-  bool shadowReady = false;
-  uint64_t shadowUpdates = 0;
-  // Falling leaves (host_leaves.comp moves them by canopyWindAt, host_leaves.vert/frag draw them):
-  // two vec4 a leaf in one host-visible buffer, the wind image and the buffer in one descriptor set.
-  VkBuffer leaves = VK_NULL_HANDLE;
-  VkDeviceMemory leavesMemory = VK_NULL_HANDLE;
-  VkSampler windSampler = VK_NULL_HANDLE;
-  VkDescriptorSetLayout leafSetLayout = VK_NULL_HANDLE;
-  VkDescriptorPool leafPool = VK_NULL_HANDLE;
-  VkDescriptorSet leafSet = VK_NULL_HANDLE;
-  VkPipelineLayout leafComputeLayout = VK_NULL_HANDLE, leafDrawLayout = VK_NULL_HANDLE;
-  VkPipeline leafCompute = VK_NULL_HANDLE, leafDraw = VK_NULL_HANDLE;
-  glm::vec4 leafArea{0.0f};  // the area's centre (x, z), half width, the canopy's top
-  // The leaves' self-check: each leaf's velocity against sampleCanopyWind at its place, along the
-  // wind plane's right axis, pooled over leaves and frames (a correlation), and the frames whose
-  // character (a pusher) Canopy mapped onto its plane.
-  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
-  uint64_t leafSamples = 0, characterMapped = 0;
-  canopy::Device* adopted = nullptr;
-  canopy::CanopyContext* ctx = nullptr;
-  int validationMessages = 0;
-  // The self-check's totals.
-  uint64_t fartherPixels = 0, stencilChanged = 0, checkedFrames = 0, framesWithVegetationInFront = 0;
-  std::string outDir;
-  // --no-push: the character is drawn but not given to Canopy; --no-leaves: no leaves drawn (the
-  // two together let a test compare frames with and without the character's push).
-  bool push = true, drawLeaves = true;
-  std::string characterPath;  // per frame: x y (pixels, rows from the top) and radius (pixels) of the character's middle
-  std::vector<glm::vec4> walked;  // the character's path so far: x, z, its radius
-};
+namespace game {
 
 bool createInstanceAndDevice(Game& g, bool validate) {
   uint32_t n = 0, api = 0;
@@ -293,104 +185,6 @@ bool createFrames(Game& g) {
   return true;
 }
 
-// The leaves: their buffer (host-visible, filled here), the descriptor set (Canopy's wind image and
-// the buffer), the compute pipeline that moves them and the one that draws them (depth tested
-// against the host's depth after Canopy's passes, not written).
-bool createLeaves(Game& g, const glm::vec4& area) {
-  g.leafArea = area;
-  VkBufferCreateInfo bci{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-  bci.size = VkDeviceSize(kLeaves) * 32;
-  bci.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT;
-  HOST_CHECK(vkCreateBuffer(g.dev.device, &bci, nullptr, &g.leaves));
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(g.dev.device, g.leaves, &req);
-  VkMemoryAllocateInfo mai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  mai.allocationSize = req.size;
-  const int32_t type = host::memoryType(g.dev.memory, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT,
-                                        VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  if (type < 0) return false;
-  mai.memoryTypeIndex = uint32_t(type);
-  HOST_CHECK(vkAllocateMemory(g.dev.device, &mai, nullptr, &g.leavesMemory));
-  HOST_CHECK(vkBindBufferMemory(g.dev.device, g.leaves, g.leavesMemory, 0));
-  float* mapped = nullptr;
-  HOST_CHECK(vkMapMemory(g.dev.device, g.leavesMemory, 0, VK_WHOLE_SIZE, 0, reinterpret_cast<void**>(&mapped)));
-  uint32_t state = 12345u;
-  auto next = [&] { return float((state = state * 1664525u + 1013904223u) >> 8) / float(1u << 24); };
-  for (uint32_t i = 0; i < kLeaves; ++i) {
-    const float x = area.x + (2.0f * next() - 1.0f) * area.z, y = area.w * next(), z = area.y + (2.0f * next() - 1.0f) * area.z;
-    const float leaf[8] = {x, y, z, next(), 0.0f, 0.0f, 0.0f, 0.0f};
-    std::memcpy(mapped + 8 * i, leaf, sizeof leaf);
-  }
-  vkUnmapMemory(g.dev.device, g.leavesMemory);
-  VkSamplerCreateInfo si{VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO};  // texelFetch: the sampler's settings do not matter
-  HOST_CHECK(vkCreateSampler(g.dev.device, &si, nullptr, &g.windSampler));
-  const VkDescriptorSetLayoutBinding b[2] = {
-      {0, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1, VK_SHADER_STAGE_COMPUTE_BIT, nullptr},
-      {1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1, VK_SHADER_STAGE_COMPUTE_BIT | VK_SHADER_STAGE_VERTEX_BIT, nullptr}};
-  VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
-  li.bindingCount = 2;
-  li.pBindings = b;
-  HOST_CHECK(vkCreateDescriptorSetLayout(g.dev.device, &li, nullptr, &g.leafSetLayout));
-  const VkDescriptorPoolSize ps[2] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 1}, {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 1}};
-  VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  pi.maxSets = 1;
-  pi.poolSizeCount = 2;
-  pi.pPoolSizes = ps;
-  HOST_CHECK(vkCreateDescriptorPool(g.dev.device, &pi, nullptr, &g.leafPool));
-  VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
-  ai.descriptorPool = g.leafPool;
-  ai.descriptorSetCount = 1;
-  ai.pSetLayouts = &g.leafSetLayout;
-  HOST_CHECK(vkAllocateDescriptorSets(g.dev.device, &ai, &g.leafSet));
-  // Canopy's wind image lives as long as the context: one descriptor, written once.
-  canopy::CanopyWind wind;
-  const canopy::Status ws = canopy::canopyWind(g.ctx, &wind);
-  if (!ws.ok()) return std::fprintf(stderr, "canopy-game-host: %s\n", ws.message().c_str()), false;
-  const VkDescriptorImageInfo ii{g.windSampler, wind.view, wind.state.layout};
-  const VkDescriptorBufferInfo bi{g.leaves, 0, VK_WHOLE_SIZE};
-  VkWriteDescriptorSet w[2] = {{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}, {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET}};
-  w[0].dstSet = w[1].dstSet = g.leafSet;
-  w[0].descriptorCount = w[1].descriptorCount = 1;
-  w[0].descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER;
-  w[0].pImageInfo = &ii;
-  w[1].dstBinding = 1;
-  w[1].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
-  w[1].pBufferInfo = &bi;
-  vkUpdateDescriptorSets(g.dev.device, 2, w, 0, nullptr);
-  VkPushConstantRange computeRange{VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(canopy::CanopyWindInfo) + 2 * sizeof(glm::vec4)};
-  VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
-  pl.setLayoutCount = 1;
-  pl.pSetLayouts = &g.leafSetLayout;
-  pl.pushConstantRangeCount = 1;
-  pl.pPushConstantRanges = &computeRange;
-  HOST_CHECK(vkCreatePipelineLayout(g.dev.device, &pl, nullptr, &g.leafComputeLayout));
-  VkPushConstantRange drawRange{VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(glm::mat4) + 2 * sizeof(glm::vec4)};
-  pl.pPushConstantRanges = &drawRange;
-  HOST_CHECK(vkCreatePipelineLayout(g.dev.device, &pl, nullptr, &g.leafDrawLayout));
-  VkShaderModuleCreateInfo mi{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
-  mi.codeSize = sizeof(host_leaves_comp);
-  mi.pCode = host_leaves_comp;
-  VkShaderModule module = VK_NULL_HANDLE;
-  HOST_CHECK(vkCreateShaderModule(g.dev.device, &mi, nullptr, &module));
-  VkComputePipelineCreateInfo cpi{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
-  cpi.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, nullptr, 0, VK_SHADER_STAGE_COMPUTE_BIT, module, "main", nullptr};
-  cpi.layout = g.leafComputeLayout;
-  const VkResult r = vkCreateComputePipelines(g.dev.device, VK_NULL_HANDLE, 1, &cpi, nullptr, &g.leafCompute);
-  vkDestroyShaderModule(g.dev.device, module, nullptr);
-  HOST_CHECK(r);
-  VkPipelineDepthStencilStateCreateInfo ds = host::depthTested(VK_COMPARE_OP_LESS);
-  ds.depthWriteEnable = VK_FALSE;
-  HOST_CHECK(host::createHostPipeline(g.dev.device, g.leafDrawLayout,
-                                      {host_leaves_vert, sizeof(host_leaves_vert), host_leaves_frag, sizeof(host_leaves_frag)},
-                                      kColorFormat, g.depthFormat, g.depthFormat, ds, false, &g.leafDraw));
-  return true;
-}
-
-const VkPipelineStageFlags2 kColorStage = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT;
-const VkAccessFlags2 kColorAccess = VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT;
-const VkPipelineStageFlags2 kDepthStage = VK_PIPELINE_STAGE_2_EARLY_FRAGMENT_TESTS_BIT | VK_PIPELINE_STAGE_2_LATE_FRAGMENT_TESTS_BIT;
-const VkAccessFlags2 kDepthAccess = VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_READ_BIT | VK_ACCESS_2_DEPTH_STENCIL_ATTACHMENT_WRITE_BIT;
-const VkPipelineStageFlags2 kCopy = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
 
 // Depth and stencil of the host's target into the slot's readback at byte `at` (depth) and `sAt`.
 void copyDepthStencil(Game& g, VkCommandBuffer cmd, Slot& s, VkDeviceSize at, VkDeviceSize sAt) {
@@ -412,71 +206,6 @@ void drawBoxes(Game& g, VkCommandBuffer cmd, VkPipeline pipeline, bool clear, co
     vkCmdDraw(cmd, 36, 1, 0, 0);
   }
   vkCmdEndRendering(cmd);
-}
-
-canopy::Float4x4 toCanopy(const glm::mat4& m) {
-  canopy::Float4x4 r;
-  std::memcpy(r.m, glm::value_ptr(m), sizeof r.m);
-  return r;
-}
-
-struct Scene {
-  glm::vec3 plantMin{0}, plantMax{0};
-  float spacing = 1, half = 1;  // the grid's cell and half its extent
-  glm::vec2 corridor{0.0f};      // x and z of the middle lanes between the rows and columns
-  std::vector<glm::mat4> boxes;  // model matrices (unit cube of side 1); [0] is outlined
-};
-
-// The camera's projection: 60 degrees vertical, Vulkan clip (y down).
-glm::mat4 walkProjection() {
-  return glm::perspectiveRH_ZO(glm::radians(60.0f), float(kW) / float(kH), 0.05f, 200.0f) *
-         glm::mat4(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1);
-}
-
-// The walking camera: along the corridor between two rows, at eye height, looking around.
-glm::mat4 walkView(const Scene& s, uint32_t frame, uint32_t frames) {
-  const float t = frames > 1 ? float(frame) / float(frames - 1) : 0.0f;
-  const float height = s.plantMax.y - s.plantMin.y;
-  const glm::vec3 eye(s.corridor.x, 0.45f * height, s.half + 0.5f * s.spacing - t * 1.6f * s.half);
-  const float yaw = glm::radians(25.0f * std::sin(t * 6.2831853f));
-  const glm::vec3 dir(std::sin(yaw), -0.08f, -std::cos(yaw));
-  return glm::lookAt(eye, eye + dir, glm::vec3(0, 1, 0));
-}
-
-// The character walking ahead of the camera, weaving into the plants either side of its corridor:
-// a capsule (a pusher, setCanopyPushers) whose path parts the vegetation it walks through.
-canopy::CanopyPusher character(const Scene& s, uint32_t frame, uint32_t frames) {
-  const float R = 0.12f * s.spacing;
-  auto at = [&](float f) {
-    const float t = frames > 1 ? f / float(frames - 1) : 0.0f;
-    return glm::vec3(s.corridor.x + 0.9f * s.spacing * std::sin(t * 9.42f), R,
-                     s.half + 0.5f * s.spacing - t * 1.6f * s.half - 2.5f * s.spacing);
-  };
-  const glm::vec3 p = at(float(frame)), ahead = at(float(frame) + 1.0f);
-  canopy::CanopyPusher c;
-  c.a = {p.x, p.y, p.z};
-  c.b = {p.x, p.y + 2.5f * R, p.z};
-  c.radius = R;
-  const glm::vec3 v = (ahead - p) * 30.0f;  // the frames are 1/30 s apart
-  c.velocity = {v.x, v.y, v.z};
-  c.bend = 2.0f;
-  return c;
-}
-
-// The sun: an orthographic view around the ground and everything standing on it (Vulkan clip, depth
-// 0 near the sun).
-glm::mat4 sunViewProj(const Scene& s) {
-  const float w = s.half + 0.5f * s.spacing, height = s.plantMax.y - s.plantMin.y;
-  const glm::vec3 l = glm::normalize(glm::vec3(0.5f, 1.0f, 0.35f)), centre(0.0f, 0.5f * height, 0.0f);
-  const float reach = glm::length(glm::vec3(w, height, w));
-  const glm::mat4 view = glm::lookAt(centre + l * (2.0f * reach), centre, glm::vec3(0, 1, 0));
-  glm::vec3 lo(INFINITY), hi(-INFINITY);
-  for (int k = 0; k < 8; ++k) {
-    const glm::vec3 q(view * glm::vec4(k & 1 ? w : -w, k & 2 ? height : 0.0f, k & 4 ? w : -w, 1.0f));
-    lo = glm::min(lo, q);
-    hi = glm::max(hi, q);
-  }
-  return glm::orthoRH_ZO(lo.x, hi.x, lo.y, hi.y, -hi.z - 0.01f * reach, -lo.z + 0.01f * reach) * view;
 }
 
 // Checks the slot's last frame (its readback is complete once its fence was waited for).
@@ -553,6 +282,114 @@ bool wait(Game& g, Slot& s) {
   HOST_CHECK(vkResetFences(g.dev.device, 1, &s.fence));
   s.pending = false;
   checkSlot(g, s);
+  return true;
+}
+
+// The sun's shadow map for the next frame: the host's boxes (its own casters), then the forest
+// over them, each leaf where this frame shows it (recordCanopyShadow).
+bool drawShadowMap(Game& g, const Scene& sc, VkCommandBuffer cmd) {
+  barrier(cmd, g.shadowMap.image, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+          VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+          kDepthStage, kDepthAccess);
+  {
+    VkRenderingAttachmentInfo z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
+    z.imageView = g.shadowMap.view;
+    z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
+    z.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
+    z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
+    z.clearValue.depthStencil = {1.0f, 0};
+    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
+    ri.renderArea = {{0, 0}, {kShadowSize, kShadowSize}};
+    ri.layerCount = 1;
+    ri.pDepthAttachment = &z;
+    vkCmdBeginRendering(cmd, &ri);
+    const VkViewport v{0, 0, float(kShadowSize), float(kShadowSize), 0, 1};
+    const VkRect2D area{{0, 0}, {kShadowSize, kShadowSize}};
+    vkCmdSetViewport(cmd, 0, 1, &v);
+    vkCmdSetScissor(cmd, 0, 1, &area);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.casters);
+    for (const glm::mat4& b : sc.boxes) {
+      const BoxPush push{g.light * b, glm::vec4(0.0f)};
+      vkCmdPushConstants(cmd, g.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push, &push);
+      vkCmdDraw(cmd, 36, 1, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+  }
+  canopy::CanopyShadowInputs shadow;
+  shadow.depth = canopy::canopyImage(
+      g.shadowMap.image, g.shadowMap.view,
+      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_FORMAT_D32_SFLOAT,
+      {kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
+      {VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
+  shadow.width = shadow.height = kShadowSize;
+  shadow.lightViewProj = toCanopy(g.light);
+  shadow.clear = false;  // over the boxes the host drew
+  bool updated = false;
+  const canopy::Status shadowStatus = canopy::recordCanopyShadow(g.ctx, cmd, shadow, &updated);
+  if (!shadowStatus.ok()) {
+    std::fprintf(stderr, "canopy-game-host: %s\n", shadowStatus.message().c_str());
+    return false;
+  }
+  g.shadowUpdates += updated;
+  return true;
+}
+
+// The frame's end: depth, stencil and colour after Canopy into the slot's readback, the colour
+// blitted into the swapchain image, the submission and the present.
+bool finishFrame(Game& g, Slot& s, VkCommandBuffer cmd, uint32_t image) {
+  const VkImageAspectFlags ds = VK_IMAGE_ASPECT_DEPTH_BIT | VK_IMAGE_ASPECT_STENCIL_BIT;
+  const VkDeviceSize n = VkDeviceSize(kW) * kH;
+  barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
+          kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
+  copyDepthStencil(g, cmd, s, 4 * n, 9 * n);
+  barrier(cmd, g.color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+          kColorStage, kColorAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
+  VkBufferImageCopy c{};
+  c.bufferOffset = 10 * n;
+  c.imageExtent = {kW, kH, 1};
+  c.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  vkCmdCopyImageToBuffer(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &c);
+  const VkImage swap = g.swapImages[image];
+  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, kCopy,
+          VK_ACCESS_2_NONE, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT);
+  VkImageBlit blit{};
+  blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  blit.srcOffsets[1] = {int32_t(kW), int32_t(kH), 1};
+  blit.dstOffsets[1] = {int32_t(kW), int32_t(kH), 1};
+  vkCmdBlitImage(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, swap, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
+                 VK_FILTER_NEAREST);
+  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, kCopy,
+          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE);
+  // The readback for the host (after the fence).
+  VkMemoryBarrier2 hostRead{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
+  hostRead.srcStageMask = kCopy;
+  hostRead.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
+  hostRead.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
+  hostRead.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.memoryBarrierCount = 1;
+  di.pMemoryBarriers = &hostRead;
+  vkCmdPipelineBarrier2(cmd, &di);
+  HOST_CHECK(vkEndCommandBuffer(cmd));
+  const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_TRANSFER_BIT;
+  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  si.waitSemaphoreCount = 1;
+  si.pWaitSemaphores = &s.acquired;
+  si.pWaitDstStageMask = &waitStage;
+  si.commandBufferCount = 1;
+  si.pCommandBuffers = &cmd;
+  si.signalSemaphoreCount = 1;
+  si.pSignalSemaphores = &g.presentReady[image];
+  HOST_CHECK(vkQueueSubmit(g.dev.queue, 1, &si, s.fence));
+  s.pending = true;
+  VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+  pi.waitSemaphoreCount = 1;
+  pi.pWaitSemaphores = &g.presentReady[image];
+  pi.swapchainCount = 1;
+  pi.pSwapchains = &g.swapchain;
+  pi.pImageIndices = &image;
+  const VkResult pr = vkQueuePresentKHR(g.dev.queue, &pi);
+  if (pr != VK_SUCCESS && pr != VK_SUBOPTIMAL_KHR) HOST_CHECK(pr);
   return true;
 }
 
@@ -654,191 +491,10 @@ bool frame(Game& g, const Scene& sc, uint64_t number, uint32_t index, uint32_t f
   // The outline of box 0, where the stencil is not its own: the stencil survived Canopy's passes.
   const glm::mat4 grown = sc.boxes[0] * glm::scale(glm::mat4(1.0f), glm::vec3(1.12f));
   drawBoxes(g, cmd, g.outline, false, {{{vp * grown, glm::vec4(1.0f, 0.85f, 0.1f, 1)}, uint32_t(kOutlined)}});
-  // The falling leaves: moved by this frame's wind (Canopy's image, in the state recordCanopy left
-  // it for the host's shaders: no barrier of the host's), then drawn over the scene.
-  {
-    VkBufferMemoryBarrier2 before{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
-    before.srcStageMask = VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT | kCopy;
-    before.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT;
-    before.dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-    before.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-    before.srcQueueFamilyIndex = before.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    before.buffer = g.leaves;
-    before.size = VK_WHOLE_SIZE;
-    VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-    di.bufferMemoryBarrierCount = 1;
-    di.pBufferMemoryBarriers = &before;
-    vkCmdPipelineBarrier2(cmd, &di);
-    canopy::CanopyWind wind;
-    const canopy::Status ws = canopy::canopyWind(g.ctx, &wind);
-    if (!ws.ok()) {
-      std::fprintf(stderr, "canopy-game-host: %s\n", ws.message().c_str());
-      return false;
-    }
-    struct {
-      canopy::CanopyWindInfo wind;
-      glm::vec4 area, step;
-    } push{wind.info, g.leafArea, glm::vec4(1.0f / 30.0f, float(number) / 30.0f, float(kLeaves), 0.0f)};
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, g.leafCompute);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, g.leafComputeLayout, 0, 1, &g.leafSet, 0, nullptr);
-    vkCmdPushConstants(cmd, g.leafComputeLayout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof push, &push);
-    vkCmdDispatch(cmd, (kLeaves + 63) / 64, 1, 1);
-    VkBufferMemoryBarrier2 after = before;
-    after.srcStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
-    after.srcAccessMask = VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT;
-    after.dstStageMask = VK_PIPELINE_STAGE_2_VERTEX_SHADER_BIT | kCopy;
-    after.dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_TRANSFER_READ_BIT;
-    di.pBufferMemoryBarriers = &after;
-    vkCmdPipelineBarrier2(cmd, &di);
-    host::beginBoxPass(cmd, g.color.view, g.depth.view, true, false, {}, 1.0f, kW, kH, g.leafDraw);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.leafDrawLayout, 0, 1, &g.leafSet, 0, nullptr);
-    const glm::mat4 inv = glm::inverse(view);
-    const float size = 0.015f * (sc.plantMax.y - sc.plantMin.y);  // half a leaf
-    struct {
-      glm::mat4 viewProj;
-      glm::vec4 right, up;
-    } draw{vp, glm::vec4(glm::vec3(inv[0]) * size, 40.0f * size), glm::vec4(glm::vec3(inv[1]) * size, 0.0f)};
-    vkCmdPushConstants(cmd, g.leafDrawLayout, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof draw, &draw);
-    vkCmdDraw(cmd, g.drawLeaves ? 6 * kLeaves : 0, 1, 0, 0);
-    vkCmdEndRendering(cmd);
-    const VkBufferCopy copy{0, 14 * VkDeviceSize(kW) * kH, VkDeviceSize(kLeaves) * 32};
-    vkCmdCopyBuffer(cmd, g.leaves, s.readback.buffer, 1, &copy);
-  }
-  // The sun's shadow map for the next frame: the host's boxes (its own casters), then the forest
-  // over them, each leaf where this frame shows it.
-  barrier(cmd, g.shadowMap.image, VK_IMAGE_ASPECT_DEPTH_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-          VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
-          kDepthStage, kDepthAccess);
-  {
-    VkRenderingAttachmentInfo z{VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO};
-    z.imageView = g.shadowMap.view;
-    z.imageLayout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
-    z.loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR;
-    z.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
-    z.clearValue.depthStencil = {1.0f, 0};
-    VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-    ri.renderArea = {{0, 0}, {kShadowSize, kShadowSize}};
-    ri.layerCount = 1;
-    ri.pDepthAttachment = &z;
-    vkCmdBeginRendering(cmd, &ri);
-    const VkViewport v{0, 0, float(kShadowSize), float(kShadowSize), 0, 1};
-    const VkRect2D area{{0, 0}, {kShadowSize, kShadowSize}};
-    vkCmdSetViewport(cmd, 0, 1, &v);
-    vkCmdSetScissor(cmd, 0, 1, &area);
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, g.casters);
-    for (const glm::mat4& b : sc.boxes) {
-      const BoxPush push{g.light * b, glm::vec4(0.0f)};
-      vkCmdPushConstants(cmd, g.layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof push, &push);
-      vkCmdDraw(cmd, 36, 1, 0, 0);
-    }
-    vkCmdEndRendering(cmd);
-  }
-  canopy::CanopyShadowInputs shadow;
-  shadow.depth = canopy::canopyImage(
-      g.shadowMap.image, g.shadowMap.view,
-      VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT, VK_FORMAT_D32_SFLOAT,
-      {kDepthStage, kDepthAccess, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
-      {VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL});
-  shadow.width = shadow.height = kShadowSize;
-  shadow.lightViewProj = toCanopy(g.light);
-  shadow.clear = false;  // over the boxes the host drew
-  bool updated = false;
-  const canopy::Status shadowStatus = canopy::recordCanopyShadow(g.ctx, cmd, shadow, &updated);
-  if (!shadowStatus.ok()) {
-    std::fprintf(stderr, "canopy-game-host: %s\n", shadowStatus.message().c_str());
-    return false;
-  }
-  g.shadowUpdates += updated;
-  // Depth, stencil and colour after, then the colour into the swapchain image.
-  barrier(cmd, g.depth.image, ds, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, kDepthStage,
-          kDepthAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
-  copyDepthStencil(g, cmd, s, 4 * n, 9 * n);
-  barrier(cmd, g.color.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-          kColorStage, kColorAccess, kCopy, VK_ACCESS_2_TRANSFER_READ_BIT);
-  VkBufferImageCopy c{};
-  c.bufferOffset = 10 * n;
-  c.imageExtent = {kW, kH, 1};
-  c.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  vkCmdCopyImageToBuffer(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, s.readback.buffer, 1, &c);
-  const VkImage swap = g.swapImages[image];
-  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, kCopy,
-          VK_ACCESS_2_NONE, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT);
-  VkImageBlit blit{};
-  blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-  blit.srcOffsets[1] = {int32_t(kW), int32_t(kH), 1};
-  blit.dstOffsets[1] = {int32_t(kW), int32_t(kH), 1};
-  vkCmdBlitImage(cmd, g.color.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, swap, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit,
-                 VK_FILTER_NEAREST);
-  barrier(cmd, swap, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, kCopy,
-          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE);
-  // The readback for the host (after the fence).
-  VkMemoryBarrier2 hostRead{VK_STRUCTURE_TYPE_MEMORY_BARRIER_2};
-  hostRead.srcStageMask = kCopy;
-  hostRead.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-  hostRead.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-  hostRead.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
-  di.memoryBarrierCount = 1;
-  di.pMemoryBarriers = &hostRead;
-  vkCmdPipelineBarrier2(cmd, &di);
-  HOST_CHECK(vkEndCommandBuffer(cmd));
-  const VkPipelineStageFlags waitStage = VK_PIPELINE_STAGE_TRANSFER_BIT;
-  VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-  si.waitSemaphoreCount = 1;
-  si.pWaitSemaphores = &s.acquired;
-  si.pWaitDstStageMask = &waitStage;
-  si.commandBufferCount = 1;
-  si.pCommandBuffers = &cmd;
-  si.signalSemaphoreCount = 1;
-  si.pSignalSemaphores = &g.presentReady[image];
-  HOST_CHECK(vkQueueSubmit(g.dev.queue, 1, &si, s.fence));
-  s.pending = true;
-  VkPresentInfoKHR pi{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
-  pi.waitSemaphoreCount = 1;
-  pi.pWaitSemaphores = &g.presentReady[image];
-  pi.swapchainCount = 1;
-  pi.pSwapchains = &g.swapchain;
-  pi.pImageIndices = &image;
-  const VkResult pr = vkQueuePresentKHR(g.dev.queue, &pi);
-  if (pr != VK_SUCCESS && pr != VK_SUBOPTIMAL_KHR) HOST_CHECK(pr);
-  return true;
-}
-
-// N copies of the plant on a square grid, each turned and scaled its own way, standing on the
-// ground (y = 0); a few boxes among them.
-bool makeScene(const canopy::Model* model, uint32_t plants, canopy::CanopyDesc* desc, Scene* s) {
-  canopy::Float3 lo, hi;
-  canopy::modelBounds(model, &lo, &hi);
-  s->plantMin = glm::vec3(lo.x, lo.y, lo.z);
-  s->plantMax = glm::vec3(hi.x, hi.y, hi.z);
-  const glm::vec3 size = s->plantMax - s->plantMin;
-  const uint32_t side = uint32_t(std::ceil(std::sqrt(double(plants))));
-  s->spacing = 1.3f * std::max(size.x, size.z);
-  s->half = 0.5f * float(side - 1) * s->spacing;
-  s->corridor = glm::vec2(-s->half + (float(side / 2) - 0.5f) * s->spacing);
-  uint32_t seed = 7;
-  auto rnd = [&] {
-    seed = seed * 1664525u + 1013904223u;
-    return float(seed >> 8) / float(1u << 24);
-  };
-  const glm::vec3 foot(0.5f * (s->plantMin.x + s->plantMax.x), s->plantMin.y, 0.5f * (s->plantMin.z + s->plantMax.z));
-  for (uint32_t i = 0; i < plants; ++i) {
-    const glm::vec3 at(float(i % side) * s->spacing - s->half, 0.0f, float(i / side) * s->spacing - s->half);
-    const glm::mat4 t = glm::translate(glm::mat4(1.0f), at) * glm::rotate(glm::mat4(1.0f), rnd() * 6.2831853f, glm::vec3(0, 1, 0)) *
-                        glm::scale(glm::mat4(1.0f), glm::vec3(0.8f + 0.4f * rnd())) * glm::translate(glm::mat4(1.0f), -foot);
-    canopy::CanopyInstance inst;
-    inst.transform = toCanopy(t);
-    inst.tint = {0.85f + 0.3f * rnd(), 0.85f + 0.3f * rnd(), 0.85f + 0.2f * rnd()};
-    desc->instances.push_back(inst);
-  }
-  // Boxes where the lanes cross, off the walk (the first outlined through the stencil).
-  const float b = 0.3f * size.y;
-  const int dx[6] = {1, -1, 2, 1, -1, 2}, dz[6] = {-1, -1, -1, 1, 1, 1};
-  for (int k = 0; k < 6; ++k) {
-    const glm::vec3 at(s->corridor.x + float(dx[k]) * s->spacing, 0.5f * b, s->corridor.y + float(dz[k]) * s->spacing);
-    s->boxes.push_back(glm::scale(glm::translate(glm::mat4(1.0f), at), glm::vec3(b)));
-  }
-  return true;
+  // The falling leaves: moved by this frame's wind, then drawn over the scene.
+  if (!recordLeaves(g, sc, s, cmd, number, view, vp)) return false;
+  if (!drawShadowMap(g, sc, cmd)) return false;
+  return finishFrame(g, s, cmd, image);
 }
 
 // A scene file's species (glTF files; a generated species needs canopy-demo's generator) and copies,
@@ -969,7 +625,9 @@ void shutdown(Game& g) {
   glfwTerminate();
 }
 
-}  // namespace
+}  // namespace game
+
+using namespace game;
 
 int main(int argc, char** argv) {
   uint32_t frames = 48, plants = 64, writeEvery = 1;

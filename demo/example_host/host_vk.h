@@ -191,6 +191,23 @@ inline void barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspec
   vkCmdPipelineBarrier2(cmd, &di);
 }
 
+// A whole-buffer barrier: `buffer`'s accesses before (src) ordered before those after (dst).
+inline void bufferBarrier(VkCommandBuffer cmd, VkBuffer buffer, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                          VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess) {
+  VkBufferMemoryBarrier2 b{VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2};
+  b.srcStageMask = srcStage;
+  b.srcAccessMask = srcAccess;
+  b.dstStageMask = dstStage;
+  b.dstAccessMask = dstAccess;
+  b.srcQueueFamilyIndex = b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+  b.buffer = buffer;
+  b.size = VK_WHOLE_SIZE;
+  VkDependencyInfo di{VK_STRUCTURE_TYPE_DEPENDENCY_INFO};
+  di.bufferMemoryBarrierCount = 1;
+  di.pBufferMemoryBarriers = &b;
+  vkCmdPipelineBarrier2(cmd, &di);
+}
+
 // A pool whose command buffers are reset one by one (a frame slot re-records its own).
 inline VkResult createCommandPool(VkDevice device, uint32_t family, VkCommandPool* out) {
   VkCommandPoolCreateInfo pci{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};

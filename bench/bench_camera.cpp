@@ -183,6 +183,48 @@ struct PathResult {
 
 }  // namespace
 
+// One face count's tables: each path against the still camera, the reprojected frames, the cross-fades.
+void printCameraResults(uint64_t faces, const std::vector<double>& stillMs, const std::vector<PathResult>& results,
+                        const std::vector<FadeResult>& fades) {
+  const double stillMed = quantile(stillMs, 0.5);
+  std::printf("\n%llu faces: still camera %.2f ms (median), p95 %.2f ms\n", (unsigned long long)faces, stillMed,
+              quantile(stillMs, 0.95));
+  std::printf("  (IoU, sil.: covered = differs from the clear colour by > 1 level; depth IoU, sil.: covered = Canopy wrote\n"
+              "   the host's depth there, alpha >= 0.5)\n");
+  std::printf("  %-7s %9s %8s %7s %10s %8s %7s %9s %9s %8s %8s %8s %9s %8s\n", "path", "auto ms", "p95", "x still", "every ms",
+              "p95", "x still", "re-slices", "IoU min", "sil. avg", "sil. max", "p99 max", "depth IoU", "sil. max");
+  for (const PathResult& r : results) {
+    const double am = quantile(r.autoMs, 0.5), em = quantile(r.everyMs, 0.5);
+    std::printf("  %-7s %9.2f %8.2f %7.2f %10.2f %8.2f %7.2f %9u %9.4f %8.3f %8.3f %8.2f %9.4f %8.3f\n", r.name.c_str(), am,
+                quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
+                em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
+                r.worst.silhouetteP99Px, r.worstDepth.coverageIoU, r.worstDepth.silhouetteMeanPx);
+  }
+  // The issue-56 figure: the frames that only reprojected, against the still frames drawn alternately.
+  std::printf("\n  Reprojected frames (the policy side's frames with no re-slice work: not re-sliced at once, no step of a\n"
+              "  spread re-slice) against the still camera's frames drawn alternately with them (the path's start\n"
+              "  view), and against a still frame at the same camera (re-sliced there, then drawn again), medians:\n");
+  std::printf("  %-7s %7s %12s %9s %11s %11s %9s\n", "path", "frames", "reproj. ms", "still ms", "x still", "here ms", "x here");
+  for (const PathResult& r : results) {
+    const double rm = quantile(r.reprojectedMs, 0.5), sm = quantile(r.stillMs, 0.5), hm = quantile(r.stillHereMs, 0.5);
+    std::printf("  %-7s %7zu %12.2f %9.2f %11.2f %11.2f %9.2f\n", r.name.c_str(), r.reprojectedMs.size(), rm, sm,
+                rm / std::max(sm, 1e-9), hm, rm / std::max(hm, 1e-9));
+  }
+  if (!fades.empty()) {
+    std::printf("\n  Cross-fade at one camera (spread re-slice, %u frames of fade): coverage of each frame of the re-slice\n"
+                "  against the old and the new set (mean alpha; covered = alpha >= 1/2), the lowest frame over the smaller set\n",
+                LayerSettings{}.crossFadeFrames);
+    std::printf("  %-30s %6s %5s %9s %9s %9s %9s %9s %9s %9s %9s %8s %8s\n", "change", "frames", "fade", "alpha old", "new",
+                "lowest", "/smaller", "cov. old", "new", "lowest", "/smaller", "still ms", "fade ms");
+    for (const FadeResult& f : fades) {
+      const double sa = std::min(f.before.meanAlpha, f.after.meanAlpha), sc = std::min(f.before.covered, f.after.covered);
+      std::printf("  %-30s %6u %5u %9.5f %9.5f %9.5f %9.4f %9.5f %9.5f %9.5f %9.4f %8.2f %8.2f\n", f.change.c_str(), f.frames,
+                  f.fadeFrames, f.before.meanAlpha, f.after.meanAlpha, f.lowest.meanAlpha, f.lowest.meanAlpha / std::max(sa, 1e-12),
+                  f.before.covered, f.after.covered, f.lowest.covered, f.lowest.covered / std::max(sc, 1e-12), f.stillMs, f.fadeMs);
+    }
+  }
+}
+
 int runCameraBench(Device& d, const CameraBenchOptions& o) {
   const uint8_t* clear = kHostClearRgba8;
   char policy[192] = "at once";
@@ -318,43 +360,7 @@ int runCameraBench(Device& d, const CameraBenchOptions& o) {
       std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
       return 1;
     }
-    const double stillMed = quantile(stillMs, 0.5);
-    std::printf("\n%llu faces: still camera %.2f ms (median), p95 %.2f ms\n", (unsigned long long)faces, stillMed,
-                quantile(stillMs, 0.95));
-    std::printf("  (IoU, sil.: covered = differs from the clear colour by > 1 level; depth IoU, sil.: covered = Canopy wrote\n"
-                "   the host's depth there, alpha >= 0.5)\n");
-    std::printf("  %-7s %9s %8s %7s %10s %8s %7s %9s %9s %8s %8s %8s %9s %8s\n", "path", "auto ms", "p95", "x still", "every ms",
-                "p95", "x still", "re-slices", "IoU min", "sil. avg", "sil. max", "p99 max", "depth IoU", "sil. max");
-    for (const PathResult& r : results) {
-      const double am = quantile(r.autoMs, 0.5), em = quantile(r.everyMs, 0.5);
-      std::printf("  %-7s %9.2f %8.2f %7.2f %10.2f %8.2f %7.2f %9u %9.4f %8.3f %8.3f %8.2f %9.4f %8.3f\n", r.name.c_str(), am,
-                  quantile(r.autoMs, 0.95), am / std::max(stillMed, 1e-9), em, quantile(r.everyMs, 0.95),
-                  em / std::max(stillMed, 1e-9), r.reslices, r.worst.coverageIoU, r.silhouetteMeanAvg, r.worst.silhouetteMeanPx,
-                  r.worst.silhouetteP99Px, r.worstDepth.coverageIoU, r.worstDepth.silhouetteMeanPx);
-    }
-    // The issue-56 figure: the frames that only reprojected, against the still frames drawn alternately.
-    std::printf("\n  Reprojected frames (the policy side's frames with no re-slice work: not re-sliced at once, no step of a\n"
-                "  spread re-slice) against the still camera's frames drawn alternately with them (the path's start\n"
-                "  view), and against a still frame at the same camera (re-sliced there, then drawn again), medians:\n");
-    std::printf("  %-7s %7s %12s %9s %11s %11s %9s\n", "path", "frames", "reproj. ms", "still ms", "x still", "here ms", "x here");
-    for (const PathResult& r : results) {
-      const double rm = quantile(r.reprojectedMs, 0.5), sm = quantile(r.stillMs, 0.5), hm = quantile(r.stillHereMs, 0.5);
-      std::printf("  %-7s %7zu %12.2f %9.2f %11.2f %11.2f %9.2f\n", r.name.c_str(), r.reprojectedMs.size(), rm, sm,
-                  rm / std::max(sm, 1e-9), hm, rm / std::max(hm, 1e-9));
-    }
-    if (!fades.empty()) {
-      std::printf("\n  Cross-fade at one camera (spread re-slice, %u frames of fade): coverage of each frame of the re-slice\n"
-                  "  against the old and the new set (mean alpha; covered = alpha >= 1/2), the lowest frame over the smaller set\n",
-                  LayerSettings{}.crossFadeFrames);
-      std::printf("  %-30s %6s %5s %9s %9s %9s %9s %9s %9s %9s %9s %8s %8s\n", "change", "frames", "fade", "alpha old", "new",
-                  "lowest", "/smaller", "cov. old", "new", "lowest", "/smaller", "still ms", "fade ms");
-      for (const FadeResult& f : fades) {
-        const double sa = std::min(f.before.meanAlpha, f.after.meanAlpha), sc = std::min(f.before.covered, f.after.covered);
-        std::printf("  %-30s %6u %5u %9.5f %9.5f %9.5f %9.4f %9.5f %9.5f %9.5f %9.4f %8.2f %8.2f\n", f.change.c_str(), f.frames,
-                    f.fadeFrames, f.before.meanAlpha, f.after.meanAlpha, f.lowest.meanAlpha, f.lowest.meanAlpha / std::max(sa, 1e-12),
-                    f.before.covered, f.after.covered, f.lowest.covered, f.lowest.covered / std::max(sc, 1e-12), f.stillMs, f.fadeMs);
-      }
-    }
+    printCameraResults(faces, stillMs, results, fades);
   }
   return 0;
 }

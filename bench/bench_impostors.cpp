@@ -79,6 +79,109 @@ Status writeImage(const std::string& path, uint32_t w, uint32_t h, const std::ve
 
 }  // namespace
 
+namespace {
+
+struct Variant {
+  ImpostorMode mode;
+  ImpostorShape shape;
+  const char* name;
+  const char* file;
+};
+
+// One camera of one view set: every variant re-sliced `rebuilds` times (alternated), its far and
+// all layers against the six-view set's 'off' (kept in refFar/refAll), images to `imageDir`, a table row each.
+Status measureCamera(Device& dev, LayeredVegetation& lv, const std::vector<Variant>& variants, const LayerView& view, int cam, bool six,
+                     uint64_t faces, int rebuilds, uint32_t width, uint32_t height, const std::string& imageDir,
+                     std::vector<glm::vec4> refFar[2], std::vector<glm::vec4> refAll[2]) {
+  const int nv = int(variants.size());
+  const char* camName = cam == 0 ? "across" : "distant";
+  rg::RenderGraph g;
+  GpuTimer timer;
+  Status s = addLayerPasses(lv, g, nullptr);
+  if (s.ok()) s = g.compile();
+  if (s.ok()) s = g.realize(dev);
+  if (s.ok()) s = timer.init(dev, 16);
+  struct Samples {
+    std::vector<double> wall, gpu, place;
+    uint64_t triangles = 0;
+    uint32_t impostors = 0, fading = 0;
+    std::vector<glm::vec4> far, all;
+  };
+  std::vector<Samples> per(nv);
+  auto reslice = [&](int v, bool keep, bool debug) -> Status {
+    LayerSettings ls = lv.settings;
+    ls.impostors.mode = variants[v].mode;
+    ls.impostors.shape = variants[v].shape;
+    ls.impostors.debugView = debug;
+    CANOPY_TRY(setLayerSettings(lv, ls));
+    const double w0 = nowMs();
+    bool changed = false;
+    CANOPY_TRY(updateLayerView(lv, view, &changed));
+    CANOPY_TRY(submitAndWait(dev, [&](VkCommandBuffer cmd) {
+      timer.reset(cmd);
+      return g.record(cmd, &timer);
+    }));
+    const double w1 = nowMs();
+    std::vector<PassTiming> t;
+    CANOPY_TRY(timer.read(dev, &t));
+    if (!keep) return Status();
+    Samples& p = per[v];
+    const bool off = variants[v].mode == ImpostorMode::Off;
+    p.wall.push_back(w1 - w0);
+    p.place.push_back(lv.stats.lastPlacementMs);
+    for (const PassTiming& x : t)
+      if (x.name == "layers: foliage") p.gpu.push_back(x.milliseconds);
+    p.triangles = off ? lv.stats.foliageTriangles : lv.stats.lastDrawnTriangles;
+    p.impostors = off ? 0 : lv.stats.lastImpostors;
+    p.fading = off ? 0 : lv.stats.lastFadingBoxes;
+    return Status();
+  };
+  for (int r = 0; r <= rebuilds && s.ok(); ++r)
+    for (int v = 0; v < nv && s.ok(); ++v) s = reslice(v, r > 0, false);
+  // The images of each variant (one more re-slice each), and the debug view.
+  const LayerLayout& l = lv.settings.layout;
+  const uint32_t farFirst = l.region[0] + l.region[1], n = l.count();
+  for (int v = 0; v < nv && s.ok(); ++v) {
+    s = reslice(v, false, false);
+    if (s.ok()) s = flatten(lv, farFirst, n, &per[v].far);
+    if (s.ok()) s = flatten(lv, 0, n, &per[v].all);
+    if (s.ok() && !imageDir.empty() && (six || v > 0)) {
+      const std::string name = imageDir + "/impostors_" + camName + "_" + std::to_string(faces) + "_" + variants[v].file + ".png";
+      s = writeImage(name, width, height, per[v].far);
+    }
+  }
+  if (s.ok() && six) {
+    refFar[cam] = per[0].far;
+    refAll[cam] = per[0].all;
+  }
+  if (s.ok() && six && !imageDir.empty()) {
+    std::vector<glm::vec4> dbg;
+    s = reslice(2, false, true);  // by projected size: the most impostors
+    if (s.ok()) s = flatten(lv, 0, n, &dbg);
+    if (s.ok())
+      s = writeImage(imageDir + "/impostors_debug_" + camName + "_" + std::to_string(faces) + ".png", width, height, dbg);
+  }
+  timer.destroy(dev);
+  g.release(dev);
+  if (!s.ok()) return s;
+  std::printf("  camera %s:\n", camName);
+  std::printf("  %-15s %10s %9s %9s %11s %10s %9s | %-16s | %-16s\n", "mode", "wall ms", "GPU ms", "place ms",
+              "tris drawn", "impostors", "x wall", "far |d|  IoU", "all |d|  IoU");
+  const double base = medianOf(per[0].wall);
+  for (int v = 0; v < nv; ++v) {
+    const Samples& p = per[v];
+    const Diff far = compare(p.far, refFar[cam]), all = compare(p.all, refAll[cam]);
+    char imp[32];
+    std::snprintf(imp, sizeof imp, "%u (%u)", p.impostors, p.fading);
+    std::printf("  %-15s %10.2f %9.2f %9.2f %11llu %10s %9.2f | %7.4f %7.3f  | %7.4f %7.3f\n", variants[v].name,
+                medianOf(p.wall), medianOf(p.gpu), medianOf(p.place), (unsigned long long)p.triangles, imp,
+                base / std::max(medianOf(p.wall), 1e-9), far.meanAbs, far.iou, all.meanAbs, all.iou);
+  }
+  return Status();
+}
+
+}  // namespace
+
 int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const std::string& sceneName, int rebuilds,
                      uint32_t width, uint32_t height, const std::string& imageDir) {
   SceneKind kind;
@@ -147,12 +250,6 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
                 lv.stats.impostorBakedBoxes, lv.stats.impostorViewsPerBox, lv.stats.impostorTilePixels,
                 double(lv.stats.impostorBytesPerBox) / 1024.0, double(lv.stats.impostorBytes) / double(1 << 20),
                 lv.stats.impostorBakeMs);
-    struct Variant {
-      ImpostorMode mode;
-      ImpostorShape shape;
-      const char* name;
-      const char* file;
-    };
     std::vector<Variant> variants = {{ImpostorMode::Off, ImpostorShape::CrossedPolygons, "off", "off"}};
     if (six) {
       variants.push_back({ImpostorMode::FarRegion, ImpostorShape::CrossedPolygons, "far, crossed", "far"});
@@ -162,93 +259,8 @@ int runImpostorBench(Device& dev, const std::vector<uint64_t>& faceCounts, const
       variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::FacingPolygon, "size, facing", "size_facing12"});
       variants.push_back({ImpostorMode::ByProjectedSize, ImpostorShape::CrossedPolygons, "size, crossed", "size_crossed12"});
     }
-    const int nv = int(variants.size());
-    for (int cam = 0; cam < 2 && s.ok(); ++cam) {
-    const LayerView& view = views[cam];
-    const char* camName = cam == 0 ? "across" : "distant";
-    rg::RenderGraph g;
-    GpuTimer timer;
-    s = addLayerPasses(lv, g, nullptr);
-    if (s.ok()) s = g.compile();
-    if (s.ok()) s = g.realize(dev);
-    if (s.ok()) s = timer.init(dev, 16);
-    struct Samples {
-      std::vector<double> wall, gpu, place;
-      uint64_t triangles = 0;
-      uint32_t impostors = 0, fading = 0;
-      std::vector<glm::vec4> far, all;
-    };
-    std::vector<Samples> per(nv);
-    auto reslice = [&](int v, bool keep, bool debug) -> Status {
-      LayerSettings ls = lv.settings;
-      ls.impostors.mode = variants[v].mode;
-      ls.impostors.shape = variants[v].shape;
-      ls.impostors.debugView = debug;
-      CANOPY_TRY(setLayerSettings(lv, ls));
-      const double w0 = nowMs();
-      bool changed = false;
-      CANOPY_TRY(updateLayerView(lv, view, &changed));
-      CANOPY_TRY(submitAndWait(dev, [&](VkCommandBuffer cmd) {
-        timer.reset(cmd);
-        return g.record(cmd, &timer);
-      }));
-      const double w1 = nowMs();
-      std::vector<PassTiming> t;
-      CANOPY_TRY(timer.read(dev, &t));
-      if (!keep) return Status();
-      Samples& p = per[v];
-      const bool off = variants[v].mode == ImpostorMode::Off;
-      p.wall.push_back(w1 - w0);
-      p.place.push_back(lv.stats.lastPlacementMs);
-      for (const PassTiming& x : t)
-        if (x.name == "layers: foliage") p.gpu.push_back(x.milliseconds);
-      p.triangles = off ? lv.stats.foliageTriangles : lv.stats.lastDrawnTriangles;
-      p.impostors = off ? 0 : lv.stats.lastImpostors;
-      p.fading = off ? 0 : lv.stats.lastFadingBoxes;
-      return Status();
-    };
-    for (int r = 0; r <= rebuilds && s.ok(); ++r)
-      for (int v = 0; v < nv && s.ok(); ++v) s = reslice(v, r > 0, false);
-    // The images of each variant (one more re-slice each), and the debug view.
-    const LayerLayout& l = lv.settings.layout;
-    const uint32_t farFirst = l.region[0] + l.region[1], n = l.count();
-    for (int v = 0; v < nv && s.ok(); ++v) {
-      s = reslice(v, false, false);
-      if (s.ok()) s = flatten(lv, farFirst, n, &per[v].far);
-      if (s.ok()) s = flatten(lv, 0, n, &per[v].all);
-      if (s.ok() && !imageDir.empty() && (six || v > 0)) {
-        const std::string name = imageDir + "/impostors_" + camName + "_" + std::to_string(faces) + "_" + variants[v].file + ".png";
-        s = writeImage(name, width, height, per[v].far);
-      }
-    }
-    if (s.ok() && six) {
-      refFar[cam] = per[0].far;
-      refAll[cam] = per[0].all;
-    }
-    if (s.ok() && six && !imageDir.empty()) {
-      std::vector<glm::vec4> dbg;
-      s = reslice(2, false, true);  // by projected size: the most impostors
-      if (s.ok()) s = flatten(lv, 0, n, &dbg);
-      if (s.ok())
-        s = writeImage(imageDir + "/impostors_debug_" + camName + "_" + std::to_string(faces) + ".png", width, height, dbg);
-    }
-    timer.destroy(dev);
-    g.release(dev);
-    if (!s.ok()) break;
-    std::printf("  camera %s:\n", camName);
-    std::printf("  %-15s %10s %9s %9s %11s %10s %9s | %-16s | %-16s\n", "mode", "wall ms", "GPU ms", "place ms",
-                "tris drawn", "impostors", "x wall", "far |d|  IoU", "all |d|  IoU");
-    const double base = medianOf(per[0].wall);
-    for (int v = 0; v < nv; ++v) {
-      const Samples& p = per[v];
-      const Diff far = compare(p.far, refFar[cam]), all = compare(p.all, refAll[cam]);
-      char imp[32];
-      std::snprintf(imp, sizeof imp, "%u (%u)", p.impostors, p.fading);
-      std::printf("  %-15s %10.2f %9.2f %9.2f %11llu %10s %9.2f | %7.4f %7.3f  | %7.4f %7.3f\n", variants[v].name,
-                  medianOf(p.wall), medianOf(p.gpu), medianOf(p.place), (unsigned long long)p.triangles, imp,
-                  base / std::max(medianOf(p.wall), 1e-9), far.meanAbs, far.iou, all.meanAbs, all.iou);
-    }
-    }
+    for (int cam = 0; cam < 2 && s.ok(); ++cam)
+      s = measureCamera(dev, lv, variants, views[cam], cam, six, faces, rebuilds, width, height, imageDir, refFar, refAll);
     destroyLayeredVegetation(lv);
     if (!s.ok()) {
       std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());

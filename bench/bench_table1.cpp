@@ -269,8 +269,122 @@ std::string layoutFor(uint32_t layers) {
 
 }  // namespace
 
-int runTable1Bench(Device& d, const Table1Options& o) {
+namespace {
+
+struct FaceRatio {
+  std::string layout;
+  double smallMs = 0, largeMs = 0, pairMedian = 0;
+};
+
+struct Point {
+  std::string series;
+  double x = 0;
+  std::string label;
+  Spread wall;
+};
+
+// Scaling series: the still frame against face count, layer count and resolution (o.series), with
+// CSV files in o.csvDir.
+int runSeries(Device& d, const Table1Options& o, std::vector<Point>* series) {
+  std::printf("\nScaling series (still camera, whole frame ms, median):\n");
+  auto point = [&](const std::string& name, double x, const std::string& label, uint64_t faces, uint32_t w, uint32_t h,
+                   const std::string& layout) -> Status {
+    Bench b(d, o);
+    CANOPY_TRY(b.init(faces, w, h));
+    CANOPY_TRY(b.set(layout));
+    Measured m;
+    CANOPY_TRY(b.frame(0.0f, o.frames, &m));
+    series->push_back({name, x, label, m.wall});
+    std::printf("  %-11s %-12s %9.2f ms\n", name.c_str(), label.c_str(), m.wall.median);
+    return Status();
+  };
+  Status s;
+  for (uint64_t f : o.seriesFaces)
+    if (s.ok()) s = point("faces", double(f), std::to_string(f), f, o.width, o.height, "5(3-1-1)");
+  for (uint32_t l = 1; l <= 9 && s.ok(); ++l) s = point("layers", l, layoutFor(l), o.faces.front(), o.width, o.height, layoutFor(l));
+  const uint32_t res[][2] = {{512, 384}, {1024, 768}, {1280, 720}, {1920, 1080}};
+  for (const auto& r : res)
+    if (s.ok())
+      s = point("resolution", double(r[0]) * r[1], std::to_string(r[0]) + "x" + std::to_string(r[1]), o.faces.front(), r[0],
+                r[1], "5(3-1-1)");
+  if (!s.ok()) {
+    std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
+    return 1;
+  }
+  if (!o.csvDir.empty())
+    for (const char* name : {"faces", "layers", "resolution"}) {
+      const std::string path = o.csvDir + "/series_" + name + ".csv";
+      std::ofstream f(path);
+      f << "x,label,median_ms,p95_ms,max_ms\n";
+      for (const Point& p : *series)
+        if (p.series == name) f << p.x << "," << p.label << "," << p.wall.median << "," << p.wall.p95 << "," << p.wall.max << "\n";
+      if (!f) {
+        std::fprintf(stderr, "canopy-bench: cannot write %s\n", path.c_str());
+        return 1;
+      }
+      std::printf("  wrote %s\n", path.c_str());
+    }
+  return 0;
+}
+
+// The run as JSON (Table1Options.json): the rows, the baselines, the face-count ratios and the series.
+int writeTable1Json(const Device& d, const Table1Options& o, const std::vector<Row>& rows, const std::vector<Baseline>& baselines,
+                    const std::vector<FaceRatio>& faceRatios, const std::vector<Point>& series) {
   const bool cpuDevice = d.properties.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  std::ostringstream j;
+  j << "{\n  \"device\": " << jsonString(d.properties.deviceName) << ",\n  \"deviceType\": "
+    << (cpuDevice ? "\"cpu\"" : "\"gpu\"") << ",\n  \"driverVersion\": " << d.properties.driverVersion
+    << ",\n  \"apiVersion\": " << d.properties.apiVersion << ",\n  \"timestampsTrusted\": " << (cpuDevice ? "false" : "true")
+    << ",\n  \"figureOfRecord\": \"wall clock, submit-to-fence of one frame minus the host's clear, frames without timestamp queries\""
+    << ",\n  \"params\": {\"width\": " << o.width << ", \"height\": " << o.height << ", \"scene\": " << jsonString(o.scene)
+    << ", \"frames\": " << o.frames << ", \"orbitDegreesPerFrame\": " << o.orbitDegrees
+    << ", \"simulation\": {\"gridSize\": 64, \"dt\": 0.0333333}, \"defaults\": \"CanopyParams defaults unless the row says\"},\n"
+    << "  \"rows\": [\n";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    const Row& r = rows[i];
+    j << "    {\"faces\": " << r.faces << ", \"layout\": " << jsonString(r.layout) << ", \"camera\": " << jsonString(r.camera)
+      << ", \"width\": " << r.width << ", \"height\": " << r.height << ", \"frameMs\": " << jsonSpread(r.m.wall)
+      << ", \"fps\": " << 1000.0 / std::max(r.m.wall.median, 1e-9) << ", \"paperFps\": " << r.paperFps
+      << ", \"coverage\": " << r.coverage << ", \"passes\": {";
+    size_t k = 0;
+    for (const auto& [name, sp] : r.m.passes) j << (k++ ? ", " : "") << jsonString(name) << ": " << jsonSpread(sp);
+    j << "}}" << (i + 1 < rows.size() ? "," : "") << "\n";
+  }
+  j << "  ],\n  \"baselines\": [\n";
+  for (size_t i = 0; i < baselines.size(); ++i) {
+    const Baseline& x = baselines[i];
+    j << "    {\"name\": " << jsonString(x.name) << ", \"first\": " << jsonString(x.a) << ", \"firstMs\": " << x.aMs
+      << ", \"second\": " << jsonString(x.b) << ", \"secondMs\": " << x.bMs
+      << ", \"ratio\": " << x.bMs / std::max(x.aMs, 1e-9) << "}" << (i + 1 < baselines.size() ? "," : "") << "\n";
+  }
+  j << "  ],\n  \"faceRatios\": [\n";
+  for (size_t i = 0; i < faceRatios.size(); ++i) {
+    const FaceRatio& x = faceRatios[i];
+    j << "    {\"layout\": " << jsonString(x.layout) << ", \"smallFaces\": " << o.faces.front() << ", \"smallMs\": " << x.smallMs
+      << ", \"largeFaces\": " << o.faces.back() << ", \"largeMs\": " << x.largeMs
+      << ", \"ratio\": " << x.largeMs / std::max(x.smallMs, 1e-9) << ", \"pairRatioMedian\": " << x.pairMedian
+      << ", \"frames\": " << o.pairFrames << ", \"method\": \"frames alternated\"}"
+      << (i + 1 < faceRatios.size() ? "," : "") << "\n";
+  }
+  j << "  ],\n  \"series\": [\n";
+  for (size_t i = 0; i < series.size(); ++i)
+    j << "    {\"series\": " << jsonString(series[i].series) << ", \"x\": " << series[i].x << ", \"label\": "
+      << jsonString(series[i].label) << ", \"frameMs\": " << jsonSpread(series[i].wall) << "}"
+      << (i + 1 < series.size() ? "," : "") << "\n";
+  j << "  ]\n}\n";
+  std::ofstream f(o.json);
+  f << j.str();
+  if (!f) {
+    std::fprintf(stderr, "canopy-bench: cannot write %s\n", o.json.c_str());
+    return 1;
+  }
+  std::printf("\nwrote %s\n", o.json.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int runTable1Bench(Device& d, const Table1Options& o) {
   std::printf("\nTable 1 (paper: GTX 275, simulation on the CPU) at %ux%u, generated scene '%s'; whole frame =\n"
               "simulation step (N = 64, dt = 1/30 s) + dynamics + warp + composite, wall clock minus the host's clear;\n"
               "median / p95 / max of %d frames recorded without timestamp queries (per-pass figures come from as many\n"
@@ -284,10 +398,6 @@ int runTable1Bench(Device& d, const Table1Options& o) {
               "paper FPS", "coverage");
   std::vector<Row> rows;
   std::vector<Baseline> baselines;
-  struct FaceRatio {
-    std::string layout;
-    double smallMs = 0, largeMs = 0, pairMedian = 0;
-  };
   std::vector<FaceRatio> faceRatios;  // still frame, largest / smallest face count, frames alternated
   std::unique_ptr<Bench> smallest;    // the first face count's context, kept for the paired comparison
   for (uint64_t faces : o.faces) {
@@ -396,105 +506,10 @@ int runTable1Bench(Device& d, const Table1Options& o) {
                   x.largeMs / std::max(x.smallMs, 1e-9), x.pairMedian);
   }
 
-  // Scaling series: frame cost against face count, layer count and resolution (still camera).
-  struct Point {
-    std::string series;
-    double x = 0;
-    std::string label;
-    Spread wall;
-  };
   std::vector<Point> series;
-  if (o.series) {
-    std::printf("\nScaling series (still camera, whole frame ms, median):\n");
-    auto point = [&](const std::string& name, double x, const std::string& label, uint64_t faces, uint32_t w, uint32_t h,
-                     const std::string& layout) -> Status {
-      Bench b(d, o);
-      CANOPY_TRY(b.init(faces, w, h));
-      CANOPY_TRY(b.set(layout));
-      Measured m;
-      CANOPY_TRY(b.frame(0.0f, o.frames, &m));
-      series.push_back({name, x, label, m.wall});
-      std::printf("  %-11s %-12s %9.2f ms\n", name.c_str(), label.c_str(), m.wall.median);
-      return Status();
-    };
-    Status s;
-    for (uint64_t f : o.seriesFaces)
-      if (s.ok()) s = point("faces", double(f), std::to_string(f), f, o.width, o.height, "5(3-1-1)");
-    for (uint32_t l = 1; l <= 9 && s.ok(); ++l) s = point("layers", l, layoutFor(l), o.faces.front(), o.width, o.height, layoutFor(l));
-    const uint32_t res[][2] = {{512, 384}, {1024, 768}, {1280, 720}, {1920, 1080}};
-    for (const auto& r : res)
-      if (s.ok())
-        s = point("resolution", double(r[0]) * r[1], std::to_string(r[0]) + "x" + std::to_string(r[1]), o.faces.front(), r[0],
-                  r[1], "5(3-1-1)");
-    if (!s.ok()) {
-      std::fprintf(stderr, "canopy-bench: %s\n", s.message().c_str());
-      return 1;
-    }
-    if (!o.csvDir.empty())
-      for (const char* name : {"faces", "layers", "resolution"}) {
-        const std::string path = o.csvDir + "/series_" + name + ".csv";
-        std::ofstream f(path);
-        f << "x,label,median_ms,p95_ms,max_ms\n";
-        for (const Point& p : series)
-          if (p.series == name) f << p.x << "," << p.label << "," << p.wall.median << "," << p.wall.p95 << "," << p.wall.max << "\n";
-        if (!f) {
-          std::fprintf(stderr, "canopy-bench: cannot write %s\n", path.c_str());
-          return 1;
-        }
-        std::printf("  wrote %s\n", path.c_str());
-      }
-  }
+  if (o.series && runSeries(d, o, &series) != 0) return 1;
 
-  if (!o.json.empty()) {
-    std::ostringstream j;
-    j << "{\n  \"device\": " << jsonString(d.properties.deviceName) << ",\n  \"deviceType\": "
-      << (cpuDevice ? "\"cpu\"" : "\"gpu\"") << ",\n  \"driverVersion\": " << d.properties.driverVersion
-      << ",\n  \"apiVersion\": " << d.properties.apiVersion << ",\n  \"timestampsTrusted\": " << (cpuDevice ? "false" : "true")
-      << ",\n  \"figureOfRecord\": \"wall clock, submit-to-fence of one frame minus the host's clear, frames without timestamp queries\""
-      << ",\n  \"params\": {\"width\": " << o.width << ", \"height\": " << o.height << ", \"scene\": " << jsonString(o.scene)
-      << ", \"frames\": " << o.frames << ", \"orbitDegreesPerFrame\": " << o.orbitDegrees
-      << ", \"simulation\": {\"gridSize\": 64, \"dt\": 0.0333333}, \"defaults\": \"CanopyParams defaults unless the row says\"},\n"
-      << "  \"rows\": [\n";
-    for (size_t i = 0; i < rows.size(); ++i) {
-      const Row& r = rows[i];
-      j << "    {\"faces\": " << r.faces << ", \"layout\": " << jsonString(r.layout) << ", \"camera\": " << jsonString(r.camera)
-        << ", \"width\": " << r.width << ", \"height\": " << r.height << ", \"frameMs\": " << jsonSpread(r.m.wall)
-        << ", \"fps\": " << 1000.0 / std::max(r.m.wall.median, 1e-9) << ", \"paperFps\": " << r.paperFps
-        << ", \"coverage\": " << r.coverage << ", \"passes\": {";
-      size_t k = 0;
-      for (const auto& [name, sp] : r.m.passes) j << (k++ ? ", " : "") << jsonString(name) << ": " << jsonSpread(sp);
-      j << "}}" << (i + 1 < rows.size() ? "," : "") << "\n";
-    }
-    j << "  ],\n  \"baselines\": [\n";
-    for (size_t i = 0; i < baselines.size(); ++i) {
-      const Baseline& x = baselines[i];
-      j << "    {\"name\": " << jsonString(x.name) << ", \"first\": " << jsonString(x.a) << ", \"firstMs\": " << x.aMs
-        << ", \"second\": " << jsonString(x.b) << ", \"secondMs\": " << x.bMs
-        << ", \"ratio\": " << x.bMs / std::max(x.aMs, 1e-9) << "}" << (i + 1 < baselines.size() ? "," : "") << "\n";
-    }
-    j << "  ],\n  \"faceRatios\": [\n";
-    for (size_t i = 0; i < faceRatios.size(); ++i) {
-      const FaceRatio& x = faceRatios[i];
-      j << "    {\"layout\": " << jsonString(x.layout) << ", \"smallFaces\": " << o.faces.front() << ", \"smallMs\": " << x.smallMs
-        << ", \"largeFaces\": " << o.faces.back() << ", \"largeMs\": " << x.largeMs
-        << ", \"ratio\": " << x.largeMs / std::max(x.smallMs, 1e-9) << ", \"pairRatioMedian\": " << x.pairMedian
-        << ", \"frames\": " << o.pairFrames << ", \"method\": \"frames alternated\"}"
-        << (i + 1 < faceRatios.size() ? "," : "") << "\n";
-    }
-    j << "  ],\n  \"series\": [\n";
-    for (size_t i = 0; i < series.size(); ++i)
-      j << "    {\"series\": " << jsonString(series[i].series) << ", \"x\": " << series[i].x << ", \"label\": "
-        << jsonString(series[i].label) << ", \"frameMs\": " << jsonSpread(series[i].wall) << "}"
-        << (i + 1 < series.size() ? "," : "") << "\n";
-    j << "  ]\n}\n";
-    std::ofstream f(o.json);
-    f << j.str();
-    if (!f) {
-      std::fprintf(stderr, "canopy-bench: cannot write %s\n", o.json.c_str());
-      return 1;
-    }
-    std::printf("\nwrote %s\n", o.json.c_str());
-  }
+  if (!o.json.empty() && writeTable1Json(d, o, rows, baselines, faceRatios, series) != 0) return 1;
   return 0;
 }
 

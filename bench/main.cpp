@@ -114,7 +114,8 @@ static int usage(const char* why) {
   return why ? 2 : 0;
 }
 
-int main(int argc, char** argv) {
+// The command line, parsed into each section's options (main: parse, then run).
+struct Args {
   std::vector<uint32_t> sizes = {64, 128, 256};
   int frames = 0;  // 0: the section's default
   bool detail = false;
@@ -124,7 +125,8 @@ int main(int argc, char** argv) {
   bool runSim = false, runLayers = false, runAnim = false, runSoak = false, check = false, runTable1 = false;
   bench::Table1Options t1;
   bool facesGiven = false;
-  auto parseList = [](const char* v, std::vector<uint64_t>* out) {
+  // A comma-separated list of counts in [2, 10^8].
+  static bool parseList(const char* v, std::vector<uint64_t>* out) {
     if (!v) return false;
     out->clear();
     std::stringstream ss(v);
@@ -135,19 +137,19 @@ int main(int argc, char** argv) {
       out->push_back(n);
     }
     return !out->empty();
-  };
+  }
   uint32_t rebuildEvery = 100;
   bool runRebuild = false, runPerVertex = false, runImpostors = false, runCamera = false;
   bench::CameraBenchOptions cam;
   bool budgetGiven = false;
   // A float in [lo, hi] from the next argument.
-  auto parseNumber = [](const char* v, float lo, float hi, float* out) {
+  static bool parseNumber(const char* v, float lo, float hi, float* out) {
     char* end = nullptr;
     const float f = v ? std::strtof(v, &end) : 0.0f;
     if (!v || *end || !(f >= lo && f <= hi)) return false;
     *out = f;
     return true;
-  };
+  }
   std::string csvPath, imagesDir;
   float budgetMs = 4.0f;
   uint64_t spreadMaxFaces = 10000000;
@@ -159,22 +161,20 @@ int main(int argc, char** argv) {
   bool runPicture = false, pathsGiven = false;
   bench::PictureOptions picture;
   // A comma-separated list, each item through `each` (false: refused).
-  auto forEachItem = [](const char* v, const std::function<bool(const std::string&)>& each) {
+  static bool forEachItem(const char* v, const std::function<bool(const std::string&)>& each) {
     if (!v || !*v) return false;
     std::stringstream ss(v);
     std::string item;
     while (std::getline(ss, item, ','))
       if (!each(item)) return false;
     return true;
-  };
+  }
   uint32_t mapSize = 1024;
   uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
-  desc.applicationName = "canopy-bench";
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-    if (a == "--help" || a == "-h") return usage(nullptr);
+
+  // The section words and canopy-bench picture's options; -1: not one of them, else the exit code (0: go on).
+  int sectionOrPictureOption(const std::string& a, const std::function<const char*()>& next) {
     if (a == "sim") runSim = true;
     else if (a == "layers") runLayers = true;
     else if (a == "anim") runAnim = true;
@@ -225,7 +225,13 @@ int main(int argc, char** argv) {
     else if (a == "shadows") runShadows = true;
     else if (a == "pushers") runPushers = true;
     else if (a == "counters") runCounters = true;
-    else if (a == "--map") {
+    else return -1;
+    return 0;
+  }
+
+  // The shadow, species, layer-count and camera sections' options; -1: not one of them, else the exit code (0: go on).
+  int cameraOption(const std::string& a, const std::function<const char*()>& next) {
+    if (a == "--map") {
       if (!cli::parseUint(next(), 16, 16384, &mapSize)) return usage("--map needs the shadow map's side in [16, 16384]");
     }
     else if (a == "--copies") {
@@ -279,7 +285,13 @@ int main(int argc, char** argv) {
       if (!v) return usage("--csv needs a file name");
       csvPath = v;
     }
-    else if (a == "--spread-max-faces") {
+    else return -1;
+    return 0;
+  }
+
+  // Re-slicing, budgets and table1's options; -1: not one of them, else the exit code (0: go on).
+  int budgetOption(const std::string& a, const std::function<const char*()>& next) {
+    if (a == "--spread-max-faces") {
       uint32_t n = 0;
       if (!cli::parseUint(next(), 0, 100000000, &n)) return usage("--spread-max-faces needs an integer in [0, 100000000]");
       spreadMaxFaces = n;
@@ -331,7 +343,13 @@ int main(int argc, char** argv) {
       if (!v || *end || !(deg > 0.0f && deg <= 90.0f)) return usage("--orbit needs degrees in (0, 90]");
       t1.orbitDegrees = deg;
     }
-    else if (a == "--check") check = true;
+    else return -1;
+    return 0;
+  }
+
+  // The options several sections read; -1: not one of them, else the exit code (0: go on).
+  int commonOption(const std::string& a, const std::function<const char*()>& next) {
+    if (a == "--check") check = true;
     else if (a == "--rebuild-every") {
       if (!cli::parseUint(next(), 1, 100000, &rebuildEvery)) return usage("--rebuild-every needs an integer in [1, 100000]");
     }
@@ -378,10 +396,29 @@ int main(int argc, char** argv) {
       const char* v = next();
       if (!v) return usage("--device needs a name");
       desc.preferredDevice = v;
-    } else {
-      return usage(("unknown argument '" + a + "'").c_str());
     }
+    else return -1;
+    return 0;
   }
+
+  // 0: run; 1: --help printed; else the exit code of a refusal.
+  int parse(int argc, char** argv) {
+    desc.applicationName = "canopy-bench";
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+      if (a == "--help" || a == "-h") return usage(nullptr), 1;
+      int rc = -1;
+      for (auto group : {&Args::sectionOrPictureOption, &Args::cameraOption, &Args::budgetOption, &Args::commonOption})
+        if ((rc = (this->*group)(a, next)) >= 0) break;
+      if (rc < 0) return usage(("unknown argument '" + a + "'").c_str());
+      if (rc > 0) return rc;
+    }
+    return 0;
+  }
+
+  // The sections asked for (sim when none), on the device `desc` names.
+  int run() {
   if (runRebuild && !(budgetMs > 0.0f)) return usage("rebuild: --budget needs ms in (0, 1000]");
   Device dev;
   Status s = createDevice(desc, &dev);
@@ -457,4 +494,13 @@ int main(int argc, char** argv) {
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
   return rc;
+  }
+};
+
+int main(int argc, char** argv) {
+  Args args;
+  const int rc = args.parse(argc, argv);
+  if (rc == 1) return 0;
+  if (rc != 0) return rc;
+  return args.run();
 }

@@ -399,6 +399,95 @@ struct InFlight {
   double submitted = 0.0;
 };
 
+// The headless run's per-frame timing: the first frame (it slices the layers; every orbit frame
+// re-slices) apart from the steady frames of the sequence and from the frames held alone after it.
+// Wall clock per frame: the interval between frame completions (with two frames in flight the GPU
+// never idles between them), or submit-to-fence for the very first frame.
+struct FrameClock {
+  TimingLog first, steady, alone;
+  bool held = false;  // the frames measured alone after the sequence
+  bool anyDone = false;
+  double lastDone = -1.0;
+  void add(const std::vector<PassTiming>& t, const InFlight& p) {
+    const double done = nowMs();
+    const double wall = done - (lastDone >= 0.0 ? std::max(lastDone, p.submitted) : p.submitted);
+    lastDone = done;
+    if (!anyDone) first.add(t, wall);
+    else if (p.keep) (held ? alone : steady).add(t, wall);
+    anyDone = true;
+  }
+};
+
+// Frame `i` of the run's camera path from `rig` (the demo's dt; the frame number is the submit's).
+CanopyFrame pathFrame(const Options& o, const CameraRig& rig, const VegetationModel& model, uint32_t i) {
+  CanopyFrame f;
+  f.camera = toCamera(cameraPathView(cameraPathOf(o, rig), model.boundsMin, model.boundsMax, float(o.width) / float(o.height), i));
+  f.dt = 1.0f / o.fps;
+  return f;
+}
+
+// The frame progress: on a terminal one line rewritten in place; in a log at most one line a
+// second, and the last.
+void printProgress(uint32_t i, uint32_t frames, double t0, double* lastProgress) {
+  const bool tty = isatty(2), lastFrame = i + 1 == frames;
+  if (!tty && !lastFrame && nowMs() - *lastProgress < 1000.0) return;
+  *lastProgress = nowMs();
+  std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", tty ? "\r" : "", i + 1, frames,
+               double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), tty && !lastFrame ? "" : "\n");
+}
+
+// --shadows: the direction, in shadow-map texels, along which the camera's right runs (the map's
+// caster centroid is measured along it).
+glm::vec2 shadowAxis(const Host& host, const VegetationModel& model, const CanopyFrame& f0) {
+  const glm::vec3 right(glm::inverse(toGlm(f0.camera.view))[0]);
+  const glm::vec3 c = 0.5f * (model.boundsMin + model.boundsMax);
+  auto lightPixel = [&](glm::vec3 p) {
+    const glm::vec4 q = host.shadow.light * glm::vec4(p, 1.0f);
+    return (glm::vec2(q) / q.w * 0.5f + 0.5f) * float(Host::Shadow::kSize);
+  };
+  const glm::vec2 along = lightPixel(c + right) - lightPixel(c);
+  return glm::length(along) > 0.0f ? glm::normalize(along) : ShadowMeter{}.axis;
+}
+
+// The sway of the written frames, measured against the host's clear colour as the frames store it.
+SwayMeter swayMeterFor(const Options& o, const Host& host) {
+  SwayMeter sway;
+  sway.width = o.width;
+  sway.height = o.height;
+  for (int c = 0; c < 3; ++c) sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(host.clearSrgb[c], 0.0f, 1.0f)));
+  sway.greyGround = o.shadows;
+  return sway;
+}
+
+// --pusher: the sphere at written frame `index` (none for a warm-up or held frame, index < 0), and
+// its screen path appended to *path, one line a frame: x y (pixels, y down) and its radius in pixels.
+Status setFramePushers(const Options& o, Host& host, const VegetationModel& model, const glm::vec3& right, int64_t index,
+                       const CanopyFrame& f, std::string* path) {
+  if (o.pusher == PusherPath::None) return Status();
+  if (index < 0) return setCanopyPushers(host.canopy, {});
+  const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, right, uint32_t(index), o.frames, o.fps, domainWindSpeed(o));
+  const glm::mat4 view = toGlm(f.camera.view), proj = toGlm(f.camera.proj);
+  const glm::vec4 q = proj * view * glm::vec4(toGlm(p.a), 1.0f);
+  const float depth = -(view * glm::vec4(toGlm(p.a), 1.0f)).z;
+  const float x = (q.x / q.w * 0.5f + 0.5f) * float(o.width), y = (q.y / q.w * 0.5f + 0.5f) * float(o.height);
+  const float r = p.radius * std::abs(proj[1][1]) * 0.5f * float(o.height) / std::max(depth, 1e-6f);
+  char line[96];
+  std::snprintf(line, sizeof line, "%lld %.2f %.2f %.2f\n", static_cast<long long>(index), double(x), double(y), double(r));
+  *path += line;
+  return setCanopyPushers(host.canopy, {p});
+}
+
+// --shadows --debug shadow-map: a frame's shadow map as a grey PNG (near the sun dark, nothing white).
+Status writeShadowMap(FrameWriter& writer, const std::string& path, const std::vector<float>& depth) {
+  std::vector<uint8_t> grey(depth.size() * 4);
+  for (size_t k = 0; k < depth.size(); ++k) {
+    const uint8_t v = uint8_t(std::lround(255.0f * std::clamp(depth[k], 0.0f, 1.0f)));
+    grey[4 * k] = grey[4 * k + 1] = grey[4 * k + 2] = v;
+    grey[4 * k + 3] = 255;
+  }
+  return writer.push(path, Host::Shadow::kSize, Host::Shadow::kSize, grey);
+}
+
 int runHeadless(const Options& o, const VegetationModel& model, const std::string& label) {
   int messages = 0;
   Device dev;
@@ -414,29 +503,17 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(prepareOutputFolder(o));
     CANOPY_TRY(createHost(dev, model, o, o.width, o.height, true, VK_FORMAT_UNDEFINED, &host));
     const CameraRig rig0 = defaultRig(o);
-    TimingLog first, steady, alone;
-    bool held = false;  // the frames measured alone after the sequence
+    FrameClock clock;
     FrameWriter writer;
     const std::vector<size_t> picked = contactSheetFrames(o.frames);
     std::vector<std::vector<uint8_t>> sheetFrames;
-    SwayMeter sway;
-    sway.width = o.width;
-    sway.height = o.height;
-    for (int c = 0; c < 3; ++c) sway.clear[c] = uint8_t(std::lround(255.0f * std::clamp(host.clearSrgb[c], 0.0f, 1.0f)));
-    sway.greyGround = o.shadows;
+    SwayMeter sway = swayMeterFor(o, host);
     const bool measureSway = o.camera == CameraMotion::Still && o.debug == CompositeDebugView::None;
     ShadowMeter shadow;
     // Warm-up: whole frames at the same dt and camera as frame 0, not written, so the wind has
     // reached the plant and the history ring (exact delay) is full when the first frame is written.
     const uint32_t warmup = uint32_t(std::lround(double(o.warmupSeconds) * o.fps));
-    bool firstSubmitted = false;
-    auto frameAt = [&](uint32_t i) {
-      CanopyFrame f;
-      f.camera = toCamera(cameraPathView(cameraPathOf(o, rig0), model.boundsMin, model.boundsMax,
-                                         float(o.width) / float(o.height), i));
-      f.dt = 1.0f / o.fps;
-      return f;
-    };
+    auto frameAt = [&](uint32_t i) { return pathFrame(o, rig0, model, i); };
     InFlight inFlight[Host::kFramesInFlight];
     uint64_t frameNumber = 0;
     CANOPY_TRY(createFrameRing(dev, &ring));
@@ -444,23 +521,14 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     // the loop waits only for the slot's previous frame (its fence), then writes that frame.
     std::function<Status(uint32_t, const std::vector<uint8_t>&)> written;  // set below
     std::function<Status(uint32_t, const std::vector<float>&)> shadowWritten;
-    double lastDone = -1.0;
     auto retire = [&](uint32_t slot) -> Status {
       const InFlight& p = inFlight[slot];
       bool waited = false;
       CANOPY_TRY(waitFrameSlot(dev, ring, slot, &waited));
       if (!waited) return Status();
-      const double done = nowMs();
-      // Wall clock per frame: the interval between frame completions (with two frames in flight the
-      // GPU never idles between them), or submit-to-fence for the very first frame.
-      const double wall = done - (lastDone >= 0.0 ? std::max(lastDone, p.submitted) : p.submitted);
-      lastDone = done;
       std::vector<PassTiming> t;
       CANOPY_TRY(host.timer[slot].read(dev, &t));
-      // The first frame slices the layers (and every orbit frame re-slices): kept apart from the steady state.
-      if (!firstSubmitted) first.add(t, wall);
-      else if (p.keep) (held ? alone : steady).add(t, wall);
-      firstSubmitted = true;
+      clock.add(t, p);
       if (p.index >= 0) {
         std::vector<uint8_t> rgba;
         readPixels(host, slot, &rgba);
@@ -473,23 +541,11 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       }
       return Status();
     };
-    // --pusher: the sphere at written frame i (none in the warm-up and the held frames), and its
-    // screen path, one line a frame: x y (pixels, y down) and its radius in pixels.
+    // --pusher: the sphere at written frame i (none in the warm-up and the held frames).
     const glm::vec3 pusherRight(glm::inverse(toGlm(frameAt(0).camera.view))[0]);
     std::string pusherPath;
-    auto pushersFor = [&](int64_t index, const CanopyFrame& f) -> Status {
-      if (o.pusher == PusherPath::None) return Status();
-      if (index < 0) return setCanopyPushers(host.canopy, {});
-      const CanopyPusher p = pusherAt(o.pusher, model.boundsMin, model.boundsMax, pusherRight, uint32_t(index), o.frames, o.fps, domainWindSpeed(o));
-      const glm::mat4 view = toGlm(f.camera.view), proj = toGlm(f.camera.proj);
-      const glm::vec4 q = proj * view * glm::vec4(toGlm(p.a), 1.0f);
-      const float depth = -(view * glm::vec4(toGlm(p.a), 1.0f)).z;
-      const float x = (q.x / q.w * 0.5f + 0.5f) * float(o.width), y = (q.y / q.w * 0.5f + 0.5f) * float(o.height);
-      const float r = p.radius * std::abs(proj[1][1]) * 0.5f * float(o.height) / std::max(depth, 1e-6f);
-      char line[96];
-      std::snprintf(line, sizeof line, "%lld %.2f %.2f %.2f\n", static_cast<long long>(index), double(x), double(y), double(r));
-      pusherPath += line;
-      return setCanopyPushers(host.canopy, {p});
+    auto pushersFor = [&](int64_t index, const CanopyFrame& f) {
+      return setFramePushers(o, host, model, pusherRight, index, f, &pusherPath);
     };
     auto submit = [&](CanopyFrame f, bool keep, int64_t index) -> Status {
       const uint32_t slot = uint32_t(frameNumber % Host::kFramesInFlight);
@@ -527,40 +583,18 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
       CANOPY_TRY(writer.push(o.outDir + name, o.width, o.height, rgba));
       if (measureSway) sway.add(rgba);
       if (std::find(picked.begin(), picked.end(), size_t(i)) != picked.end()) sheetFrames.push_back(std::move(rgba));
-      // On a terminal one line rewritten in place; in a log at most one line a second, and the last.
-      const bool tty = isatty(2), lastFrame = i + 1 == o.frames;
-      if (tty || lastFrame || nowMs() - lastProgress >= 1000.0) {
-        lastProgress = nowMs();
-        std::fprintf(stderr, "%sframe %u / %u (%.1f frames/s)%s", tty ? "\r" : "", i + 1, o.frames,
-                     double(i + 1) * 1000.0 / std::max(nowMs() - t0, 1e-3), tty && !lastFrame ? "" : "\n");
-      }
+      printProgress(i, o.frames, t0, &lastProgress);
       return Status();
     };
     // --shadows: the map's caster centroid along where the camera's right runs in it; the map itself
     // with --debug shadow-map (near the sun dark, nothing white).
-    if (o.shadows) {
-      const CanopyFrame f0 = frameAt(0);
-      const glm::vec3 right(glm::inverse(toGlm(f0.camera.view))[0]);
-      const glm::vec3 c = 0.5f * (model.boundsMin + model.boundsMax);
-      auto lightPixel = [&](glm::vec3 p) {
-        const glm::vec4 q = host.shadow.light * glm::vec4(p, 1.0f);
-        return (glm::vec2(q) / q.w * 0.5f + 0.5f) * float(Host::Shadow::kSize);
-      };
-      const glm::vec2 along = lightPixel(c + right) - lightPixel(c);
-      if (glm::length(along) > 0.0f) shadow.axis = glm::normalize(along);
-    }
+    if (o.shadows) shadow.axis = shadowAxis(host, model, frameAt(0));
     shadowWritten = [&](uint32_t i, const std::vector<float>& depth) -> Status {
       if (measureSway) shadow.add(depth, Host::Shadow::kSize);
       if (!o.debugShadowMap) return Status();
-      std::vector<uint8_t> grey(depth.size() * 4);
-      for (size_t k = 0; k < depth.size(); ++k) {
-        const uint8_t v = uint8_t(std::lround(255.0f * std::clamp(depth[k], 0.0f, 1.0f)));
-        grey[4 * k] = grey[4 * k + 1] = grey[4 * k + 2] = v;
-        grey[4 * k + 3] = 255;
-      }
       char name[64];
       std::snprintf(name, sizeof name, "/shadow_%04u.png", i);
-      return writer.push(o.outDir + name, Host::Shadow::kSize, Host::Shadow::kSize, grey);
+      return writeShadowMap(writer, o.outDir + name, depth);
     };
     for (uint32_t i = 0; i < o.frames; ++i) CANOPY_TRY(submit(frameAt(i), true, int64_t(i)));
     CANOPY_TRY(drain());
@@ -568,19 +602,19 @@ int runHeadless(const Options& o, const VegetationModel& model, const std::strin
     CANOPY_TRY(writer.finish());
     // Canopy's frame with nothing else running: the last view held, one frame at a time (submit to
     // fence), no file written; the first two are not kept (a moving path's last view re-slices).
-    held = true;
+    clock.held = true;
     for (uint32_t k = 0; k < kHeldFrames + 2; ++k) {
       CANOPY_TRY(submit(frameAt(o.frames - 1), k >= 2, -1));
       CANOPY_TRY(drain());
     }
-    held = false;
+    clock.held = false;
     glm::uvec4 crop;
     CANOPY_TRY(writeContactSheet(o.outDir + "/contact_sheet.png", sheetFrames, o.width, o.height, sway.clear, &crop));
     const CanopyStats st = canopyStats(host.canopy);  // the sequence's, before the light sheet's re-slices
     if (o.lightSheet) CANOPY_TRY(writeLightSheet(o, host, sway.clear, frameAt, submit, drain, written));
     CANOPY_TRY(writer.finish());
     const std::string text =
-        timingReport(o, label, dev, st, warmup, first, steady, alone, writer.writeMs(), measureSway ? &sway : nullptr,
+        timingReport(o, label, dev, st, warmup, clock.first, clock.steady, clock.alone, writer.writeMs(), measureSway ? &sway : nullptr,
                      measureSway && o.shadows ? &shadow : nullptr);
     writeTextFile(o.outDir + "/timing.txt", text);
     std::printf("%s\n", text.c_str());

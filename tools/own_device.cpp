@@ -58,6 +58,46 @@ uint32_t graphicsComputeFamily(VkPhysicalDevice pd) {
 
 }  // namespace
 
+// Device selection: explicit name (option or $CANOPY_DEVICE) first, else best type, among those
+// that can run Canopy (queryDeviceRequirements).
+static Status choosePhysicalDevice(VkInstance instance, uint32_t apiVersion, const DeviceDesc& desc, VkPhysicalDevice* out) {
+  uint32_t n = 0;
+  CANOPY_VK(vkEnumeratePhysicalDevices(instance, &n, nullptr));
+  std::vector<VkPhysicalDevice> pds(n);
+  CANOPY_VK(vkEnumeratePhysicalDevices(instance, &n, pds.data()));
+  if (n == 0)
+    return Status::error(Result::UnsupportedDevice,
+                         "no Vulkan device found (on a machine without a GPU install mesa-vulkan-drivers for lavapipe)");
+  std::string want = desc.preferredDevice;
+  if (want.empty())
+    if (const char* env = std::getenv("CANOPY_DEVICE")) want = env;
+  want = lower(want);
+  int bestScore = -1;
+  std::string rejected;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  for (auto pd : pds) {
+    VkPhysicalDeviceProperties p;
+    vkGetPhysicalDeviceProperties(pd, &p);
+    if (!want.empty() && lower(p.deviceName).find(want) == std::string::npos) {
+      rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": name does not match '" + want + "'";
+      continue;
+    }
+    DeviceRequirements req;
+    const Status rs = queryDeviceRequirements(vkGetInstanceProcAddr, instance, apiVersion, pd, &req);
+    if (!rs.ok()) {
+      rejected += std::string(rejected.empty() ? "" : "; ") + rs.message();
+      continue;
+    }
+    if (typeScore(p.deviceType) > bestScore) {
+      bestScore = typeScore(p.deviceType);
+      physical = pd;
+    }
+  }
+  if (!physical) return Status::error(Result::UnsupportedDevice, "no suitable Vulkan device (" + rejected + ")");
+  *out = physical;
+  return Status();
+}
+
 Status createDevice(const DeviceDesc& desc, Device* out) {
   *out = Device{};
   Device& d = *out;
@@ -117,41 +157,8 @@ Status createDevice(const DeviceDesc& desc, Device* out) {
     CANOPY_VK(create(d.instance, &mci, nullptr, &d.messenger));
   }
 
-  // Device selection: explicit name (option or $CANOPY_DEVICE) first, else best type, among those
-  // that can run Canopy (queryDeviceRequirements).
-  uint32_t n = 0;
-  CANOPY_VK(vkEnumeratePhysicalDevices(d.instance, &n, nullptr));
-  std::vector<VkPhysicalDevice> pds(n);
-  CANOPY_VK(vkEnumeratePhysicalDevices(d.instance, &n, pds.data()));
-  if (n == 0)
-    return Status::error(Result::UnsupportedDevice,
-                         "no Vulkan device found (on a machine without a GPU install mesa-vulkan-drivers for lavapipe)");
-  std::string want = desc.preferredDevice;
-  if (want.empty())
-    if (const char* env = std::getenv("CANOPY_DEVICE")) want = env;
-  want = lower(want);
-  int bestScore = -1;
-  std::string rejected;
   VkPhysicalDevice physical = VK_NULL_HANDLE;
-  for (auto pd : pds) {
-    VkPhysicalDeviceProperties p;
-    vkGetPhysicalDeviceProperties(pd, &p);
-    if (!want.empty() && lower(p.deviceName).find(want) == std::string::npos) {
-      rejected += std::string(rejected.empty() ? "" : "; ") + p.deviceName + ": name does not match '" + want + "'";
-      continue;
-    }
-    DeviceRequirements req;
-    const Status rs = queryDeviceRequirements(vkGetInstanceProcAddr, d.instance, app.apiVersion, pd, &req);
-    if (!rs.ok()) {
-      rejected += std::string(rejected.empty() ? "" : "; ") + rs.message();
-      continue;
-    }
-    if (typeScore(p.deviceType) > bestScore) {
-      bestScore = typeScore(p.deviceType);
-      physical = pd;
-    }
-  }
-  if (!physical) return Status::error(Result::UnsupportedDevice, "no suitable Vulkan device (" + rejected + ")");
+  CANOPY_TRY(choosePhysicalDevice(d.instance, app.apiVersion, desc, &physical));
   VkPhysicalDeviceProperties props;
   vkGetPhysicalDeviceProperties(physical, &props);
   const bool core13 = props.apiVersion >= VK_API_VERSION_1_3 && app.apiVersion >= VK_API_VERSION_1_3;

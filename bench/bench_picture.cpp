@@ -151,23 +151,40 @@ void writeJson(const std::string& path, const std::vector<Run>& runs) {
   f << "]\n";
 }
 
-void writeTable(const std::string& path, const std::vector<Run>& runs) {
+// The runs as docs/performance.md's table: a row per scene, path and size, the winds side by side;
+// 2D: sharpness median / least, coverage least; per-vertex: sharpness median, coverage least.
+void writeTable(const std::string& path, const std::vector<Run>& runs, const std::vector<std::string>& winds) {
   std::ofstream f(path);
-  f << "| scene | path | size | wind | 2D sharpness median / least | 2D coverage least | per-vertex sharpness median / least | "
-       "per-vertex coverage least |\n|---|---|---|---|---|---|---|---|\n";
-  char cell[64];
-  for (const Run& r : runs) {
-    std::snprintf(cell, sizeof cell, "%g m/s", double(r.speed));
-    f << "| " << r.scene << " | " << r.path << " | " << r.size << " | " << r.wind << " (" << cell << ")";
-    for (const Series* s : {&r.twoD, &r.perVertex}) {
-      if (!s->measured) {
-        f << " | - | -";
-        continue;
+  f << "| scene | path | size |";
+  for (const std::string& w : winds) f << " " << w << " 2D | " << w << " per-vertex |";
+  f << "\n|---|---|---|";
+  for (size_t i = 0; i < winds.size(); ++i) f << "---|---|";
+  f << "\n";
+  std::vector<bool> done(runs.size(), false);
+  char cell[96];
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (done[i]) continue;
+    f << "| " << runs[i].scene << " | " << runs[i].path << " | " << runs[i].size << " |";
+    for (const std::string& w : winds) {
+      const Run* r = nullptr;
+      for (size_t j = i; j < runs.size(); ++j)
+        if (!done[j] && runs[j].scene == runs[i].scene && runs[j].path == runs[i].path && runs[j].size == runs[i].size &&
+            runs[j].wind == w) {
+          r = &runs[j];
+          done[j] = true;
+        }
+      if (!r || !r->twoD.measured) f << " - |";
+      else {
+        std::snprintf(cell, sizeof cell, " %.2f / %.2f, %.2f |", r->twoD.sharpMedian(), r->twoD.sharpLeast(), r->twoD.coverLeast());
+        f << cell;
       }
-      std::snprintf(cell, sizeof cell, " | %.2f / %.2f | %.2f", s->sharpMedian(), s->sharpLeast(), s->coverLeast());
-      f << cell;
+      if (!r || !r->perVertex.measured) f << " - |";
+      else {
+        std::snprintf(cell, sizeof cell, " %.2f, %.2f |", r->perVertex.sharpMedian(), r->perVertex.coverLeast());
+        f << cell;
+      }
     }
-    f << " |\n";
+    f << "\n";
   }
 }
 
@@ -259,7 +276,7 @@ int runPictureBench(Device& d, const PictureOptions& p) {
     std::printf("wrote %s\n", p.json.c_str());
   }
   if (!p.table.empty()) {
-    writeTable(p.table, runs);
+    writeTable(p.table, runs, p.winds);
     std::printf("wrote %s\n", p.table.c_str());
   }
   for (const std::string& f : failures) std::printf("picture: outside issue 67's bounds: %s\n", f.c_str());

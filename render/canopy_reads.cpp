@@ -22,6 +22,8 @@ CanopyStats canopyStats(const CanopyContext* c) {
   s.pushersMapped = c->pusherCounts.mapped;
   s.pushersOutside = c->pusherCounts.outside;
   s.pushersBehind = c->pusherCounts.behind;
+  s.compositeCompute = c->params.animation == AnimationMode::Layers2D && c->compositor.computeThisFrame;
+  s.compositeComputeAvailable = c->compositor.computeAvailable;
   s.internalGraphBuilds = c->recordGraphBuilds;
   s.pendingReleases = c->device->pendingReleases.size();
   s.deviceBytes = c->device->allocator->liveBytes;

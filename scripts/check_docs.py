@@ -17,7 +17,10 @@
 7. every find_package(Canopy X.Y) names the header's CANOPY_VERSION_MAJOR.MINOR;
 8. every row of a table in docs/parameters.md has as many cells as its header row;
 9. every C++ block of README.md and docs/ is a compiled sample or says it is a fragment
-   (scripts/doc_samples.py).
+   (scripts/doc_samples.py);
+10. every default quoted for a parameter (`Struct.field` followed within its clause by "default N"
+   or "(N, the default)") is the schema's default in docs/parameters.md (the lab notebook, which
+   keeps the defaults of their day, and parameters.md itself are not read).
 
 Usage: check_docs.py [REPO_ROOT] [--bin BUILD_DIR] [--pretend-file PATH ...] [--plant KIND]
 (exit 0: all hold; 1: each problem on a line). --pretend-file adds a file that does not exist to
@@ -146,6 +149,7 @@ PLANTS = {
     "option": "Run `./build/release/canopy-demo --planted-missing-option 3`.",
     "version": "In the host's CMakeLists: `find_package(Canopy 0.1 REQUIRED)`.",
     "sample": "```cpp\nint planted_unmarked_block = 1;\n```",
+    "default": "The warp's filter keeps leaves sharp (`CompositeParams.sharpness`, default 7).",
 }
 
 
@@ -282,6 +286,47 @@ def check_parameter_table(root, plant, problems):
             problems.append(f"{page}:{n}: {cells} cells where the table has {header} (an unescaped '|'?)")
 
 
+def schema_defaults(root):
+    """{"Struct.field": default as a float} from docs/parameters.md's tables (numbers only)."""
+    out, struct = {}, None
+    path = os.path.join(root, "docs", "parameters.md")
+    if not os.path.exists(path):
+        return out
+    for line in open(path, encoding="utf-8"):
+        m = re.match(r"## (\w+)", line)
+        if m:
+            struct = m.group(1)
+            continue
+        cells = [c.strip() for c in re.split(r"(?<!\\)\|", line.strip())[1:-1]] if line.startswith("| `") else []
+        if struct and len(cells) >= 3:
+            value = cells[2].strip("` ").rstrip("fu")
+            try:
+                out[f"{struct}.{cells[0].strip('` ')}"] = float(value)
+            except ValueError:
+                pass
+    return out
+
+
+DEFAULT_QUOTE = re.compile(r"`(\w+\.\w+)`[^.;`\n]{0,60}?\bdefault(?:s to| is|:)?\s+`?(-?\d+(?:\.\d+)?)")
+
+
+def check_defaults(root, texts, problems):
+    defaults = schema_defaults(root)
+    quoted = 0
+    for page, text in texts.items():
+        if page.startswith(os.path.join("docs", "lab")) or page == os.path.join("docs", "parameters.md"):
+            continue
+        for m in DEFAULT_QUOTE.finditer(text.replace("\n", " ")):
+            name, value = m.group(1), float(m.group(2))
+            if name not in defaults:
+                continue
+            quoted += 1
+            if abs(defaults[name] - value) > 1e-9 * max(1.0, abs(value)):
+                problems.append(f"{page}: {name} quoted with default {m.group(2)}; the schema's is {defaults[name]:g} "
+                                "(docs/parameters.md)")
+    return quoted
+
+
 def check_samples(root, texts, problems):
     for page, text in texts.items():
         if page != "README.md" and not page.startswith("docs"):
@@ -325,10 +370,12 @@ def main():
     check_versions(root, texts, problems)
     check_parameter_table(root, plant, problems)
     check_samples(root, texts, problems)
+    quoted = check_defaults(root, texts, problems)
     for p in problems:
         print(p)
     checked = len([f for f in files if f.endswith(SOURCE_ENDINGS)])
-    print(f"docs check: {len(problems)} problems ({checked} source files, {len(headings(root))} design.md headings)")
+    print(f"docs check: {len(problems)} problems ({checked} source files, {len(headings(root))} design.md headings, "
+          f"{quoted} quoted parameter defaults)")
     return 1 if problems else 0
 
 

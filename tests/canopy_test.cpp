@@ -15,6 +15,7 @@ TEST_F(CanopyTest, ZeroWindGivesTheStaticCompositeOfTheLayers) {
   renderCrown(0.0f, 16, 3, &r);
   if (HasFailure()) return;
   EXPECT_EQ(r.maxDisplacement, 0.0f) << "no wind, no motion";
+  EXPECT_TRUE(r.compositeCompute) << "the default composite is the tiled compute path (CanopyStats.compositeCompute)";
   float worst = 0.0f;
   size_t leaves = 0, depthOff = 0;
   for (size_t i = 0; i < r.color.size(); ++i) {
@@ -112,6 +113,9 @@ TEST_F(CanopyTest, DebugViewsShowLayersGridAndVelocity) {
   CrownFrame layers;
   renderCrown(0.0f, 16, 3, &layers, CompositeDebugView::Layers);
   if (HasFailure()) return;
+  // A debug view composites on the fragment path, and CanopyStats says so.
+  EXPECT_FALSE(layers.compositeCompute);
+  EXPECT_TRUE(layers.compositeComputeAvailable) << "lavapipe has RGBA32F as a filtered storage image";
   const uint32_t count = 5;  // the default layout 5(3-1-1)
   std::vector<size_t> perLayer(count, 0);
   size_t foliage = 0;

@@ -179,6 +179,7 @@ struct CrownFrame {
   uint64_t graphBuilds = 0;
   uint32_t layerWidth = 0;  // the layer images' width (guard band included)
   uint64_t reslices = 0, reslicesBeforeLast = 0;
+  bool compositeCompute = false, compositeComputeAvailable = false;  // CanopyStats of the last frame
 };
 
 class CanopyTest : public GpuTest {
@@ -225,6 +226,8 @@ class CanopyTest : public GpuTest {
     }
     EXPECT_TRUE(s.ok()) << s.message();
     out->graphBuilds = canopyStats(ctx).internalGraphBuilds;
+    out->compositeCompute = canopyStats(ctx).compositeCompute;
+    out->compositeComputeAvailable = canopyStats(ctx).compositeComputeAvailable;
     if (host.dev) host.destroy();
     destroyCanopy(ctx);
   }

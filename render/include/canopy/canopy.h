@@ -109,7 +109,8 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 
 // The host's targets changed size: recreates the size-dependent parts (layer images, compositor,
 // warp grid); mesh, leaf roots, simulation and parameters are kept. Waits for nothing: the old
-// objects are freed once no frame in flight uses them. Width and height in [1, 16384].
+// objects are freed once no frame in flight uses them. Width and height in [1, 16384]. After a
+// failure (out of memory) frames are refused until a resizeCanopy succeeds; the same size retries.
 Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
 
 // Replaces the placed copies (CanopyDesc.instances; at least one; CanopyInstance.species must name
@@ -125,6 +126,8 @@ struct CanopyFrame {
   float dt = 1.0f / 30.0f;  // simulation step, s, [0, 10]; 0 holds the simulation (pause)
   // The host's frame counter: never decreases; several contexts recorded in one host frame give
   // the same number. Recording frame F promises that frames <= F - framesInFlight have completed.
+  // 0: the device's last number plus one, for one context per frame (with several, each 0 would
+  // count as a new frame: pass the host's counter to all of them).
   uint64_t frameNumber = 0;
   // A camera cut: no motion vectors across it and the layers are re-sliced at once.
   bool cameraCut = false;

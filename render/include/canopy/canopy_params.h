@@ -691,6 +691,11 @@ struct CanopyStats {
   // setCanopyPushers: of the last frame's pushers, those mapped onto the plane, those outside its
   // domain and those behind the camera (these two do nothing).
   uint32_t pushersMapped = 0, pushersOutside = 0, pushersBehind = 0;
+  // The composite of the last frame ran on the tiled compute path (the fast one). False: the
+  // full-screen fragment path (about 10x dearer on lavapipe) because CompositeParams.path is
+  // Fragment, a debug view is on, or the device lacks what the compute path needs
+  // (compositeComputeAvailable: VK_FORMAT_R32G32B32A32_SFLOAT as a linearly filtered storage image).
+  bool compositeCompute = false, compositeComputeAvailable = false;
   LayerStats layers;
   SimulationStats simulation;
 };

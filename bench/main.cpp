@@ -110,6 +110,7 @@ static int usage(const char* why) {
                "  --sizes        grid sizes, powers of two in [4, 1024] (default 64,128,256)\n"
                "  --frames N     sim: steps, anim: frames measured per configuration, 3..100000 (default 60; anim 30)\n"
                "  --detail       per-pass GPU timestamps\n"
+               "  --validate     the validation layers with synchronization validation: any message fails the run (exit 1)\n"
                "  --device NAME  substring of the Vulkan device name\n");
   return why ? 2 : 0;
 }
@@ -172,6 +173,8 @@ struct Args {
   uint32_t mapSize = 1024;
   uint32_t copiesPerSpecies = 10;
   DeviceDesc desc;
+  bool validate = false;  // the validation layers and synchronization validation; a message fails the run
+  int validationMessages = 0;
 
   // The section words and canopy-bench picture's options; -1: not one of them, else the exit code (0: go on).
   int sectionOrPictureOption(const std::string& a, const std::function<const char*()>& next) {
@@ -354,6 +357,7 @@ struct Args {
       if (!cli::parseUint(next(), 1, 100000, &rebuildEvery)) return usage("--rebuild-every needs an integer in [1, 100000]");
     }
     else if (a == "--detail") detail = true;
+    else if (a == "--validate") validate = true;
     else if (a == "--faces") {
       const char* v = next();
       if (!v) return usage("--faces needs a list");
@@ -419,6 +423,13 @@ struct Args {
 
   // The sections asked for (sim when none), on the device `desc` names.
   int run() {
+    if (validate) {
+      desc.enableValidation = desc.requireValidation = true;
+      desc.validationSink = [this](VkDebugUtilsMessageSeverityFlagBitsEXT, const char* id, const char* text) {
+        ++validationMessages;
+        std::fprintf(stderr, "validation: %s: %s\n", id ? id : "", text);
+      };
+    }
   if (runRebuild && !(budgetMs > 0.0f)) return usage("rebuild: --budget needs ms in (0, 1000]");
   Device dev;
   Status s = createDevice(desc, &dev);
@@ -493,6 +504,10 @@ struct Args {
   }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);
+  if (validationMessages > 0) {
+    std::fprintf(stderr, "canopy-bench: %d validation messages\n", validationMessages);
+    return 1;
+  }
   return rc;
   }
 };

@@ -92,10 +92,11 @@ def headings(root, page=os.path.join("docs", DESIGN)):
 CITED = {name: os.path.join("docs", *folder, name) + ".md" for name, folder in (
     ("design", ()), ("performance", ()), ("performance-notebook", ("lab",)), ("embedding", ()),
     ("tuning", ()), ("reliability", ()), ("getting-started", ()))}
+CITED["CONTRIBUTING"] = "CONTRIBUTING.md"
 # A quoted heading right after the page's name, allowing "'s", commas, brackets, "section" and a
 # comment leader on the next line between them.
 PAGE = r"(?<![\w-])(" + "|".join(re.escape(k) for k in CITED) + r")\.md"
-QUOTED = re.compile(PAGE + r"(?:'s)?[\s,(]*(?:(?://|#|\*)\s*)?(?:section\s+)?\"([^\"\n]+)\"")
+QUOTED = re.compile(PAGE + r"(?:'s)?[\s,(]*(?:(?://|#|\*)\s*)?(?:section\s+)?\"(?=[A-Za-z0-9])([^\"\n]+(?:\n[ \t]*(?:(?://|#|\*)[ \t]*)?[^\"\n]+)?)\"")
 UNQUOTED = re.compile(PAGE + r",\s+([A-Z][A-Za-z][A-Za-z :-]*?)[).;]")
 
 
@@ -110,7 +111,8 @@ def check_citations(root, files, problems):
             continue
         for rx in (QUOTED, UNQUOTED):
             for m in rx.finditer(text):
-                page, title = m.group(1), m.group(2).strip()
+                page = m.group(1)
+                title = re.sub(r"\s*\n\s*(?:(?://|#|\*)\s*)?", " ", m.group(2)).strip()  # across a line break
                 if page in hs and title not in hs[page]:
                     line = text.count("\n", 0, m.start()) + 1
                     problems.append(f"{f}:{line}: cites {CITED[page]} \"{title}\", which has no such heading")

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The structure limits of CONTRIBUTING.md "Limits", checked (issue 68; ctest StructureLimits):
+"""The structure limits of CONTRIBUTING.md "Conventions in the code", its limits, checked (issue 68; ctest StructureLimits):
 
   a source file (C++, GLSL, Python, shell) over 900 lines
   a C++ function over 150 lines (from its signature's first line to its closing brace)

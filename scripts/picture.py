@@ -1,5 +1,7 @@
 #!/usr/bin/python3
-"""The picture in wind (issue 67; docs/performance.md "The picture in wind"): each frame with wind
+"""The picture in wind, for trying levers (any canopy-demo option through --extra); the measure of
+record is `canopy-bench picture` (bench/bench_picture.cpp: the same frames, in memory, and the table
+of docs/performance.md "The picture in wind"). Each frame with wind
 against the same frame (camera, time) without it (--wind-speed 0), for the 2D method and the
 per-vertex baseline, measured by canopy-demo --measure-foliage (tools/foliage_measure.h):
 

@@ -1,4 +1,4 @@
-// The layered vegetation's parts alone (CONTRIBUTING.md "Module map"): each is handed the plain
+// The layered vegetation's parts alone (CONTRIBUTING.md "The module map"): each is handed the plain
 // structs it reads, so these tests build them by hand, without a device or a model. The re-slice
 // scheduler's decisions (docs/design.md "Layers: reprojection" and "Layers: spread re-slicing")
 // from a hand-made visible set, copies' bounds, mesh size and settings; the mesh part's run

@@ -67,7 +67,11 @@ bool checkPath(FsContext& c, const std::string& path) {
     }
     rel = path.substr(prefix.size());
   }
-  if (rel.empty() || rel[0] == '/' || rel[0] == '\\' || (rel.size() > 1 && rel[1] == ':')) {
+  if (rel.empty()) {
+    c.lastError = "an empty URI names no file";
+    return false;
+  }
+  if (rel[0] == '/' || rel[0] == '\\' || (rel.size() > 1 && rel[1] == ':')) {
     c.lastError = "URI '" + rel + "' is an absolute path (only paths relative to the model are allowed)";
     return false;
   }

@@ -13,6 +13,7 @@
 
 using namespace canopy;
 using canopy::test::expectConsistent;
+using canopy::test::toGlb;
 using nlohmann::json;
 
 namespace {
@@ -58,27 +59,6 @@ Outcome load(const json& m, const std::map<std::string, std::vector<unsigned cha
   return o;
 }
 
-std::vector<unsigned char> toGlb(const std::string& text, const std::vector<unsigned char>& bin) {
-  std::string j = text;
-  while (j.size() % 4) j += ' ';
-  std::vector<unsigned char> b = bin;
-  while (b.size() % 4) b.push_back(0);
-  std::vector<unsigned char> out = {'g', 'l', 'T', 'F'};
-  auto u32 = [&](uint32_t v) {
-    unsigned char x[4];
-    std::memcpy(x, &v, 4);
-    out.insert(out.end(), x, x + 4);
-  };
-  u32(2);
-  u32(uint32_t(12 + 8 + j.size() + 8 + b.size()));
-  u32(uint32_t(j.size()));
-  u32(0x4E4F534Au);
-  out.insert(out.end(), j.begin(), j.end());
-  u32(uint32_t(b.size()));
-  u32(0x004E4942u);
-  out.insert(out.end(), b.begin(), b.end());
-  return out;
-}
 
 void expectOneTriangle(const Outcome& o, const char* what) {
   ASSERT_TRUE(o.status.ok()) << what << ": " << o.status.message();

@@ -60,7 +60,14 @@ bool decodeDataUri(const std::string& uri, std::vector<unsigned char>* out, bool
   *wasBase64 = meta.size() >= 7 && meta.compare(meta.size() - 7, 7, ";base64") == 0;
   const std::string payload = uri.substr(comma + 1);
   out->clear();
-  if (*wasBase64) return true;  // tinygltf decodes these itself
+  if (*wasBase64) {  // tinygltf decodes these itself: only the alphabet and the length are checked here
+    size_t n = 0;
+    for (char ch : payload) {
+      if (std::isalnum(static_cast<unsigned char>(ch)) || ch == '+' || ch == '/' || ch == '=') ++n;
+      else if (!std::isspace(static_cast<unsigned char>(ch))) return false;
+    }
+    return n % 4 == 0;
+  }
   for (size_t i = 0; i < payload.size(); ++i) {
     if (payload[i] == '%') {
       if (i + 2 >= payload.size()) return false;
@@ -112,6 +119,29 @@ void materialTextures(const json& v, const std::string& key, std::set<size_t>* o
   } else if (v.is_array()) {
     for (const json& e : v) materialTextures(e, key, out, textures);
   }
+}
+
+// The images no drawn material reads become a one-byte stub (kept encoded, never decoded); a read
+// image's data: URI is checked (RFC 2397) and made base64 for tinygltf.
+Status keepReadImages(json& doc, const std::set<size_t>& imageUsed) {
+  const size_t images = count(doc, "images");
+  for (size_t i = 0; i < images; ++i) {
+    json& im = doc["images"][i];
+    if (!imageUsed.count(i)) {
+      im = json{{"uri", "data:image/png;base64,AA=="}};
+      continue;
+    }
+    const json* uri = child(im, "uri");
+    if (!uri || !uri->is_string()) continue;  // a bufferView image, or tinygltf names what is missing
+    const std::string u = uri->get<std::string>();
+    if (u.compare(0, 5, "data:") != 0) continue;
+    std::vector<unsigned char> bytes;
+    bool wasBase64 = false;
+    if (!decodeDataUri(u, &bytes, &wasBase64))
+      return Status::error("images[" + std::to_string(i) + "]: the data: URI is not data:[<mediatype>][;base64],<data> (RFC 2397)");
+    if (!wasBase64) im["uri"] = "data:image/png;base64," + base64(bytes);
+  }
+  return Status();
 }
 
 // The buffers the model reads checked (Canopy's messages), their data: URIs made base64 for
@@ -266,6 +296,7 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
     if (indexIn(v, views, &b)) viewUsed[b] = true;
   };
   for (size_t img : imageUsed) useView(child(doc["images"][img], "bufferView"));
+  CANOPY_TRY(keepReadImages(doc, imageUsed));
   // Accessors -> bufferViews -> buffers; the others become a stub tinygltf parses and nothing reads.
   for (size_t a = 0; a < accessors; ++a) {
     json& acc = doc["accessors"][a];

@@ -255,3 +255,20 @@ TEST(GltfValidFiles, RefusalsAreInCanopysWords) {
     EXPECT_EQ(s.message().find("json.exception"), std::string::npos) << s.message();
   }
 }
+
+// An image nothing reads (no material of a drawn primitive names a texture of it) may be missing,
+// remote or an undecodable data URI; the same image on the drawn material is refused by name.
+TEST(GltfValidFiles, AnImageNothingReadsDoesNotRefuseTheFile) {
+  for (const char* uri : {"missing.png", "https://example.com/leaf.png", "data:image/png;base64,@@@"}) {
+    SCOPED_TRACE(uri);
+    json m = triangleModel();
+    m["images"] = json::array({{{"uri", uri}}});
+    m["textures"] = json::array({{{"source", 0}}});
+    m["materials"] = json::array({{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}});
+    expectOneTriangle(load(m), "unused image");
+    m["meshes"][0]["primitives"][0]["material"] = 0;
+    const Outcome o = load(m);
+    EXPECT_FALSE(o.status.ok()) << "a drawn texture's image that cannot be read";
+    EXPECT_NE(o.status.message().find("case.gltf"), std::string::npos) << o.status.message();
+  }
+}

@@ -138,6 +138,31 @@ struct PictureOptions {
   bool check = false;                 // exit 1 when a 2D run is outside issue 67's bounds
 };
 int runPictureBench(Device& dev, const PictureOptions& options);
+// canopy-bench plants (issue 77): real plants in a breeze and a gale, the 2D method beside the
+// per-vertex baseline: the attachment gap, the sway, the trunk's base, bare rigid pixels in the
+// crown (bench/bench_plants.cpp).
+struct PlantsOptions {
+  // "tree:PATH" (a glTF plant; a missing file is skipped with a message) or a generated scene's name.
+  std::vector<std::string> plants = {
+      "tree:../shared/assets/quaternius_megakit_common_tree_3/CommonTree_3.gltf",
+      "tree:../shared/assets/quaternius_CommonTree_1/CommonTree_1.glb",
+      "tree:../shared/assets/quaternius_PineTree_1/PineTree_1.glb",
+      "tree:../shared/assets/sketchfab_pine_ps1_wersaus33/scene.gltf",
+      "tree:../shared/assets/DiffuseTransmissionPlant/DiffuseTransmissionPlant.gltf",
+      "tree:../shared/assets/fern_02/fern_02.glb",
+      "tree:../shared/assets/kaykit_tree_1_c/Tree_1_C_Color1.gltf",
+      "tree:../shared/assets/kenney_nature_palm_tall/tree_palmTall.glb",
+      "tree:../shared/assets/polypizza_flower_bushes/flower_bushes.glb",
+      "tree"};
+  std::vector<std::string> winds = {"breeze", "gale"};  // WorldWind.speed's default, galeFactor x it
+  uint32_t width = 640, height = 480;
+  uint32_t frames = 90;  // measured frames per run (after the demo's 2 s warm-up)
+  float galeFactor = 3.0f;
+  bool before = false;   // as before issue 77: RigidMotion::Still and the paper's leaf roots
+  std::string json = "bench_plants.json", table;  // "" none
+  bool check = false;    // exit 1 outside issue 77's bounds
+};
+int runPlantsBench(Device& dev, const PlantsOptions& options);
 int runShadowBench(Device& dev, const std::vector<uint64_t>& faceCounts, int frames, uint32_t width, uint32_t height, uint32_t mapSize);
 }
 }  // namespace canopy

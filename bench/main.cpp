@@ -88,6 +88,12 @@ static int usage(const char* why) {
                "                 the default speed), method (--methods, default 2d,per-vertex); --frames default 10; --json\n"
                "                 default bench_picture.json; --table FILE: the markdown table; --check: exit 1 when a 2D\n"
                "                 run is outside issue 67's bounds\n"
+               "  plants         real plants in wind (issue 77): per plant (--plants, default the real trees and bushes\n"
+               "                 of ../shared/assets and the generated tree) and wind (--winds, default breeze,gale), the\n"
+               "                 2D method beside the per-vertex baseline: the attachment gap (a leaf's root against the\n"
+               "                 rigid point it grows from, on screen), the sway, the trunk's base, bare rigid pixels in\n"
+               "                 the crown (--size default 640x480, --frames default 90, --json default bench_plants.json,\n"
+               "                 --table FILE, --check: exit 1 outside issue 77's bounds, --before: as before issue 77)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"
@@ -159,8 +165,9 @@ struct Args {
   std::string layout = "5(3-1-1)";
   std::string scene;
   bool runSpecies = false, runShadows = false, runPushers = false, runCounters = false, jsonGiven = false;
-  bool runPicture = false, pathsGiven = false;
+  bool runPicture = false, pathsGiven = false, runPlants = false;
   bench::PictureOptions picture;
+  bench::PlantsOptions plants;
   // A comma-separated list, each item through `each` (false: refused).
   static bool forEachItem(const char* v, const std::function<bool(const std::string&)>& each) {
     if (!v || !*v) return false;
@@ -186,6 +193,12 @@ struct Args {
     else if (a == "rebuild") runRebuild = true;
     else if (a == "pervertex") runPerVertex = true;
     else if (a == "picture") runPicture = true;
+    else if (a == "plants") runPlants = true;
+    else if (a == "--plants") {
+      plants.plants.clear();
+      if (!forEachItem(next(), [&](const std::string& it) { plants.plants.push_back(it); return true; }))
+        return usage("--plants needs a list: tree:FILE.glb, ..., or generated scene names (tree, shrub, ...)");
+    } else if (a == "--before") plants.before = true;
     else if (a == "--scenes") {
       picture.scenes.clear();
       if (!forEachItem(next(), [&](const std::string& it) { picture.scenes.push_back(it); return true; }))
@@ -207,6 +220,7 @@ struct Args {
             return it == "breeze" || it == "gale";
           }))
         return usage("--winds needs a list of breeze, gale");
+      plants.winds = picture.winds;
     } else if (a == "--methods") {
       picture.methods.clear();
       if (!forEachItem(next(), [&](const std::string& it) {
@@ -218,7 +232,7 @@ struct Args {
     } else if (a == "--table") {
       const char* v = next();
       if (!v) return usage("--table needs a file");
-      picture.table = v;
+      picture.table = plants.table = v;
     }
     else if (a == "impostors") runImpostors = true;
     else if (a == "camera") runCamera = true;
@@ -439,7 +453,8 @@ struct Args {
   }
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
-      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters && !runPicture)
+      !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters && !runPicture &&
+      !runPlants)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -501,6 +516,16 @@ struct Args {
     if (jsonGiven) picture.json = t1.json;
     picture.check = check;
     rc = bench::runPictureBench(dev, picture);
+  }
+  if (rc == 0 && runPlants) {
+    if (frames) plants.frames = uint32_t(frames);
+    if (sizeGiven) {
+      plants.width = t1.width;
+      plants.height = t1.height;
+    }
+    if (jsonGiven) plants.json = t1.json;
+    plants.check = check;
+    rc = bench::runPlantsBench(dev, plants);
   }
   if (rc == 0 && runSoak) rc = bench::runSoakBench(dev, frames ? frames : 100000, int(rebuildEvery), check);
   destroyDevice(dev);

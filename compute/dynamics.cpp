@@ -105,9 +105,14 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     l.depth = d.layers[i].depth;
     l.distance = d.layers[i].distance * distanceScale;
     l.vd = p.vd + p.vdJitter * layerJitter(p.vdSeed, i);
-    // docs/design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer.
+    // docs/design.md: A_i = 1 - m (L_i / L_{n-1})^2; A_0 = 1, and 1 with a single layer. With the
+    // world wind eq. 6 is scaled by each plant's height on screen, which already makes a farther
+    // plant move fewer pixels: m, the paper's stand-in for that perspective, is not applied twice
+    // (it would move the back of one crown 30 % less than its front, and tear a branch spanning
+    // both from its leaves: docs/design.md "Rigid parts in wind").
     const float ratio = (n > 1 && last > 0) ? d.layers[i].distance / last : 0.0f;
-    l.attenuation = 1.0f - p.depthAttenuation * ratio * ratio;
+    const float m = d.heightSway > 0.0f ? 0.0f : p.depthAttenuation;
+    l.attenuation = 1.0f - m * ratio * ratio;
     l.rootLineY = d.layers[i].rootLineY;
     l.height = std::max(d.layers[i].height, 1.0f);
   }

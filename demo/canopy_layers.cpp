@@ -164,6 +164,18 @@ void printSplit(const Device& dev, const VegetationModel& m, const LayeredVegeta
     std::printf("  material #%zu '%s': %s (%s), %llu triangles\n", i, lv.mesh.materials[i].name.c_str(),
                 lv.mesh.split.role[i] == MaterialRole::Rigid ? "rigid" : "foliage", lv.mesh.split.reason[i].c_str(),
                 (unsigned long long)used[i]);
+    // Its parts where its role is only a hint (render/part_split.h): where each went and why.
+    uint32_t shown = 0, rigid = 0, parts = 0;
+    for (const PartReport& p : lv.mesh.split.parts) {
+      if (p.material != i) continue;
+      ++parts;
+      rigid += p.rigid;
+      if (shown < 12 && (p.rigid || shown < 4)) {
+        std::printf("    part of %u triangles: %s (%s)\n", p.triangles, p.rigid ? "rigid" : "foliage", p.reason.c_str());
+        ++shown;
+      }
+    }
+    if (parts) std::printf("    %u parts by their geometry: %u rigid, %u foliage\n", parts, rigid, parts - rigid);
   }
   std::printf("Split: %llu foliage triangles, %llu rigid triangles\n", (unsigned long long)lv.stats.foliageTriangles,
               (unsigned long long)lv.stats.rigidTriangles);

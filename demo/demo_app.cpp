@@ -250,6 +250,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.leafRoughness = o.leafRoughness;
   p.layers.leafTransmission = o.leafTransmission;
   p.layers.translucency = o.translucency;
+  p.layers.rigidMotion = o.rigidMotion;
   p.layers.impostors.mode = o.impostors;
   p.layers.impostors.switchPixels = o.impostorPixels;
   p.layers.impostors.debugView = o.impostorDebug;
@@ -557,6 +558,7 @@ Status createHost(Device& d, const VegetationModel& model, const Options& o, uin
   desc.rootCacheDir = o.cacheFolder;
   desc.cacheMaxBytes = uint64_t(o.cache.maxMiB) << 20;
   desc.split = o.split;
+  desc.roots.attachRoots = o.attachRoots;
   desc.deviceMemoryBudget = uint64_t(double(o.deviceBudgetMiB) * double(1 << 20));
   desc.guardBand = o.guardBand;
   desc.meshStagingRingBytes = uint64_t(double(o.ringMiB) * double(1 << 20));

@@ -36,6 +36,8 @@ struct Options {
   std::string sceneFile;               // a scene file (species and copies) instead of one model
   std::shared_ptr<const SceneCopies> copies;  // what loadScene read from sceneFile (main sets it)
   MaterialSplitOptions split;          // --rigid / --foliage overrides of the default material rule
+  bool attachRoots = LeafRootOptions{}.attachRoots;  // --paper-roots: false
+  RigidMotion rigidMotion = LayerSettings{}.rigidMotion;  // --rigid-motion
   cli::CacheOptions cache;             // where the caches of a --gltf model go (demo/cache_cli.h)
   std::string cacheFolder;             // resolved by main(); empty: no cache
   SceneKind scene = SceneKind::Shrub;

@@ -51,7 +51,11 @@ void printHelp() {
       "                      scatters, in one vegetation (instead of --scene / --gltf)\n"
       "  --rigid M1,M2       materials (names or #index) forced to be rigid background (trunk, branches)\n"
       "  --foliage M1,M2     materials forced to be foliage (default rule: render/material_split.h)\n"
+      "  --paper-roots       each leaf rooted at its smallest (u, v), as the paper (default: where it meets a\n"
+      "                      branch, LeafRootOptions.attachRoots)\n"
       "Method:\n"
+      "  --rigid-motion M    follow (trunks and branches drawn every frame, moving with the leaves they carry)\n"
+      "                      or still (a background drawn per re-slice, before 0.8) (default follow)\n"
       "  --layers L          layer layout N(near-mid-far) or N, 1..32 layers (default %s)\n"
       "  --wind-dir X,Y,Z    the world direction the wind blows toward, y up (default %g,%g,%g)\n"
       "%s%s%s%s%s"
@@ -239,6 +243,7 @@ const SwitchOption kSwitchOptions[] = {
     {"--light-sheet", &Options::lightSheet, true},
     {"--window", &Options::window, true},
     {"--validate", &Options::validate, true},
+    {"--paper-roots", &Options::attachRoots, false},
     {"--no-mp4", &Options::mp4, false},
 };
 // Options that take one of a few words, each word setting Options its own way; `words` is what a
@@ -283,6 +288,9 @@ const std::vector<ChoiceOption>& choiceOptions() {
       {"--reslice", "auto or every-frame",
        {{"auto", [](Options& o) { o.reslice = ReslicePolicy::OnViewChange; }},
         {"every-frame", [](Options& o) { o.reslice = ReslicePolicy::EveryFrame; }}}},
+      {"--rigid-motion", "follow or still",
+       {{"follow", [](Options& o) { o.rigidMotion = RigidMotion::FollowFoliage; }},
+        {"still", [](Options& o) { o.rigidMotion = RigidMotion::Still; }}}},
       {"--vsync", "on or off",
        {{"on", [](Options& o) { o.vsync = true; }}, {"off", [](Options& o) { o.vsync = false; }}}},
   };

@@ -66,6 +66,7 @@ void destroyNow(CanopyContext* c) {
     destroyCompositor(c->compositor);
     destroyShadowCaster(c->shadow);
     destroyPerVertex(c->perVertex);
+    destroyRigidFollow(c->rigid);
     destroyLayerDynamics(c->dynamics);
     destroyLayeredVegetation(c->layers);
   }
@@ -87,6 +88,10 @@ Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTarg
   rg::ResourceId disp = rg::kInvalidResource, prev = rg::kInvalidResource;
   rg::ResourceId animFrame = rg::kInvalidResource;
   CANOPY_TRY(addDynamicsPasses(c->dynamics, g, sr.tiled, sr.ring, sr.ringTimes, &disp, &prev, &animFrame));
+  // The rigid parts with the foliage they carry, into the host's targets before the composite
+  // reads its depth (docs/design.md "Rigid parts in wind").
+  if (rigidFollows(c->layers) && c->rigid.device)
+    CANOPY_TRY(addRigidFollowPasses(c->rigid, c->layers, g, targets, {&lr, animFrame, disp, prev, &c->dynamics}));
   return addCompositePasses(c->compositor, g, lr, disp, prev, targets, {animFrame, sr.tiled});
 }
 
@@ -261,6 +266,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
       CANOPY_TRY(createPerVertex(d, c->layers, c->layers.mesh.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
+    CANOPY_TRY(makeRigidFollow(*c));
     releaseLeafRootPositions(c->layers.mesh);  // uploaded (or not needed)
     // The pass group's uses are the 2D method's; the baseline's (colour blended, depth tested and
     // written, motion) are among them.
@@ -318,6 +324,8 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
       CANOPY_TRY(setLayerSettings(c->layers, p.layers, &recreated));
       if (recreated) c->generation++;  // new layer images
     }
+    // The rigid parts drawn every frame or into the background: another pass in the graphs.
+    if (p.layers.rigidMotion != c->params.layers.rigidMotion) c->generation++;
     if (p.animation != c->params.animation) {
       c->generation++;  // other passes: graphs are rebuilt
       if (p.animation == AnimationMode::Layers2D) {
@@ -457,8 +465,10 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   const bool motionValid = c->frames > 0 && !f.cameraCut && a.gridX == c->previousAnimFrame.gridX && a.gridY == c->previousAnimFrame.gridY &&
                            a.layerCount == c->previousAnimFrame.layerCount;
   const VkRect2D footprint = layerFootprint(c->layers);
-  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, c->layers.mesh.hasRigid, c->layers.reslice.occupancyDirty,
+  CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, drawsBackground(c->layers), c->layers.reslice.occupancyDirty,
                               motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
+  if (rigidFollows(c->layers) && c->rigid.device)
+    CANOPY_TRY(prepareRigidFollow(c->rigid, c->layers, f.camera, c->params.composite.exposure, motionValid));
   const LayerView& previous = motionValid ? c->lastView : view;
   // The slice camera is the guard band's widening of the camera it was asked for: the same camera
   // as this frame's when that widening gives it bit for bit (layer pixel = pixel + guard).

@@ -11,6 +11,7 @@
 #include "render/canopy.h"
 #include "render/per_vertex.h"
 #include "render/pushers.h"
+#include "render/rigid_follow.h"
 #include "render/shadow.h"
 #include "render/world_wind.h"
 
@@ -52,6 +53,7 @@ struct CanopyContext {
   // frames are refused, and the same size again recreates them.
   bool sized = true;
   PerVertexAnimation perVertex;  // CanopyDesc.allowPerVertex only
+  RigidFollow rigid;  // the rigid parts drawn every frame (render/rigid_follow.h): a resident mesh with rigid parts
   bool planeChosen = false;  // `plane` holds the host's or the first view's (chooseSimulationPlane)
   SimulationPlane plane;
   WorldWindState worldWind;  // CanopyParams.wind as it stands while a change eases in
@@ -84,6 +86,9 @@ Status buildRecordGraph(CanopyContext& context, const CanopyFrameInputs& inputs,
 void retireRecordGraphs(CanopyContext& context, std::vector<RecordGraph> graphs);
 
 // Shared by createCanopy (render/canopy.cpp) and the calls after it (render/canopy_scene.cpp).
+// Creates the rigid parts' draw for the mesh in force (its textures' specialization), retiring
+// one made for another mesh once no frame in flight uses it; none without resident rigid parts.
+Status makeRigidFollow(CanopyContext& c);
 uint32_t guardPixels(float fraction, uint32_t size);
 Status checkRange(const char* name, uint32_t v, uint32_t lo, uint32_t hi);
 void retireSizeDependentParts(CanopyContext& c);

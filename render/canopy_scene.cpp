@@ -42,6 +42,16 @@ void retireSizeDependentParts(CanopyContext& c) {
   });
 }
 
+Status makeRigidFollow(CanopyContext& c) {
+  if (c.rigid.device) {
+    auto old = std::make_shared<RigidFollow>();
+    std::swap(*old, c.rigid);
+    deferRelease(*c.device, [old] { destroyRigidFollow(*old); });
+  }
+  if (!c.layers.mesh.hasRigid || c.layers.mesh.streamed) return Status();
+  return createRigidFollow(*c.device, c.layers, c.compositor.desc, &c.rigid);
+}
+
 // The copies as the layers take them (CanopyInstance's fields side by side).
 InstanceInputs instanceInputs(const std::vector<CanopyInstance>& instances) {
   InstanceInputs in;
@@ -103,6 +113,7 @@ Status setCanopySpecies(CanopyContext* c, const std::vector<CanopySpecies>& spec
     auto old = std::make_shared<LayeredVegetation>(std::move(c->layers));
     c->layers = std::move(next);
     deferRelease(*c->device, [old] { destroyLayeredVegetation(*old); });
+    CANOPY_TRY(makeRigidFollow(*c).context("setCanopySpecies"));
     c->generation++;  // new layer images and mesh: graphs rebuilt
     c->previousAnimFrame = gpu::AnimFrame{};
     if (!c->params.customPlane) c->planeChosen = false;
@@ -123,6 +134,8 @@ Status resizeCanopy(CanopyContext* c, uint32_t width, uint32_t height) {
     c->desc.height = height;
     c->perVertex.desc.width = width;
     c->perVertex.desc.height = height;
+    c->rigid.desc.width = width;
+    c->rigid.desc.height = height;
     Status s = [&]() -> Status {
       CompositorDesc cd = c->compositorDesc;
       cd.width = width;

@@ -8,6 +8,7 @@
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
+#include "render/rigid_flex.h"
 #include <glm/gtc/packing.hpp>
 
 namespace canopy {
@@ -81,6 +82,8 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesPart
   CompactMeshOptions co;
   co.maxChunkVertices = b.desc.maxChunkVertices;
   co.bend = b.desc.keepBend && !m.bend.empty();
+  co.rigidFlexibility = &parts.rigidFlex;
+  co.rigidProxy = &parts.rigidProxy;
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
@@ -232,8 +235,7 @@ Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, Speci
   *rootKey = 0;
   *cached = false;
   CANOPY_TRY(splitMaterials(m, desc.split, &p.split));
-  p.foliage.resize(m.triangleCount());
-  for (size_t t = 0; t < p.foliage.size(); ++t) p.foliage[t] = p.split.role[m.triangleMaterial[t]] == MaterialRole::Foliage;
+  p.foliage = std::move(p.split.triangleFoliage);  // the materials' roles, and the parts' (render/part_split.h)
   const bool cacheOn = !desc.rootCacheDir.empty() && !m.path.empty();
   const std::string cachePath = cacheOn ? leafRootCachePath(m.path, desc.rootCacheDir) : std::string();
   if (cacheOn) {
@@ -257,7 +259,12 @@ Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, Speci
   // per-vertex root goes now and the rest after it (the placement reads the compact mesh).
   std::vector<uint32_t>().swap(p.roots.rootOfVertex);
   if (desc.impostors.enable) CANOPY_TRY(buildFoliageBoxes(m, p.foliage, p.roots, desc.impostors, &p.boxes));
-  return findPlants(m, p.roots, &p.plants);
+  std::vector<uint32_t> trianglePlant;
+  CANOPY_TRY(findPlants(m, p.roots, &p.plants, &trianglePlant));
+  // How far each rigid vertex follows the foliage (docs/design.md "Rigid parts in wind").
+  if (!p.split.rigidTriangles) return Status();
+  CANOPY_TRY(rigidFlexibility(m, p.foliage, p.roots, trianglePlant, &p.rigidFlex));
+  return rigidProxies(m, p.foliage, p.roots, &p.rigidProxy);
 }
 }  // namespace
 

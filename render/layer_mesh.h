@@ -202,6 +202,13 @@ Status drawMaterials(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPi
 // The compact mesh in a render graph (issue 16's buffers, read-only after their upload): imported in
 // its rest states and bound; readsMesh() declares a draw's reads. One place for the layer passes,
 // the per-vertex baseline and the impostor bake.
+// Whether the rigid parts are drawn into the layers' background at each re-slice (RigidMotion::Still,
+// or a streamed mesh, which is not resident to be drawn every frame), or every frame displaced with
+// the foliage (render/rigid_follow.h; docs/design.md "Rigid parts in wind").
+inline bool drawsBackground(const LayerMesh& mesh, const LayerSettings& s) {
+  return mesh.hasRigid && (mesh.streamed || s.rigidMotion == RigidMotion::Still);
+}
+
 struct MeshResources {
   rg::ResourceId vertices = rg::kInvalidResource, indices = rg::kInvalidResource, roots = rg::kInvalidResource;
 };

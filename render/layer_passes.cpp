@@ -200,7 +200,7 @@ Status recordFadeBlend(LayeredVegetation& lv, VkCommandBuffer cmd) {
     CANOPY_TRY(step(laidOver(i), lv.pipelines.fade, lv.pipelines.fadeOver, lv.targets.colorLayerViews[i], lv.targets.next.color, i, w[i]));
     if (i < merge.size() && merge[i]) CANOPY_TRY(mergeDepth(i));
   }
-  if (!lv.mesh.hasRigid) return Status();  // both backgrounds stay cleared
+  if (!drawsBackground(lv)) return Status();  // both backgrounds stay cleared
   return step(laidOver(n), lv.pipelines.fadeBackground, lv.pipelines.fadeOverBackground, lv.targets.backgroundColor.view,
               lv.targets.next.backgroundColor, 0, w[n]);
 }
@@ -235,6 +235,9 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
   r.backgroundDepth = g.importImage("background: depth", descOf(lv.targets.backgroundDepth), rest, rest);
   MeshResources mesh;
   CANOPY_TRY(importMesh(lv.mesh, g, &mesh));
+  r.meshVertices = mesh.vertices;
+  r.meshIndices = mesh.indices;
+  r.meshRoots = mesh.roots;
   const auto frame = g.importBuffer("layers: frame", lv.visible.frameBuffer.size, kFrameRead, kFrameRead);
   // Impostors (render/impostor_gpu.cpp): the re-slice's list, the box table and the baked atlas.
   rg::ResourceId impostorList = rg::kInvalidResource, impostorBoxes = rg::kInvalidResource,
@@ -290,12 +293,12 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
         .read(atlasColor, rg::Use::FragmentSampled)
         .read(atlasDepth, rg::Use::FragmentSampled);
   drawsMesh(g.addPass("layers: background", [p](rg::PassContext& c) {
-     return p->reslice.rebuildPending && p->mesh.hasRigid ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
-                                                        : Status();
+     return p->reslice.rebuildPending && drawsBackground(*p) ? recordBackground(*p, c.cmd, visibleTargets(*p), true, nullptr)
+                                                          : Status();
    }))
       .write(r.backgroundColor, rg::Use::ColorAttachmentWrite)
       .write(r.backgroundDepth, rg::Use::DepthAttachmentWrite)
-      .when([p] { return p->reslice.rebuildPending && p->mesh.hasRigid; });
+      .when([p] { return p->reslice.rebuildPending && drawsBackground(*p); });
   if (lv.targets.next.color.image) {
     // Spread re-slicing (docs/design.md "Layers: spread re-slicing"): this frame's slice into the
     // next set (loaded: earlier slices are kept), then a cross-fade step into the visible set.
@@ -310,7 +313,7 @@ Status addLayerPasses(LayeredVegetation& lv, rg::RenderGraph& g, LayerResources*
        const bool lastImpostors = p->reslice.spread.sliceLast && p->reslice.spread.impostors.cut.active;
        if (clear || sliceHas(*p, true) || lastImpostors)
          CANOPY_TRY(recordFoliage(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
-       if (p->mesh.hasRigid && (clear || sliceHas(*p, false)))
+       if (drawsBackground(*p) && (clear || sliceHas(*p, false)))
          CANOPY_TRY(recordBackground(*p, c.cmd, nextTargets(*p), clear, &p->reslice.spread.slice));
        return Status();
      });

@@ -14,6 +14,8 @@ struct LayerResources {
   rg::ResourceId backgroundColor = rg::kInvalidResource, backgroundDepth = rg::kInvalidResource;
   // The next set's colour (spread re-slicing only): the composite's occupancy unites it in.
   rg::ResourceId nextColor = rg::kInvalidResource, nextBackgroundColor = rg::kInvalidResource;
+  // The chunked mesh as imported (render/layer_mesh.h MeshResources), for the other passes that draw it.
+  rg::ResourceId meshVertices = rg::kInvalidResource, meshIndices = rg::kInvalidResource, meshRoots = rg::kInvalidResource;
 };
 // Adds "layers: frame constants", "layers: foliage" and "layers: background" with the layer
 // images imported (and bound) in desc.restUse, and with spread re-slicing "layers: spread slice"

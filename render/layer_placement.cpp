@@ -203,6 +203,13 @@ size_t PlacementPass::foliageVertexDepths() {
 
 Status PlacementPass::layerBoundaries() {
   if (!(job.zMin <= job.zMax)) job.zMin = job.zMax = 0.0f;  // no foliage: empty layers
+  // Every root at one depth (a plant whose foliage is one welded part, a single leaf): the slabs
+  // would all be that depth, and the vertex shader's root depth, rounded otherwise than this
+  // one, could put the leaf in the last layer while the CPU counts it in the first, whose top and
+  // height it then does not get (issue 77: a palm that never moved). The range is opened behind
+  // the roots by a thousandth of their depth, far beyond any rounding, so they lie in layer 0.
+  const float minRange = 1e-3f * std::max(std::abs(job.zMin), 1e-3f);
+  if (job.zMax - job.zMin < minRange) job.zMax = job.zMin + minRange;
   std::vector<LayerSlab> slabs;
   std::vector<float> bounds;
   CANOPY_TRY(placeLayers(settings.layout, settings.regions, job.zMin, job.zMax, &slabs, &bounds));
@@ -294,10 +301,21 @@ void PlacementPass::finish() {
   // height of the image, or eq. 6 (h times the sway) moved every corner by thousands of pixels.
   float bottom = std::min(job.bottom, 2.0f * height);
   if (!std::isfinite(bottom)) bottom = height;
-  for (LayerInfo& li : job.layers) {
+  // A layer without leaves takes the top of the nearest layer with some: the vertex shader, not this
+  // count, decides where a leaf at a slab boundary is drawn, and a leaf drawn in a layer of height
+  // 1 px would stand still (eq. 6 is scaled by h with the world wind).
+  const size_t n = job.layers.size();
+  std::vector<float> tops(n, INFINITY);
+  for (size_t i = 0; i < n; ++i) tops[i] = job.layers[i].top;
+  for (size_t i = 0; i < n; ++i)
+    for (size_t k = 1; !std::isfinite(tops[i]) && k < n; ++k) {
+      if (i >= k && std::isfinite(job.layers[i - k].top)) tops[i] = job.layers[i - k].top;
+      else if (i + k < n && std::isfinite(job.layers[i + k].top)) tops[i] = job.layers[i + k].top;
+    }
+  for (size_t i = 0; i < n; ++i) {
+    LayerInfo& li = job.layers[i];
     li.rootLineY = bottom;
-    li.top = std::max(li.top, -height);
-    if (!std::isfinite(li.top)) li.top = bottom;
+    li.top = std::isfinite(tops[i]) ? std::max(tops[i], -height) : bottom;
     li.height = std::max(bottom - li.top, 1.0f);
   }
   if (perPlant) placePlants(job, plants, species, height, width);

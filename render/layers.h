@@ -101,6 +101,10 @@ struct LayeredVegetation {
   LayerStats stats;
 };
 
+// drawsBackground(mesh, settings) of the vegetation (render/layer_mesh.h), and its opposite.
+inline bool drawsBackground(const LayeredVegetation& lv) { return drawsBackground(lv.mesh, lv.settings); }
+inline bool rigidFollows(const LayeredVegetation& lv) { return lv.mesh.hasRigid && !drawsBackground(lv); }
+
 // Which shading inputs the layer draws may meet (LAYER_FEATURE_*, shared/layers.h): the model's
 // material textures, the translucency model and the impostors' level colours of `s`. A clear bit
 // compiles that input's code out of the fragment shader (layers_shade.glsl): lavapipe runs both

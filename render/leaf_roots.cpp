@@ -3,6 +3,7 @@
 #include "engine/files.h"
 #include "engine/hash.h"
 #include "render/cache_file.h"
+#include "render/leaf_attach.h"
 
 #include <cstring>
 
@@ -39,6 +40,30 @@ uint64_t hashPosition(const glm::vec3& p) {
 }
 
 }  // namespace
+
+// A leaf that meets the rigid parts is rooted at its vertex nearest them, unless its paper root
+// (smallest u, v) already lies on them (docs/design.md "Rigid parts in wind").
+Status rootAtAttachments(const VegetationModel& m, const std::vector<uint8_t>& foliage, LeafRoots* r) {
+  std::vector<LeafAttachment> at;
+  CANOPY_TRY(findLeafAttachments(m, foliage, *r, 0.0f, &at));
+  const RigidGrid grid = buildRigidGrid(m, foliage, 0.0f);
+  std::vector<uint32_t> newRoot(r->leafCount(), kNoLeaf);
+  bool any = false;
+  for (uint32_t l = 0; l < r->leafCount(); ++l) {
+    if (at[l].vertex == kNoLeaf || at[l].vertex == r->leafRoot[l]) continue;
+    LeafAttachment own;
+    if (nearestRigidPoint(grid, m.positions[r->leafRoot[l]], &own)) continue;  // the paper's root is on a branch
+    newRoot[l] = at[l].vertex;
+    any = true;
+  }
+  if (!any) return Status();
+  for (size_t v = 0; v < r->rootOfVertex.size(); ++v) {
+    const uint32_t l = r->leafOfVertex[v];
+    if (l != kNoLeaf && newRoot[l] != kNoLeaf) r->rootOfVertex[v] = newRoot[l];
+  }
+  indexLeaves(r);
+  return Status();
+}
 
 void indexLeaves(LeafRoots* r) {
   const size_t n = r->rootOfVertex.size();
@@ -142,11 +167,12 @@ Status computeLeafRoots(const VegetationModel& m, const std::vector<uint8_t>& fo
   out->rootOfVertex = std::move(parent);
   report(work);
   indexLeaves(out);
+  if (o.attachRoots) CANOPY_TRY(rootAtAttachments(m, foliage, out));
   return Status();
 }
 
 uint64_t leafRootKey(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRootOptions& o) {
-  uint64_t h = 0x6a09e667f3bcc909ull ^ (o.weldPositions ? 1 : 2);
+  uint64_t h = 0x6a09e667f3bcc909ull ^ (o.weldPositions ? 1 : 2) ^ (o.attachRoots ? 4 : 0);
   h = hashBytes(h, m.positions.data(), m.positions.size() * sizeof(glm::vec3));
   h = hashBytes(h, m.uvs.data(), m.uvs.size() * sizeof(glm::vec2));
   h = hashBytes(h, m.indices.data(), m.indices.size() * sizeof(uint32_t));

@@ -37,6 +37,9 @@ Status computeLeafRoots(const VegetationModel& model, const std::vector<uint8_t>
 
 // Fills leafOfVertex and leafRoot from rootOfVertex (used after loading a cache).
 void indexLeaves(LeafRoots* roots);
+// LeafRootOptions.attachRoots: each leaf that meets the rigid parts (render/leaf_attach.h) and
+// whose root does not, rooted at its vertex nearest them; leaves renumbered (indexLeaves).
+Status rootAtAttachments(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage, LeafRoots* roots);
 
 // A hash of everything the roots depend on (positions, uvs, indices, the foliage mask, options).
 uint64_t leafRootKey(const VegetationModel& model, const std::vector<uint8_t>& triangleIsFoliage,

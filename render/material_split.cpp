@@ -73,6 +73,11 @@ Status splitMaterials(const VegetationModel& m, const MaterialSplitOptions& o, M
       out->reason[i] = "OPAQUE in an all-opaque model";
     }
   }
+  // The roles rules (3) and (5) gave are hints: their materials are split part by part.
+  std::vector<uint8_t> byParts(n, 0);
+  for (size_t i = 0; i < n; ++i)
+    byParts[i] = out->role[i] == MaterialRole::Foliage && (m.materials[i].alphaMode != AlphaMode::Opaque || !anyCutout) &&
+                 out->reason[i] != "name looks like leaves";
   std::vector<int> forced(n, -1);
   for (int pass = 0; pass < 2; ++pass)
     for (const std::string& e : pass == 0 ? o.rigid : o.foliage) {
@@ -85,11 +90,14 @@ Status splitMaterials(const VegetationModel& m, const MaterialSplitOptions& o, M
       forced[idx] = want;
       out->role[idx] = MaterialRole(want);
       out->reason[idx] = "user override";
+      byParts[idx] = 0;
     }
-  for (uint32_t mat : m.triangleMaterial) {
+  for (uint32_t mat : m.triangleMaterial)
     if (mat >= n) return Status::error(m.path + ": a triangle names material " + std::to_string(mat) + " of " + std::to_string(n));
-    (out->role[mat] == MaterialRole::Rigid ? out->rigidTriangles : out->foliageTriangles)++;
-  }
+  std::vector<uint8_t> materialFoliage(n);
+  for (size_t i = 0; i < n; ++i) materialFoliage[i] = out->role[i] == MaterialRole::Foliage;
+  CANOPY_TRY(splitParts(m, materialFoliage, byParts, &out->triangleFoliage, &out->parts));
+  for (uint8_t f : out->triangleFoliage) (f ? out->foliageTriangles : out->rigidTriangles)++;
   return Status();
 }
 

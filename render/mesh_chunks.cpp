@@ -64,7 +64,17 @@ glm::vec3 decodeNormal(const gpu::LayerVertex& v) { return gpu::layerDecodeNorma
 
 glm::vec2 decodeUv(const gpu::LayerVertex& v) { return glm::unpackHalf2x16(v.uv); }
 
-uint32_t chunkLeaf(const gpu::LayerVertex& v) { return v.positionZLeaf >> 16; }
+uint32_t chunkLeaf(const gpu::LayerVertex& v) {
+  const uint32_t field = v.positionZLeaf >> 16;
+  return gpu::layerFieldIsLeaf(field) ? field : LAYER_CHUNK_NO_LEAF;
+}
+
+float chunkRigidFlexibility(const gpu::LayerVertex& v) { return gpu::layerRigidFlexibility(v.positionZLeaf >> 16); }
+
+uint32_t chunkRigidProxy(const gpu::LayerVertex& v) {
+  const uint32_t field = v.positionZLeaf >> 16;
+  return gpu::layerRigidHasProxy(field) ? field & LAYER_RIGID_FULL : LAYER_CHUNK_NO_LEAF;
+}
 
 Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
@@ -102,6 +112,12 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   out->roots.reserve(roots.leafCount() + roots.leafCount() / 32 + 65536);
   uint32_t stamp = 0;
   MeshChunk cur;
+  // The leaf a vertex brings into the chunk's root table: its own (foliage chunks) or its proxy's
+  // (rigid chunks: render/rigid_flex.h rigidProxies).
+  const bool proxies = o.rigidProxy && o.rigidProxy->size() == nv;
+  auto chunkLeafOf = [&](uint32_t v) -> uint32_t {
+    return cur.foliage ? roots.leafOfVertex[v] : proxies ? (*o.rigidProxy)[v] : kNoLeaf;
+  };
   auto open = [&](const TriangleRange& r, uint64_t firstTriangle) {
     ++stamp;
     cur = MeshChunk{};
@@ -127,7 +143,16 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     cur.vertexCount = uint32_t(chunkVertices.size());
     for (uint32_t v : chunkVertices) {
       const glm::vec3 q = glm::clamp(glm::round((m.positions[v] - lo) * inv), glm::vec3(0.0f), glm::vec3(65535.0f));
-      const uint32_t leaf = roots.leafOfVertex[v] == kNoLeaf ? LAYER_CHUNK_NO_LEAF : lLocal.find(roots.leafOfVertex[v], stamp);
+      // A rigid chunk's vertices carry their proxy leaf or their flexibility, not a leaf (a vertex a
+      // leaf shares with the trunk is drawn there as trunk).
+      uint32_t leaf = LAYER_CHUNK_NO_LEAF;
+      if (cur.foliage) {
+        if (roots.leafOfVertex[v] != kNoLeaf) leaf = lLocal.find(roots.leafOfVertex[v], stamp);
+      } else if (chunkLeafOf(v) != kNoLeaf) {
+        leaf = LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY | lLocal.find(chunkLeafOf(v), stamp);
+      } else if (o.rigidFlexibility && o.rigidFlexibility->size() == nv) {
+        leaf = LAYER_CHUNK_RIGID | std::min<uint32_t>((*o.rigidFlexibility)[v], LAYER_RIGID_FULL);
+      }
       const glm::vec2 uv = m.uvs[v];
       if (!(std::abs(uv.x) <= 65504.0f && std::abs(uv.y) <= 65504.0f))
         return Status::error(modelName(m) + ": vertex " + std::to_string(v) + " has texture coordinate (" +
@@ -170,11 +195,11 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
         bool seen = vLocal.find(v, stamp) != kNoLeaf;
         for (int j = 0; j < k; ++j) seen = seen || corner(t, j) == v;
         newV += !seen;
-        const uint32_t leaf = roots.leafOfVertex[v];
+        const uint32_t leaf = chunkLeafOf(v);
         if (leaf != kNoLeaf && !seen && lLocal.find(leaf, stamp) == kNoLeaf) ++newL;  // over-counts a leaf new twice: harmless
       }
-      if (cur.triangleCount > 0 &&
-          (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
+      const uint32_t maxLeaves = cur.foliage ? kMaxChunkLeaves - 1 : LAYER_RIGID_FULL;
+      if (cur.triangleCount > 0 && (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > maxLeaves)) {
         CANOPY_TRY(close());
         open(r, t);
       }
@@ -185,7 +210,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
           local = uint32_t(chunkVertices.size());
           vLocal.insert(v, stamp, local);
           chunkVertices.push_back(v);
-          const uint32_t leaf = roots.leafOfVertex[v];
+          const uint32_t leaf = chunkLeafOf(v);
           if (leaf != kNoLeaf && lLocal.find(leaf, stamp) == kNoLeaf) {
             lLocal.insert(leaf, stamp, uint32_t(chunkLeaves.size()));
             chunkLeaves.push_back(leaf);

@@ -24,7 +24,9 @@
 namespace canopy {
 
 constexpr uint32_t kMaxChunkVertices = 65535;  // 16-bit indices
-constexpr uint32_t kMaxChunkLeaves = 65535;    // chunk-local leaf 0xffff = none (LAYER_CHUNK_NO_LEAF)
+// Chunk-local leaves below LAYER_CHUNK_RIGID: the field's values from it up are rigid vertices
+// (shared/layers.h); a chunk's 65535 vertices hold at most 21845 leaves anyway.
+constexpr uint32_t kMaxChunkLeaves = LAYER_CHUNK_RIGID;
 
 struct MeshChunk {
   uint32_t material = 0;
@@ -58,6 +60,13 @@ struct CompactMeshOptions {
   uint32_t maxChunkVertices = kMaxChunkVertices;  // 3..65535
   uint32_t rootAlignment = 1;  // chunk root blocks start at multiples of this many entries (>= 1)
   bool bend = false;           // also CompactMesh::bend (the model must have VegetationModel::bend)
+  // Per model vertex, how far a rigid vertex follows the foliage (0..LAYER_RIGID_FULL; render/rigid_flex.h),
+  // written into the leaf field of the rigid chunks' vertices; null or empty: LAYER_CHUNK_NO_LEAF (follows fully).
+  const std::vector<uint16_t>* rigidFlexibility = nullptr;
+  // Per model vertex, the leaf whose layer a rigid vertex follows (render/rigid_flex.h rigidProxies;
+  // kNoLeaf: its own depth's, by its flexibility); null or empty: none. Its root goes into the rigid
+  // chunk's root table (at most LAYER_RIGID_FULL leaves a rigid chunk).
+  const std::vector<uint32_t>* rigidProxy = nullptr;
 };
 
 // One draw range of the GPU order: `count` triangles from `first`, all of `material`.
@@ -80,6 +89,8 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
 glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v);
 glm::vec3 decodeNormal(const gpu::LayerVertex& v);
 glm::vec2 decodeUv(const gpu::LayerVertex& v);
-uint32_t chunkLeaf(const gpu::LayerVertex& v);  // chunk-local leaf, LAYER_CHUNK_NO_LEAF for none
+uint32_t chunkLeaf(const gpu::LayerVertex& v);  // chunk-local leaf, LAYER_CHUNK_NO_LEAF for none (a rigid vertex)
+float chunkRigidFlexibility(const gpu::LayerVertex& v);  // a rigid vertex's flexibility, 0..1 (1 for a leaf's)
+uint32_t chunkRigidProxy(const gpu::LayerVertex& v);  // a rigid vertex's proxy leaf in the chunk's root table, or LAYER_CHUNK_NO_LEAF
 
 }  // namespace canopy

@@ -5,7 +5,7 @@
 
 namespace canopy {
 
-Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out) {
+Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out, std::vector<uint32_t>* trianglePlant) {
   *out = Plants{};
   const size_t nt = m.triangleCount();
   const bool given = !m.trianglePlant.empty() && m.trianglePlant.size() == nt;
@@ -79,6 +79,13 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out)
   }
   for (uint32_t& p : out->leafPlant)
     if (p == kNoPlant) p = 0;
+  if (trianglePlant) {
+    trianglePlant->assign(nt, kNoPlant);
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t g = plantOf(t);
+      (*trianglePlant)[t] = g == kNoPlant ? kNoPlant : dense[find(g)];
+    }
+  }
   return Status();
 }
 

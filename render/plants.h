@@ -21,6 +21,9 @@ struct Plants {
 // Groups the triangles by VegetationModel::trianglePlant (empty, or of another size: one plant, the
 // whole model), merging plants whose bounds overlap in x and z when the model asks for it; a leaf
 // takes the plant of its root vertex's first triangle. Plants without leaves are dropped.
-Status findPlants(const VegetationModel& model, const LeafRoots& roots, Plants* out);
+// `trianglePlant` (optional): per triangle its plant in that numbering, kNoPlant for a triangle of no
+// plant or of a group without leaves (a rock, the ground).
+Status findPlants(const VegetationModel& model, const LeafRoots& roots, Plants* out,
+                  std::vector<uint32_t>* trianglePlant = nullptr);
 
 }  // namespace canopy

@@ -179,7 +179,8 @@ void planSpreadItems(ResliceScheduler& r, const ResliceParts& p) {
   sp.items = cut ? sp.impostors.parts : std::vector<ChunkPart>{};
   for (uint32_t c = 0; c < p.mesh.chunks.size(); ++c) {
     const MeshChunk& mc = p.mesh.chunks[c];
-    if ((!cut || !mc.foliage) && mc.triangleCount) sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
+    // Rigid chunks only into a background (drawn every frame otherwise: render/rigid_follow.h).
+    if ((mc.foliage ? !cut : drawsBackground(p.mesh, p.settings)) && mc.triangleCount) sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
   }
 }
 

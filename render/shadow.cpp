@@ -201,6 +201,7 @@ Status recordShadow(ShadowCaster& sc, const ShadowSources& src, VkCommandBuffer 
   sc.shadowFrame = gpu::ShadowFrame{};
   sc.shadowFrame.lightViewProj = light;
   sc.shadowFrame.displace = src.displaced && src.dynamics->current.layerCount > 0 ? 1u : 0u;
+  sc.shadowFrame.displaceRigid = rigidFollows(lv) ? 1u : 0u;
   sc.runs = sc.drawNow ? visibleInstanceRuns(lv.instances, lv.mesh.species, light) : std::vector<InstanceRun>{};
   ShadowGraph* graph = nullptr;
   for (ShadowGraph& g : sc.graphs)

@@ -5,6 +5,8 @@
 
 #include <canopy/canopy_params.h>
 
+#include "shared/layers.h"
+
 namespace canopy {
 
 Status checkSpecies(const std::vector<SpeciesModel>& species) {
@@ -82,9 +84,25 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     // The parts, renumbered past the earlier species'.
     append(out->split.role, p.split.role);
     append(out->split.reason, p.split.reason);
+    for (PartReport r : p.split.parts) {
+      r.material += materialBase;
+      out->split.parts.push_back(std::move(r));
+    }
     out->split.rigidTriangles += p.split.rigidTriangles;
     out->split.foliageTriangles += p.split.foliageTriangles;
     append(out->foliage, p.foliage);
+    if (!p.rigidFlex.empty() || !out->rigidFlex.empty()) {
+      out->rigidFlex.resize(vertexBase, uint16_t(LAYER_RIGID_FULL));
+      if (p.rigidFlex.size() == m.positions.size()) append(out->rigidFlex, p.rigidFlex);
+      else out->rigidFlex.resize(vertexBase + m.positions.size(), uint16_t(LAYER_RIGID_FULL));
+    }
+    if (!p.rigidProxy.empty() || !out->rigidProxy.empty()) {
+      out->rigidProxy.resize(vertexBase, kNoLeaf);
+      if (p.rigidProxy.size() == m.positions.size())
+        for (uint32_t l : p.rigidProxy) out->rigidProxy.push_back(l == kNoLeaf ? kNoLeaf : l + leafBase);
+      else
+        out->rigidProxy.resize(vertexBase + m.positions.size(), kNoLeaf);
+    }
     for (uint32_t l : p.roots.leafOfVertex) out->roots.leafOfVertex.push_back(l == kNoLeaf ? kNoLeaf : l + leafBase);
     for (uint32_t v : p.roots.leafRoot) out->roots.leafRoot.push_back(v + vertexBase);
     for (uint32_t pl : p.plants.leafPlant) out->plants.leafPlant.push_back(pl == kNoPlant ? kNoPlant : pl + plantBase);

@@ -54,6 +54,10 @@ struct SpeciesParts {
   std::vector<uint8_t> foliage;  // per triangle
   LeafRoots roots;               // leafOfVertex and leafRoot (rootOfVertex dropped)
   Plants plants;
+  // Per vertex, how far a rigid vertex follows the foliage (render/rigid_flex.h); empty: fully.
+  std::vector<uint16_t> rigidFlex;
+  // Per vertex, the leaf whose layer a rigid vertex follows (render/rigid_flex.h rigidProxies); empty: none.
+  std::vector<uint32_t> rigidProxy;
   BoxHierarchy boxes;            // with impostors: its foliage boxes (render/impostors.h buildFoliageBoxes)
   std::vector<uint32_t> speciesBoxes;  // merged: where each species' boxes start, then the end
 };

@@ -57,7 +57,7 @@ LayerInstance thisInstance() {
 }
 vec3 placed(vec3 p) { return (inInstanceModel * vec4(p, 1.0)).xyz; }
 vec3 worldPosition() { return placed(vertexPosition()); }
-bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
+bool hasLeaf() { return layerFieldIsLeaf(inPositionLeaf.w); }
 
 // The layer of this vertex's triangle. Every vertex of a leaf reads the same root (a leaf split
 // over chunks has the same root in each chunk's table), so a leaf's triangles all agree and no leaf
@@ -65,6 +65,14 @@ bool hasLeaf() { return inPositionLeaf.w != LAYER_CHUNK_NO_LEAF; }
 uint triangleLayer() {
   vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && hasLeaf()) ? leafRoot[inPositionLeaf.w].position : vertexPosition();
   return layerOfDepth(f, viewDepth(placed(root)));
+}
+
+// The layer a rigid vertex follows (docs/design.md "Rigid parts in wind"): that of the leaf it
+// carries (its root's depth, as the leaf's own vertices take it), else its own depth's.
+uint rigidLayer(vec3 world) {
+  uint field = inPositionLeaf.w;
+  vec3 at = layerRigidHasProxy(field) ? placed(leafRoot[field & LAYER_RIGID_FULL].position) : world;
+  return layerOfDepth(f, viewDepth(at));
 }
 
 void emitVertex() {

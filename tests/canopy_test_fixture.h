@@ -104,11 +104,15 @@ struct Host {
   }
 };
 
+// The façade tests compare frames with the CPU reference composite (render/composite_reference.h),
+// which composites the layers over the background image: the rigid parts are that still background
+// here (RigidMotion::Still); drawn every frame with the foliage: tests/rigid_motion_test.cpp.
 inline CanopyDesc smallDesc(uint32_t w, uint32_t h, VkFormat color) {
   CanopyDesc d;
   d.width = w;
   d.height = h;
   d.colorFormat = color;
+  d.params.layers.rigidMotion = RigidMotion::Still;
   return d;
 }
 

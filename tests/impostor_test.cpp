@@ -278,6 +278,7 @@ Status createSwitchLayers(Device& dev, SwitchScene& sc, uint32_t w, uint32_t h, 
                           float rebuildBudgetMs = 0.0f, uint32_t fixedSliceTriangles = 0) {
   LayeredVegetationDesc d;
   d.settings.rebuildBudgetMs = rebuildBudgetMs;
+  d.settings.rigidMotion = RigidMotion::Still;  // the rigid chunks in the slices, as the background
   d.fixedSliceTriangles = fixedSliceTriangles;
   d.impostors.views = views;
   d.width = w;

@@ -58,6 +58,7 @@ TEST_F(LayersTest, StreamedMeshEqualsResidentMeshWithinTheBudget) {
       d.height = k.height;
       ASSERT_TRUE(parseLayerLayout(k.layout, &d.settings.layout).ok());
       d.settings.draw = mode;
+      d.settings.rigidMotion = RigidMotion::Still;  // a streamed mesh draws its background: the resident one too
       d.maxChunkVertices = k.chunkVertices;
       // The resident reference, with both layer sets (what the budget plans for).
       LayeredVegetationDesc rd = d;

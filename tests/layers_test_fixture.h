@@ -104,6 +104,8 @@ inline LayeredVegetationDesc smallDesc(const char* layout = "5(3-1-1)") {
   d.width = kW;
   d.height = kH;
   d.writeIds = true;
+  // The layers' own background (these tests read it); rigid parts drawn every frame: RigidMotionTest.
+  d.settings.rigidMotion = RigidMotion::Still;
   EXPECT_TRUE(parseLayerLayout(layout, &d.settings.layout).ok());
   return d;
 }

@@ -13,6 +13,7 @@
 #include "render/gltf_loader.h"
 #include "tools/gltf_writer.h"
 #include "render/leaf_roots.h"
+#include "render/leaf_attach.h"
 #include "render/material_split.h"
 #include "tools/scene_generator.h"
 
@@ -109,7 +110,19 @@ TEST_P(SceneTest, MaterialSplitLeavesFacesAndDeterminism) {
     LeafRoots roots;
     ASSERT_TRUE(computeLeafRoots(m, isFoliage, {}, &roots).ok());
     EXPECT_EQ(roots.leafCount(), st.leaves);
-    // The root of each leaf is at its attachment: uv (0, 0).
+    // The root of each leaf is at its attachment: uv (0, 0), the paper's smallest (u, v), unless
+    // that lies farther than the attachment reach from every rigid triangle and another of the
+    // leaf's vertices does not (a card on a twig too fine to be drawn): then that vertex
+    // (LeafRootOptions.attachRoots; docs/design.md "Rigid parts in wind").
+    const RigidGrid grid = buildRigidGrid(m, isFoliage, 0.0f);
+    for (uint32_t r : roots.leafRoot) {
+      if (m.uvs[r] == glm::vec2(0.0f)) continue;
+      LeafAttachment at;
+      ASSERT_TRUE(nearestRigidPoint(grid, m.positions[r], &at)) << "a leaf rooted off (0, 0) meets a branch there";
+    }
+    LeafRootOptions paper;
+    paper.attachRoots = false;
+    ASSERT_TRUE(computeLeafRoots(m, isFoliage, paper, &roots).ok());
     for (uint32_t r : roots.leafRoot) ASSERT_EQ(m.uvs[r], glm::vec2(0.0f));
   }
 }

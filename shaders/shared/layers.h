@@ -112,13 +112,24 @@ CANOPY_SIZE_CHECK(LayerFadePush, 16)
 
 // A chunk-local leaf index that means "no leaf" (rigid parts).
 #define LAYER_CHUNK_NO_LEAF 0xffffu
+// The chunk-local leaf field of a rigid vertex (docs/design.md "Rigid parts in wind"): this bit, and
+// - without LAYER_CHUNK_RIGID_PROXY: in the 14 bits below, how far the vertex follows the foliage
+//   layer of its own depth, 0 (the trunk's base: still) to LAYER_RIGID_FULL (a branch in the crown);
+// - with it: the index into the chunk's root table of a leaf that grows from this vertex's triangle,
+//   whose layer the vertex follows fully (so the branch moves with the leaves it carries, at their
+//   layer, not at the slab its own depth falls in).
+// A chunk holds at most 65535 vertices and a leaf at least one triangle, so leaf indices stay below
+// LAYER_CHUNK_RIGID; LAYER_CHUNK_NO_LEAF reads as a rigid vertex without a leaf that follows fully.
+#define LAYER_CHUNK_RIGID 0x8000u
+#define LAYER_CHUNK_RIGID_PROXY 0x4000u
+#define LAYER_RIGID_FULL 0x3fffu
 
 // One vertex of the compact GPU mesh (issue 16; vertex attributes, not a buffer block; the C++ side
 // static_asserts the offsets the pipeline declares). 16 bytes, against 28 for float positions,
 // snorm8 normals, float UVs and a 32-bit leaf index plus a global 16-byte root per leaf.
 struct LayerVertex {
   uint positionXY;   // x | y << 16: position quantised to the chunk's bounds (R16G16B16A16_UINT)
-  uint positionZLeaf;// z | leaf << 16: leaf = index into the chunk's root table, LAYER_CHUNK_NO_LEAF
+  uint positionZLeaf;// z | leaf << 16: leaf = index into the chunk's root table, or LAYER_CHUNK_RIGID | its flexibility
   uint normal;       // octahedral unit normal as 2 x snorm16 (R16G16_SNORM)
   uint uv;           // texcoord 0 as 2 x half (R16G16_SFLOAT)
 };
@@ -175,6 +186,17 @@ CANOPY_INLINE vec3 lodLevelColor(uint level) {
 // s x layerTexelScale (the composite's two paths, its occupancy, the CPU reference).
 CANOPY_INLINE float layerTexelScale(uint halfResolution, uint layer) {
   return ((halfResolution >> layer) & 1u) != 0u ? 0.5f : 1.0f;
+}
+
+// Whether a vertex's chunk-local leaf field names a leaf, and a rigid vertex's flexibility in [0, 1].
+CANOPY_INLINE bool layerFieldIsLeaf(uint field) { return field < LAYER_CHUNK_RIGID; }
+CANOPY_INLINE bool layerRigidHasProxy(uint field) {
+  return field >= (LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY) && field != LAYER_CHUNK_NO_LEAF;
+}
+CANOPY_INLINE float layerRigidFlexibility(uint field) {
+  return field < LAYER_CHUNK_RIGID || field >= (LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY)
+             ? 1.0f
+             : float(field & LAYER_RIGID_FULL) / float(LAYER_RIGID_FULL);
 }
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {

@@ -11,7 +11,7 @@ CANOPY_NAMESPACE_BEGIN
 struct ShadowFrame {
   mat4 lightViewProj;  // world -> the light's Vulkan clip space (the host's: orthographic or perspective)
   uint displace;       // 1: leaves displaced by their layer's warp; 0: the still mesh
-  uint pad0;
+  uint displaceRigid;  // 1: rigid parts too, by their share (RigidMotion::FollowFoliage; shared/rigid.h)
   uint pad1;
   uint pad2;
 };

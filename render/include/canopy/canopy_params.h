@@ -135,6 +135,10 @@ struct MaterialSplitOptions {
 };
 struct LeafRootOptions {
   bool weldPositions = true;  // also join vertices with bit-identical positions into one leaf
+  // A leaf that meets the rigid parts (a vertex within 1 % of the model's size of a trunk or branch
+  // triangle) is rooted where it meets them, not at its smallest (u, v): it goes into the layer of
+  // the depth where it grows from its branch (docs/design.md "Rigid parts in wind"; false: the paper's).
+  bool attachRoots = true;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -316,6 +320,12 @@ CANOPY_PARAM_STRUCT(ImpostorDesc, CANOPY_IMPOSTOR_DESC)
 // III.C: the light-facing side's relief, its self-shadowing, Fresnel entry, Beer-Lambert through the
 // leaf's thickness), or the diffuse BTDF he contrasts it with.
 enum class TranslucencyModel { Habel, DiffuseBtdf };
+// How the rigid parts (trunks, branches) move (docs/design.md "Rigid parts in wind"): drawn every
+// frame, each vertex displaced as the foliage layer of its depth is, by a share that is 0 at the
+// plant's foot and 1 from its crown's base up, so the leaves stay on their branches and the trunk's
+// base stands (FollowFoliage); or drawn once per re-slice as the still background the paper
+// composites the layers over (Still; before 0.8, and for a streamed mesh).
+enum class RigidMotion { FollowFoliage, Still };
 #define CANOPY_LAYER_SETTINGS(X)                                                                                        \
   X(LayerLayout, layout, {}, None, 1, kMaxLayers, "layers", "default 5(3-1-1), at most CanopyDesc.maxLayers layers (checked as a whole)") \
   X(RegionSplit, regions, {}, Nested, 0, 0, "", "where the depth regions meet")                                        \
@@ -335,6 +345,7 @@ enum class TranslucencyModel { Habel, DiffuseBtdf };
   X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \
   X(TranslucencyModel, translucencyModel, TranslucencyModel::Habel, Enum, 0, 1, "Habel | DiffuseBtdf", "the unlit side's light (DiffuseBtdf: before 0.7)") \
   X(float, leafOpticalDepth, 0.3f, Closed, 0, 100, "", "Habel: optical depth through a leaf whose file gives no KHR_materials_volume")       \
+  X(RigidMotion, rigidMotion, RigidMotion::FollowFoliage, Enum, 0, 1, "FollowFoliage | Still", "trunks and branches move with the leaves they carry, drawn every frame (Still: a background drawn per re-slice, before 0.8)") \
   X(float, rebuildBudgetMs, 0.0f, Closed, 0, 1000, "ms", "work a frame of a spread re-slice; 0: re-slices at once")   \
   X(uint32_t, crossFadeFrames, 8, Closed, 1, 240, "frames", "a spread re-slice fades in over this many frames")       \
   X(ImpostorSettings, impostors, {}, Nested, 0, 0, "", "Lluch et al.'s impostors (a change re-slices)")

@@ -1,0 +1,92 @@
+#include "render/rigid_flex.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "render/leaf_attach.h"
+#include "shared/layers.h"
+
+namespace canopy {
+
+Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                        const std::vector<uint32_t>& trianglePlant, std::vector<uint16_t>* out) {
+  const size_t nt = m.triangleCount(), nv = m.positions.size();
+  if (foliage.size() != nt || trianglePlant.size() != nt || roots.leafOfVertex.size() != nv)
+    return Status::error("rigid flexibility: per-triangle or per-vertex arrays disagree with the model");
+  uint32_t plants = 0;
+  for (uint32_t p : trianglePlant)
+    if (p != kNoPlant) plants = std::max(plants, p + 1);
+  // Each plant's foot (its lowest point, rigid parts too) and its leaves' root heights.
+  std::vector<float> foot(plants, INFINITY);
+  std::vector<uint32_t> leafPlant(roots.leafCount(), kNoPlant);
+  for (size_t t = 0; t < nt; ++t) {
+    const uint32_t p = trianglePlant[t];
+    if (p == kNoPlant) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.indices[3 * t + size_t(k)];
+      foot[p] = std::min(foot[p], m.positions[v].y);
+      if (foliage[t] && roots.leafOfVertex[v] != kNoLeaf && leafPlant[roots.leafOfVertex[v]] == kNoPlant)
+        leafPlant[roots.leafOfVertex[v]] = p;
+    }
+  }
+  std::vector<std::vector<float>> rootHeights(plants);
+  for (uint32_t l = 0; l < roots.leafCount(); ++l)
+    if (leafPlant[l] != kNoPlant) rootHeights[leafPlant[l]].push_back(m.positions[roots.leafRoot[l]].y);
+  // The crown's base: the kCrownBaseQuantile of the roots' heights (nth_element: linear).
+  std::vector<float> crown(plants, -INFINITY);
+  for (uint32_t p = 0; p < plants; ++p) {
+    std::vector<float>& h = rootHeights[p];
+    if (h.empty()) continue;
+    const size_t k = std::min(h.size() - 1, size_t(std::floor(kCrownBaseQuantile * float(h.size()))));
+    std::nth_element(h.begin(), h.begin() + std::ptrdiff_t(k), h.end());
+    crown[p] = h[k];
+    std::vector<float>().swap(h);
+  }
+  out->assign(nv, uint16_t(LAYER_RIGID_FULL));
+  std::vector<uint8_t> done(nv, 0);
+  for (size_t t = 0; t < nt; ++t) {
+    if (foliage[t]) continue;
+    const uint32_t p = trianglePlant[t];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.indices[3 * t + size_t(k)];
+      if (done[v]) continue;
+      done[v] = 1;
+      float w = 0.0f;  // a rigid part of no plant with leaves: still
+      if (p != kNoPlant && std::isfinite(crown[p])) {
+        const float span = crown[p] - foot[p];
+        // Leaves from the foot up (a bush's stems): the rigid parts follow as the leaves do (eq. 7's
+        // R already stills the base); otherwise a smoothstep from the foot to the crown's base.
+        const float x = span > 1e-6f * std::max(std::abs(crown[p]), 1.0f) ? (m.positions[v].y - foot[p]) / span : 1.0f;
+        const float c = std::clamp(x, 0.0f, 1.0f);
+        w = c * c * (3.0f - 2.0f * c);
+      }
+      (*out)[v] = uint16_t(std::lround(w * float(LAYER_RIGID_FULL)));
+    }
+  }
+  return Status();
+}
+
+Status rigidProxies(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots, std::vector<uint32_t>* out) {
+  const size_t nv = m.positions.size();
+  if (foliage.size() != m.triangleCount() || roots.leafOfVertex.size() != nv)
+    return Status::error("rigid proxies: per-triangle or per-vertex arrays disagree with the model");
+  out->assign(nv, kNoLeaf);
+  const RigidGrid grid = buildRigidGrid(m, foliage, 0.0f);
+  if (grid.cells.empty()) return Status();
+  std::vector<float> best(nv, INFINITY);
+  for (uint32_t l = 0; l < roots.leafCount(); ++l) {
+    LeafAttachment at;
+    if (!nearestRigidPoint(grid, m.positions[roots.leafRoot[l]], &at)) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.indices[3 * size_t(at.triangle) + size_t(k)];
+      const float d = glm::length(m.positions[v] - at.rigidPoint);
+      if (d < best[v]) {
+        best[v] = d;
+        (*out)[v] = l;
+      }
+    }
+  }
+  return Status();
+}
+
+}  // namespace canopy

@@ -1,0 +1,36 @@
+#pragma once
+// How far each rigid vertex follows the foliage's displacement (docs/design.md "Rigid parts in
+// wind"), found once per model. The paper draws trunks and branches as a still background; a real
+// tree carries branches inside its crown, and those must move with the leaves they hold while the
+// trunk's base stands. A rigid vertex of a plant follows fully from the crown's base up (the height
+// most of the plant's leaves grow above) and not at all at the plant's foot, with a smoothstep
+// between, so the trunk bends like a clamped beam: still and level at the ground, joining the
+// crown's motion smoothly. Rigid parts of no plant with leaves (the ground, a rock) stay still.
+#include <cstdint>
+#include <vector>
+
+#include "engine/status.h"
+#include "render/leaf_roots.h"
+#include "render/model.h"
+
+namespace canopy {
+
+// The crown's base of a plant: this share of its leaves' roots lie below it (a few low leaves, a
+// sprig at the trunk's foot, do not pull the crown down to the ground).
+inline constexpr float kCrownBaseQuantile = 0.05f;
+
+// Per model vertex, 0 (still) .. LAYER_RIGID_FULL (follows the foliage) for the vertices of rigid
+// triangles (the others LAYER_RIGID_FULL, unused). `trianglePlant`: per triangle its plant
+// (findPlants), `foliage` per triangle, `roots` the leaves' roots. Up is the model's +y (glTF).
+Status rigidFlexibility(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                        const std::vector<uint32_t>& trianglePlant, std::vector<uint16_t>* out);
+
+// The leaves the rigid parts carry: for each leaf whose root lies within the attachment reach of a
+// rigid triangle (render/leaf_attach.h), that triangle's corners follow the leaf's layer (the depth
+// of its root, as the leaf does), so a branch and the leaves growing from it move as one even where
+// the two lie on either side of a slab's boundary. Per model vertex the leaf whose root is nearest
+// the corner's own attachment point among those of its triangles; kNoLeaf for the others.
+Status rigidProxies(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                    std::vector<uint32_t>* out);
+
+}  // namespace canopy

@@ -6,8 +6,9 @@
 //                   where the rigid point it grows from is drawn, less the same offset at rest
 //                   (pixels; p99 and max over leaves and frames)
 //   sway            the range of the horizontal centroid of the top third of the vegetation
-//   base            the share of the plant's bottom tenth's pixels that differ from the windless
-//                   frame (the trunk's base: still)
+//   base            the share of the plant's bottom tenth's rigid pixels (the trunk's base) that
+//                   differ from the windless frame, with the layers in false colour; the baseline
+//                   (which draws no false colour): of all its pixels there
 //   bare rigid      rigid pixels inside the crown farther than 3 px from any foliage pixel, with the
 //                   layers in false colour (CompositeDebugView::Layers), gale over still
 // The 2D method's gap is computed from the frame's own displacement (read back): a leaf's root is
@@ -49,7 +50,7 @@ struct PlantParts {
   std::vector<uint8_t> foliage;
   LeafRoots roots;
   std::vector<uint16_t> rigidFlex;
-  std::vector<uint32_t> rigidProxy;
+  std::vector<glm::vec3> layerRoots;  // per leaf, the position its layer is decided by
   std::vector<Attached> attached;
   uint32_t leaves = 0;
 };
@@ -64,7 +65,7 @@ Status plantParts(const VegetationModel& m, const CanopyDesc& desc, PlantParts* 
   CANOPY_TRY(findPlants(m, out->roots, &plants, &trianglePlant));
   if (split.rigidTriangles) {
     CANOPY_TRY(rigidFlexibility(m, out->foliage, out->roots, trianglePlant, &out->rigidFlex));
-    CANOPY_TRY(rigidProxies(m, out->foliage, out->roots, &out->rigidProxy));
+    CANOPY_TRY(leafLayerRoots(m, out->foliage, out->roots, &out->layerRoots));
   }
   out->leaves = out->roots.leafCount();
   const RigidGrid grid = buildRigidGrid(m, out->foliage, 0.0f);
@@ -137,9 +138,11 @@ Status readWarp(Device& d, CanopyContext* ctx, WarpFrame* out) {
 // The 2D method's gaps this frame, pixels (one per attached leaf).
 void gaps2D(const VegetationModel& m, const PlantParts& parts, const WarpFrame& f, bool follows, std::vector<double>* out) {
   for (const Attached& a : parts.attached) {
-    glm::vec2 pr, pg;
-    float zr, zg;
+    glm::vec2 pr, pg, pl;
+    float zr, zg, zl;
     if (!f.pixel(a.root, &pr, &zr) || !f.pixel(a.rigid, &pg, &zg)) continue;
+    // The leaf's layer: the depth of its layer root (the corner it grows from: render/leaf_attach.h).
+    if (!parts.layerRoots.empty() && f.pixel(parts.layerRoots[a.leaf], &pl, &zl)) zr = zl;
     const glm::vec2 leaf = f.shown(f.layerOf(zr), pr);
     glm::vec2 rigid = pg;
     if (follows) {
@@ -148,19 +151,16 @@ void gaps2D(const VegetationModel& m, const PlantParts& parts, const WarpFrame& 
       const glm::vec3 w = barycentric(a.rigid, m.positions[tri[0]], m.positions[tri[1]], m.positions[tri[2]]);
       rigid = glm::vec2(0.0f);
       for (int k = 0; k < 3; ++k) {
-        // A corner that carries a leaf follows that leaf's layer fully, the others their own
-        // depth's by their share (shared/layers.h, rigid_follow_draw.glsl).
-        const uint32_t proxy = parts.rigidProxy.empty() ? kNoLeaf : parts.rigidProxy[tri[k]];
-        const float share = proxy != kNoLeaf || parts.rigidFlex.empty() ? 1.0f : float(parts.rigidFlex[tri[k]]) / float(LAYER_RIGID_FULL);
-        glm::vec2 pk, pp;
-        float zk, zp = 0.0f;
+        // Each corner follows the layer of its own depth by its share (rigid_follow_draw.glsl).
+        const float share = parts.rigidFlex.empty() ? 1.0f : float(parts.rigidFlex[tri[k]]) / float(LAYER_RIGID_FULL);
+        glm::vec2 pk;
+        float zk;
         if (!f.pixel(m.positions[tri[k]], &pk, &zk)) continue;
-        if (proxy != kNoLeaf && f.pixel(m.positions[parts.roots.leafRoot[proxy]], &pp, &zp)) zk = zp;
         rigid += w[k] * (pk + share * (f.shown(f.layerOf(zk), pk) - pk));
       }
     }
     out->push_back(glm::length((leaf - rigid) - (pr - pg)));
-    if (std::getenv("CANOPY_DEBUG_GAP") && out->back() > 3.0) {
+    if (std::getenv("CANOPY_DEBUG_GAP") && out->back() > std::atof(std::getenv("CANOPY_DEBUG_GAP"))) {
       const uint32_t* tri = &m.indices[3 * size_t(a.triangle)];
       std::fprintf(stderr, "gap %.2f: root layer %u p (%.1f %.1f) z %.3f shown d (%.2f %.2f); rigid p (%.1f %.1f) z %.3f drawn d (%.2f %.2f)", out->back(),
                    f.layerOf(zr), pr.x, pr.y, zr, (leaf - pr).x, (leaf - pr).y, pg.x, pg.y, zg, (rigid - pg).x, (rigid - pg).y);
@@ -253,13 +253,14 @@ double centroidX(const Pixels& P, const std::vector<uint8_t>& px, const Rows& r)
       }
   return n > 0 ? sum / n : 0.0;
 }
-// The share of the base rows' vegetation pixels (in either frame) that differ by more than 8/255.
-double baseChange(const Pixels& P, const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, const Rows& r) {
+// The share of the base rows' vegetation pixels (in either frame) that differ by more than 8/255;
+// `rigidOnly`: of the still frame's rigid pixels (layers in false colour), the trunk's base.
+double baseChange(const Pixels& P, const std::vector<uint8_t>& a, const std::vector<uint8_t>& b, const Rows& r, bool rigidOnly = false) {
   double n = 0, changed = 0;
   for (uint32_t y = r.baseBegin; y < r.bottom; ++y)
     for (uint32_t x = 0; x < P.w; ++x) {
       const size_t i = size_t(y) * P.w + x;
-      if (!P.vegetation(a, i) && !P.vegetation(b, i)) continue;
+      if (rigidOnly ? !P.vegetation(b, i) || Pixels::falseColour(b, i) : !P.vegetation(a, i) && !P.vegetation(b, i)) continue;
       n += 1;
       for (int c = 0; c < 3; ++c)
         if (std::abs(int(a[4 * i + size_t(c)]) - int(b[4 * i + size_t(c)])) > 8) {
@@ -352,6 +353,7 @@ struct PlantRun {
   std::string plant, wind;
   float speed = 0;
   uint32_t leaves = 0, attached = 0;
+  float height = 0, radius = 0;  // the model's bounds: height, half horizontal diagonal (the baseline's fallback trunk and crown)
   MethodResult twoD, perVertex;
   double bareStill = 0;
   double bareRatio() const { return bareStill > 0 ? twoD.bare / bareStill : (twoD.bare > 0 ? INFINITY : 1.0); }
@@ -390,6 +392,56 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
   desc.roots.attachRoots = o.attachRoots;
   PlantParts parts;
   CANOPY_TRY(plantParts(model, desc, &parts));
+  if (std::getenv("CANOPY_SHAPE_ONLY")) {  // TEMP
+    std::vector<glm::vec3> lo(parts.leaves, glm::vec3(INFINITY)), hi(parts.leaves, glm::vec3(-INFINITY));
+    std::vector<double> tris(parts.leaves, 0);
+    for (size_t t = 0; t < model.triangleCount(); ++t) {
+      if (!parts.foliage[t]) continue;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = model.indices[3 * t + k], l = parts.roots.leafOfVertex[v];
+        if (l == kNoLeaf) continue;
+        lo[l] = glm::min(lo[l], model.positions[v]); hi[l] = glm::max(hi[l], model.positions[v]);
+        if (k == 0) tris[l] += 1;
+      }
+    }
+    double sum = 0, w = 0, fol = 0;
+    for (uint32_t l = 0; l < parts.leaves; ++l) { sum += tris[l] * glm::length(hi[l] - lo[l]); w += tris[l]; }
+    for (uint8_t f : parts.foliage) fol += f;
+    const float H = model.boundsMax.y - model.boundsMin.y;
+    {
+      // The per-vertex fallback's lever over the 2D method's, foliage vertices of the top third.
+      const glm::vec3 c = 0.5f * (model.boundsMin + model.boundsMax);
+      const float R = std::max(0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z)), 1e-6f);
+      const float yTop = model.boundsMax.y, y0 = model.boundsMin.y;
+      double pv = 0, twoD = 0, trunkS = 0, branchS = 0, leafS = 0;
+      std::vector<uint8_t> seen(model.positions.size(), 0);
+      for (size_t t = 0; t < model.triangleCount(); ++t) {
+        if (!parts.foliage[t]) continue;
+        for (int k = 0; k < 3; ++k) {
+          const uint32_t v = model.indices[3 * t + k];
+          if (seen[v]) continue;
+          seen[v] = 1;
+          const glm::vec3 p = model.positions[v];
+          if (p.y < yTop - (yTop - y0) / 3.0f) continue;
+          const uint32_t l = parts.roots.leafOfVertex[v];
+          const glm::vec3 r = l == kNoLeaf ? p : model.positions[parts.roots.leafRoot[l]];
+          const float h = p.y - y0;
+          const float xr = std::min(glm::length(glm::vec2(r.x - c.x, r.z - c.z)) / R, 1.0f);
+          const glm::vec3 pivot(c.x, r.y, c.z);
+          const double trunk = 0.045 * std::pow(h / H, 1.5) * h, branch = 0.079 * std::pow(xr, 1.5) * glm::length(p - pivot),
+                       leaf = 0.3375 * glm::length(p - r);
+          trunkS += trunk; branchS += branch; leafS += leaf;
+          pv += trunk + branch + leaf;
+          twoD += h;
+        }
+      }
+      std::printf("LEVER %s pv/2d %.4f (trunk %.4f branch %.4f leaf %.4f)\n", name.c_str(), pv / std::max(twoD, 1e-9), trunkS / twoD, branchS / twoD, leafS / twoD);
+    }
+    std::printf("SHAPE %s H %.3f R %.3f leaves %u leafsize/H %.3f foliageShare %.2f\n", name.c_str(), H,
+                0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z)), parts.leaves,
+                w > 0 ? sum / w / H : 0.0, fol / double(parts.foliage.size()));
+    return Status();
+  }
   Pixels P;
   P.w = o.width;
   P.h = o.height;
@@ -406,9 +458,11 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
   }));
   const Rows rows = rowsOf(P, still[0]);
   double bareStill = 0;
+  std::vector<std::vector<uint8_t>> stillLayers(o.frames);
   calm.debug = CompositeDebugView::Layers;
-  CANOPY_TRY(runFrames(d, calm, model, [&](uint32_t, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+  CANOPY_TRY(runFrames(d, calm, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
     bareStill += bareRigid(P, px);
+    stillLayers[i] = px;
     return Status();
   }));
   for (const std::string& wind : po.winds) {
@@ -417,6 +471,8 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
     r.wind = wind;
     r.speed = WorldWind{}.speed * (wind == "gale" ? po.galeFactor : 1.0f);
     r.leaves = parts.leaves;
+    r.height = model.boundsMax.y - model.boundsMin.y;
+    r.radius = 0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z));
     r.attached = uint32_t(parts.attached.size());
     r.bareStill = bareStill;
     for (AnimationMode method : {AnimationMode::Layers2D, AnimationMode::PerVertex}) {
@@ -426,7 +482,9 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
       MethodResult& m = method == AnimationMode::Layers2D ? r.twoD : r.perVertex;
       CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext* ctx, const glm::mat4& vp) {
         m.centroid.push_back(centroidX(P, px, rows));
-        m.base.push_back(baseChange(P, px, still[i], rows));
+        // The baseline's base: every pixel (it draws no false colours); the 2D method's: its rigid
+        // pixels, from the false-colour frames below.
+        if (method == AnimationMode::PerVertex) m.base.push_back(baseChange(P, px, still[i], rows));
         if (method == AnimationMode::PerVertex) {
           gapsPerVertex(model, parts, ctx, vp, glm::vec2(o.width, o.height), &m.gaps);
           return Status();
@@ -438,8 +496,9 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
       }));
       if (method == AnimationMode::Layers2D) {
         run.debug = CompositeDebugView::Layers;
-        CANOPY_TRY(runFrames(d, run, model, [&](uint32_t, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+        CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
           m.bare += bareRigid(P, px);
+          m.base.push_back(baseChange(P, px, stillLayers[i], rows, true));
           return Status();
         }));
       }
@@ -460,7 +519,7 @@ void writeJson(const std::string& path, const std::vector<PlantRun>& runs, const
   for (size_t i = 0; i < runs.size(); ++i) {
     const PlantRun& r = runs[i];
     f << " {\"plant\": \"" << r.plant << "\", \"wind\": \"" << r.wind << "\", \"speed_mps\": " << r.speed << ", \"leaves\": " << r.leaves
-      << ", \"attached\": " << r.attached;
+      << ", \"attached\": " << r.attached << ", \"height\": " << r.height << ", \"radius\": " << r.radius;
     for (const auto& [key, m] : {std::pair<const char*, const MethodResult*>{"2d", &r.twoD}, {"pv", &r.perVertex}})
       f << ", \"" << key << "\": {\"gap_p99_px\": " << m->gapP99() << ", \"gap_max_px\": " << m->gapMax() << ", \"sway_px\": " << m->sway()
         << ", \"base_changed_max\": " << m->baseMax() << "}";
@@ -489,8 +548,8 @@ void writeTable(const std::string& path, const std::vector<PlantRun>& runs) {
 int runPlantsBench(Device& d, const PlantsOptions& po) {
   std::printf("\nReal plants in wind (%ux%u, %u frames after a 2 s warm-up, canopy-demo's camera; %s). Gap: a leaf's root against the\n"
               "rigid point it grows from on screen, less the same at rest (px); sway: range of the top third's centroid (px); base: share\n"
-              "of the bottom tenth's pixels changed against the windless frame (largest frame); bare: rigid pixels in the crown > 3 px\n"
-              "from foliage, gale / still.\n",
+              "of the bottom tenth's rigid pixels changed against the windless frame (largest frame; per-vertex: all its pixels); bare:\n"
+              "rigid pixels in the crown > 3 px from foliage, gale / still.\n",
               po.width, po.height, po.frames, po.before ? "before issue 77: still background, paper roots" : "as shipped");
   std::printf("%-26s %-6s %-12s | %-13s | %-13s | %-17s | %-11s | %s\n", "plant", "wind", "attached", "2D gap p99/max",
               "pv gap p99/max", "sway 2D/pv ratio", "base 2D/pv", "bare");

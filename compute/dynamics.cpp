@@ -98,6 +98,12 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
   f.newestSlot = d.newestSlot;
   f.halfResolution = d.halfResolution;
   const float last = d.layers.back().distance;
+  // With the world wind, eq. 7's h is the vegetation's height for every layer (the tallest layer's
+  // from the shared root line): eq. 6 is then l x sway x V below it whatever the layer (r = 1), and a
+  // trunk reaching above the highest leaf of its own layer bends on, not flattened at that leaf's
+  // row (docs/design.md "Rigid parts in wind"). Per-plant rects carry the plant's own height.
+  float tallest = 1.0f;
+  for (const DynamicsLayer& dl : d.layers) tallest = std::max(tallest, dl.height);
   // Eq. 4's L_i in the simulation's domain units: one domain unit is one tile of the plane.
   const float distanceScale = p.delayUnits == DelayDistanceUnits::Domain ? 1.0f / tileSize : 1.0f;
   for (uint32_t i = 0; i < n; ++i) {
@@ -114,7 +120,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     const float m = d.heightSway > 0.0f ? 0.0f : p.depthAttenuation;
     l.attenuation = 1.0f - m * ratio * ratio;
     l.rootLineY = d.layers[i].rootLineY;
-    l.height = std::max(d.layers[i].height, 1.0f);
+    l.height = d.heightSway > 0.0f ? tallest : std::max(d.layers[i].height, 1.0f);
   }
   // Per-plant roots: the layers' plant rects in one table after the frame block.
   if (plantRects) {
@@ -125,7 +131,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     // response differs from the method's, the layer's root line then standing.
     bool response = false;
     for (const DynamicsLayer& dl : d.layers)
-      for (const glm::vec2& r : dl.plantResponse) response = response || r != glm::vec2(1.0f);
+      for (const glm::vec3& r : dl.plantResponse) response = response || glm::vec2(r) != glm::vec2(1.0f) || (d.heightSway > 0.0f && r.z != 1.0f);
     const float ownRoot = p.roots == RootMode::PerPlant ? 1.0f : 0.0f;
     if ((p.roots == RootMode::PerPlant || response) && total <= ANIM_MAX_PLANT_RECTS)
       for (uint32_t i = 0; i < n; ++i) {
@@ -133,7 +139,9 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
         f.layers[i].firstPlant = uint32_t(plantRects->size() / 2);
         f.layers[i].plantCount = uint32_t(dl.plants.size());
         for (size_t j = 0; j < dl.plants.size(); ++j) {
-          const glm::vec2 r = j < dl.plantResponse.size() ? dl.plantResponse[j] : glm::vec2(1.0f);
+          const glm::vec3 pr = j < dl.plantResponse.size() ? dl.plantResponse[j] : glm::vec3(1.0f);
+          // With the world wind a plant's flexibility carries its sway scale (render/plant_sway.h).
+          const glm::vec2 r(pr.x * (d.heightSway > 0.0f ? pr.z : 1.0f), pr.y);
           plantRects->push_back(dl.plants[j]);
           const float h = j < dl.plantHeight.size() ? dl.plantHeight[j] : 0.0f;
           plantRects->push_back(glm::vec4(r, ownRoot, h));

@@ -33,7 +33,9 @@ struct DynamicsLayer {
   float rootLineY = 0;  // pixels, y down
   float height = 1;     // pixels
   std::vector<glm::vec4> plants;  // per-plant roots: rects (x lo, x hi, top, root row), LayerInfo::plants
-  std::vector<glm::vec2> plantResponse;  // per rect: its species' flexibility and response speed; empty: 1, 1
+  // Per rect: its species' flexibility and response speed, and the plant's sway scale (its lever
+  // against the per-vertex baseline's, applied with the world wind: heightSway > 0); empty: 1, 1, 1.
+  std::vector<glm::vec3> plantResponse;
   std::vector<float> plantHeight;        // per rect: eq. 7's h, pixels (LayerInfo::plantHeight); empty or 0: the rect's rows
 };
 

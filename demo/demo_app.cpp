@@ -248,6 +248,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.layers.ambient = o.ambient;
   p.layers.leafRefractiveIndex = o.leafIor;
   p.layers.leafRoughness = o.leafRoughness;
+  p.layers.overrideLeafRoughness = o.overrideLeafRoughness;
   p.layers.leafTransmission = o.leafTransmission;
   p.layers.translucency = o.translucency;
   p.layers.rigidMotion = o.rigidMotion;
@@ -259,6 +260,7 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.composite.bilinear = o.bilinear;
   p.composite.sharpness = o.sharpness;
   p.dynamics.maxStretch = o.maxStretch;
+  if (getenv("CANOPY_VD")) p.dynamics.vd = float(atof(getenv("CANOPY_VD")));  // TEMP experiment
   p.composite.debugVelocityScale = std::max(0.05f, domainWindSpeed(o));
   return p;
 }

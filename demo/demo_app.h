@@ -80,6 +80,7 @@ struct Options {
   float ambient = LayerSettings{}.ambient;
   float leafIor = LayerSettings{}.leafRefractiveIndex;
   float leafRoughness = LayerSettings{}.leafRoughness;
+  bool overrideLeafRoughness = false;  // --leaf-roughness given: it overrides the materials' own
   float leafTransmission = LayerSettings{}.leafTransmission;
   bool translucency = true;
   bool bilinear = true;                // CompositeParams.bilinear (--nearest: false)

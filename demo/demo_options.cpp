@@ -359,6 +359,8 @@ int parseOptions(int argc, char** argv, Options* o, std::string* err) {
     if (num) {
       if (const int rc = number(num->low(), num->high(), &(o->*(num->field)), num->what)) return rc;
       if (num->param && std::strncmp(num->param, "WindParams.", 11) == 0) o->planeSides = true;
+      // Given, the roughness overrides every material's own (LayerSettings.overrideLeafRoughness).
+      if (num->field == &Options::leafRoughness) o->overrideLeafRoughness = true;
       if (num->field == &Options::halfResolutionLayers && o->halfResolutionLayers != std::floor(o->halfResolutionLayers))
         return bad("needs a whole number of layers");
       if (num->field == &Options::depthSearchSteps && o->depthSearchSteps != std::floor(o->depthSearchSteps))

@@ -186,7 +186,8 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
 
 // The extensions the loader reads (a file may require these and no others).
 constexpr const char* kImplementedExtensions[] = {"EXT_mesh_gpu_instancing", "KHR_materials_diffuse_transmission",
-                                                  "KHR_materials_transmission", "KHR_materials_volume", "KHR_mesh_quantization"};
+                                                  "KHR_materials_specular", "KHR_materials_transmission", "KHR_materials_volume",
+                                                  "KHR_mesh_quantization"};
 
 // The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded, no
 // required extension the loader lacks.
@@ -516,9 +517,10 @@ struct ImageSlots {
 };
 
 // A texture of material `what` (texture index `tex`, coordinate set `texCoord`) as a slot of
-// out->images, decoded once per image and colour space (`linear`: normal maps; else sRGB).
+// out->images, decoded once per image and colour space (`linear`: normal maps; else sRGB). With
+// `only`, decoded into it instead and not kept (a texture read once on the CPU: its slot stays -1).
 Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, int texCoord, const char* role,
-                     bool linear, int32_t* slot) {
+                     bool linear, int32_t* slot, ModelImage* only = nullptr) {
   const tinygltf::Model& m = L.m;
   const GltfLoadOptions& opt = L.opt;
   VegetationModel* out = L.out;
@@ -535,7 +537,7 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
     out->warnings.push_back(what + ": " + role + " uses TEXCOORD_" + std::to_string(texCoord) + "; TEXCOORD_0 is used");
   if (!opt.decodeImages) return Status();
   std::vector<int32_t>& slots = linear ? S.linear : S.srgb;
-  if (slots[size_t(img)] < 0) {
+  if (slots[size_t(img)] < 0 || only) {
     const std::string iw = "images[" + std::to_string(img) + "]";
     const tinygltf::Image& im = m.images[size_t(img)];
     const unsigned char* data = nullptr;
@@ -569,6 +571,10 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
     mi.rgba.assign(px, px + size_t(w) * h * 4);
     stbi_image_free(px);
     mi.linear = linear;
+    if (only) {
+      *only = std::move(mi);
+      return Status();
+    }
     slots[size_t(img)] = int32_t(out->images.size());
     out->images.push_back(std::move(mi));
   }
@@ -645,6 +651,47 @@ Status transmissionFactors(const tinygltf::Material& src, const std::string& wha
   return Status();
 }
 
+// The leaf's gloss (docs/design.md "Layers: leaf shading"): glTF's roughness (roughnessFactor, default 1,
+// times the mean green of metallicRoughnessTexture where a triangle uses the material) and
+// KHR_materials_specular's factors (its textures are not read).
+Status glossFactors(Load& L, ImageSlots& S, const tinygltf::Material& src, const std::string& what, bool used, ModelMaterial* mm) {
+  const auto& pbr = src.pbrMetallicRoughness;
+  if (!(pbr.roughnessFactor >= 0.0 && pbr.roughnessFactor <= 1.0))
+    return Status::error(what + ": pbrMetallicRoughness.roughnessFactor must be a number in [0, 1]");
+  mm->roughness = float(pbr.roughnessFactor);
+  if (used && pbr.metallicRoughnessTexture.index >= 0) {
+    ModelImage mr;
+    int32_t unused = -1;
+    CANOPY_TRY(decodeTexture(L, S, what, pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord,
+                             "metallic-roughness", true, &unused, &mr));
+    double sum = 0;
+    for (size_t p = 1; p < mr.rgba.size(); p += 4) sum += mr.rgba[p];
+    if (!mr.rgba.empty()) mm->roughness *= float(sum / (double(mr.rgba.size() / 4) * 255.0));
+  }
+  const auto extension = src.extensions.find("KHR_materials_specular");
+  if (extension == src.extensions.end() || !extension->second.IsObject()) return Status();
+  const tinygltf::Value& ext = extension->second;
+  double factor = 1.0, colour = 1.0;
+  if (ext.Has("specularFactor")) {
+    const tinygltf::Value& v = ext.Get("specularFactor");
+    factor = v.IsNumber() ? v.GetNumberAsDouble() : NAN;
+    if (!(factor >= 0.0 && factor <= 1.0)) return Status::error(what + ": KHR_materials_specular.specularFactor must be a number in [0, 1]");
+  }
+  if (ext.Has("specularColorFactor")) {
+    const tinygltf::Value& c = ext.Get("specularColorFactor");
+    bool good = c.IsArray() && c.ArrayLen() == 3;
+    colour = 0.0;
+    for (int k = 0; good && k < 3; ++k) {
+      const double x = c.Get(k).IsNumber() ? c.Get(k).GetNumberAsDouble() : NAN;
+      good = x >= 0.0 && x <= 1e6;
+      colour = std::max(colour, x);
+    }
+    if (!good) return Status::error(what + ": KHR_materials_specular.specularColorFactor must be 3 non-negative numbers");
+  }
+  mm->specularFactor = float(std::min(factor * colour, 1.0));
+  return Status();
+}
+
 // Material i: factors, alpha, transmission, and (when a triangle uses it) its textures decoded.
 Status loadMaterial(Load& L, ImageSlots& S, size_t i, bool used, ModelMaterial* mm) {
   const tinygltf::Material& src = L.m.materials[i];
@@ -657,6 +704,7 @@ Status loadMaterial(Load& L, ImageSlots& S, size_t i, bool used, ModelMaterial* 
   mm->doubleSided = src.doubleSided;
   const tinygltf::Value* diffuseTransmission = nullptr;
   CANOPY_TRY(transmissionFactors(src, what, mm, &diffuseTransmission));
+  CANOPY_TRY(glossFactors(L, S, src, what, used, mm));
   Status s;
   auto texture = [&](int tex, int texCoord, const char* role, bool linear, int32_t* slot) {
     return used ? decodeTexture(L, S, what, tex, texCoord, role, linear, slot) : Status();

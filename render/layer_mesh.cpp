@@ -8,6 +8,8 @@
 #include "engine/device.h"
 #include "engine/transfer.h"
 #include "render/layer_common.h"
+#include "render/leaf_attach.h"
+#include "render/plant_sway.h"
 #include "render/rigid_flex.h"
 #include <glm/gtc/packing.hpp>
 
@@ -40,6 +42,10 @@ GraphicsPipelineDesc layerMeshPipelineDesc(VkFormat colorFormat, VkFormat depthF
 
 
 namespace {
+
+// The smallest Beckmann sigma a file's roughness gives the lobe: below it the highlight is a
+// point the layers' texels cannot hold (Habel's measured range starts at 0.078).
+constexpr float kMinLeafSigma = 0.05f;
 
 // The GPU triangle order and the compact chunked mesh, in host memory.
 struct MeshBuild {
@@ -83,7 +89,7 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesPart
   co.maxChunkVertices = b.desc.maxChunkVertices;
   co.bend = b.desc.keepBend && !m.bend.empty();
   co.rigidFlexibility = &parts.rigidFlex;
-  co.rigidProxy = &parts.rigidProxy;
+  co.leafRootPositions = &parts.layerRoots;
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
   if (align % sizeof(gpu::LayerLeafRoot) && sizeof(gpu::LayerLeafRoot) % align)
@@ -261,10 +267,13 @@ Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, Speci
   if (desc.impostors.enable) CANOPY_TRY(buildFoliageBoxes(m, p.foliage, p.roots, desc.impostors, &p.boxes));
   std::vector<uint32_t> trianglePlant;
   CANOPY_TRY(findPlants(m, p.roots, &p.plants, &trianglePlant));
+  // Each plant's sway scale from its levers (render/plant_sway.h).
+  CANOPY_TRY(plantSwayScales(m, p.foliage, p.roots, trianglePlant, &p.plants));
   // How far each rigid vertex follows the foliage (docs/design.md "Rigid parts in wind").
   if (!p.split.rigidTriangles) return Status();
   CANOPY_TRY(rigidFlexibility(m, p.foliage, p.roots, trianglePlant, &p.rigidFlex));
-  return rigidProxies(m, p.foliage, p.roots, &p.rigidProxy);
+  // Each leaf layered where it grows from its branch (render/leaf_attach.h).
+  return leafLayerRoots(m, p.foliage, p.roots, &p.layerRoots);
 }
 }  // namespace
 
@@ -388,7 +397,7 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
     push.targetLayer = target;
     // Leaf shading (shared/leaf_shading.h): foliage has the front's lobe and its transmission (the
     // file's, else the settings' in the leaf's own colour); rigid parts neither.
-    push.specular = c.foliage ? 1.0f : 0.0f;
+    push.specular = c.foliage ? std::clamp(mat.specularFactor, 0.0f, 1.0f) : 0.0f;
     const bool fileTransmission = mat.transmissionFactor >= 0.0f;
     push.transmission = !c.foliage ? glm::vec4(0.0f)
                         : fileTransmission ? glm::vec4(mat.transmissionColor, mat.transmissionFactor)
@@ -405,7 +414,10 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
         for (int k = 0; k < 3; ++k)
           tau[k] = mat.thicknessFactor * -std::log(std::max(mat.attenuationColor[k], 1e-6f)) / mat.attenuationDistance;
     }
-    push.volume = glm::vec4(glm::min(tau, glm::vec3(100.0f)), 0.0f);
+    // The lobe's Beckmann sigma from the file's roughness (GGX's alpha = roughness^2, which a Beckmann
+    // sigma matches closely), at least kMinLeafSigma; 0: the frame's (LayerSettings.leafRoughness).
+    const float sigma = mat.roughness >= 0.0f && !md.overrideLeafRoughness ? std::max(mat.roughness * mat.roughness, kMinLeafSigma) : 0.0f;
+    push.volume = glm::vec4(glm::min(tau, glm::vec3(100.0f)), sigma);
     push.passKind = passKind;
     push.lod = glm::vec4(part ? part->weight : 1.0f, o.debugLevels ? float((part ? part->level : 0u) + 1u) : 0.0f, 0.0f, 0.0f);
     push.triangleBase = uint32_t(c.firstTriangle);

@@ -122,6 +122,7 @@ struct MeshDraw {
   VkBuffer frame = VK_NULL_HANDLE;
   uint32_t width = 0, height = 0;
   float leafTransmission = 0.0f, leafOpticalDepth = 0.0f;  // LayerSettings'
+  bool overrideLeafRoughness = false;                       // LayerSettings': the frame's sigma for every material
 };
 
 // How drawMaterials differs from a layer draw (the impostor bake, the debug view).

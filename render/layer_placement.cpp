@@ -91,7 +91,7 @@ void placePlants(PlacementJob& job, const Plants& plants, const std::vector<Mesh
         if (!std::isfinite(top)) continue;
         job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
         job.layers[i].plantKeys.push_back(uint32_t(slot));
-        job.layers[i].plantResponse.push_back(glm::vec2(sp.flexibility, sp.responseSpeed));
+        job.layers[i].plantResponse.push_back(glm::vec3(sp.flexibility, sp.responseSpeed, p < plants.sway.size() ? plants.sway[p] : 1.0f));
         job.layers[i].plantHeight.push_back(upright);
       }
     }
@@ -125,6 +125,7 @@ struct PlacementPass {
     // from the method's (its rects carry it to the warp).
     bool response = false;
     for (const MeshSpecies& s : species) response = response || s.flexibility != 1.0f || s.responseSpeed != 1.0f;
+    for (float s : plants.sway) response = response || s != 1.0f;  // a plant's sway scale rides on its rect
     perPlant = (job.plantBase.back() > 1 || response) && plants.leafPlant.size() == mesh.leafCount;
     for (const MeshChunk& c : mesh.chunks)
       if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);

@@ -53,7 +53,8 @@ struct LayerInfo {
   std::vector<uint32_t> plantKeys;
   // Per plant rect, its species' wind response (docs/design.md "Species: wind response"):
   // flexibility, response speed.
-  std::vector<glm::vec2> plantResponse;
+  // and the plant's sway scale (render/plant_sway.h; applied with the world wind).
+  std::vector<glm::vec3> plantResponse;
   // Per plant rect, eq. 7's h (pixels): the plant's box's vertical extent projected at its centre
   // (a grass patch's blades, not the depth its rect spans seen from above; docs/design.md "Per-plant roots").
   std::vector<float> plantHeight;

@@ -449,6 +449,7 @@ MeshDraw meshDraw(const LayeredVegetation& lv) {
   md.height = lv.desc.height;
   md.leafTransmission = lv.settings.leafTransmission;
   md.leafOpticalDepth = lv.settings.leafOpticalDepth;
+  md.overrideLeafRoughness = lv.settings.overrideLeafRoughness;
   return md;
 }
 

@@ -117,4 +117,28 @@ Status findLeafAttachments(const VegetationModel& m, const std::vector<uint8_t>&
   return Status();
 }
 
+Status leafLayerRoots(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                      std::vector<glm::vec3>* out) {
+  if (foliage.size() != m.triangleCount() || roots.leafOfVertex.size() != m.positions.size())
+    return Status::error("leaf layer roots: per-triangle or per-vertex arrays disagree with the model");
+  out->resize(roots.leafCount());
+  const RigidGrid grid = buildRigidGrid(m, foliage, 0.0f);
+  for (uint32_t l = 0; l < roots.leafCount(); ++l) {
+    const glm::vec3 root = m.positions[roots.leafRoot[l]];
+    (*out)[l] = root;
+    LeafAttachment at;
+    if (grid.cells.empty() || !nearestRigidPoint(grid, root, &at)) continue;
+    float best = INFINITY;
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 c = m.positions[m.indices[3 * size_t(at.triangle) + size_t(k)]];
+      const float d = glm::length(c - at.rigidPoint);
+      if (d < best) {
+        best = d;
+        (*out)[l] = c;
+      }
+    }
+  }
+  return Status();
+}
+
 }  // namespace canopy

@@ -49,6 +49,15 @@ bool nearestRigidPoint(const RigidGrid& grid, const glm::vec3& p, LeafAttachment
 Status findLeafAttachments(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
                            float maxDistance, std::vector<LeafAttachment>* out);
 
+// The position each leaf's layer is decided by (docs/design.md "Rigid parts in wind"): for a leaf
+// whose root lies within the attachment reach of a rigid triangle, the corner of that triangle
+// nearest the point it grows from, whose layer the branch takes too (the rigid draw puts a vertex
+// in the layer of its own depth), so the two move as one even where the leaf's own root lies across
+// a slab's boundary, and every leaf hanging from that corner shares its layer; for the others their
+// root vertex. Per leaf of `roots`.
+Status leafLayerRoots(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                      std::vector<glm::vec3>* out);
+
 // The closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
 glm::vec3 closestPointOnTriangle(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c);
 

@@ -71,11 +71,6 @@ uint32_t chunkLeaf(const gpu::LayerVertex& v) {
 
 float chunkRigidFlexibility(const gpu::LayerVertex& v) { return gpu::layerRigidFlexibility(v.positionZLeaf >> 16); }
 
-uint32_t chunkRigidProxy(const gpu::LayerVertex& v) {
-  const uint32_t field = v.positionZLeaf >> 16;
-  return gpu::layerRigidHasProxy(field) ? field & LAYER_RIGID_FULL : LAYER_CHUNK_NO_LEAF;
-}
-
 Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
                         const CompactMeshOptions& o, CompactMesh* out, const Progress& progress) {
@@ -112,12 +107,9 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   out->roots.reserve(roots.leafCount() + roots.leafCount() / 32 + 65536);
   uint32_t stamp = 0;
   MeshChunk cur;
-  // The leaf a vertex brings into the chunk's root table: its own (foliage chunks) or its proxy's
-  // (rigid chunks: render/rigid_flex.h rigidProxies).
-  const bool proxies = o.rigidProxy && o.rigidProxy->size() == nv;
-  auto chunkLeafOf = [&](uint32_t v) -> uint32_t {
-    return cur.foliage ? roots.leafOfVertex[v] : proxies ? (*o.rigidProxy)[v] : kNoLeaf;
-  };
+  // The leaf a vertex brings into the chunk's root table (foliage chunks only).
+  auto chunkLeafOf = [&](uint32_t v) -> uint32_t { return cur.foliage ? roots.leafOfVertex[v] : kNoLeaf; };
+  const bool rootPositions = o.leafRootPositions && o.leafRootPositions->size() == roots.leafCount();
   auto open = [&](const TriangleRange& r, uint64_t firstTriangle) {
     ++stamp;
     cur = MeshChunk{};
@@ -143,13 +135,11 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     cur.vertexCount = uint32_t(chunkVertices.size());
     for (uint32_t v : chunkVertices) {
       const glm::vec3 q = glm::clamp(glm::round((m.positions[v] - lo) * inv), glm::vec3(0.0f), glm::vec3(65535.0f));
-      // A rigid chunk's vertices carry their proxy leaf or their flexibility, not a leaf (a vertex a
-      // leaf shares with the trunk is drawn there as trunk).
+      // A rigid chunk's vertices carry their flexibility, not a leaf (a vertex a leaf shares with
+      // the trunk is drawn there as trunk).
       uint32_t leaf = LAYER_CHUNK_NO_LEAF;
       if (cur.foliage) {
         if (roots.leafOfVertex[v] != kNoLeaf) leaf = lLocal.find(roots.leafOfVertex[v], stamp);
-      } else if (chunkLeafOf(v) != kNoLeaf) {
-        leaf = LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY | lLocal.find(chunkLeafOf(v), stamp);
       } else if (o.rigidFlexibility && o.rigidFlexibility->size() == nv) {
         leaf = LAYER_CHUNK_RIGID | std::min<uint32_t>((*o.rigidFlexibility)[v], LAYER_RIGID_FULL);
       }
@@ -173,7 +163,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     out->roots.resize(cur.firstRoot + std::max<size_t>(chunkLeaves.size(), 1), gpu::LayerLeafRoot{});
     for (size_t i = 0; i < chunkLeaves.size(); ++i) {
       gpu::LayerLeafRoot& r = out->roots[cur.firstRoot + i];
-      r.position = m.positions[roots.leafRoot[chunkLeaves[i]]];
+      r.position = rootPositions ? (*o.leafRootPositions)[chunkLeaves[i]] : m.positions[roots.leafRoot[chunkLeaves[i]]];
       r.leaf = chunkLeaves[i];
     }
     out->chunks.push_back(cur);
@@ -198,8 +188,8 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
         const uint32_t leaf = chunkLeafOf(v);
         if (leaf != kNoLeaf && !seen && lLocal.find(leaf, stamp) == kNoLeaf) ++newL;  // over-counts a leaf new twice: harmless
       }
-      const uint32_t maxLeaves = cur.foliage ? kMaxChunkLeaves - 1 : LAYER_RIGID_FULL;
-      if (cur.triangleCount > 0 && (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > maxLeaves)) {
+      if (cur.triangleCount > 0 &&
+          (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
         CANOPY_TRY(close());
         open(r, t);
       }

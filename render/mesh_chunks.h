@@ -63,10 +63,9 @@ struct CompactMeshOptions {
   // Per model vertex, how far a rigid vertex follows the foliage (0..LAYER_RIGID_FULL; render/rigid_flex.h),
   // written into the leaf field of the rigid chunks' vertices; null or empty: LAYER_CHUNK_NO_LEAF (follows fully).
   const std::vector<uint16_t>* rigidFlexibility = nullptr;
-  // Per model vertex, the leaf whose layer a rigid vertex follows (render/rigid_flex.h rigidProxies;
-  // kNoLeaf: its own depth's, by its flexibility); null or empty: none. Its root goes into the rigid
-  // chunk's root table (at most LAYER_RIGID_FULL leaves a rigid chunk).
-  const std::vector<uint32_t>* rigidProxy = nullptr;
+  // Per model leaf, the root position its layer is decided by (render/leaf_attach.h
+  // leafLayerRoots: the rigid corner it grows from); null or empty: its root vertex's.
+  const std::vector<glm::vec3>* leafRootPositions = nullptr;
 };
 
 // One draw range of the GPU order: `count` triangles from `first`, all of `material`.
@@ -91,6 +90,5 @@ glm::vec3 decodeNormal(const gpu::LayerVertex& v);
 glm::vec2 decodeUv(const gpu::LayerVertex& v);
 uint32_t chunkLeaf(const gpu::LayerVertex& v);  // chunk-local leaf, LAYER_CHUNK_NO_LEAF for none (a rigid vertex)
 float chunkRigidFlexibility(const gpu::LayerVertex& v);  // a rigid vertex's flexibility, 0..1 (1 for a leaf's)
-uint32_t chunkRigidProxy(const gpu::LayerVertex& v);  // a rigid vertex's proxy leaf in the chunk's root table, or LAYER_CHUNK_NO_LEAF
 
 }  // namespace canopy

@@ -39,6 +39,12 @@ struct ModelMaterial {
   float thicknessFactor = -1.0f;
   float attenuationDistance = INFINITY;
   glm::vec3 attenuationColor{1.0f};
+  // The leaf's gloss (docs/design.md "Layers: leaf shading"): glTF's perceptual roughness,
+  // roughnessFactor x the mean of its metallicRoughnessTexture's green channel (the Beckmann sigma
+  // of the lobe is its square, as GGX's alpha); -1: the model gives none (LayerSettings.leafRoughness).
+  float roughness = -1.0f;
+  // The lobe's weight: KHR_materials_specular's specularFactor x the largest of its colour factor.
+  float specularFactor = 1.0f;
 };
 
 struct ModelImage {
@@ -76,6 +82,10 @@ struct VegetationModel {
   // glTF file's root nodes, which may be the parts of one plant rather than plants of a field).
   std::vector<uint32_t> trianglePlant;
   bool mergeOverlappingPlants = false;
+  // The plants bend through a branch hierarchy of their own in the per-vertex baseline (generated
+  // plants, a host mesh with MeshDesc.branches), whether or not this copy carries it (`bend`): their
+  // sway scale is 1 (render/plant_sway.h); otherwise it comes from their levers.
+  bool ownHierarchy = false;
   std::vector<std::string> warnings;       // parts skipped (unused broken parts, ignored features)
   size_t triangleCount() const { return indices.size() / 3; }
 };

@@ -105,6 +105,9 @@ Status createModel(const MeshDesc& desc, Model** out) {
         if (!(mm.alphaCutoff >= 0.0f && mm.alphaCutoff <= 1.0f) || uint32_t(mm.alphaMode) > 2)
           return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
                                                          "]: alphaCutoff outside [0, 1] or an unknown alphaMode");
+        if (!((mm.roughness >= 0.0f && mm.roughness <= 1.0f) || mm.roughness == -1.0f) || !(mm.specular >= 0.0f && mm.specular <= 1.0f))
+          return Status::error(Result::InvalidModel, what + ": materials[" + std::to_string(i) +
+                                                         "]: roughness outside [0, 1] (or -1: none) or specular outside [0, 1]");
         ModelMaterial mat;
         mat.name = mm.name;
         mat.baseColorFactor = {mm.baseColor[0], mm.baseColor[1], mm.baseColor[2], mm.baseColor[3]};
@@ -112,6 +115,8 @@ Status createModel(const MeshDesc& desc, Model** out) {
         mat.alphaMode = mm.alphaMode;
         mat.alphaCutoff = mm.alphaCutoff;
         mat.doubleSided = mm.doubleSided;
+        mat.roughness = mm.roughness;
+        mat.specularFactor = mm.specular;
         v.materials.push_back(mat);
       }
       // The loader's convention: the file's materials, then one default material last.

@@ -15,6 +15,7 @@ namespace canopy {
 struct Plants {
   std::vector<uint32_t> leafPlant;              // per leaf (LeafRoots numbering): its plant
   std::vector<glm::vec3> boundsMin, boundsMax;  // per plant, model space: every triangle of it, rigid parts too
+  std::vector<float> sway;  // per plant, its sway scale with the world wind (render/plant_sway.h); empty: 1
   uint32_t count() const { return uint32_t(boundsMin.size()); }
 };
 

@@ -30,8 +30,17 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
     }
   }
   std::vector<std::vector<float>> rootHeights(plants);
-  for (uint32_t l = 0; l < roots.leafCount(); ++l)
-    if (leafPlant[l] != kNoPlant) rootHeights[leafPlant[l]].push_back(m.positions[roots.leafRoot[l]].y);
+  // The lowest root sitting on the rigid parts (render/leaf_attach.h): the wood follows in full
+  // wherever a leaf grows from it.
+  std::vector<float> lowestAttached(plants, INFINITY);
+  const RigidGrid grid = buildRigidGrid(m, foliage, 0.0f);
+  for (uint32_t l = 0; l < roots.leafCount(); ++l) {
+    if (leafPlant[l] == kNoPlant) continue;
+    const glm::vec3 r = m.positions[roots.leafRoot[l]];
+    rootHeights[leafPlant[l]].push_back(r.y);
+    LeafAttachment at;
+    if (r.y < lowestAttached[leafPlant[l]] && nearestRigidPoint(grid, r, &at)) lowestAttached[leafPlant[l]] = r.y;
+  }
   // The crown's base: the kCrownBaseQuantile of the roots' heights (nth_element: linear).
   std::vector<float> crown(plants, -INFINITY);
   for (uint32_t p = 0; p < plants; ++p) {
@@ -39,7 +48,7 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
     if (h.empty()) continue;
     const size_t k = std::min(h.size() - 1, size_t(std::floor(kCrownBaseQuantile * float(h.size()))));
     std::nth_element(h.begin(), h.begin() + std::ptrdiff_t(k), h.end());
-    crown[p] = h[k];
+    crown[p] = std::min(h[k], lowestAttached[p]);
     std::vector<float>().swap(h);
   }
   out->assign(nv, uint16_t(LAYER_RIGID_FULL));
@@ -61,29 +70,6 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
         w = c * c * (3.0f - 2.0f * c);
       }
       (*out)[v] = uint16_t(std::lround(w * float(LAYER_RIGID_FULL)));
-    }
-  }
-  return Status();
-}
-
-Status rigidProxies(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots, std::vector<uint32_t>* out) {
-  const size_t nv = m.positions.size();
-  if (foliage.size() != m.triangleCount() || roots.leafOfVertex.size() != nv)
-    return Status::error("rigid proxies: per-triangle or per-vertex arrays disagree with the model");
-  out->assign(nv, kNoLeaf);
-  const RigidGrid grid = buildRigidGrid(m, foliage, 0.0f);
-  if (grid.cells.empty()) return Status();
-  std::vector<float> best(nv, INFINITY);
-  for (uint32_t l = 0; l < roots.leafCount(); ++l) {
-    LeafAttachment at;
-    if (!nearestRigidPoint(grid, m.positions[roots.leafRoot[l]], &at)) continue;
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = m.indices[3 * size_t(at.triangle) + size_t(k)];
-      const float d = glm::length(m.positions[v] - at.rigidPoint);
-      if (d < best[v]) {
-        best[v] = d;
-        (*out)[v] = l;
-      }
     }
   }
   return Status();

@@ -16,7 +16,8 @@
 namespace canopy {
 
 // The crown's base of a plant: this share of its leaves' roots lie below it (a few low leaves, a
-// sprig at the trunk's foot, do not pull the crown down to the ground).
+// sprig at the trunk's foot, do not pull the crown down to the ground), or its lowest leaf that grows
+// from the rigid parts (render/leaf_attach.h) if lower: the wood follows in full where leaves hang.
 inline constexpr float kCrownBaseQuantile = 0.05f;
 
 // Per model vertex, 0 (still) .. LAYER_RIGID_FULL (follows the foliage) for the vertices of rigid
@@ -24,13 +25,5 @@ inline constexpr float kCrownBaseQuantile = 0.05f;
 // (findPlants), `foliage` per triangle, `roots` the leaves' roots. Up is the model's +y (glTF).
 Status rigidFlexibility(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
                         const std::vector<uint32_t>& trianglePlant, std::vector<uint16_t>* out);
-
-// The leaves the rigid parts carry: for each leaf whose root lies within the attachment reach of a
-// rigid triangle (render/leaf_attach.h), that triangle's corners follow the leaf's layer (the depth
-// of its root, as the leaf does), so a branch and the leaves growing from it move as one even where
-// the two lie on either side of a slab's boundary. Per model vertex the leaf whose root is nearest
-// the corner's own attachment point among those of its triangles; kNoLeaf for the others.
-Status rigidProxies(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                    std::vector<uint32_t>* out);
 
 }  // namespace canopy

@@ -96,13 +96,9 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
       if (p.rigidFlex.size() == m.positions.size()) append(out->rigidFlex, p.rigidFlex);
       else out->rigidFlex.resize(vertexBase + m.positions.size(), uint16_t(LAYER_RIGID_FULL));
     }
-    if (!p.rigidProxy.empty() || !out->rigidProxy.empty()) {
-      out->rigidProxy.resize(vertexBase, kNoLeaf);
-      if (p.rigidProxy.size() == m.positions.size())
-        for (uint32_t l : p.rigidProxy) out->rigidProxy.push_back(l == kNoLeaf ? kNoLeaf : l + leafBase);
-      else
-        out->rigidProxy.resize(vertexBase + m.positions.size(), kNoLeaf);
-    }
+    if (p.layerRoots.size() == p.roots.leafCount()) append(out->layerRoots, p.layerRoots);
+    else
+      for (uint32_t v : p.roots.leafRoot) out->layerRoots.push_back(m.positions[v]);
     for (uint32_t l : p.roots.leafOfVertex) out->roots.leafOfVertex.push_back(l == kNoLeaf ? kNoLeaf : l + leafBase);
     for (uint32_t v : p.roots.leafRoot) out->roots.leafRoot.push_back(v + vertexBase);
     for (uint32_t pl : p.plants.leafPlant) out->plants.leafPlant.push_back(pl == kNoPlant ? kNoPlant : pl + plantBase);
@@ -117,6 +113,8 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     for (uint32_t t : p.boxes.triangles) out->boxes.triangles.push_back(t + triangleBase);
     append(out->plants.boundsMin, p.plants.boundsMin);
     append(out->plants.boundsMax, p.plants.boundsMax);
+    p.plants.sway.resize(p.plants.count(), 1.0f);
+    append(out->plants.sway, p.plants.sway);
     if (several) {
       append(merged->positions, m.positions);
       append(merged->normals, m.normals);

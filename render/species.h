@@ -56,8 +56,8 @@ struct SpeciesParts {
   Plants plants;
   // Per vertex, how far a rigid vertex follows the foliage (render/rigid_flex.h); empty: fully.
   std::vector<uint16_t> rigidFlex;
-  // Per vertex, the leaf whose layer a rigid vertex follows (render/rigid_flex.h rigidProxies); empty: none.
-  std::vector<uint32_t> rigidProxy;
+  // Per leaf, the position its layer is decided by (render/leaf_attach.h leafLayerRoots); empty: its root's.
+  std::vector<glm::vec3> layerRoots;
   BoxHierarchy boxes;            // with impostors: its foliage boxes (render/impostors.h buildFoliageBoxes)
   std::vector<uint32_t> speciesBoxes;  // merged: where each species' boxes start, then the end
 };

@@ -67,14 +67,6 @@ uint triangleLayer() {
   return layerOfDepth(f, viewDepth(placed(root)));
 }
 
-// The layer a rigid vertex follows (docs/design.md "Rigid parts in wind"): that of the leaf it
-// carries (its root's depth, as the leaf's own vertices take it), else its own depth's.
-uint rigidLayer(vec3 world) {
-  uint field = inPositionLeaf.w;
-  vec3 at = layerRigidHasProxy(field) ? placed(leafRoot[field & LAYER_RIGID_FULL].position) : world;
-  return layerOfDepth(f, viewDepth(at));
-}
-
 void emitVertex() {
   LayerInstance inst = thisInstance();
   vWorld = (inst.model * vec4(vertexPosition(), 1.0)).xyz;

@@ -60,12 +60,13 @@ bool shade() {
     tc *= texture(transmissionColorTex, vUv).rgb;
   if ((pc.shadingFlags & LAYER_SHADE_TINT_FROM_BASE) != 0u) tc *= leafTransmissionTint(base.rgb);
   // leafShading.w: the translucency model (docs/design.md "Layers: leaf shading").
+  float sigma = pc.volume.a > 0.0 ? pc.volume.a : f.leafShading.y;  // the material's gloss, else the frame's
   bool habel = !mayMeet(LAYER_FEATURE_DIFFUSE_BTDF) || (mayMeet(LAYER_FEATURE_HABEL) && f.leafShading.w == LAYER_TRANSLUCENCY_HABEL);
   vec3 lit = habel
                  ? leafShadeHabel(base.rgb, n, nGeom, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
-                                  f.leafShading.x, f.leafShading.y, pc.specular, t, tc, pc.volume.rgb)
+                                  f.leafShading.x, sigma, pc.specular, t, tc, pc.volume.rgb)
                  : leafShade(base.rgb, n, front, v, f.lightDirection.xyz, f.lightColor.rgb, f.lightDirection.w,
-                             f.leafShading.x, f.leafShading.y, pc.specular, t, tc);
+                             f.leafShading.x, sigma, pc.specular, t, tc);
   // The impostor debug view: leaves in their box level's colour, darker than impostors.
   if (mayMeet(LAYER_FEATURE_LEVEL_COLORS) && pc.lod.y > 0.0)
     lit = lodLevelColor(uint(pc.lod.y) - 1u) * (0.2 + 0.35 * max(dot(n, f.lightDirection.xyz), 0.0));

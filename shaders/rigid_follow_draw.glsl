@@ -26,7 +26,7 @@ void main() {
     vec3 ndc = clip.xyz / clip.w;
     vec2 size = vec2(anim.width, anim.height);
     vec2 p = (ndc.xy * 0.5 + 0.5) * size;
-    uint layer = min(rigidLayer(vWorld), anim.layerCount - 1u);
+    uint layer = min(layerOfDepth(f, viewDepth(vWorld)), anim.layerCount - 1u);
     AnimGridSample s = animGridSample(anim.cellSize, anim.gridX, anim.gridY, size, p);
     uint base = layer * anim.gridX * anim.gridY;
     // Shown where the inverse warp shows p (shared/rigid.h RIGID_SHOWN_STEPS).

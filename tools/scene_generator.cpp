@@ -793,6 +793,9 @@ Status generateScene(const SceneDesc& desc, VegetationModel* out, SceneStats* st
       m.boundsMax = glm::max(m.boundsMax, v);
     }
     compactMaterials(m);
+    // The per-vertex baseline bends these plants through their own hierarchy (SceneDesc.hierarchy
+    // builds it on request): the default sway's calibration (render/plant_sway.h).
+    m.ownHierarchy = true;
     p.stats.faces = triangles;
     p.stats.rigidFaces = rigidTriangles;
     p.stats.leafFaces = triangles - rigidTriangles;

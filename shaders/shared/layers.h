@@ -82,7 +82,7 @@ struct LayerDrawPush {
   uint targetLayer;  // LAYER_PASS_ONE_LAYER: the layer this draw renders
   uint passKind;     // LAYER_PASS_*
   uint triangleBase; // index of the draw's first triangle in the mesh (id output only)
-  float specular;    // 1: the front side has the Cook-Torrance lobe (foliage); 0: none (rigid parts)
+  float specular;    // the front side's Cook-Torrance lobe weight: the material's (foliage); 0: none (rigid parts)
   uint shadingFlags;  // LAYER_SHADE_*: which material inputs this draw has
   float normalScale; // the material's normal map scale (glTF normalTexture.scale); 0: no normal map
   // Diffuse transmission (KHR_materials_diffuse_transmission): rgb its colour, a its factor 0..1
@@ -93,7 +93,8 @@ struct LayerDrawPush {
   // view: 0 material colours, else the hierarchy level + 1 of the draw's box (colour by level).
   vec4 lod;
   // Habel's translucency: rgb the leaf's optical depth through its thickness (KHR_materials_volume:
-  // thicknessFactor x -ln(attenuationColor) / attenuationDistance; else LayerSettings.leafOpticalDepth); a unused.
+  // thicknessFactor x -ln(attenuationColor) / attenuationDistance; else LayerSettings.leafOpticalDepth);
+  // a: the lobe's Beckmann sigma from the material's roughness (0: the frame's, leafShading.y).
   vec4 volume;
 };
 CANOPY_SIZE_CHECK(LayerDrawPush, 128)
@@ -112,17 +113,13 @@ CANOPY_SIZE_CHECK(LayerFadePush, 16)
 
 // A chunk-local leaf index that means "no leaf" (rigid parts).
 #define LAYER_CHUNK_NO_LEAF 0xffffu
-// The chunk-local leaf field of a rigid vertex (docs/design.md "Rigid parts in wind"): this bit, and
-// - without LAYER_CHUNK_RIGID_PROXY: in the 14 bits below, how far the vertex follows the foliage
-//   layer of its own depth, 0 (the trunk's base: still) to LAYER_RIGID_FULL (a branch in the crown);
-// - with it: the index into the chunk's root table of a leaf that grows from this vertex's triangle,
-//   whose layer the vertex follows fully (so the branch moves with the leaves it carries, at their
-//   layer, not at the slab its own depth falls in).
-// A chunk holds at most 65535 vertices and a leaf at least one triangle, so leaf indices stay below
-// LAYER_CHUNK_RIGID; LAYER_CHUNK_NO_LEAF reads as a rigid vertex without a leaf that follows fully.
+// The chunk-local leaf field of a rigid vertex (docs/design.md "Rigid parts in wind"): this bit and,
+// in the 15 bits below it, how far the vertex follows the foliage layer of its own depth, 0 (the
+// trunk's base: still) to LAYER_RIGID_FULL (a branch in the crown). A chunk holds at most 65535
+// vertices and a leaf at least one triangle, so leaf indices stay below it; LAYER_CHUNK_NO_LEAF
+// reads as a rigid vertex that follows fully.
 #define LAYER_CHUNK_RIGID 0x8000u
-#define LAYER_CHUNK_RIGID_PROXY 0x4000u
-#define LAYER_RIGID_FULL 0x3fffu
+#define LAYER_RIGID_FULL 0x7fffu
 
 // One vertex of the compact GPU mesh (issue 16; vertex attributes, not a buffer block; the C++ side
 // static_asserts the offsets the pipeline declares). 16 bytes, against 28 for float positions,
@@ -135,9 +132,11 @@ struct LayerVertex {
 };
 CANOPY_SIZE_CHECK(LayerVertex, 16)
 
-// A chunk's leaf-root table entry (bound per draw at the chunk's offset): the root vertex's world
-// position at full precision, so a leaf's layer is decided exactly as the CPU placement decides it,
-// and the model-wide leaf index for the id output.
+// A chunk's leaf-root table entry (bound per draw at the chunk's offset): the root's world position
+// at full precision, so a leaf's layer is decided exactly as the CPU placement decides it, and the
+// model-wide leaf index for the id output. The root is the leaf's root vertex, or for a leaf that
+// grows from a rigid triangle that triangle's corner it grows nearest (docs/design.md "Rigid parts in
+// wind"): the leaf and the branch it hangs on are then in one layer and move as one.
 struct LayerLeafRoot {
   vec3 position;
   uint leaf;
@@ -190,13 +189,8 @@ CANOPY_INLINE float layerTexelScale(uint halfResolution, uint layer) {
 
 // Whether a vertex's chunk-local leaf field names a leaf, and a rigid vertex's flexibility in [0, 1].
 CANOPY_INLINE bool layerFieldIsLeaf(uint field) { return field < LAYER_CHUNK_RIGID; }
-CANOPY_INLINE bool layerRigidHasProxy(uint field) {
-  return field >= (LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY) && field != LAYER_CHUNK_NO_LEAF;
-}
 CANOPY_INLINE float layerRigidFlexibility(uint field) {
-  return field < LAYER_CHUNK_RIGID || field >= (LAYER_CHUNK_RIGID | LAYER_CHUNK_RIGID_PROXY)
-             ? 1.0f
-             : float(field & LAYER_RIGID_FULL) / float(LAYER_RIGID_FULL);
+  return field < LAYER_CHUNK_RIGID ? 1.0f : float(field & LAYER_RIGID_FULL) / float(LAYER_RIGID_FULL);
 }
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {

@@ -39,6 +39,10 @@ struct MeshMaterial {
   AlphaMode alphaMode = AlphaMode::Opaque;
   float alphaCutoff = 0.5f;            // [0, 1]
   bool doubleSided = false;
+  // The leaf's gloss (docs/design.md "Layers: leaf shading"): glTF's perceptual roughness in [0, 1]
+  // (the lobe's Beckmann sigma is its square); -1: LayerSettings.leafRoughness (Habel's range).
+  float roughness = -1.0f;
+  float specular = 1.0f;               // the lobe's weight, [0, 1] (KHR_materials_specular's specularFactor)
 };
 struct MeshImage {
   uint32_t width = 0, height = 0;      // 1..16384
@@ -340,7 +344,8 @@ enum class RigidMotion { FollowFoliage, Still };
   X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \
   X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \
   X(float, leafRefractiveIndex, 1.45f, Closed, 1.2, 1.7, "", "effective refractive index n of the lobe (Bousquet et al.'s measured range)") \
-  X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range)")     \
+  X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range) where the material gives no roughness (a generated scene; glTF files always do)") \
+  X(bool, overrideLeafRoughness, false, None, 0, 0, "", "leafRoughness for every material, the file's roughness ignored")    \
   X(float, leafTransmission, 0.35f, Closed, 0, 1, "", "diffuse transmission of foliage materials whose file gives none") \
   X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \
   X(TranslucencyModel, translucencyModel, TranslucencyModel::Habel, Enum, 0, 1, "Habel | DiffuseBtdf", "the unlit side's light (DiffuseBtdf: before 0.7)") \

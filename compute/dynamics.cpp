@@ -136,7 +136,7 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     if ((p.roots == RootMode::PerPlant || response) && total <= ANIM_MAX_PLANT_RECTS)
       for (uint32_t i = 0; i < n; ++i) {
         const DynamicsLayer& dl = d.layers[i];
-        f.layers[i].firstPlant = uint32_t(plantRects->size() / 2);
+        f.layers[i].firstPlant = uint32_t(plantRects->size() / ANIM_RECT_VEC4S);
         f.layers[i].plantCount = uint32_t(dl.plants.size());
         for (size_t j = 0; j < dl.plants.size(); ++j) {
           const glm::vec3 pr = j < dl.plantResponse.size() ? dl.plantResponse[j] : glm::vec3(1.0f);
@@ -145,6 +145,10 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
           plantRects->push_back(dl.plants[j]);
           const float h = j < dl.plantHeight.size() ? dl.plantHeight[j] : 0.0f;
           plantRects->push_back(glm::vec4(r, ownRoot, h));
+          // The field's sample depth: the plant's centre with the world wind (one gust for all its
+          // layers), the layer's otherwise (the paper's: each layer where it lies).
+          const float depth = j < dl.plantDepth.size() && d.heightSway > 0.0f ? dl.plantDepth[j] : 0.0f;
+          plantRects->push_back(glm::vec4(depth, 0.0f, 0.0f, 0.0f));
         }
       }
   }
@@ -170,7 +174,7 @@ Status createLayerDynamics(Device& d, uint32_t width, uint32_t height, uint32_t 
     CANOPY_TRY(createComputePipeline(d, pd, &out->stretchRows));
     static_assert(sizeof(gpu::AnimFrame) % 4 == 0 && sizeof(gpu::AnimFrame) <= 65536,
                   "the frame block is written with one vkCmdUpdateBuffer");
-    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + 2 * ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
+    CANOPY_TRY(createBuffer(d, sizeof(gpu::AnimFrame) + ANIM_RECT_VEC4S * ANIM_MAX_PLANT_RECTS * sizeof(glm::vec4),
                             VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
                             MemoryUsage::DeviceLocal, &out->frame, "dynamics: frame"));
     CANOPY_TRY(createBuffer(d, VkDeviceSize(out->maxCorners) * maxLayers * sizeof(glm::vec2),

@@ -37,6 +37,7 @@ struct DynamicsLayer {
   // against the per-vertex baseline's, applied with the world wind: heightSway > 0); empty: 1, 1, 1.
   std::vector<glm::vec3> plantResponse;
   std::vector<float> plantHeight;        // per rect: eq. 7's h, pixels (LayerInfo::plantHeight); empty or 0: the rect's rows
+  std::vector<float> plantDepth;         // per rect: the plant's centre's view depth (LayerInfo::plantDepth); empty or 0: the layer's
 };
 
 struct DynamicsFrameDesc {

@@ -15,13 +15,13 @@ glm::vec2 sampleTiledReference(const glm::vec2* field, uint32_t n, glm::vec2 a) 
   return glm::mix(b, c, t.y);
 }
 
-glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy) {
+glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy, float depth) {
   const glm::vec2 pixel = glm::min(glm::vec2(float(gx), float(gy)) * f.cellSize, glm::vec2(f.width, f.height));
   const glm::vec2 ndc = pixel / glm::vec2(f.width, f.height) * 2.0f - 1.0f;
   const glm::vec4 h0 = f.invViewProj * glm::vec4(ndc, 0, 1), h1 = f.invViewProj * glm::vec4(ndc, 1, 1);
   const glm::vec3 p0 = glm::vec3(h0) / h0.w, p1 = glm::vec3(h1) / h1.w;
   const float d0 = glm::dot(f.depthRow, glm::vec4(p0, 1)), d1 = glm::dot(f.depthRow, glm::vec4(p1, 1));
-  const glm::vec3 world = p0 + (p1 - p0) * ((f.layers[layer].depth - d0) / (d1 - d0));
+  const glm::vec3 world = p0 + (p1 - p0) * (((depth > 0.0f ? depth : f.layers[layer].depth) - d0) / (d1 - d0));
   const glm::vec3 rel = world - glm::vec3(f.simOrigin);
   return glm::vec2(glm::dot(rel, glm::vec3(f.simRight)), glm::dot(rel, glm::vec3(f.simUp))) / f.simOrigin.w;
 }
@@ -49,22 +49,25 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
     for (uint32_t id = 0; id < corners; ++id) {
       const uint32_t gx = id % f.gridX, gy = id / f.gridX;
       const glm::vec2 pixel = glm::min(glm::vec2(float(gx), float(gy)) * f.cellSize, glm::vec2(f.width, f.height));
-      const glm::vec2 a = cornerSimCoord(f, layer, gx, gy);
-      const glm::vec2 vs = sampleTiledReference(tiled.data(), f.n, a);
-      const glm::vec3 v0 = gpu::simToView(f, vs);
       gpu::AnimLayer rooted = f.layers[layer];
       glm::vec2 response(1.0f);
+      float sampleDepth = 0.0f;  // the layer's
       float bestD = 3.0e38f, bestA = 3.0e38f;
-      for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && 2 * j + 1 < plantRects.size(); ++j) {
-        const glm::vec4 r = plantRects[2 * j];
+      const uint32_t k = ANIM_RECT_VEC4S;
+      for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && k * j + 2 < plantRects.size(); ++j) {
+        const glm::vec4 r = plantRects[k * j];
         if (gpu::plantRectBetter(r, pixel, bestD, bestA)) {
           bestD = gpu::plantRectDistance2(r, pixel);
           bestA = (r.y - r.x) * (r.w - r.z);
-          const glm::vec4 species = plantRects[2 * j + 1];
+          const glm::vec4 species = plantRects[k * j + 1];
           rooted = species.z > 0.0f ? gpu::withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
           response = glm::vec2(species);
+          sampleDepth = plantRects[k * j + 2].x;
         }
       }
+      const glm::vec2 a = cornerSimCoord(f, layer, gx, gy, sampleDepth);
+      const glm::vec2 vs = sampleTiledReference(tiled.data(), f.n, a);
+      const glm::vec3 v0 = gpu::simToView(f, vs);
       glm::vec3 vi = v0;
       if (layer > 0) {
         const float gamma = gpu::speciesDelay(f.maxDelay, gpu::layerDelay(f.maxDelay, f.layers[layer], v0.z), response.y);

@@ -20,7 +20,8 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
 std::vector<glm::vec2> boundStretchReference(const gpu::AnimFrame& f, const std::vector<glm::vec2>& raw);
 
 // The simulation-plane coordinate (tile units) of warp-grid corner (gx, gy) of a layer.
-glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy);
+// `depth` > 0: the view depth the corner reads the field at (a plant rect's), else the layer's.
+glm::vec2 cornerSimCoord(const gpu::AnimFrame& f, uint32_t layer, uint32_t gx, uint32_t gy, float depth = 0.0f);
 
 // Bilinear periodic sample of an n*n field at tile coordinates a (cell centres at (i + 0.5) / n).
 glm::vec2 sampleTiledReference(const glm::vec2* field, uint32_t n, glm::vec2 a);

@@ -260,7 +260,6 @@ CanopyParams paramsFrom(const Options& o, const CanopyParams& base) {
   p.composite.bilinear = o.bilinear;
   p.composite.sharpness = o.sharpness;
   p.dynamics.maxStretch = o.maxStretch;
-  if (getenv("CANOPY_VD")) p.dynamics.vd = float(atof(getenv("CANOPY_VD")));  // TEMP experiment
   p.composite.debugVelocityScale = std::max(0.05f, domainWindSpeed(o));
   return p;
 }

@@ -438,7 +438,8 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   DynamicsFrameDesc fd;
   fd.view = slice;
   fd.plane = c->plane;
-  for (const LayerInfo& l : c->layers.visible.layers) fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants, l.plantResponse, l.plantHeight});
+  for (const LayerInfo& l : c->layers.visible.layers)
+    fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants, l.plantResponse, l.plantHeight, l.plantDepth});
   fd.width = c->layers.desc.width;  // the layer images: the output and the guard band
   fd.height = c->layers.desc.height;
   fd.simSize = sim.n;

@@ -10,6 +10,7 @@
 #include "render/layer_common.h"
 #include "render/leaf_attach.h"
 #include "render/plant_sway.h"
+#include "render/rigid_refine.h"
 #include "render/rigid_flex.h"
 #include <glm/gtc/packing.hpp>
 
@@ -88,7 +89,7 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesPart
   CompactMeshOptions co;
   co.maxChunkVertices = b.desc.maxChunkVertices;
   co.bend = b.desc.keepBend && !m.bend.empty();
-  co.rigidFlexibility = &parts.rigidFlex;
+  co.rigidAnchors = &parts.rigidAnchors;
   co.leafRootPositions = &parts.layerRoots;
   const VkDeviceSize align = std::max<VkDeviceSize>(d.properties.limits.minStorageBufferOffsetAlignment, 1);
   co.rootAlignment = uint32_t((align + sizeof(gpu::LayerLeafRoot) - 1) / sizeof(gpu::LayerLeafRoot));
@@ -174,7 +175,7 @@ Status placeLayerMesh(Device& d, const LayerMeshDesc& desc, LayerMesh& lm, Layer
     uint64_t minV = 0, minR = 0, minI = 3;
     for (const MeshChunk& c : lm.chunks) {
       minV = std::max<uint64_t>(minV, c.vertexCount);
-      minR = std::max<uint64_t>(minR, roundUp(std::max<uint32_t>(c.rootCount, 1), r.rootAlignment));
+      minR = std::max<uint64_t>(minR, roundUp(std::max<uint32_t>(c.tableEntries(), 1), r.rootAlignment));
       minI = std::max<uint64_t>(minI, 3ull * std::min<uint32_t>(c.triangleCount, 1024));
     }
     const uint64_t vb = mesh.vertices.size() * sizeof(gpu::LayerVertex), ib = mesh.indices.size() * 2,
@@ -266,14 +267,14 @@ Status prepareSpecies(const LayerMeshDesc& desc, const VegetationModel& m, Speci
   std::vector<uint32_t>().swap(p.roots.rootOfVertex);
   if (desc.impostors.enable) CANOPY_TRY(buildFoliageBoxes(m, p.foliage, p.roots, desc.impostors, &p.boxes));
   std::vector<uint32_t> trianglePlant;
-  CANOPY_TRY(findPlants(m, p.roots, &p.plants, &trianglePlant));
+  CANOPY_TRY(findPlants(m, p.roots, &p.plants, &trianglePlant, p.foliage));
   // Each plant's sway scale from its levers (render/plant_sway.h).
   CANOPY_TRY(plantSwayScales(m, p.foliage, p.roots, trianglePlant, &p.plants));
   // How far each rigid vertex follows the foliage (docs/design.md "Rigid parts in wind").
   if (!p.split.rigidTriangles) return Status();
-  CANOPY_TRY(rigidFlexibility(m, p.foliage, p.roots, trianglePlant, &p.rigidFlex));
-  // Each leaf layered where it grows from its branch (render/leaf_attach.h).
-  return leafLayerRoots(m, p.foliage, p.roots, &p.layerRoots);
+  CANOPY_TRY(rigidAnchors(m, p.foliage, p.roots, trianglePlant, &p.rigidAnchors));
+  // Each leaf layered where it grows from its branch (render/leaf_attach.h), as that branch is.
+  return leafLayerRoots(m, p.foliage, p.roots, &p.layerRoots, &p.rigidAnchors);
 }
 }  // namespace
 
@@ -282,11 +283,22 @@ Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const VegetationMo
   return prepareLayerMesh(d, desc, std::vector<SpeciesModel>{SpeciesModel{&m}}, mesh, impostors, stats, out, rootKey);
 }
 
-Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<SpeciesModel>& species, LayerMesh& mesh,
+Status prepareLayerMesh(Device& d, const LayerMeshDesc& desc, const std::vector<SpeciesModel>& given, LayerMesh& mesh,
                         Impostors& impostors, LayerStats& stats, CompactMesh* out, uint64_t* rootKey) {
   *rootKey = 0;
-  CANOPY_TRY(checkSpecies(species));
+  CANOPY_TRY(checkSpecies(given));
   const auto t0 = std::chrono::steady_clock::now();
+  // A species whose rigid parts have edges too long to follow the displacement between their
+  // vertices is refined first (render/rigid_refine.h); the others are used as given.
+  std::vector<SpeciesModel> species = given;
+  std::vector<VegetationModel> refined(given.size());
+  for (size_t s = 0; s < given.size(); ++s) {
+    MaterialSplit split;
+    CANOPY_TRY(splitMaterials(*given[s].model, desc.split, &split));
+    if (!needsRigidRefinement(*given[s].model, split.triangleFoliage)) continue;
+    CANOPY_TRY(refineRigidParts(*given[s].model, &split.triangleFoliage, &refined[s]));
+    species[s].model = &refined[s];
+  }
   // Each species on its own (its split rule reads its own materials, its leaf roots have its own
   // cache file), then laid end to end (render/species.h).
   std::vector<SpeciesParts> parts(species.size());
@@ -421,7 +433,7 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
     push.passKind = passKind;
     push.lod = glm::vec4(part ? part->weight : 1.0f, o.debugLevels ? float((part ? part->level : 0u) + 1u) : 0.0f, 0.0f, 0.0f);
     push.triangleBase = uint32_t(c.firstTriangle);
-    const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.rootCount, 1) * sizeof(gpu::LayerLeafRoot);
+    const VkDeviceSize rootBytes = std::max<VkDeviceSize>(c.tableEntries(), 1) * sizeof(gpu::LayerLeafRoot);
     // A streamed mesh's part sits in this frame's ring segment (planSlice copied it there).
     const bool ring = mesh.streamed;
     const uint64_t rootAt = ring ? part->ringRoot : c.firstRoot;

@@ -86,13 +86,20 @@ void placePlants(PlacementJob& job, const Plants& plants, const std::vector<Mesh
       const float upright = fw > 1e-6f && hw > 1e-6f
                                 ? std::clamp((glm::dot(job.rowsY[k], foot) / fw - glm::dot(job.rowsY[k], head) / hw) * 0.5f * h, 0.0f, 2.0f * h)
                                 : 0.0f;
+      // Its top over every layer: a layer it has no leaves in still gets its rect when it has rigid
+      // parts, which follow the layer of their own depth (docs/design.md "Rigid parts in wind").
+      float topAll = INFINITY;
+      for (uint32_t i = 0; i < layers; ++i) topAll = std::min(topAll, job.plantTop[slot * layers + i]);
+      const bool wood = p < plants.rigid.size() && plants.rigid[p];
       for (uint32_t i = 0; i < layers; ++i) {
-        const float top = std::max(job.plantTop[slot * layers + i], -h);
+        float top = std::max(job.plantTop[slot * layers + i], -h);
+        if (!std::isfinite(top) && wood) top = std::max(topAll, -h);
         if (!std::isfinite(top)) continue;
         job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
         job.layers[i].plantKeys.push_back(uint32_t(slot));
         job.layers[i].plantResponse.push_back(glm::vec3(sp.flexibility, sp.responseSpeed, p < plants.sway.size() ? plants.sway[p] : 1.0f));
         job.layers[i].plantHeight.push_back(upright);
+        job.layers[i].plantDepth.push_back(std::max(glm::dot(job.depthRows[k], glm::vec4(mid, 1.0f)), 0.0f));
       }
     }
   }

@@ -58,6 +58,9 @@ struct LayerInfo {
   // Per plant rect, eq. 7's h (pixels): the plant's box's vertical extent projected at its centre
   // (a grass patch's blades, not the depth its rect spans seen from above; docs/design.md "Per-plant roots").
   std::vector<float> plantHeight;
+  // Per plant rect, the view depth of the plant's box's centre: where every layer of it reads the
+  // wind field with the world wind (docs/design.md "Rigid parts in wind").
+  std::vector<float> plantDepth;
 };
 
 // The placement's stages, in order (advancePlacement runs them until a deadline and resumes).

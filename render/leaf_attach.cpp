@@ -118,7 +118,7 @@ Status findLeafAttachments(const VegetationModel& m, const std::vector<uint8_t>&
 }
 
 Status leafLayerRoots(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                      std::vector<glm::vec3>* out) {
+                      std::vector<glm::vec3>* out, const std::vector<gpu::LayerLeafRoot>* anchors) {
   if (foliage.size() != m.triangleCount() || roots.leafOfVertex.size() != m.positions.size())
     return Status::error("leaf layer roots: per-triangle or per-vertex arrays disagree with the model");
   out->resize(roots.leafCount());
@@ -130,11 +130,12 @@ Status leafLayerRoots(const VegetationModel& m, const std::vector<uint8_t>& foli
     if (grid.cells.empty() || !nearestRigidPoint(grid, root, &at)) continue;
     float best = INFINITY;
     for (int k = 0; k < 3; ++k) {
-      const glm::vec3 c = m.positions[m.indices[3 * size_t(at.triangle) + size_t(k)]];
+      const uint32_t v = m.indices[3 * size_t(at.triangle) + size_t(k)];
+      const glm::vec3 c = m.positions[v];
       const float d = glm::length(c - at.rigidPoint);
       if (d < best) {
         best = d;
-        (*out)[l] = c;
+        (*out)[l] = anchors && anchors->size() == m.positions.size() ? (*anchors)[v].position : c;
       }
     }
   }

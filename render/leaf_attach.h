@@ -17,6 +17,7 @@
 #include "engine/status.h"
 #include "render/leaf_roots.h"
 #include "render/model.h"
+#include "shared/layers.h"
 
 namespace canopy {
 
@@ -55,8 +56,10 @@ Status findLeafAttachments(const VegetationModel& model, const std::vector<uint8
 // in the layer of its own depth), so the two move as one even where the leaf's own root lies across
 // a slab's boundary, and every leaf hanging from that corner shares its layer; for the others their
 // root vertex. Per leaf of `roots`.
+// With `anchors` (per model vertex: render/rigid_flex.h rigidAnchors), the corner's anchor: the point
+// whose depth picks the layer the rigid draw moves that corner with.
 Status leafLayerRoots(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
-                      std::vector<glm::vec3>* out);
+                      std::vector<glm::vec3>* out, const std::vector<gpu::LayerLeafRoot>* anchors = nullptr);
 
 // The closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection 5.1.5).
 glm::vec3 closestPointOnTriangle(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c);

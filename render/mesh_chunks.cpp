@@ -69,7 +69,7 @@ uint32_t chunkLeaf(const gpu::LayerVertex& v) {
   return gpu::layerFieldIsLeaf(field) ? field : LAYER_CHUNK_NO_LEAF;
 }
 
-float chunkRigidFlexibility(const gpu::LayerVertex& v) { return gpu::layerRigidFlexibility(v.positionZLeaf >> 16); }
+uint32_t chunkRigidEntry(const gpu::LayerVertex& v) { return gpu::layerRigidEntry(v.positionZLeaf >> 16); }
 
 Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
                         const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
@@ -109,6 +109,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   MeshChunk cur;
   // The leaf a vertex brings into the chunk's root table (foliage chunks only).
   auto chunkLeafOf = [&](uint32_t v) -> uint32_t { return cur.foliage ? roots.leafOfVertex[v] : kNoLeaf; };
+  const bool anchors = o.rigidAnchors && o.rigidAnchors->size() == nv;
   const bool rootPositions = o.leafRootPositions && o.leafRootPositions->size() == roots.leafCount();
   auto open = [&](const TriangleRange& r, uint64_t firstTriangle) {
     ++stamp;
@@ -133,15 +134,16 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     const glm::vec3 inv(cur.scale.x > 0 ? 1.0f / cur.scale.x : 0.0f, cur.scale.y > 0 ? 1.0f / cur.scale.y : 0.0f,
                         cur.scale.z > 0 ? 1.0f / cur.scale.z : 0.0f);
     cur.vertexCount = uint32_t(chunkVertices.size());
-    for (uint32_t v : chunkVertices) {
+    for (size_t local = 0; local < chunkVertices.size(); ++local) {
+      const uint32_t v = chunkVertices[local];
       const glm::vec3 q = glm::clamp(glm::round((m.positions[v] - lo) * inv), glm::vec3(0.0f), glm::vec3(65535.0f));
-      // A rigid chunk's vertices carry their flexibility, not a leaf (a vertex a leaf shares with
-      // the trunk is drawn there as trunk).
+      // A rigid chunk's vertices name their own root-table entry (anchor and share), not a leaf (a
+      // vertex a leaf shares with the trunk is drawn there as trunk).
       uint32_t leaf = LAYER_CHUNK_NO_LEAF;
       if (cur.foliage) {
         if (roots.leafOfVertex[v] != kNoLeaf) leaf = lLocal.find(roots.leafOfVertex[v], stamp);
-      } else if (o.rigidFlexibility && o.rigidFlexibility->size() == nv) {
-        leaf = LAYER_CHUNK_RIGID | std::min<uint32_t>((*o.rigidFlexibility)[v], LAYER_RIGID_FULL);
+      } else if (anchors) {
+        leaf = LAYER_CHUNK_RIGID | uint32_t(local);
       }
       const glm::vec2 uv = m.uvs[v];
       if (!(std::abs(uv.x) <= 65504.0f && std::abs(uv.y) <= 65504.0f))
@@ -160,6 +162,14 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     // without leaves still gets one (unused) entry, since a binding's range cannot be 0.
     cur.firstRoot = alignUp(out->roots.size(), o.rootAlignment);
     cur.rootCount = uint32_t(chunkLeaves.size());
+    if (!cur.foliage && anchors) {  // a rigid chunk: an entry per vertex, its anchor and share
+      cur.rootCount = 0;
+      cur.anchorCount = uint32_t(chunkVertices.size());
+      out->roots.resize(cur.firstRoot + chunkVertices.size(), gpu::LayerLeafRoot{});
+      for (size_t i = 0; i < chunkVertices.size(); ++i) out->roots[cur.firstRoot + i] = (*o.rigidAnchors)[chunkVertices[i]];
+      out->chunks.push_back(cur);
+      return Status();
+    }
     out->roots.resize(cur.firstRoot + std::max<size_t>(chunkLeaves.size(), 1), gpu::LayerLeafRoot{});
     for (size_t i = 0; i < chunkLeaves.size(); ++i) {
       gpu::LayerLeafRoot& r = out->roots[cur.firstRoot + i];
@@ -188,8 +198,9 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
         const uint32_t leaf = chunkLeafOf(v);
         if (leaf != kNoLeaf && !seen && lLocal.find(leaf, stamp) == kNoLeaf) ++newL;  // over-counts a leaf new twice: harmless
       }
-      if (cur.triangleCount > 0 &&
-          (chunkVertices.size() + newV > o.maxChunkVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
+      // A rigid chunk with anchors names each vertex's entry in 15 bits.
+      const size_t maxVertices = !cur.foliage && anchors ? std::min<size_t>(o.maxChunkVertices, LAYER_RIGID_FULL + 1) : o.maxChunkVertices;
+      if (cur.triangleCount > 0 && (chunkVertices.size() + newV > maxVertices || chunkLeaves.size() + newL > kMaxChunkLeaves - 1)) {
         CANOPY_TRY(close());
         open(r, t);
       }

@@ -39,6 +39,10 @@ struct MeshChunk {
   uint64_t firstIndex = 0;     // into CompactMesh::indices
   uint64_t firstRoot = 0;      // into CompactMesh::roots, a multiple of the root alignment
   uint32_t rootCount = 0;      // leaves with a vertex in the chunk
+  // A rigid chunk's entries at firstRoot instead: one per vertex, its anchor and share
+  // (CompactMeshOptions::rigidAnchors; shared/layers.h LAYER_CHUNK_RIGID); 0: none.
+  uint32_t anchorCount = 0;
+  uint32_t tableEntries() const { return rootCount > anchorCount ? rootCount : anchorCount; }  // bound per draw
   glm::vec3 origin{0}, scale{0};  // world position = origin + q * scale, q in 0..65535
 };
 
@@ -60,9 +64,10 @@ struct CompactMeshOptions {
   uint32_t maxChunkVertices = kMaxChunkVertices;  // 3..65535
   uint32_t rootAlignment = 1;  // chunk root blocks start at multiples of this many entries (>= 1)
   bool bend = false;           // also CompactMesh::bend (the model must have VegetationModel::bend)
-  // Per model vertex, how far a rigid vertex follows the foliage (0..LAYER_RIGID_FULL; render/rigid_flex.h),
-  // written into the leaf field of the rigid chunks' vertices; null or empty: LAYER_CHUNK_NO_LEAF (follows fully).
-  const std::vector<uint16_t>* rigidFlexibility = nullptr;
+  // Per model vertex, a rigid vertex's anchor and share (render/rigid_flex.h): the rigid chunks'
+  // root tables hold one entry per chunk vertex, which the vertex's leaf field names (at most
+  // LAYER_RIGID_FULL + 1 vertices a rigid chunk then); null or empty: none (LAYER_CHUNK_NO_LEAF).
+  const std::vector<gpu::LayerLeafRoot>* rigidAnchors = nullptr;
   // Per model leaf, the root position its layer is decided by (render/leaf_attach.h
   // leafLayerRoots: the rigid corner it grows from); null or empty: its root vertex's.
   const std::vector<glm::vec3>* leafRootPositions = nullptr;
@@ -89,6 +94,6 @@ glm::vec3 decodePosition(const MeshChunk& c, const gpu::LayerVertex& v);
 glm::vec3 decodeNormal(const gpu::LayerVertex& v);
 glm::vec2 decodeUv(const gpu::LayerVertex& v);
 uint32_t chunkLeaf(const gpu::LayerVertex& v);  // chunk-local leaf, LAYER_CHUNK_NO_LEAF for none (a rigid vertex)
-float chunkRigidFlexibility(const gpu::LayerVertex& v);  // a rigid vertex's flexibility, 0..1 (1 for a leaf's)
+uint32_t chunkRigidEntry(const gpu::LayerVertex& v);  // a rigid vertex's root-table entry, or LAYER_CHUNK_NO_LEAF
 
 }  // namespace canopy

@@ -5,7 +5,8 @@
 
 namespace canopy {
 
-Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out, std::vector<uint32_t>* trianglePlant) {
+Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out, std::vector<uint32_t>* trianglePlant,
+                  const std::vector<uint8_t>& foliage) {
   *out = Plants{};
   const size_t nt = m.triangleCount();
   const bool given = !m.trianglePlant.empty() && m.trianglePlant.size() == nt;
@@ -79,6 +80,12 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out,
   }
   for (uint32_t& p : out->leafPlant)
     if (p == kNoPlant) p = 0;
+  out->rigid.assign(out->count(), 0);
+  if (!foliage.empty())
+    for (size_t t = 0; t < nt; ++t) {
+      const uint32_t g = plantOf(t);
+      if (!foliage[t] && g != kNoPlant && dense[find(g)] != kNoPlant) out->rigid[dense[find(g)]] = 1;
+    }
   if (trianglePlant) {
     trianglePlant->assign(nt, kNoPlant);
     for (size_t t = 0; t < nt; ++t) {

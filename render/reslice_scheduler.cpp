@@ -124,7 +124,7 @@ void planSlice(ResliceScheduler& r, const ResliceParts& p) {
     part.firstTriangle = item.firstTriangle + sp.cursorTriangle;
     part.triangleCount = count;
     if (p.mesh.streamed && count) {
-      const uint64_t roots = roundUp(std::max<uint32_t>(c.rootCount, 1), ring.rootAlignment);
+      const uint64_t roots = roundUp(std::max<uint32_t>(c.tableEntries(), 1), ring.rootAlignment);
       if (usedV + c.vertexCount > ring.vertexCapacity || usedR + roots > ring.rootCapacity || usedI + 3 > ring.indexCapacity) break;
       part.triangleCount = count = uint32_t(std::min<uint64_t>(count, (ring.indexCapacity - usedI) / 3));
       part.ringVertex = segment * ring.vertexCapacity + usedV;
@@ -135,7 +135,7 @@ void planSlice(ResliceScheduler& r, const ResliceParts& p) {
       auto* rt = static_cast<gpu::LayerLeafRoot*>(p.mesh.leafRoots.allocation.mapped);
       std::memcpy(v + part.ringVertex, p.mesh.hostMesh.vertices.data() + c.firstVertex, size_t(c.vertexCount) * sizeof(gpu::LayerVertex));
       std::memcpy(ix + part.ringIndex, p.mesh.hostMesh.indices.data() + c.firstIndex + 3ull * part.firstTriangle, size_t(count) * 6);
-      std::memcpy(rt + part.ringRoot, p.mesh.hostMesh.roots.data() + c.firstRoot, size_t(c.rootCount) * sizeof(gpu::LayerLeafRoot));
+      std::memcpy(rt + part.ringRoot, p.mesh.hostMesh.roots.data() + c.firstRoot, size_t(c.tableEntries()) * sizeof(gpu::LayerLeafRoot));
       usedV += c.vertexCount;
       usedI += 3ull * count;
       usedR += roots;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 #include "render/leaf_attach.h"
 #include "shared/layers.h"
@@ -71,6 +72,50 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
       }
       (*out)[v] = uint16_t(std::lround(w * float(LAYER_RIGID_FULL)));
     }
+  }
+  return Status();
+}
+
+Status rigidAnchors(const VegetationModel& m, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                    const std::vector<uint32_t>& trianglePlant, std::vector<gpu::LayerLeafRoot>* out) {
+  std::vector<uint16_t> share;
+  CANOPY_TRY(rigidFlexibility(m, foliage, roots, trianglePlant, &share));
+  const size_t nv = m.positions.size();
+  out->resize(nv);
+  std::vector<uint8_t> rigid(nv, 0);
+  for (size_t t = 0; t < m.triangleCount(); ++t)
+    if (!foliage[t])
+      for (int k = 0; k < 3; ++k) rigid[m.indices[3 * t + size_t(k)]] = 1;
+  // The rigid vertices in a grid of cells the anchor's radius wide: a vertex's neighbours lie in
+  // the 27 cells around its own.
+  const float radius = std::max(kAnchorShare * glm::length(m.boundsMax - m.boundsMin), 1e-12f);
+  auto cellOf = [&](const glm::vec3& p) { return glm::ivec3(glm::floor((p - m.boundsMin) / radius)); };
+  auto key = [](const glm::ivec3& c) {
+    return (uint64_t(uint32_t(c.x) & 0x1fffff) << 42) | (uint64_t(uint32_t(c.y) & 0x1fffff) << 21) | uint64_t(uint32_t(c.z) & 0x1fffff);
+  };
+  std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
+  for (size_t v = 0; v < nv; ++v)
+    if (rigid[v]) cells[key(cellOf(m.positions[v]))].push_back(uint32_t(v));
+  for (size_t v = 0; v < nv; ++v) {
+    gpu::LayerLeafRoot& e = (*out)[v];
+    e.position = m.positions[v];
+    e.leaf = share[v];
+    if (!rigid[v]) continue;
+    const glm::ivec3 c = cellOf(m.positions[v]);
+    glm::dvec3 sum(0.0);
+    double n = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = cells.find(key(c + glm::ivec3(dx, dy, dz)));
+          if (it == cells.end()) continue;
+          for (uint32_t u : it->second)
+            if (glm::length(m.positions[u] - m.positions[v]) <= radius) {
+              sum += glm::dvec3(m.positions[u]);
+              n += 1;
+            }
+        }
+    if (n > 0) e.position = glm::vec3(sum / n);
   }
   return Status();
 }

@@ -91,10 +91,12 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     out->split.rigidTriangles += p.split.rigidTriangles;
     out->split.foliageTriangles += p.split.foliageTriangles;
     append(out->foliage, p.foliage);
-    if (!p.rigidFlex.empty() || !out->rigidFlex.empty()) {
-      out->rigidFlex.resize(vertexBase, uint16_t(LAYER_RIGID_FULL));
-      if (p.rigidFlex.size() == m.positions.size()) append(out->rigidFlex, p.rigidFlex);
-      else out->rigidFlex.resize(vertexBase + m.positions.size(), uint16_t(LAYER_RIGID_FULL));
+    if (!p.rigidAnchors.empty() || !out->rigidAnchors.empty()) {
+      // A species without rigid parts: its vertices' own positions (never read: no rigid chunk).
+      for (size_t v = out->rigidAnchors.size(); v < vertexBase; ++v) out->rigidAnchors.push_back({glm::vec3(0.0f), LAYER_RIGID_FULL});
+      if (p.rigidAnchors.size() == m.positions.size()) append(out->rigidAnchors, p.rigidAnchors);
+      else
+        for (const glm::vec3& q : m.positions) out->rigidAnchors.push_back({q, LAYER_RIGID_FULL});
     }
     if (p.layerRoots.size() == p.roots.leafCount()) append(out->layerRoots, p.layerRoots);
     else
@@ -115,6 +117,8 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     append(out->plants.boundsMax, p.plants.boundsMax);
     p.plants.sway.resize(p.plants.count(), 1.0f);
     append(out->plants.sway, p.plants.sway);
+    p.plants.rigid.resize(p.plants.count(), 0);
+    append(out->plants.rigid, p.plants.rigid);
     if (several) {
       append(merged->positions, m.positions);
       append(merged->normals, m.normals);

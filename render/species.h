@@ -16,6 +16,7 @@
 #include "render/material_split.h"
 #include "render/model.h"
 #include "render/plants.h"
+#include "shared/layers.h"
 
 namespace canopy {
 
@@ -54,8 +55,8 @@ struct SpeciesParts {
   std::vector<uint8_t> foliage;  // per triangle
   LeafRoots roots;               // leafOfVertex and leafRoot (rootOfVertex dropped)
   Plants plants;
-  // Per vertex, how far a rigid vertex follows the foliage (render/rigid_flex.h); empty: fully.
-  std::vector<uint16_t> rigidFlex;
+  // Per vertex, a rigid vertex's anchor and share (render/rigid_flex.h rigidAnchors); empty: none.
+  std::vector<gpu::LayerLeafRoot> rigidAnchors;
   // Per leaf, the position its layer is decided by (render/leaf_attach.h leafLayerRoots); empty: its root's.
   std::vector<glm::vec3> layerRoots;
   BoxHierarchy boxes;            // with impostors: its foliage boxes (render/impostors.h buildFoliageBoxes)

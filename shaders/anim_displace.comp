@@ -11,7 +11,7 @@
 layout(local_size_x = ANIM_GROUP_SIZE) in;
 layout(binding = 0, scalar) readonly buffer FrameBuf {
   AnimFrame frameIn;
-  vec4 plantRects[];  // per-plant roots (AnimLayer.firstPlant, plantCount)
+  vec4 plantRects[];  // per-plant roots (AnimLayer.firstPlant, plantCount), ANIM_RECT_VEC4S each
 };
 // Loaded once per invocation: the shared helpers take the frame by value, and passing the buffer
 // member copies it from memory at every call (shaders/sim_common.glsl).
@@ -132,13 +132,32 @@ void main() {
   if (id >= corners || layer >= f.layerCount) return;
   uint gx = id % f.gridX, gy = id / f.gridX;
   vec2 pixel = min(vec2(gx, gy) * f.cellSize, vec2(f.width, f.height));
-  // Unproject: the point on the pixel's ray at the layer's view depth (depth is affine along the ray).
+  // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's;
+  // the plant's species' wind response with it (flexibility, response speed), and the depth its
+  // corners read the field at (the plant's centre: one gust for the plant's every layer).
+  AnimLayer rooted = f.layers[layer];
+  vec2 response = vec2(1.0);
+  float sampleDepth = f.layers[layer].depth;
+  float bestD = 3.0e38, bestA = 3.0e38;
+  for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
+    vec4 r = plantRects[ANIM_RECT_VEC4S * j];
+    if (plantRectBetter(r, pixel, bestD, bestA)) {
+      bestD = plantRectDistance2(r, pixel);
+      bestA = (r.y - r.x) * (r.w - r.z);
+      vec4 species = plantRects[ANIM_RECT_VEC4S * j + 1u];
+      rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
+      response = species.xy;
+      float depth = plantRects[ANIM_RECT_VEC4S * j + 2u].x;
+      sampleDepth = depth > 0.0 ? depth : f.layers[layer].depth;
+    }
+  }
+  // Unproject: the point on the pixel's ray at that view depth (depth is affine along the ray).
   vec2 ndc = pixel / vec2(f.width, f.height) * 2.0 - 1.0;
   vec4 h0 = f.invViewProj * vec4(ndc, 0.0, 1.0);
   vec4 h1 = f.invViewProj * vec4(ndc, 1.0, 1.0);
   vec3 p0 = h0.xyz / h0.w, p1 = h1.xyz / h1.w;
   float d0 = dot(f.depthRow, vec4(p0, 1.0)), d1 = dot(f.depthRow, vec4(p1, 1.0));
-  vec3 world = p0 + (p1 - p0) * ((f.layers[layer].depth - d0) / (d1 - d0));
+  vec3 world = p0 + (p1 - p0) * ((sampleDepth - d0) / (d1 - d0));
   // Simulation-plane coordinates in tile units (the tiled field repeats with period 1).
   vec3 rel = world - f.simOrigin.xyz;
   vec2 a = vec2(dot(rel, f.simRight.xyz), dot(rel, f.simUp.xyz)) / f.simOrigin.w;
@@ -159,21 +178,6 @@ void main() {
     bend = vec3(f.viewRotation * vec4(sampleBend(at), 0.0));
   }
   vec3 v0 = simToView(f, vs);  // eq. 4's V_0 (the delays): the wind's
-  // Eq. 7 about the root of the plant this corner belongs to (per-plant roots), else the layer's;
-  // the plant's species' wind response with it (flexibility, response speed).
-  AnimLayer rooted = f.layers[layer];
-  vec2 response = vec2(1.0);
-  float bestD = 3.0e38, bestA = 3.0e38;
-  for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
-    vec4 r = plantRects[2u * j];
-    if (plantRectBetter(r, pixel, bestD, bestA)) {
-      bestD = plantRectDistance2(r, pixel);
-      bestA = (r.y - r.x) * (r.w - r.z);
-      vec4 species = plantRects[2u * j + 1u];
-      rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
-      response = species.xy;
-    }
-  }
   vec3 vi = v0 + bend;
   if (layer > 0u) {
     float gamma = speciesDelay(f.maxDelay, layerDelay(f.maxDelay, f.layers[layer], v0.z), response.y);

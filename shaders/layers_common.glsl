@@ -67,6 +67,17 @@ uint triangleLayer() {
   return layerOfDepth(f, viewDepth(placed(root)));
 }
 
+// A rigid vertex (docs/design.md "Rigid parts in wind"): how far it follows the foliage (its share)
+// and the layer it follows, that of its anchor's depth (shared/layers.h LAYER_CHUNK_RIGID).
+float rigidShare() {
+  uint entry = layerRigidEntry(inPositionLeaf.w);
+  return entry == LAYER_CHUNK_NO_LEAF ? 1.0 : layerRigidShare(leafRoot[entry].leaf);
+}
+uint rigidLayer(vec3 world) {
+  uint entry = layerRigidEntry(inPositionLeaf.w);
+  return layerOfDepth(f, viewDepth(entry == LAYER_CHUNK_NO_LEAF ? world : placed(leafRoot[entry].position)));
+}
+
 void emitVertex() {
   LayerInstance inst = thisInstance();
   vWorld = (inst.model * vec4(vertexPosition(), 1.0)).xyz;

@@ -20,13 +20,13 @@ layout(location = 4) out vec2 vMotion;
 void main() {
   emitVertex();  // the still vertex: vWorld (the shading's), normal, uv, tint
   vec3 world = vWorld, before = vWorld;
-  float share = hasLeaf() ? 0.0 : layerRigidFlexibility(inPositionLeaf.w);
+  float share = hasLeaf() ? 0.0 : rigidShare();
   vec4 clip = f.viewProj * vec4(vWorld, 1.0);
   if ((rf.flags & RIGID_FLAG_DISPLACE) != 0u && share > 0.0 && clip.w > 0.0 && anim.gridX >= 2u && anim.gridY >= 2u) {
     vec3 ndc = clip.xyz / clip.w;
     vec2 size = vec2(anim.width, anim.height);
     vec2 p = (ndc.xy * 0.5 + 0.5) * size;
-    uint layer = min(layerOfDepth(f, viewDepth(vWorld)), anim.layerCount - 1u);
+    uint layer = min(rigidLayer(vWorld), anim.layerCount - 1u);
     AnimGridSample s = animGridSample(anim.cellSize, anim.gridX, anim.gridY, size, p);
     uint base = layer * anim.gridX * anim.gridY;
     // Shown where the inverse warp shows p (shared/rigid.h RIGID_SHOWN_STEPS).

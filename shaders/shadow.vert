@@ -31,9 +31,9 @@ void main() {
   bool leaf = hasLeaf();
   // A leaf goes with its root's layer; a rigid vertex (rigid parts in wind) with its share of the
   // layer of its own depth, as rigid_follow_draw.glsl draws it.
-  float share = leaf ? 1.0 : (sf.displaceRigid != 0u ? layerRigidFlexibility(inPositionLeaf.w) : 0.0);
+  float share = leaf ? 1.0 : (sf.displaceRigid != 0u ? rigidShare() : 0.0);
   if (sf.displace != 0u && share > 0.0 && anim.gridX >= 2u && anim.gridY >= 2u) {
-    uint layer = min(leaf ? triangleLayer() : layerOfDepth(f, viewDepth(world)), anim.layerCount - 1u);
+    uint layer = min(leaf ? triangleLayer() : rigidLayer(world), anim.layerCount - 1u);
     vec4 clip = f.viewProj * vec4(world, 1.0);
     if (clip.w > 0.0) {
       vec3 ndc = clip.xyz / clip.w;

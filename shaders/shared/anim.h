@@ -30,12 +30,15 @@ struct AnimLayer {
   uint plantCount;
 };
 CANOPY_SIZE_CHECK(AnimLayer, 32)
-// Plant rects the frame block holds after the AnimFrame (all layers together), two vec4 each: the
-// rect (x lo, x hi, top, root row; pixels, y down) at 2j, its species' wind response at 2j + 1
+// Plant rects the frame block holds after the AnimFrame (all layers together), ANIM_RECT_VEC4S vec4
+// each: the rect (x lo, x hi, top, root row; pixels, y down), its species' wind response
 // (flexibility, response speed; docs/design.md "Species: wind response"), and in its z 1 when the
 // rect's root line is eq. 7's (per-plant roots), 0 when the layer's is (the rects then only carry
-// the response).
+// the response), in w eq. 7's h; then in x the view depth at which the plant's corners read the
+// wind field (its centre's: every layer of one plant in the same gust, docs/design.md "Rigid parts
+// in wind"; 0: the layer's depth).
 #define ANIM_MAX_PLANT_RECTS 3072u
+#define ANIM_RECT_VEC4S 3u
 
 struct AnimFrame {
   mat4 invViewProj;   // Vulkan clip -> world (unprojects grid corners)
@@ -104,11 +107,15 @@ CANOPY_INLINE vec2 approximateLookup(AnimFrame f, vec2 a, float gamma, vec2 vs) 
 // GLSL passes a struct by value, and lavapipe copies a frame whose array the callee indexes
 // dynamically on every call (measured on the simulation's motors, docs/performance.md).
 
-// Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1].
+// Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1]. With the
+// world wind (eq. 6 x h) to [0, ANIM_HEIGHT_RELATIVE_REACH]: d = R h x ... is then l x ... (r = 1)
+// up a plant's whole height, whichever row its box's projection puts the top at, and a trunk
+// drawn from its base to its top bends as the leaves along it do (docs/design.md "Rigid parts in wind").
+#define ANIM_HEIGHT_RELATIVE_REACH 2.0f
 CANOPY_INLINE float rigidityFactor(AnimFrame f, AnimLayer layer, float pixelY) {
   if (f.everyPartMoves != 0u) return 1.0f;
   float l = layer.rootLineY - pixelY;
-  float x = clamp(l / max(layer.height, 1.0f), 0.0f, 1.0f);
+  float x = clamp(l / max(layer.height, 1.0f), 0.0f, f.heightRelative != 0u ? ANIM_HEIGHT_RELATIVE_REACH : 1.0f);
   return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
 }
 

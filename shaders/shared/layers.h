@@ -114,10 +114,13 @@ CANOPY_SIZE_CHECK(LayerFadePush, 16)
 // A chunk-local leaf index that means "no leaf" (rigid parts).
 #define LAYER_CHUNK_NO_LEAF 0xffffu
 // The chunk-local leaf field of a rigid vertex (docs/design.md "Rigid parts in wind"): this bit and,
-// in the 15 bits below it, how far the vertex follows the foliage layer of its own depth, 0 (the
-// trunk's base: still) to LAYER_RIGID_FULL (a branch in the crown). A chunk holds at most 65535
-// vertices and a leaf at least one triangle, so leaf indices stay below it; LAYER_CHUNK_NO_LEAF
-// reads as a rigid vertex that follows fully.
+// in the 15 bits below it, the vertex's entry in the rigid chunk's root table (LayerLeafRoot): its
+// anchor (`position`: where the wood around it is centred, whose depth picks the foliage layer it
+// follows, so the front and back of a trunk follow the same one) and its share (`leaf`: 0, the
+// trunk's base, still, to LAYER_RIGID_FULL, a branch in the crown, follows in full). A chunk holds
+// at most 65535 vertices and a leaf at least one triangle, so leaf indices stay below the bit; a
+// rigid chunk holds at most LAYER_RIGID_FULL + 1 vertices. LAYER_CHUNK_NO_LEAF: a rigid vertex
+// without an entry (no wind data: the layers' background).
 #define LAYER_CHUNK_RIGID 0x8000u
 #define LAYER_RIGID_FULL 0x7fffu
 
@@ -189,9 +192,12 @@ CANOPY_INLINE float layerTexelScale(uint halfResolution, uint layer) {
 
 // Whether a vertex's chunk-local leaf field names a leaf, and a rigid vertex's flexibility in [0, 1].
 CANOPY_INLINE bool layerFieldIsLeaf(uint field) { return field < LAYER_CHUNK_RIGID; }
-CANOPY_INLINE float layerRigidFlexibility(uint field) {
-  return field < LAYER_CHUNK_RIGID ? 1.0f : float(field & LAYER_RIGID_FULL) / float(LAYER_RIGID_FULL);
+// A rigid vertex's entry in its chunk's root table, or LAYER_CHUNK_NO_LEAF.
+CANOPY_INLINE uint layerRigidEntry(uint field) {
+  return field >= LAYER_CHUNK_RIGID && field != LAYER_CHUNK_NO_LEAF ? field & LAYER_RIGID_FULL : LAYER_CHUNK_NO_LEAF;
 }
+// The share of an entry's `leaf` word, [0, 1].
+CANOPY_INLINE float layerRigidShare(uint entryLeaf) { return float(min(entryLeaf, LAYER_RIGID_FULL)) / float(LAYER_RIGID_FULL); }
 
 CANOPY_INLINE uint layerOfDepth(LayerFrame f, float depth) {
   uint layer = 0u;

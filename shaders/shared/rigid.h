@@ -1,8 +1,8 @@
 // Rigid parts in wind (docs/design.md "Rigid parts in wind"): the trunks and branches are drawn
 // every frame into the host's targets, each vertex displaced as the composite displaces the foliage
-// layer of its depth, by its share (shared/layers.h layerRigidFlexibility). The displacement lives
-// in the slice camera's layer pixels (docs/design.md "Layers: reprojection"): a vertex goes to its
-// slice pixel p, takes d = share x d_i(p) of layer i = layerOfDepth(its depth), and is unprojected
+// layer of its anchor's depth, by its share (shared/layers.h LAYER_CHUNK_RIGID). The displacement
+// lives in the slice camera's layer pixels (docs/design.md "Layers: reprojection"): a vertex goes to
+// its slice pixel p, takes d = share x d_i(p) of layer i = layerOfDepth(its anchor's depth), and is unprojected
 // from p + d at its own depth, then drawn by the current camera. Read by shaders/rigid_follow.vert,
 // shaders/shadow.vert and the CPU (rigidDisplacedNdc; the attachment-gap bench).
 #ifndef CANOPY_SHARED_RIGID_H

@@ -378,7 +378,7 @@ enum class RootMode { PerPlant, Vegetation };
 // [-vdJitter, vdJitter] (the paper: "a small random number"; 0: the constant).
 #define CANOPY_DYNAMICS_PARAMS(X)                                                                                       \
   X(DelayMode, delay, DelayMode::Exact, Enum, 0, 1, "Exact | Approximate", "eq. 3-4, or eq. 5")                         \
-  X(float, vd, 1.0f, Closed, -1000, 1000, "domain units/s", "V_D of eq. 4 (before 0.7: 2, with L_i in world units)")                                             \
+  X(float, vd, 4.0f, Closed, -1000, 1000, "domain units/s", "V_D of eq. 4 (before 0.8: 1; before 0.7: 2, with L_i in world units)")                                             \
   X(float, propagationSpeed, 0.0f, Closed, 0, 1000, "domain units/s", "s of eq. 5; 0: the wave oscillator's speed c (WaveParams.speed)") \
   X(Float3, lambda, (Float3{18.75f, 18.75f, 9.375f}), Closed, 0, 1e6, "cells (lambdaUnits) per domain unit", "lambda_x,y,z of eq. 6") \
   X(float, rigidity, 1.0f, Closed, 0, 10, "", "r of eq. 7")                                                            \

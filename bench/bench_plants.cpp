@@ -30,6 +30,7 @@
 #include "render/leaf_attach.h"
 #include "render/material_split.h"
 #include "render/plants.h"
+#include "render/plant_sway.h"
 #include "render/rigid_flex.h"
 #include "render/rigid_refine.h"
 #include "shared/rigid.h"
@@ -54,6 +55,8 @@ struct PlantParts {
   std::vector<glm::vec3> layerRoots;  // per leaf, the position its layer is decided by
   std::vector<Attached> attached;
   uint32_t leaves = 0;
+  std::vector<PlantLevers> levers;         // per plant, its levers (render/plant_sway.h)
+  std::vector<float> sway;                 // per plant, its sway scale with the world wind
   VegetationModel refined;                 // the model with its long rigid edges split, when it had any
   const VegetationModel* model = nullptr;  // the one measured: `refined` or the given
 };
@@ -74,6 +77,9 @@ Status plantParts(const VegetationModel& given, const CanopyDesc& desc, PlantPar
   Plants plants;
   std::vector<uint32_t> trianglePlant;
   CANOPY_TRY(findPlants(m, out->roots, &plants, &trianglePlant));
+  CANOPY_TRY(plantSwayScales(m, out->foliage, out->roots, trianglePlant, &plants));
+  CANOPY_TRY(plantLevers(m, out->foliage, out->roots, trianglePlant, plants, &out->levers));
+  out->sway = plants.sway;
   if (split.rigidTriangles) {
     CANOPY_TRY(rigidAnchors(m, out->foliage, out->roots, trianglePlant, &out->rigidAnchors));
     CANOPY_TRY(leafLayerRoots(m, out->foliage, out->roots, &out->layerRoots, &out->rigidAnchors));
@@ -189,32 +195,29 @@ void gaps2D(const VegetationModel& m, const PlantParts& parts, const WarpFrame& 
       if (!f.pixel(moved, &rigid, &zm)) continue;
     }
     out->push_back(glm::length((leaf - rigid) - (pr - pg)));
-    if (std::getenv("CANOPY_DEBUG_GAP") && out->back() > std::atof(std::getenv("CANOPY_DEBUG_GAP"))) {
-      const uint32_t* tri = &m.indices[3 * size_t(a.triangle)];
-      std::fprintf(stderr, "gap %.2f: leaf %u layer-root %.3f %.3f %.3f root layer %u p (%.1f %.1f) z %.3f shown d (%.2f %.2f); rigid p (%.1f %.1f) z %.3f drawn d (%.2f %.2f)", out->back(), a.leaf,
-                   parts.layerRoots.empty() ? 0.0f : parts.layerRoots[a.leaf].x, parts.layerRoots.empty() ? 0.0f : parts.layerRoots[a.leaf].y,
-                   parts.layerRoots.empty() ? 0.0f : parts.layerRoots[a.leaf].z, f.layerOf(zr), pr.x, pr.y, zr, (leaf - pr).x, (leaf - pr).y, pg.x, pg.y, zg, (rigid - pg).x, (rigid - pg).y);
-      for (int k = 0; k < 3; ++k) {
-        glm::vec2 pk, pa;
-        float zk, za;
-        f.pixel(m.positions[tri[k]], &pk, &zk);
-        if (!parts.rigidAnchors.empty() && f.pixel(parts.rigidAnchors[tri[k]].position, &pa, &za)) zk = za;
-        std::fprintf(stderr, " | v%d layer %u share %.2f p (%.0f %.0f)", k, f.layerOf(zk), parts.rigidAnchors.empty() ? 1.0 : gpu::layerRigidShare(parts.rigidAnchors[tri[k]].leaf), pk.x, pk.y);
-      }
-      std::fprintf(stderr, "\n   d per layer at the root:");
-      for (uint32_t j = 0; j < f.anim.layerCount; ++j) std::fprintf(stderr, " (%.2f %.2f)", f.displacement(j, pr).x, f.displacement(j, pr).y);
-      std::fprintf(stderr, "\n   d per layer at v0..2:");
-      for (int k = 0; k < 3; ++k) {
-        glm::vec2 pk; float zk;
-        f.pixel(m.positions[tri[k]], &pk, &zk);
-        std::fprintf(stderr, " [");
-        for (uint32_t j = 0; j < f.anim.layerCount; ++j) std::fprintf(stderr, " %.1f", f.displacement(j, pk).x);
-        const glm::vec2 sh = f.shown(f.layerOf(zk), pk) - pk;
-        std::fprintf(stderr, " shown (%.2f %.2f) rootline %.1f h %.1f ]", sh.x, sh.y, f.anim.layers[f.layerOf(zk)].rootLineY, f.anim.layers[f.layerOf(zk)].height);
-      }
-      std::fprintf(stderr, "\n");
+  }
+}
+
+// The 2D method's trunk base this frame: the largest on-screen shift of a rigid vertex within
+// kFootShare of the model's height above its lowest point, drawn as rigid_follow_draw.glsl draws it
+// (the CPU twin, shared/rigid.h) against where it stands; -1 without rigid parts.
+double baseShift2D(const VegetationModel& m, const PlantParts& parts, const WarpFrame& f) {
+  if (parts.rigidAnchors.size() != m.positions.size()) return -1.0;
+  const float below = m.boundsMin.y + kFootShare * (m.boundsMax.y - m.boundsMin.y);
+  double worst = 0.0;
+  for (size_t t = 0; t < m.triangleCount(); ++t) {
+    if (parts.foliage[t]) continue;
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = m.indices[3 * t + size_t(k)];
+      const glm::vec3 x = m.positions[v];
+      glm::vec2 pa, pv, q;
+      float za, zv, zq;
+      if (x.y > below || !f.pixel(parts.rigidAnchors[v].position, &pa, &za) || !f.pixel(x, &pv, &zv)) continue;
+      const float share = gpu::layerRigidShare(parts.rigidAnchors[v].leaf);
+      if (f.pixel(f.rigidWorld(x, share, f.layerOf(za)), &q, &zq)) worst = std::max(worst, double(glm::length(q - pv)));
     }
   }
+  return worst;
 }
 
 // The per-vertex baseline's gaps this frame: its vertex shader's bend (the CPU twin) of the root and
@@ -394,14 +397,15 @@ Status runFrames(Device& d, const demo::Options& o, const VegetationModel& model
 }
 
 struct MethodResult {
-  std::vector<double> gaps, centroid, base, baseShift;  // baseShift: |the base's centroid - at rest|, px
+  // centroid: the top third's centroid per frame of the sway pass; baseShift: the 2D method's
+  // drawn foot (baseShift2D), the baseline's bottom tenth's pixels' centroid against at rest, px.
+  std::vector<double> gaps, centroid, base, baseShift;
   double bare = 0;
   double gapP99() const { return quantile(gaps, 0.99); }
   double gapMax() const { return gaps.empty() ? 0.0 : *std::max_element(gaps.begin(), gaps.end()); }
-  double sway() const {
-    if (centroid.size() < 2) return 0.0;
-    return *std::max_element(centroid.begin(), centroid.end()) - *std::min_element(centroid.begin(), centroid.end());
-  }
+  // The sway: the range of the top third's centroid between its 5th and 95th percentiles (a range's
+  // ends are single frames; a gust's peak comes seconds apart: docs/performance.md "Real plants in wind").
+  double sway() const { return centroid.size() < 2 ? 0.0 : quantile(centroid, 0.95) - quantile(centroid, 0.05); }
   double baseMax() const { return base.empty() ? 0.0 : *std::max_element(base.begin(), base.end()); }
   double baseShiftMax() const { return baseShift.empty() ? 0.0 : *std::max_element(baseShift.begin(), baseShift.end()); }
 };
@@ -411,6 +415,9 @@ struct PlantRun {
   float speed = 0;
   uint32_t leaves = 0, attached = 0;
   float height = 0, radius = 0;  // the model's bounds: height, half horizontal diagonal (the baseline's fallback trunk and crown)
+  bool rigid = false;            // it has rigid parts (a trunk's base to hold)
+  std::vector<PlantLevers> levers;
+  std::vector<float> sway;
   MethodResult twoD, perVertex;
   double bareStill = 0;
   double bareRatio() const { return bareStill > 0 ? twoD.bare / bareStill : (twoD.bare > 0 ? INFINITY : 1.0); }
@@ -430,6 +437,107 @@ Status plantOptions(const std::string& plant, demo::Options* o, std::string* nam
   return parseSceneKind(plant, &o->scene);
 }
 
+// The windless frames of the 2D method: the rows measured, the base's reference, the bare rigid
+// pixels at rest (with the layers in false colour).
+struct StillFrames {
+  Rows rows;
+  std::vector<std::vector<uint8_t>> plain, layers;
+  double bare = 0;
+};
+
+Status stillFrames(Device& d, const demo::Options& o, const VegetationModel& model, const Pixels& P, StillFrames* out) {
+  out->plain.assign(o.frames, {});
+  out->layers.assign(o.frames, {});
+  demo::Options calm = o;
+  calm.method = AnimationMode::Layers2D;
+  calm.windSpeed = 0.0f;
+  CANOPY_TRY(runFrames(d, calm, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+    out->plain[i] = px;
+    return Status();
+  }));
+  out->rows = rowsOf(P, out->plain[0]);
+  calm.debug = CompositeDebugView::Layers;
+  return runFrames(d, calm, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+    out->bare += bareRigid(P, px);
+    out->layers[i] = px;
+    return Status();
+  });
+}
+
+Pixels pixelsOf(const demo::Options& o) {
+  Pixels P;
+  P.w = o.width;
+  P.h = o.height;
+  const glm::vec3 sky = demo::skySrgb(o);
+  for (int c = 0; c < 3; ++c) P.sky[c] = uint8_t(std::lround(sky[c] * 255.0f));
+  return P;
+}
+
+// The sway pass: both methods at po.swayWidth x po.swayHeight over po.swayFrames frames (the top
+// third's centroid each frame; the rows from a windless frame at that size).
+Status measureSway(Device& d, const demo::Options& o, const VegetationModel& model, const PlantsOptions& po, PlantRun* r) {
+  if (po.swayFrames == 0) return Status();
+  demo::Options s = o;
+  s.width = po.swayWidth;
+  s.height = po.swayHeight;
+  s.frames = 1;
+  s.method = AnimationMode::Layers2D;
+  s.windSpeed = 0.0f;
+  const Pixels P = pixelsOf(s);
+  Rows rows;
+  CANOPY_TRY(runFrames(d, s, model, [&](uint32_t, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+    rows = rowsOf(P, px);
+    return Status();
+  }));
+  s.frames = po.swayFrames;
+  s.windSpeed = r->speed;
+  for (AnimationMode method : {AnimationMode::Layers2D, AnimationMode::PerVertex}) {
+    s.method = method;
+    MethodResult& m = method == AnimationMode::Layers2D ? r->twoD : r->perVertex;
+    CANOPY_TRY(runFrames(d, s, model, [&](uint32_t, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+      m.centroid.push_back(centroidX(P, px, rows));
+      return Status();
+    }));
+  }
+  return Status();
+}
+
+// One wind's gap, base and bare measures for both methods (po.frames frames at po.width x po.height).
+Status measureWind(Device& d, const demo::Options& o, const VegetationModel& model, const PlantParts& parts, const StillFrames& still,
+                   PlantRun* r) {
+  const Pixels P = pixelsOf(o);
+  for (AnimationMode method : {AnimationMode::Layers2D, AnimationMode::PerVertex}) {
+    demo::Options run = o;
+    run.windSpeed = r->speed;
+    run.method = method;
+    MethodResult& m = method == AnimationMode::Layers2D ? r->twoD : r->perVertex;
+    CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext* ctx, const glm::mat4& vp) {
+      if (method == AnimationMode::PerVertex) {
+        // The baseline's base: every pixel of the bottom tenth (it draws no false colours).
+        m.base.push_back(baseChange(P, px, still.plain[i], still.rows));
+        const double shift = std::abs(baseCentroid(P, px, still.rows, false) - baseCentroid(P, still.plain[i], still.rows, false));
+        if (std::isfinite(shift)) m.baseShift.push_back(shift);
+        gapsPerVertex(*parts.model, parts, ctx, vp, glm::vec2(o.width, o.height), &m.gaps);
+        return Status();
+      }
+      WarpFrame f;
+      CANOPY_TRY(readWarp(d, ctx, &f));
+      gaps2D(*parts.model, parts, f, rigidFollows(canopyLayers(ctx)), &m.gaps);
+      const double foot = baseShift2D(*parts.model, parts, f);
+      if (foot >= 0.0) m.baseShift.push_back(foot);
+      return Status();
+    }));
+    if (method != AnimationMode::Layers2D) continue;
+    run.debug = CompositeDebugView::Layers;
+    CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
+      m.bare += bareRigid(P, px);
+      m.base.push_back(baseChange(P, px, still.layers[i], still.rows, true));
+      return Status();
+    }));
+  }
+  return Status();
+}
+
 Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant, std::vector<PlantRun>* runs) {
   demo::Options o;
   std::string name;
@@ -437,6 +545,7 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
   o.width = po.width;
   o.height = po.height;
   o.frames = po.frames;
+  o.warmupSeconds = po.warmup;
   o.attachRoots = !po.before;
   o.rigidMotion = po.before ? RigidMotion::Still : RigidMotion::FollowFoliage;
   o.method = AnimationMode::PerVertex;  // the model with its hierarchy (a generated one): both methods
@@ -449,79 +558,8 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
   desc.roots.attachRoots = o.attachRoots;
   PlantParts parts;
   CANOPY_TRY(plantParts(model, desc, &parts));
-  if (std::getenv("CANOPY_SHAPE_ONLY")) {  // TEMP
-    std::vector<glm::vec3> lo(parts.leaves, glm::vec3(INFINITY)), hi(parts.leaves, glm::vec3(-INFINITY));
-    std::vector<double> tris(parts.leaves, 0);
-    for (size_t t = 0; t < model.triangleCount(); ++t) {
-      if (!parts.foliage[t]) continue;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = model.indices[3 * t + k], l = parts.roots.leafOfVertex[v];
-        if (l == kNoLeaf) continue;
-        lo[l] = glm::min(lo[l], model.positions[v]); hi[l] = glm::max(hi[l], model.positions[v]);
-        if (k == 0) tris[l] += 1;
-      }
-    }
-    double sum = 0, w = 0, fol = 0;
-    for (uint32_t l = 0; l < parts.leaves; ++l) { sum += tris[l] * glm::length(hi[l] - lo[l]); w += tris[l]; }
-    for (uint8_t f : parts.foliage) fol += f;
-    const float H = model.boundsMax.y - model.boundsMin.y;
-    {
-      // The per-vertex fallback's lever over the 2D method's, foliage vertices of the top third.
-      const glm::vec3 c = 0.5f * (model.boundsMin + model.boundsMax);
-      const float R = std::max(0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z)), 1e-6f);
-      const float yTop = model.boundsMax.y, y0 = model.boundsMin.y;
-      double pv = 0, twoD = 0, trunkS = 0, branchS = 0, leafS = 0;
-      std::vector<uint8_t> seen(model.positions.size(), 0);
-      for (size_t t = 0; t < model.triangleCount(); ++t) {
-        if (!parts.foliage[t]) continue;
-        for (int k = 0; k < 3; ++k) {
-          const uint32_t v = model.indices[3 * t + k];
-          if (seen[v]) continue;
-          seen[v] = 1;
-          const glm::vec3 p = model.positions[v];
-          if (p.y < yTop - (yTop - y0) / 3.0f) continue;
-          const uint32_t l = parts.roots.leafOfVertex[v];
-          const glm::vec3 r = l == kNoLeaf ? p : model.positions[parts.roots.leafRoot[l]];
-          const float h = p.y - y0;
-          const float xr = std::min(glm::length(glm::vec2(r.x - c.x, r.z - c.z)) / R, 1.0f);
-          const glm::vec3 pivot(c.x, r.y, c.z);
-          const double trunk = 0.045 * std::pow(h / H, 1.5) * h, branch = 0.079 * std::pow(xr, 1.5) * glm::length(p - pivot),
-                       leaf = 0.3375 * glm::length(p - r);
-          trunkS += trunk; branchS += branch; leafS += leaf;
-          pv += trunk + branch + leaf;
-          twoD += h;
-        }
-      }
-      std::printf("LEVER %s pv/2d %.4f (trunk %.4f branch %.4f leaf %.4f)\n", name.c_str(), pv / std::max(twoD, 1e-9), trunkS / twoD, branchS / twoD, leafS / twoD);
-    }
-    std::printf("SHAPE %s H %.3f R %.3f leaves %u leafsize/H %.3f foliageShare %.2f\n", name.c_str(), H,
-                0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z)), parts.leaves,
-                w > 0 ? sum / w / H : 0.0, fol / double(parts.foliage.size()));
-    return Status();
-  }
-  Pixels P;
-  P.w = o.width;
-  P.h = o.height;
-  const glm::vec3 sky = demo::skySrgb(o);
-  for (int c = 0; c < 3; ++c) P.sky[c] = uint8_t(std::lround(sky[c] * 255.0f));
-  // The windless frames: the rows measured, the base's reference, the bare rigid pixels at rest.
-  std::vector<std::vector<uint8_t>> still(o.frames);
-  demo::Options calm = o;
-  calm.method = AnimationMode::Layers2D;
-  calm.windSpeed = 0.0f;
-  CANOPY_TRY(runFrames(d, calm, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
-    still[i] = px;
-    return Status();
-  }));
-  const Rows rows = rowsOf(P, still[0]);
-  double bareStill = 0;
-  std::vector<std::vector<uint8_t>> stillLayers(o.frames);
-  calm.debug = CompositeDebugView::Layers;
-  CANOPY_TRY(runFrames(d, calm, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
-    bareStill += bareRigid(P, px);
-    stillLayers[i] = px;
-    return Status();
-  }));
+  StillFrames still;
+  if (po.frames) CANOPY_TRY(stillFrames(d, o, model, pixelsOf(o), &still));
   for (const std::string& wind : po.winds) {
     PlantRun r;
     r.plant = name;
@@ -531,44 +569,16 @@ Status measurePlant(Device& d, const PlantsOptions& po, const std::string& plant
     r.height = model.boundsMax.y - model.boundsMin.y;
     r.radius = 0.5f * glm::length(glm::vec2(model.boundsMax.x - model.boundsMin.x, model.boundsMax.z - model.boundsMin.z));
     r.attached = uint32_t(parts.attached.size());
-    r.bareStill = bareStill;
-    for (AnimationMode method : {AnimationMode::Layers2D, AnimationMode::PerVertex}) {
-      demo::Options run = o;
-      run.windSpeed = r.speed;
-      run.method = method;
-      MethodResult& m = method == AnimationMode::Layers2D ? r.twoD : r.perVertex;
-      CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext* ctx, const glm::mat4& vp) {
-        m.centroid.push_back(centroidX(P, px, rows));
-        // The baseline's base: every pixel (it draws no false colours); the 2D method's: its rigid
-        // pixels, from the false-colour frames below.
-        if (method == AnimationMode::PerVertex) {
-          m.base.push_back(baseChange(P, px, still[i], rows));
-          const double shift = std::abs(baseCentroid(P, px, rows, false) - baseCentroid(P, still[i], rows, false));
-          if (std::isfinite(shift)) m.baseShift.push_back(shift);
-        }
-        if (method == AnimationMode::PerVertex) {
-          gapsPerVertex(*parts.model, parts, ctx, vp, glm::vec2(o.width, o.height), &m.gaps);
-          return Status();
-        }
-        WarpFrame f;
-        CANOPY_TRY(readWarp(d, ctx, &f));
-        gaps2D(*parts.model, parts, f, rigidFollows(canopyLayers(ctx)), &m.gaps);
-        return Status();
-      }));
-      if (method == AnimationMode::Layers2D) {
-        run.debug = CompositeDebugView::Layers;
-        CANOPY_TRY(runFrames(d, run, model, [&](uint32_t i, const std::vector<uint8_t>& px, CanopyContext*, const glm::mat4&) {
-          m.bare += bareRigid(P, px);
-          m.base.push_back(baseChange(P, px, stillLayers[i], rows, true));
-          const double shift = std::abs(baseCentroid(P, px, rows, true) - baseCentroid(P, stillLayers[i], rows, true));
-          if (std::isfinite(shift)) m.baseShift.push_back(shift);
-          return Status();
-        }));
-      }
-    }
-    std::printf("%-26s %-6s %5u/%-6u | %6.2f %6.2f | %6.2f %6.2f | %5.1f %5.1f %5.2f | %5.2f %5.2f | %6.2f\n", name.c_str(),
+    r.rigid = !parts.rigidAnchors.empty();
+    r.levers = parts.levers;
+    r.sway = parts.sway;
+    r.bareStill = still.bare;
+    if (po.frames) CANOPY_TRY(measureWind(d, o, model, parts, still, &r));
+    CANOPY_TRY(measureSway(d, o, model, po, &r));
+    std::printf("%-26s %-6s %5u/%-6u | %6.2f %6.2f | %6.2f %6.2f | %5.1f %5.1f %5.2f | %5s %5.2f | %6.2f\n", name.c_str(),
                 wind.c_str(), r.attached, r.leaves, r.twoD.gapP99(), r.twoD.gapMax(), r.perVertex.gapP99(), r.perVertex.gapMax(),
-                r.twoD.sway(), r.perVertex.sway(), r.swayRatio(), r.twoD.baseShiftMax(), r.perVertex.baseShiftMax(), r.bareRatio());
+                r.twoD.sway(), r.perVertex.sway(), r.swayRatio(), r.rigid ? std::to_string(r.twoD.baseShiftMax()).substr(0, 5).c_str() : "n/a",
+                r.perVertex.baseShiftMax(), r.bareRatio());
     std::fflush(stdout);
     runs->push_back(std::move(r));
   }
@@ -585,7 +595,13 @@ void writeJson(const std::string& path, const std::vector<PlantRun>& runs, const
       << ", \"attached\": " << r.attached << ", \"height\": " << r.height << ", \"radius\": " << r.radius;
     for (const auto& [key, m] : {std::pair<const char*, const MethodResult*>{"2d", &r.twoD}, {"pv", &r.perVertex}})
       f << ", \"" << key << "\": {\"gap_p99_px\": " << m->gapP99() << ", \"gap_max_px\": " << m->gapMax() << ", \"sway_px\": " << m->sway()
-        << ", \"base_changed_max\": " << m->baseMax() << ", \"base_shift_max_px\": " << m->baseShiftMax() << "}";
+        << ", \"base_changed_max\": " << m->baseMax() << ", \"base_shift_max_px\": "
+        << (m == &r.twoD && !r.rigid ? std::string("null") : std::to_string(m->baseShiftMax())) << "}";
+    f << ", \"plants\": [";
+    for (size_t p = 0; p < r.levers.size(); ++p)
+      f << (p ? ", " : "") << "{\"trunk\": " << r.levers[p].trunk << ", \"branch\": " << r.levers[p].branch << ", \"leaf\": " << r.levers[p].leaf
+        << ", \"sway_scale\": " << (p < r.sway.size() ? r.sway[p] : 1.0f) << "}";
+    f << "]";
     f << ", \"sway_ratio\": " << r.swayRatio() << ", \"bare_rigid_2d\": " << r.twoD.bare << ", \"bare_rigid_still\": " << r.bareStill
       << ", \"bare_rigid_ratio\": " << r.bareRatio() << "}" << (i + 1 < runs.size() ? "," : "") << "\n";
   }
@@ -598,9 +614,10 @@ void writeTable(const std::string& path, const std::vector<PlantRun>& runs) {
        "per-vertex | bare rigid, gale / still |\n|---|---|---|---|---|---|---|---|\n";
   char line[512];
   for (const PlantRun& r : runs) {
-    std::snprintf(line, sizeof line, "| %s | %s | %u of %u | %.2f / %.2f px | %.2f / %.2f px | %.1f / %.1f px (%.2f) | %.2f / %.2f px | %s |\n",
+    std::snprintf(line, sizeof line, "| %s | %s | %u of %u | %.2f / %.2f px | %.2f / %.2f px | %.1f / %.1f px (%.2f) | %s / %.2f px | %s |\n",
                   r.plant.c_str(), r.wind.c_str(), r.attached, r.leaves, r.twoD.gapP99(), r.twoD.gapMax(), r.perVertex.gapP99(),
-                  r.perVertex.gapMax(), r.twoD.sway(), r.perVertex.sway(), r.swayRatio(), r.twoD.baseShiftMax(), r.perVertex.baseShiftMax(),
+                  r.perVertex.gapMax(), r.twoD.sway(), r.perVertex.sway(), r.swayRatio(),
+                  r.rigid ? std::to_string(r.twoD.baseShiftMax()).substr(0, 4).c_str() : "n/a", r.perVertex.baseShiftMax(),
                   r.wind == "gale" ? (std::to_string(r.bareRatio()).substr(0, 4)).c_str() : "-");
     f << line;
   }
@@ -609,11 +626,13 @@ void writeTable(const std::string& path, const std::vector<PlantRun>& runs) {
 }  // namespace
 
 int runPlantsBench(Device& d, const PlantsOptions& po) {
-  std::printf("\nReal plants in wind (%ux%u, %u frames after a 2 s warm-up, canopy-demo's camera; %s). Gap: a leaf's root against the\n"
-              "rigid point it grows from on screen, less the same at rest (px); sway: range of the top third's centroid (px); base: the\n"
-              "largest shift of the bottom tenth's rigid pixels' centroid from the windless frame's (px; per-vertex: all its pixels);\n"
-              "bare: rigid pixels in the crown > 3 px from foliage, gale / still.\n",
-              po.width, po.height, po.frames, po.before ? "before issue 77: still background, paper roots" : "as shipped");
+  std::printf("\nReal plants in wind (%ux%u, %u frames after a %.0f s warm-up, canopy-demo's camera; %s). Gap: a leaf's root against\n"
+              "the rigid point it grows from on screen, less the same at rest (px); sway: the top third's centroid, 5th to 95th\n"
+              "percentile over %u frames at %ux%u (px); base: the largest shift of a rigid vertex in the bottom 5 %% of the plant as\n"
+              "drawn (px; n/a: no rigid part; per-vertex: its bottom tenth's pixels' centroid); bare: rigid pixels in the crown > 3 px\n"
+              "from foliage, gale / still.\n",
+              po.width, po.height, po.frames, double(po.warmup), po.before ? "before issue 77: still background, paper roots" : "as shipped",
+              po.swayFrames, po.swayWidth, po.swayHeight);
   std::printf("%-26s %-6s %-12s | %-13s | %-13s | %-17s | %-11s | %s\n", "plant", "wind", "attached", "2D gap p99/max",
               "pv gap p99/max", "sway 2D/pv ratio", "base px 2D/pv", "bare");
   std::vector<PlantRun> runs;
@@ -647,11 +666,11 @@ int runPlantsBench(Device& d, const PlantsOptions& po) {
       std::printf("check: %s %s: gap p99 %.2f px > %.1f\n", r.plant.c_str(), r.wind.c_str(), r.twoD.gapP99(), gapBound);
       ++bad;
     }
-    if (r.twoD.baseShiftMax() > 0.5) {
+    if (r.rigid && r.twoD.baseShiftMax() > 0.5) {
       std::printf("check: %s %s: the trunk's base moved %.2f px > 0.5\n", r.plant.c_str(), r.wind.c_str(), r.twoD.baseShiftMax());
       ++bad;
     }
-    if (r.wind == "breeze" && r.plant.rfind("generated", 0) != 0 && (r.swayRatio() < 0.67 || r.swayRatio() > 1.5)) {
+    if (po.swayFrames && r.wind == "breeze" && r.plant.rfind("generated", 0) != 0 && (r.swayRatio() < 0.67 || r.swayRatio() > 1.5)) {
       std::printf("check: %s breeze: sway 2D / per-vertex %.2f outside [0.67, 1.5]\n", r.plant.c_str(), r.swayRatio());
       ++bad;
     }

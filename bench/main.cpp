@@ -93,7 +93,9 @@ static int usage(const char* why) {
                "                 2D method beside the per-vertex baseline: the attachment gap (a leaf's root against the\n"
                "                 rigid point it grows from, on screen), the sway, the trunk's base, bare rigid pixels in\n"
                "                 the crown (--size default 640x480, --frames default 90, --json default bench_plants.json,\n"
-               "                 --table FILE, --check: exit 1 outside issue 77's bounds, --before: as before issue 77)\n"
+               "                 --table FILE, --check: exit 1 outside issue 77's bounds, --before: as before issue 77,\n"
+               "                 --warmup S: seconds run before the first measured frame, default 2; --sway-frames N:\n"
+               "                 the sway pass's frames at 320x240, default 1800 = 60 s, 0: none)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"
@@ -199,6 +201,13 @@ struct Args {
       if (!forEachItem(next(), [&](const std::string& it) { plants.plants.push_back(it); return true; }))
         return usage("--plants needs a list: tree:FILE.glb, ..., or generated scene names (tree, shrub, ...)");
     } else if (a == "--before") plants.before = true;
+    else if (a == "--sway-frames") {
+      float v = 0;
+      if (!parseNumber(next(), 0.0f, 1e6f, &v)) return usage("--sway-frames needs a frame count in [0, 1000000]");
+      plants.swayFrames = uint32_t(v);
+    } else if (a == "--warmup") {
+      if (!parseNumber(next(), 0.0f, 600.0f, &plants.warmup)) return usage("--warmup needs seconds in [0, 600]");
+    }
     else if (a == "--scenes") {
       picture.scenes.clear();
       if (!forEachItem(next(), [&](const std::string& it) { picture.scenes.push_back(it); return true; }))

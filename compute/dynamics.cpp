@@ -132,8 +132,21 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     bool response = false;
     for (const DynamicsLayer& dl : d.layers)
       for (const glm::vec3& r : dl.plantResponse) response = response || glm::vec2(r) != glm::vec2(1.0f) || (d.heightSway > 0.0f && r.z != 1.0f);
-    const float ownRoot = p.roots == RootMode::PerPlant ? 1.0f : 0.0f;
-    if ((p.roots == RootMode::PerPlant || response) && total <= ANIM_MAX_PLANT_RECTS)
+    // One plant (at most a rect a layer, each the same plant's: the same x range and root row) takes
+    // its own root only to carry a response (the placement adds its rects for the world wind's
+    // sway scale even so); else the layer's root line stands, as for any single plant.
+    bool several = false;
+    const glm::vec4* first = nullptr;
+    for (const DynamicsLayer& dl : d.layers) {
+      several = several || dl.plants.size() > 1;
+      if (dl.plants.empty()) continue;
+      const glm::vec4& r = dl.plants[0];
+      if (!first) first = &r;
+      else several = several || r.x != first->x || r.y != first->y || r.w != first->w;
+    }
+    const bool rooted = p.roots == RootMode::PerPlant && (several || response);
+    const float ownRoot = rooted ? 1.0f : 0.0f;
+    if ((rooted || response) && total <= ANIM_MAX_PLANT_RECTS)
       for (uint32_t i = 0; i < n; ++i) {
         const DynamicsLayer& dl = d.layers[i];
         f.layers[i].firstPlant = uint32_t(plantRects->size() / ANIM_RECT_VEC4S);
@@ -148,7 +161,8 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
           // The field's sample depth: the plant's centre with the world wind (one gust for all its
           // layers), the layer's otherwise (the paper's: each layer where it lies).
           const float depth = j < dl.plantDepth.size() && d.heightSway > 0.0f ? dl.plantDepth[j] : 0.0f;
-          plantRects->push_back(glm::vec4(depth, 0.0f, 0.0f, 0.0f));
+          const float woodOnly = j < dl.plantWoodOnly.size() ? float(dl.plantWoodOnly[j]) : 0.0f;
+          plantRects->push_back(glm::vec4(depth, woodOnly, 0.0f, 0.0f));
         }
       }
   }

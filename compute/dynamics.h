@@ -38,6 +38,7 @@ struct DynamicsLayer {
   std::vector<glm::vec3> plantResponse;
   std::vector<float> plantHeight;        // per rect: eq. 7's h, pixels (LayerInfo::plantHeight); empty or 0: the rect's rows
   std::vector<float> plantDepth;         // per rect: the plant's centre's view depth (LayerInfo::plantDepth); empty or 0: the layer's
+  std::vector<uint8_t> plantWoodOnly;    // per rect: 1 where the plant has no leaves in the layer (LayerInfo::plantWoodOnly); empty: 0
 };
 
 struct DynamicsFrameDesc {

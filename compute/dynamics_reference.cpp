@@ -55,14 +55,14 @@ std::vector<glm::vec2> referenceDisplacement(const gpu::AnimFrame& f, const std:
       float bestD = 3.0e38f, bestA = 3.0e38f;
       const uint32_t k = ANIM_RECT_VEC4S;
       for (uint32_t j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount && k * j + 2 < plantRects.size(); ++j) {
-        const glm::vec4 r = plantRects[k * j];
-        if (gpu::plantRectBetter(r, pixel, bestD, bestA)) {
+        const glm::vec4 r = plantRects[k * j], place = plantRects[k * j + 2];  // sample depth, wood only
+        if (gpu::plantRectBetter(r, place.y, pixel, bestD, bestA)) {
           bestD = gpu::plantRectDistance2(r, pixel);
-          bestA = (r.y - r.x) * (r.w - r.z);
+          bestA = gpu::plantRectRank(r, place.y);
           const glm::vec4 species = plantRects[k * j + 1];
           rooted = species.z > 0.0f ? gpu::withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
           response = glm::vec2(species);
-          sampleDepth = plantRects[k * j + 2].x;
+          sampleDepth = place.x;
         }
       }
       const glm::vec2 a = cornerSimCoord(f, layer, gx, gy, sampleDepth);

@@ -439,7 +439,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   fd.view = slice;
   fd.plane = c->plane;
   for (const LayerInfo& l : c->layers.visible.layers)
-    fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants, l.plantResponse, l.plantHeight, l.plantDepth});
+    fd.layers.push_back({l.slab.depth, l.slab.distance, l.rootLineY, l.height, l.plants, l.plantResponse, l.plantHeight, l.plantDepth, l.plantWoodOnly});
   fd.width = c->layers.desc.width;  // the layer images: the output and the guard band
   fd.height = c->layers.desc.height;
   fd.simSize = sim.n;

@@ -61,18 +61,26 @@ void placePlants(PlacementJob& job, const Plants& plants, const std::vector<Mesh
       const size_t slot = job.plantBase[k] + (p - sp.firstPlant);
       float xlo = INFINITY, xhi = -INFINITY, bottom = -INFINITY;
       bool behind = false;
-      for (int c = 0; c < 8; ++c) {
-        const glm::vec4 q((c & 1) ? plants.boundsMax[p].x : plants.boundsMin[p].x, (c & 2) ? plants.boundsMax[p].y : plants.boundsMin[p].y,
-                          (c & 4) ? plants.boundsMax[p].z : plants.boundsMin[p].z, 1.0f);
+      // The x range from the whole box; the root line from the foot's box: seen from above, a wide
+      // crown's box corner in front of the trunk projects rows below the trunk's foot, and the
+      // plant then leaned about a line under it, its foot sliding (issue 77).
+      const bool hasFoot = p < plants.footMin.size();
+      for (int c = 0; c < 16 && !behind; ++c) {
+        const bool box = c < 8;
+        const glm::vec3 lo = box || !hasFoot ? plants.boundsMin[p] : plants.footMin[p];
+        const glm::vec3 hi = box || !hasFoot ? plants.boundsMax[p] : plants.footMax[p];
+        const glm::vec4 q((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z, 1.0f);
         const float cw = glm::dot(job.rowsW[k], q);
         if (cw <= 1e-6f) {
           behind = true;
           break;
         }
         const float x = (glm::dot(job.rowsX[k], q) / cw * 0.5f + 0.5f) * w, y = (glm::dot(job.rowsY[k], q) / cw * 0.5f + 0.5f) * h;
-        xlo = std::min(xlo, x);
-        xhi = std::max(xhi, x);
-        bottom = std::max(bottom, y);
+        if (box) {
+          xlo = std::min(xlo, x);
+          xhi = std::max(xhi, x);
+        }
+        if (!box || !hasFoot) bottom = std::max(bottom, y);
       }
       if (behind) continue;
       bottom = std::min(bottom, 2.0f * h);  // as the layers' root line (finish)
@@ -83,23 +91,29 @@ void placePlants(PlacementJob& job, const Plants& plants, const std::vector<Mesh
       const glm::vec3 mid = 0.5f * (plants.boundsMin[p] + plants.boundsMax[p]);
       const glm::vec4 foot(mid.x, plants.boundsMin[p].y, mid.z, 1.0f), head(mid.x, plants.boundsMax[p].y, mid.z, 1.0f);
       const float fw = glm::dot(job.rowsW[k], foot), hw = glm::dot(job.rowsW[k], head);
-      const float upright = fw > 1e-6f && hw > 1e-6f
-                                ? std::clamp((glm::dot(job.rowsY[k], foot) / fw - glm::dot(job.rowsY[k], head) / hw) * 0.5f * h, 0.0f, 2.0f * h)
-                                : 0.0f;
+      float upright = fw > 1e-6f && hw > 1e-6f
+                          ? std::clamp((glm::dot(job.rowsY[k], foot) / fw - glm::dot(job.rowsY[k], head) / hw) * 0.5f * h, 0.0f, 2.0f * h)
+                          : 0.0f;
       // Its top over every layer: a layer it has no leaves in still gets its rect when it has rigid
       // parts, which follow the layer of their own depth (docs/design.md "Rigid parts in wind").
       float topAll = INFINITY;
       for (uint32_t i = 0; i < layers; ++i) topAll = std::min(topAll, job.plantTop[slot * layers + i]);
+      // Never taller than the plant stands above its root line on screen, so its top leaves reach
+      // R = 1 (eq. 7): seen from above, the box's top at its centre lies above the crown's top as
+      // seen, and the root line (its foot) below the box's centre's foot.
+      if (std::isfinite(topAll) && upright > 0.0f) upright = std::max(std::min(upright, bottom - std::max(topAll, -h)), 1.0f);
       const bool wood = p < plants.rigid.size() && plants.rigid[p];
       for (uint32_t i = 0; i < layers; ++i) {
         float top = std::max(job.plantTop[slot * layers + i], -h);
-        if (!std::isfinite(top) && wood) top = std::max(topAll, -h);
+        const bool woodOnly = !std::isfinite(top) && wood;
+        if (woodOnly) top = std::max(topAll, -h);
         if (!std::isfinite(top)) continue;
         job.layers[i].plants.push_back(glm::vec4(xlo, xhi, std::min(top, bottom - 1.0f), bottom));
         job.layers[i].plantKeys.push_back(uint32_t(slot));
         job.layers[i].plantResponse.push_back(glm::vec3(sp.flexibility, sp.responseSpeed, p < plants.sway.size() ? plants.sway[p] : 1.0f));
         job.layers[i].plantHeight.push_back(upright);
         job.layers[i].plantDepth.push_back(std::max(glm::dot(job.depthRows[k], glm::vec4(mid, 1.0f)), 0.0f));
+        job.layers[i].plantWoodOnly.push_back(woodOnly ? 1 : 0);
       }
     }
   }

@@ -61,6 +61,9 @@ struct LayerInfo {
   // Per plant rect, the view depth of the plant's box's centre: where every layer of it reads the
   // wind field with the world wind (docs/design.md "Rigid parts in wind").
   std::vector<float> plantDepth;
+  // Per plant rect, 1 where the plant has no leaves in this layer and the rect serves its rigid parts
+  // only (a corner inside a plant's leaves' rect takes that one: shared/anim.h plantRectBetter).
+  std::vector<uint8_t> plantWoodOnly;
 };
 
 // The placement's stages, in order (advancePlacement runs them until a deadline and resumes).

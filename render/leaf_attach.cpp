@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/plants.h"
+
 namespace canopy {
 
 glm::vec3 closestPointOnTriangle(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
@@ -45,8 +47,18 @@ RigidGrid buildRigidGrid(const VegetationModel& m, const std::vector<uint8_t>& f
   g.model = &m;
   const size_t nt = m.triangleCount();
   const float diagonal = glm::length(m.boundsMax - m.boundsMin);
-  g.reach = maxDistance > 0.0f ? maxDistance : kAttachShare * diagonal;
-  if (!(g.reach > 0.0f) || !std::isfinite(g.reach) || foliage.size() != nt) return g;
+  if (foliage.size() != nt) return g;
+  // Each rigid triangle's reach: kAttachShare of its own plant's height (a file of many plants; the
+  // height, not the box's diagonal, so a copy turned about the vertical reaches as far).
+  g.reachOf.assign(nt, maxDistance);
+  if (!(maxDistance > 0.0f)) {
+    const std::vector<glm::vec3> size = plantSizeOfTriangles(m);
+    for (size_t t = 0; t < nt; ++t) g.reachOf[t] = kAttachShare * size[t].y;
+  }
+  g.reach = 0.0f;
+  for (size_t t = 0; t < nt; ++t)
+    if (!foliage[t] && std::isfinite(g.reachOf[t])) g.reach = std::max(g.reach, g.reachOf[t]);
+  if (!(g.reach > 0.0f) || !std::isfinite(g.reach)) return g;
   // The cell: the reach, or the rigid triangles' median extent where that is larger (a big trunk
   // triangle then spans a few cells, not thousands).
   std::vector<float> extents;
@@ -64,8 +76,8 @@ RigidGrid buildRigidGrid(const VegetationModel& m, const std::vector<uint8_t>& f
   for (size_t t = 0; t < nt; ++t) {
     if (foliage[t]) continue;
     const glm::vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]], c = m.positions[m.indices[3 * t + 2]];
-    const glm::ivec3 lo = cellOf(g, glm::min(glm::min(a, b), c) - glm::vec3(g.reach)),
-                     hi = cellOf(g, glm::max(glm::max(a, b), c) + glm::vec3(g.reach));
+    const glm::ivec3 lo = cellOf(g, glm::min(glm::min(a, b), c) - glm::vec3(g.reachOf[t])),
+                     hi = cellOf(g, glm::max(glm::max(a, b), c) + glm::vec3(g.reachOf[t]));
     // A triangle far larger than the cells (a ground plane) is capped: it is found from the cells
     // around its corners and centre, not every cell it covers.
     const glm::ivec3 span = hi - lo + 1;
@@ -90,7 +102,7 @@ bool nearestRigidPoint(const RigidGrid& g, const glm::vec3& p, LeafAttachment* o
     const glm::vec3 q = closestPointOnTriangle(p, m.positions[m.indices[3 * t]], m.positions[m.indices[3 * t + 1]],
                                                m.positions[m.indices[3 * t + 2]]);
     const float d = glm::length(p - q);
-    if (d <= g.reach && d < out->distance) {
+    if (d <= g.reachOf[t] && d < out->distance) {
       out->distance = d;
       out->rigidPoint = q;
       out->triangle = t;

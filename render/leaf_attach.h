@@ -21,9 +21,9 @@
 
 namespace canopy {
 
-// A leaf meets the rigid parts when a vertex of it lies within this share of the model's bounding
-// diagonal of a rigid triangle.
-inline constexpr float kAttachShare = 0.01f;
+// A leaf meets the rigid parts when a vertex of it lies within this share of its plant's height of a
+// rigid triangle (the height, which turning a copy about the vertical keeps, not the box's diagonal).
+inline constexpr float kAttachShare = 0.014f;
 
 struct LeafAttachment {
   uint32_t vertex = kNoLeaf;  // the leaf's vertex nearest the rigid parts (model index); kNoLeaf: not attached
@@ -35,18 +35,20 @@ struct LeafAttachment {
 // The rigid triangles in a uniform grid, for nearest-point queries within `reach`.
 struct RigidGrid {
   const VegetationModel* model = nullptr;
-  float reach = 0.0f, cell = 1.0f;
+  float reach = 0.0f, cell = 1.0f;  // the largest reach
+  std::vector<float> reachOf;        // per triangle, its reach
   glm::vec3 origin{0.0f};
   std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
 };
-// `reach` <= 0: kAttachShare of the model's bounding diagonal. The grid points into `model`.
+// `reach` <= 0: kAttachShare of the height of each rigid triangle's plant
+// (render/plants.h plantSizeOfTriangles). The grid points into `model`.
 RigidGrid buildRigidGrid(const VegetationModel& model, const std::vector<uint8_t>& foliage, float reach);
 // The rigid point nearest p within the grid's reach, or false.
 bool nearestRigidPoint(const RigidGrid& grid, const glm::vec3& p, LeafAttachment* out);
 
 // The attachment of every leaf of `roots` (leafOfVertex, leafRoot) to the triangles that are not
 // foliage (`foliage` per triangle), within `maxDistance` model units (<= 0: kAttachShare of the
-// model's bounding diagonal); leaves farther from every rigid triangle are not attached.
+// rigid triangle's plant's height); leaves farther from every rigid triangle are not attached.
 Status findLeafAttachments(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
                            float maxDistance, std::vector<LeafAttachment>* out);
 

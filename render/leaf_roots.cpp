@@ -177,6 +177,12 @@ uint64_t leafRootKey(const VegetationModel& m, const std::vector<uint8_t>& folia
   h = hashBytes(h, m.uvs.data(), m.uvs.size() * sizeof(glm::vec2));
   h = hashBytes(h, m.indices.data(), m.indices.size() * sizeof(uint32_t));
   h = hashBytes(h, foliage.data(), foliage.size());
+  // The attachment reach is a share of each plant's height (render/leaf_attach.h): the plants too,
+  // and the rule's revision (2: per plant, issue 77).
+  if (o.attachRoots) {
+    h = hashBytes(h ^ (0x2ull << 8), m.trianglePlant.data(), m.trianglePlant.size() * sizeof(uint32_t));
+    h ^= m.mergeOverlappingPlants ? 0x100000ull : 0;
+  }
   return h;
 }
 

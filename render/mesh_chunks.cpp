@@ -71,10 +71,11 @@ uint32_t chunkLeaf(const gpu::LayerVertex& v) {
 
 uint32_t chunkRigidEntry(const gpu::LayerVertex& v) { return gpu::layerRigidEntry(v.positionZLeaf >> 16); }
 
-Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
-                        const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
-                        const CompactMeshOptions& o, CompactMesh* out, const Progress& progress) {
-  *out = CompactMesh{};
+namespace {
+
+// The options and the per-vertex and per-triangle arrays buildCompactMesh reads, checked.
+Status checkCompactMeshInput(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder, const LeafRoots& roots,
+                             const CompactMeshOptions& o) {
   if (o.maxChunkVertices < 3 || o.maxChunkVertices > kMaxChunkVertices)
     return Status::error("mesh chunks: maxChunkVertices " + std::to_string(o.maxChunkVertices) + " is outside 3.." +
                          std::to_string(kMaxChunkVertices));
@@ -89,6 +90,17 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
   if (!triangleOrder.empty() && triangleOrder.size() != nt)
     return Status::error("mesh chunks: the triangle order has " + std::to_string(triangleOrder.size()) + " entries for " +
                          std::to_string(nt) + " triangles");
+  return Status();
+}
+
+}  // namespace
+
+Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& triangleOrder,
+                        const std::vector<TriangleRange>& ranges, const LeafRoots& roots,
+                        const CompactMeshOptions& o, CompactMesh* out, const Progress& progress) {
+  *out = CompactMesh{};
+  CANOPY_TRY(checkCompactMeshInput(m, triangleOrder, roots, o));
+  const size_t nv = m.positions.size(), nt = m.indices.size() / 3;
   // Model vertex k (0..2) of GPU triangle t.
   auto corner = [&](uint64_t t, int k) -> uint32_t {
     const uint64_t mt = triangleOrder.empty() ? t : triangleOrder[t];

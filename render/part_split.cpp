@@ -5,6 +5,8 @@
 #include <cstring>
 #include <unordered_map>
 
+#include "render/plants.h"
+
 namespace canopy {
 namespace {
 
@@ -40,6 +42,7 @@ struct Part {
   glm::dvec3 sum{0.0};
   glm::dmat3 outer{0.0};
   float minY = INFINITY;
+  float footY = 0.0f, height = 0.0f;  // its plant's lowest point and height (render/plants.h)
   glm::dvec3 colour{0.0};  // linear, summed over samples
   double samples = 0, cutout = 0;
 };
@@ -60,6 +63,8 @@ Status splitParts(const VegetationModel& m, const std::vector<uint8_t>& material
     any = any || byParts[mat];
   }
   if (!any) return Status();
+  PlantGroups groups;
+  CANOPY_TRY(groupPlants(m, &groups));
   // Parts: connected triangles of one classified material, through shared indices and equal positions.
   std::vector<uint32_t> parent(nv);
   for (size_t v = 0; v < nv; ++v) parent[v] = uint32_t(v);
@@ -115,6 +120,12 @@ Status splitParts(const VegetationModel& m, const std::vector<uint8_t>& material
     const uint32_t* tri = &m.indices[3 * t];
     const uint32_t id = findRoot(parent, tri[0]);
     Part& p = parts[id];
+    if (p.triangles == 0) {  // its plant: the group of its first triangle, the whole model's if none
+      const uint32_t g = t < groups.triangle.size() ? groups.triangle[t] : kNoPlant;
+      const bool own = g != kNoPlant && groups.lo[g].y <= groups.hi[g].y;
+      p.footY = own ? groups.lo[g].y : m.boundsMin.y;
+      p.height = std::max(own ? groups.hi[g].y - groups.lo[g].y : m.boundsMax.y - m.boundsMin.y, 1e-12f);
+    }
     p.material = mat;
     p.triangles++;
     glm::vec2 mid(0.0f);
@@ -132,7 +143,6 @@ Status splitParts(const VegetationModel& m, const std::vector<uint8_t>& material
     }
     sample(m.materials[mat], mid, p);
   }
-  const float height = std::max(m.boundsMax.y - m.boundsMin.y, 1e-12f);
   std::unordered_map<uint32_t, uint8_t> rigidPart;
   for (auto& [id, p] : parts) {
     const glm::dvec3 mean = p.sum / std::max(p.n, 1.0);
@@ -151,7 +161,7 @@ Status splitParts(const VegetationModel& m, const std::vector<uint8_t>& material
     }
     const bool cutout = p.cutout >= 0.1 * p.samples;
     const bool green = sat >= 0.2f && hue >= 65.0f && hue <= 170.0f;
-    const bool thin = elongation >= 2.5f, foot = p.minY <= m.boundsMin.y + 0.02f * height, solid = round >= 0.3f;
+    const bool thin = elongation >= 2.5f, foot = p.minY <= p.footY + 0.02f * p.height, solid = round >= 0.3f;
     const bool rigid = !cutout && !green && solid && (thin || foot);
     rigidPart[id] = rigid;
     char why[200];

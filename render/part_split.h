@@ -12,7 +12,8 @@
 //   - round: its second and third principal extents are alike (a trunk, a branch), not a flat card
 //     or blade (third below 0.3 of the second);
 //   - long and thin (its first principal extent at least 2.5 times the second) or standing on the
-//     plant's foot (its lowest point within 2 % of the model's height of the model's lowest).
+//     plant's foot (its lowest point within 2 % of its plant's height of the plant's lowest;
+//     render/plants.h groupPlants).
 // The material rule stays the hint: every other part keeps its material's role; --rigid / --foliage
 // (MaterialSplitOptions) decide whole materials; each classified part is reported with its reasons.
 #include <cstdint>

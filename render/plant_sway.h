@@ -24,6 +24,21 @@
 namespace canopy {
 
 inline constexpr float kMinPlantSway = 0.25f, kMaxPlantSway = 4.0f;
+// The fit's weights of the three levers (shares of the 2D method's lever).
+inline constexpr double kSwayTrunk = 7.0, kSwayBranch = 0.0, kSwayLeaf = 7.7;
+
+// The baseline's levers of a plant's top third, each over the 2D method's (the vertices' heights).
+struct PlantLevers {
+  double trunk = 0, branch = 0, leaf = 0;
+  bool measured = false;  // false: no foliage in the plant's top third (its scale stays 1)
+};
+
+// Per plant of `plants`, its levers (`trianglePlant` the plants' numbering per triangle, findPlants;
+// `foliage` per triangle).
+Status plantLevers(const VegetationModel& model, const std::vector<uint8_t>& foliage, const LeafRoots& roots,
+                   const std::vector<uint32_t>& trianglePlant, const Plants& plants, std::vector<PlantLevers>* out);
+// A plant's sway scale from its levers, held to [kMinPlantSway, kMaxPlantSway].
+float plantSwayScale(const PlantLevers& levers);
 
 // Fills plants->sway (one per plant of `plants`), `trianglePlant` the plants' numbering per triangle
 // (findPlants), `foliage` per triangle.

@@ -12,13 +12,32 @@
 
 namespace canopy {
 
+inline constexpr float kFootShare = 0.05f;
+
 struct Plants {
   std::vector<uint32_t> leafPlant;              // per leaf (LeafRoots numbering): its plant
   std::vector<glm::vec3> boundsMin, boundsMax;  // per plant, model space: every triangle of it, rigid parts too
+  // Per plant, its foot: the box of its vertices within kFootShare of its height above its lowest
+  // point (eq. 7's root line; a wide crown's box reaches far lower on screen than its trunk's foot).
+  std::vector<glm::vec3> footMin, footMax;
   std::vector<float> sway;  // per plant, its sway scale with the world wind (render/plant_sway.h); empty: 1
   std::vector<uint8_t> rigid;  // per plant, 1 where it has rigid parts (findPlants)
   uint32_t count() const { return uint32_t(boundsMin.size()); }
 };
+
+// The plants' groups before any leaf is known: per triangle its group (VegetationModel::trianglePlant,
+// merged where the model asks for it, kNoPlant for a triangle of none; one group for a model without
+// plants) and per group its box (model space; a group merged into another keeps an unused box).
+struct PlantGroups {
+  std::vector<uint32_t> triangle;
+  std::vector<glm::vec3> lo, hi;
+};
+Status groupPlants(const VegetationModel& model, PlantGroups* out);
+// Per triangle, the size (box max - min) of the plant it belongs to, the whole model's for a triangle
+// of no plant: lengths that scale with a plant (the leaves' attachment reach, the rigid refinement's
+// edge, the anchors' radius, a part's foot) are shares of its own plant, so a file holding a field
+// treats each plant as a file of that plant alone would.
+std::vector<glm::vec3> plantSizeOfTriangles(const VegetationModel& model);
 
 // Groups the triangles by VegetationModel::trianglePlant (empty, or of another size: one plant, the
 // whole model), merging plants whose bounds overlap in x and z when the model asks for it; a leaf

@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "render/leaf_attach.h"
+#include "render/plants.h"
 #include "shared/layers.h"
 
 namespace canopy {
@@ -83,12 +84,20 @@ Status rigidAnchors(const VegetationModel& m, const std::vector<uint8_t>& foliag
   const size_t nv = m.positions.size();
   out->resize(nv);
   std::vector<uint8_t> rigid(nv, 0);
+  // Each rigid vertex's radius: kAnchorShare of its plant's height (a file of many plants).
+  std::vector<float> radiusOf(nv, 0.0f);
+  const std::vector<glm::vec3> size = plantSizeOfTriangles(m);
   for (size_t t = 0; t < m.triangleCount(); ++t)
     if (!foliage[t])
-      for (int k = 0; k < 3; ++k) rigid[m.indices[3 * t + size_t(k)]] = 1;
-  // The rigid vertices in a grid of cells the anchor's radius wide: a vertex's neighbours lie in
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.indices[3 * t + size_t(k)];
+        rigid[v] = 1;
+        radiusOf[v] = std::max(radiusOf[v], kAnchorShare * size[t].y);
+      }
+  // The rigid vertices in a grid of cells the largest radius wide: a vertex's neighbours lie in
   // the 27 cells around its own.
-  const float radius = std::max(kAnchorShare * glm::length(m.boundsMax - m.boundsMin), 1e-12f);
+  float radius = 1e-12f;
+  for (float r : radiusOf) radius = std::max(radius, r);
   auto cellOf = [&](const glm::vec3& p) { return glm::ivec3(glm::floor((p - m.boundsMin) / radius)); };
   auto key = [](const glm::ivec3& c) {
     return (uint64_t(uint32_t(c.x) & 0x1fffff) << 42) | (uint64_t(uint32_t(c.y) & 0x1fffff) << 21) | uint64_t(uint32_t(c.z) & 0x1fffff);
@@ -110,7 +119,7 @@ Status rigidAnchors(const VegetationModel& m, const std::vector<uint8_t>& foliag
           const auto it = cells.find(key(c + glm::ivec3(dx, dy, dz)));
           if (it == cells.end()) continue;
           for (uint32_t u : it->second)
-            if (glm::length(m.positions[u] - m.positions[v]) <= radius) {
+            if (glm::length(m.positions[u] - m.positions[v]) <= std::max(radiusOf[v], 1e-12f)) {
               sum += glm::dvec3(m.positions[u]);
               n += 1;
             }

@@ -8,7 +8,7 @@
 // crown's motion smoothly. Rigid parts of no plant with leaves (the ground, a rock) stay still.
 //
 // Which foliage layer a rigid vertex follows is decided by its anchor's depth, not its own: the
-// mean of the rigid vertices within kAnchorShare of the model's bounding diagonal of it, the middle
+// mean of the rigid vertices within kAnchorShare of its plant's height of it, the middle
 // of the wood around it, so the front and the back of a trunk, which lie on either side of a slab's
 // boundary as often as not, follow one layer and the trunk is not torn across its thickness.
 #include <cstdint>
@@ -25,9 +25,9 @@ namespace canopy {
 // sprig at the trunk's foot, do not pull the crown down to the ground), or its lowest leaf that grows
 // from the rigid parts (render/leaf_attach.h) if lower: the wood follows in full where leaves hang.
 inline constexpr float kCrownBaseQuantile = 0.05f;
-// A rigid vertex's anchor is the mean of the rigid vertices this share of the model's bounding
-// diagonal around it.
-inline constexpr float kAnchorShare = 0.05f;
+// A rigid vertex's anchor is the mean of the rigid vertices this share of its plant's height around
+// it (render/plants.h plantSizeOfTriangles; the height, which turning a copy keeps).
+inline constexpr float kAnchorShare = 0.07f;
 
 // Per model vertex, 0 (still) .. LAYER_RIGID_FULL (follows the foliage) for the vertices of rigid
 // triangles (the others LAYER_RIGID_FULL, unused). `trianglePlant`: per triangle its plant

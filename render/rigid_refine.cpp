@@ -4,11 +4,16 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "render/plants.h"
+
 namespace canopy {
 namespace {
 
-float maxEdge(const VegetationModel& m) {
-  return std::max(kRigidEdgeShare * (m.boundsMax.y - m.boundsMin.y), 1e-12f);
+// Per triangle, the longest rigid edge it may keep: kRigidEdgeShare of its own plant's height.
+std::vector<float> maxEdges(const VegetationModel& m) {
+  std::vector<float> out = {};
+  for (const glm::vec3& size : plantSizeOfTriangles(m)) out.push_back(std::max(kRigidEdgeShare * size.y, 1e-12f));
+  return out;
 }
 
 uint64_t edgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | b) : (uint64_t(b) << 32 | a); }
@@ -17,11 +22,11 @@ uint64_t edgeKey(uint32_t a, uint32_t b) { return a < b ? (uint64_t(a) << 32 | b
 
 bool needsRigidRefinement(const VegetationModel& m, const std::vector<uint8_t>& foliage) {
   if (!m.bend.empty() || foliage.size() != m.triangleCount()) return false;
-  const float longest = maxEdge(m);
+  const std::vector<float> longest = maxEdges(m);
   for (size_t t = 0; t < m.triangleCount(); ++t) {
     if (foliage[t]) continue;
     for (int k = 0; k < 3; ++k)
-      if (glm::length(m.positions[m.indices[3 * t + size_t(k)]] - m.positions[m.indices[3 * t + size_t((k + 1) % 3)]]) > longest)
+      if (glm::length(m.positions[m.indices[3 * t + size_t(k)]] - m.positions[m.indices[3 * t + size_t((k + 1) % 3)]]) > longest[t])
         return true;
   }
   return false;
@@ -32,7 +37,7 @@ Status refineRigidParts(const VegetationModel& model, std::vector<uint8_t>* foli
   VegetationModel& m = *out;
   if (foliage->size() != m.triangleCount()) return Status::error("rigid refinement: the foliage mask disagrees with the model");
   const bool plants = m.trianglePlant.size() == m.triangleCount(), boxes = m.triangleBox.size() == m.triangleCount();
-  const float longest = maxEdge(m);
+  std::vector<float> longest = maxEdges(m);  // per triangle; a split triangle's parts keep its own
   for (uint32_t pass = 0; pass < kRigidRefinePasses; ++pass) {
     // The rigid edges to split this pass and their midpoints (shared by both triangles of an edge).
     std::unordered_map<uint64_t, uint32_t> mid;
@@ -41,7 +46,7 @@ Status refineRigidParts(const VegetationModel& model, std::vector<uint8_t>* foli
       if ((*foliage)[t]) continue;
       for (int k = 0; k < 3; ++k) {
         const uint32_t a = m.indices[3 * t + size_t(k)], b = m.indices[3 * t + size_t((k + 1) % 3)];
-        if (glm::length(m.positions[a] - m.positions[b]) <= longest || mid.count(edgeKey(a, b))) continue;
+        if (glm::length(m.positions[a] - m.positions[b]) <= longest[t] || mid.count(edgeKey(a, b))) continue;
         const uint32_t v = uint32_t(m.positions.size());
         if (v == 0xffffffffu) return Status::error(Result::InvalidModel, "rigid refinement: more than 32-bit vertex indices hold");
         m.positions.push_back(0.5f * (m.positions[a] + m.positions[b]));
@@ -56,11 +61,13 @@ Status refineRigidParts(const VegetationModel& model, std::vector<uint8_t>* foli
     std::vector<uint32_t> indices;
     std::vector<uint32_t> materials, plantOf, boxOf;
     std::vector<uint8_t> isFoliage;
+    std::vector<float> longestOf;
     indices.reserve(m.indices.size() + 9 * mid.size());
     auto emit = [&](size_t t, uint32_t a, uint32_t b, uint32_t c) {
       indices.insert(indices.end(), {a, b, c});
       materials.push_back(m.triangleMaterial[t]);
       isFoliage.push_back((*foliage)[t]);
+      longestOf.push_back(longest[t]);
       if (plants) plantOf.push_back(m.trianglePlant[t]);
       if (boxes) boxOf.push_back(m.triangleBox[t]);
     };
@@ -99,6 +106,7 @@ Status refineRigidParts(const VegetationModel& model, std::vector<uint8_t>* foli
     m.indices = std::move(indices);
     m.triangleMaterial = std::move(materials);
     *foliage = std::move(isFoliage);
+    longest = std::move(longestOf);
     if (plants) m.trianglePlant = std::move(plantOf);
     if (boxes) m.triangleBox = std::move(boxOf);
   }

@@ -3,10 +3,10 @@
 // the rigid draw moves each vertex and the rasterizer interpolates between them, so a low-poly
 // trunk drawn as a few triangles from its foot to its crown follows a displacement that is not
 // linear along it (the stretch bound, a gust's shape) only at its ends, and a leaf growing from its
-// middle floats off it. Rigid edges longer than kRigidEdgeShare of the model's height are split at
-// their midpoints (conforming: a split edge is split in both triangles that share it; a triangle
-// with one, two or three split edges becomes two, three or four), pass after pass until none is
-// longer. Positions, normals and texture coordinates are interpolated; materials and plants kept.
+// middle floats off it. Rigid edges longer than kRigidEdgeShare of their plant's height
+// (render/plants.h) are split at their midpoints (conforming: a split edge is split in both
+// triangles that share it; a triangle with one, two or three split edges becomes two, three or
+// four), pass after pass until none is longer. Positions, normals and texture coordinates are interpolated; materials and plants kept.
 #include <cstdint>
 
 #include "engine/status.h"

@@ -115,6 +115,8 @@ Status mergeSpecies(const std::vector<SpeciesModel>& in, std::vector<SpeciesPart
     for (uint32_t t : p.boxes.triangles) out->boxes.triangles.push_back(t + triangleBase);
     append(out->plants.boundsMin, p.plants.boundsMin);
     append(out->plants.boundsMax, p.plants.boundsMax);
+    append(out->plants.footMin, p.plants.footMin);
+    append(out->plants.footMax, p.plants.footMax);
     p.plants.sway.resize(p.plants.count(), 1.0f);
     append(out->plants.sway, p.plants.sway);
     p.plants.rigid.resize(p.plants.count(), 0);

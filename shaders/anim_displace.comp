@@ -141,14 +141,14 @@ void main() {
   float bestD = 3.0e38, bestA = 3.0e38;
   for (uint j = rooted.firstPlant; j < rooted.firstPlant + rooted.plantCount; ++j) {
     vec4 r = plantRects[ANIM_RECT_VEC4S * j];
-    if (plantRectBetter(r, pixel, bestD, bestA)) {
+    vec4 place = plantRects[ANIM_RECT_VEC4S * j + 2u];  // sample depth, wood only
+    if (plantRectBetter(r, place.y, pixel, bestD, bestA)) {
       bestD = plantRectDistance2(r, pixel);
-      bestA = (r.y - r.x) * (r.w - r.z);
+      bestA = plantRectRank(r, place.y);
       vec4 species = plantRects[ANIM_RECT_VEC4S * j + 1u];
       rooted = species.z > 0.0 ? withPlantRoot(f.layers[layer], r, species.w) : f.layers[layer];
       response = species.xy;
-      float depth = plantRects[ANIM_RECT_VEC4S * j + 2u].x;
-      sampleDepth = depth > 0.0 ? depth : f.layers[layer].depth;
+      sampleDepth = place.x > 0.0 ? place.x : f.layers[layer].depth;
     }
   }
   // Unproject: the point on the pixel's ray at that view depth (depth is affine along the ray).

@@ -124,14 +124,18 @@ TEST(LeafRoots, RigidTrianglesAreNotLeavesAndTiesAreStable) {
   addQuad(m, {1, 0, 0}, {0, 0}, 1);  // rigid, touching leaf A by position
   std::vector<uint8_t> mask = {1, 1, 0, 0};
   LeafRoots r;
-  ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+  // The paper's rule (smallest (u, v)): the leaf touches the rigid quad along x = 1, so the rule that
+  // roots a leaf where it meets the wood (attachRoots, tested in real_plants_unit_test) is off.
+  LeafRootOptions paper;
+  paper.attachRoots = false;
+  ASSERT_TRUE(computeLeafRoots(m, mask, paper, &r).ok());
   EXPECT_EQ(r.leafCount(), 1u);
   for (uint32_t v = 4; v < 8; ++v) EXPECT_EQ(r.rootOfVertex[v], kNoLeaf);
   // Vertex 0 has uv (0,0), the smallest; no other vertex of the leaf ties.
   EXPECT_EQ(r.rootOfVertex[3], 0u);
   // Equal uvs everywhere: the lowest index wins.
   for (auto& uv : m.uvs) uv = glm::vec2(0.25f);
-  ASSERT_TRUE(computeLeafRoots(m, mask, {}, &r).ok());
+  ASSERT_TRUE(computeLeafRoots(m, mask, paper, &r).ok());
   EXPECT_EQ(r.rootOfVertex[2], 0u);
 }
 
@@ -162,6 +166,7 @@ TEST(LeafRoots, MatchesAPlainReferenceOnRandomMeshes) {
     for (bool weld : {false, true}) {
       LeafRootOptions o;
       o.weldPositions = weld;
+      o.attachRoots = false;  // the reference is the paper's rule (random leaves touch the rigid triangles)
       LeafRoots r;
       ASSERT_TRUE(computeLeafRoots(m, mask, o, &r).ok());
       std::vector<uint32_t> comp(nv);

@@ -36,7 +36,8 @@ CANOPY_SIZE_CHECK(AnimLayer, 32)
 // rect's root line is eq. 7's (per-plant roots), 0 when the layer's is (the rects then only carry
 // the response), in w eq. 7's h; then in x the view depth at which the plant's corners read the
 // wind field (its centre's: every layer of one plant in the same gust, docs/design.md "Rigid parts
-// in wind"; 0: the layer's depth).
+// in wind"; 0: the layer's depth), in y 1 when the plant has no leaves in the layer (its rect serves
+// its rigid parts only: plantRectBetter).
 #define ANIM_MAX_PLANT_RECTS 3072u
 #define ANIM_RECT_VEC4S 3u
 
@@ -120,15 +121,20 @@ CANOPY_INLINE float rigidityFactor(AnimFrame f, AnimLayer layer, float pixelY) {
 }
 
 // Per-plant roots: the distance (squared, pixels) from pixel p to plant rect r (0 inside) and the
-// rect's area; a corner takes the nearest rect, the smallest of those it lies in (a plant inside
-// a larger one's rect: a tree in a grass patch).
+// rect's rank; a corner takes the nearest rect, of those it lies in a rect of a plant with leaves in
+// the layer before one that only its rigid parts reach (`woodOnly` 1; they follow the layer of their
+// own depth: docs/design.md "Rigid parts in wind"), then the smallest (a plant inside a larger one's
+// rect: a tree in a grass patch).
 CANOPY_INLINE float plantRectDistance2(vec4 r, vec2 p) {
   float dx = max(max(r.x - p.x, p.x - r.y), 0.0f), dy = max(max(r.z - p.y, p.y - r.w), 0.0f);
   return dx * dx + dy * dy;
 }
-CANOPY_INLINE bool plantRectBetter(vec4 r, vec2 p, float bestDistance2, float bestArea) {
-  float d = plantRectDistance2(r, p), a = (r.y - r.x) * (r.w - r.z);
-  return d < bestDistance2 || (d == bestDistance2 && a < bestArea);
+CANOPY_INLINE float plantRectRank(vec4 r, float woodOnly) {
+  return (r.y - r.x) * (r.w - r.z) + (woodOnly > 0.0f ? 1.0e9f : 0.0f);
+}
+CANOPY_INLINE bool plantRectBetter(vec4 r, float woodOnly, vec2 p, float bestDistance2, float bestRank) {
+  float d = plantRectDistance2(r, p);
+  return d < bestDistance2 || (d == bestDistance2 && plantRectRank(r, woodOnly) < bestRank);
 }
 // The layer's record with eq. 7's root line of plant rect r and height h (pixels; 0: the rect's rows).
 CANOPY_INLINE AnimLayer withPlantRoot(AnimLayer layer, vec4 r, float h) {

@@ -344,7 +344,7 @@ enum class RigidMotion { FollowFoliage, Still };
   X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \
   X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \
   X(float, leafRefractiveIndex, 1.45f, Closed, 1.2, 1.7, "", "effective refractive index n of the lobe (Bousquet et al.'s measured range)") \
-  X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range) where the material gives no roughness (a generated scene; glTF files always do)") \
+  X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range) where the material gives none (a generated scene), or for every material with overrideLeafRoughness (canopy-demo: when given)") \
   X(bool, overrideLeafRoughness, false, None, 0, 0, "", "leafRoughness for every material, the file's roughness ignored")    \
   X(float, leafTransmission, 0.35f, Closed, 0, 1, "", "diffuse transmission of foliage materials whose file gives none") \
   X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \

@@ -159,7 +159,7 @@ struct PlantsOptions {
   uint32_t frames = 90;  // measured frames per run (after the warm-up)
   float warmup = 2.0f;   // seconds of animation run before the first measured frame (the demo's default)
   float galeFactor = 3.0f;
-  // The sway pass: both methods at this size over this many frames after the warm-up (0: none).
+  // The breeze's sway pass: both methods at this size over this many frames after the warm-up (0: none).
   uint32_t swayFrames = 1800, swayWidth = 320, swayHeight = 240;
   bool before = false;   // as before issue 77: RigidMotion::Still and the paper's leaf roots
   std::string json = "bench_plants.json", table;  // "" none

@@ -95,7 +95,7 @@ static int usage(const char* why) {
                "                 the crown (--size default 640x480, --frames default 90, --json default bench_plants.json,\n"
                "                 --table FILE, --check: exit 1 outside issue 77's bounds, --before: as before issue 77,\n"
                "                 --warmup S: seconds run before the first measured frame, default 2; --sway-frames N:\n"
-               "                 the sway pass's frames at 320x240, default 1800 = 60 s, 0: none)\n"
+               "                 the breeze's sway pass, frames at 320x240, default 1800 = 60 s, 0: none)\n"
                "  table1         the paper's Table 1: faces x 3(1-1-1)/5(3-1-1) x still/orbit beside the paper's FPS,\n"
                "                 baselines as ratios, a JSON file (--json, default bench_table1.json)\n"
                "  --size WxH     table1, layers: resolution (default 1024x768)\n"

@@ -133,8 +133,8 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     for (const DynamicsLayer& dl : d.layers)
       for (const glm::vec3& r : dl.plantResponse) response = response || glm::vec2(r) != glm::vec2(1.0f) || (d.heightSway > 0.0f && r.z != 1.0f);
     // One plant (at most a rect a layer, each the same plant's: the same x range and root row) takes
-    // its own root only to carry a response (the placement adds its rects for the world wind's
-    // sway scale even so); else the layer's root line stands, as for any single plant.
+    // its own root only to carry a response (the placement gives every plant its rects); else the
+    // layer's root line stands, as for any single plant.
     bool several = false;
     const glm::vec4* first = nullptr;
     for (const DynamicsLayer& dl : d.layers) {
@@ -146,7 +146,8 @@ Status makeAnimFrame(const DynamicsParams& p, const DynamicsFrameDesc& d, gpu::A
     }
     const bool rooted = p.roots == RootMode::PerPlant && (several || response);
     const float ownRoot = rooted ? 1.0f : 0.0f;
-    if ((rooted || response) && total <= ANIM_MAX_PLANT_RECTS)
+    // With the world wind the rects also carry each plant's sample depth (one gust a plant).
+    if ((rooted || response || d.heightSway > 0.0f) && total <= ANIM_MAX_PLANT_RECTS)
       for (uint32_t i = 0; i < n; ++i) {
         const DynamicsLayer& dl = d.layers[i];
         f.layers[i].firstPlant = uint32_t(plantRects->size() / ANIM_RECT_VEC4S);

@@ -142,12 +142,11 @@ struct PlacementPass {
     nVertices = hm.vertices.size();
     nChunks = mesh.chunks.size();
     geometric = settings.slice == SliceMode::Geometry;
-    // Per-plant roots with more than one (copy, plant), or a species whose wind response differs
-    // from the method's (its rects carry it to the warp).
-    bool response = false;
-    for (const MeshSpecies& s : species) response = response || s.flexibility != 1.0f || s.responseSpeed != 1.0f;
-    for (float s : plants.sway) response = response || s != 1.0f;  // a plant's sway scale rides on its rect
-    perPlant = (job.plantBase.back() > 1 || response) && plants.leafPlant.size() == mesh.leafCount;
+    // Plant rects for every plant, a single one too: they carry per-plant roots (more than one
+    // plant), a species' wind response, the plant's sway scale and, with the world wind, the depth
+    // its layers read the field at (one gust a plant); the dynamics take what applies
+    // (compute/dynamics.cpp makeAnimFrame).
+    perPlant = plants.leafPlant.size() == mesh.leafCount;
     for (const MeshChunk& c : mesh.chunks)
       if (c.foliage) foliageIndices = std::max<size_t>(foliageIndices, c.firstIndex + 3ull * c.triangleCount);
     height = float(in.height);

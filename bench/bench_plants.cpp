@@ -523,7 +523,8 @@ Status measureWind(Device& d, const demo::Options& o, const VegetationModel& mod
       WarpFrame f;
       CANOPY_TRY(readWarp(d, ctx, &f));
       gaps2D(*parts.model, parts, f, rigidFollows(canopyLayers(ctx)), &m.gaps);
-      const double foot = baseShift2D(*parts.model, parts, f);
+      // RigidMotion::Still draws the wood where it stands: its foot does not move.
+      const double foot = rigidFollows(canopyLayers(ctx)) ? baseShift2D(*parts.model, parts, f) : (parts.rigidAnchors.empty() ? -1.0 : 0.0);
       if (foot >= 0.0) m.baseShift.push_back(foot);
       return Status();
     }));
@@ -614,9 +615,12 @@ void writeTable(const std::string& path, const std::vector<PlantRun>& runs) {
        "per-vertex | bare rigid, gale / still |\n|---|---|---|---|---|---|---|---|\n";
   char line[512];
   for (const PlantRun& r : runs) {
-    std::snprintf(line, sizeof line, "| %s | %s | %u of %u | %.2f / %.2f px | %.2f / %.2f px | %.1f / %.1f px (%.2f) | %s / %.2f px | %s |\n",
+    char sway[64] = "—";  // the sway pass is the breeze's
+    if (!r.twoD.centroid.empty())
+      std::snprintf(sway, sizeof sway, "%.1f / %.1f px (%.2f)", r.twoD.sway(), r.perVertex.sway(), r.swayRatio());
+    std::snprintf(line, sizeof line, "| %s | %s | %u of %u | %.2f / %.2f px | %.2f / %.2f px | %s | %s / %.2f px | %s |\n",
                   r.plant.c_str(), r.wind.c_str(), r.attached, r.leaves, r.twoD.gapP99(), r.twoD.gapMax(), r.perVertex.gapP99(),
-                  r.perVertex.gapMax(), r.twoD.sway(), r.perVertex.sway(), r.swayRatio(),
+                  r.perVertex.gapMax(), sway,
                   r.rigid ? std::to_string(r.twoD.baseShiftMax()).substr(0, 4).c_str() : "n/a", r.perVertex.baseShiftMax(),
                   r.wind == "gale" ? (std::to_string(r.bareRatio()).substr(0, 4)).c_str() : "-");
     f << line;

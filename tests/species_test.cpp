@@ -403,7 +403,8 @@ TEST_F(SpeciesTest, HalfTheFlexibilityBendsHalfAsFarInTheDefaultWind) {
   std::printf("default wind, bend (mean centroid against no wind), px: left 1.0 %.2f right 0.5 %.2f (%.3f); left 0.5 %.2f right 1.0 %.2f "
               "(%.3f); ratio %.3f (sway ranges %.2f %.2f %.2f %.2f)\n",
               a1b, a2b, ratioA, b1b, b2b, ratioB, ratio, a1.range, a2.range, b1.range, b2.range);
-  EXPECT_GT(std::abs(a1b), 2.0) << "the default wind bends the crown by pixels";
+  // A leaf cloud's sway scale comes from its levers (render/plant_sway.h): 1.9 px at 320x240.
+  EXPECT_GT(std::abs(a1b), 1.0) << "the default wind bends the crown by pixels";
   EXPECT_NEAR(ratio, 0.5, 0.075) << "flexibility 0.5 against 1.0: 0.5 +- 15 %";
 }
 

@@ -1,14 +1,15 @@
 // canopy-bench plants (issue 77; docs/performance.md "Real plants in wind"): real plants as a user
 // brings them, each in a breeze and a gale, the 2D method beside the per-vertex baseline, drawn as
 // canopy-demo draws them (its host, sky, camera and 2 s warm-up) and measured per frame:
-//   attachment gap  for every leaf whose root sits on rigid geometry (within kAttachShare of the
-//                   model's size of a rigid triangle), how far on screen the root is drawn from
+//   attachment gap  for every leaf whose root sits on rigid geometry (within kAttachShare of its
+//                   plant's height of a rigid triangle), how far on screen the root is drawn from
 //                   where the rigid point it grows from is drawn, less the same offset at rest
 //                   (pixels; p99 and max over leaves and frames)
-//   sway            the range of the horizontal centroid of the top third of the vegetation
-//   base            the share of the plant's bottom tenth's rigid pixels (the trunk's base) that
-//                   differ from the windless frame, with the layers in false colour; the baseline
-//                   (which draws no false colour): of all its pixels there
+//   sway            in the breeze, a pass of its own (--sway-frames, default 1800 at 320x240): the
+//                   top third's horizontal centroid from its 5th to its 95th percentile
+//   base            the 2D method: the largest drawn shift of a rigid vertex in the plant's bottom
+//                   5 % (the CPU twin of rigid_follow_draw.glsl); the baseline (which draws no false
+//                   colour): its bottom tenth's pixels' centroid against the windless frame's
 //   bare rigid      rigid pixels inside the crown farther than 3 px from any foliage pixel, with the
 //                   layers in false colour (CompositeDebugView::Layers), gale over still
 // The 2D method's gap is computed from the frame's own displacement (read back): a leaf's root is

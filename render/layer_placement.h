@@ -44,10 +44,10 @@ struct LayerInfo {
   float drawnNear = INFINITY, drawnFar = -INFINITY;
   uint32_t leaves = 0;        // leaves whose root is in the layer (CPU count)
   uint64_t triangles = 0;
-  // Per-plant roots (docs/design.md "Per-plant roots"), when the vegetation is more than one plant
-  // (visible copies' plants > 1) or a species responds otherwise than the method: per plant with
-  // leaves in this layer, its projected bounding box's x range, its leaves' top here and its box's
-  // bottom (x lo, x hi, top, root row; pixels, y down), and the plant's key (PlacementJob::plantBase
+  // Per-plant roots (docs/design.md "Per-plant roots"), for every plant (the dynamics take its own
+  // root when there are several, or when a response rides on it): per plant with leaves in this
+  // layer (or wood: plantWoodOnly), its projected bounding box's x range, its leaves' top here and
+  // its foot's bottom (x lo, x hi, top, root row; pixels, y down), and the plant's key (PlacementJob::plantBase
   // of its copy + its plant within the species).
   std::vector<glm::vec4> plants;
   std::vector<uint32_t> plantKeys;

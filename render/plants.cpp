@@ -85,7 +85,6 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out,
   const std::vector<glm::vec3>& lo = pg.lo;
   const std::vector<glm::vec3>& hi = pg.hi;
   auto plantOf = [&](size_t t) { return pg.triangle[t]; };
-  auto find = [](uint32_t a) { return a; };  // groupPlants resolved the merges
   std::vector<uint32_t> vertexPlant(m.positions.size(), kNoPlant);
   for (size_t t = 0; t < nt; ++t) {
     const uint32_t p = plantOf(t);
@@ -100,7 +99,7 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out,
   out->leafPlant.assign(roots.leafCount(), 0u);
   for (uint32_t leaf = 0; leaf < roots.leafCount(); ++leaf) {
     const uint32_t v = roots.leafRoot[leaf];
-    const uint32_t g = v < vertexPlant.size() && vertexPlant[v] != kNoPlant ? find(vertexPlant[v]) : kNoPlant;
+    const uint32_t g = v < vertexPlant.size() && vertexPlant[v] != kNoPlant ? vertexPlant[v] : kNoPlant;
     if (g == kNoPlant) {
       out->leafPlant[leaf] = kNoPlant;
       continue;
@@ -124,7 +123,7 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out,
   out->footMax.assign(out->count(), glm::vec3(-INFINITY));
   for (size_t t = 0; t < nt; ++t) {
     const uint32_t g = plantOf(t);
-    const uint32_t d = g == kNoPlant ? (given ? kNoPlant : 0u) : dense[find(g)];
+    const uint32_t d = g == kNoPlant ? (given ? kNoPlant : 0u) : dense[g];
     if (d == kNoPlant || d >= out->count()) continue;
     const float below = out->boundsMin[d].y + kFootShare * (out->boundsMax[d].y - out->boundsMin[d].y);
     for (int k = 0; k < 3; ++k) {
@@ -143,13 +142,13 @@ Status findPlants(const VegetationModel& m, const LeafRoots& roots, Plants* out,
   if (!foliage.empty())
     for (size_t t = 0; t < nt; ++t) {
       const uint32_t g = plantOf(t);
-      if (!foliage[t] && g != kNoPlant && dense[find(g)] != kNoPlant) out->rigid[dense[find(g)]] = 1;
+      if (!foliage[t] && g != kNoPlant && dense[g] != kNoPlant) out->rigid[dense[g]] = 1;
     }
   if (trianglePlant) {
     trianglePlant->assign(nt, kNoPlant);
     for (size_t t = 0; t < nt; ++t) {
       const uint32_t g = plantOf(t);
-      (*trianglePlant)[t] = g == kNoPlant ? kNoPlant : dense[find(g)];
+      (*trianglePlant)[t] = g == kNoPlant ? kNoPlant : dense[g];
     }
   }
   return Status();

@@ -53,6 +53,10 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
     crown[p] = std::min(h[k], lowestAttached[p]);
     std::vector<float>().swap(h);
   }
+  // The foot band (render/plants.h kFootShare of each plant's height, the box eq. 7's root line
+  // stands on) is held still: the displacement just above a plant's root line is not zero where a
+  // layer's grid blends in the crown's (a gale moved KayKit's foot 0.76 px with a share of 0.08).
+  const std::vector<glm::vec3> size = plantSizeOfTriangles(m);
   out->assign(nv, uint16_t(LAYER_RIGID_FULL));
   std::vector<uint8_t> done(nv, 0);
   for (size_t t = 0; t < nt; ++t) {
@@ -64,10 +68,11 @@ Status rigidFlexibility(const VegetationModel& m, const std::vector<uint8_t>& fo
       done[v] = 1;
       float w = 0.0f;  // a rigid part of no plant with leaves: still
       if (p != kNoPlant && std::isfinite(crown[p])) {
-        const float span = crown[p] - foot[p];
-        // Leaves from the foot up (a bush's stems): the rigid parts follow as the leaves do (eq. 7's
-        // R already stills the base); otherwise a smoothstep from the foot to the crown's base.
-        const float x = span > 1e-6f * std::max(std::abs(crown[p]), 1.0f) ? (m.positions[v].y - foot[p]) / span : 1.0f;
+        const float band = kFootShare * size[t].y, base = foot[p] + band, span = crown[p] - base;
+        // Leaves from the foot up (a bush's stems): the rigid parts above the foot band follow as
+        // the leaves do; otherwise a smoothstep from the band's top to the crown's base.
+        const float y = m.positions[v].y;
+        const float x = y <= base ? 0.0f : span > 1e-6f * std::max(std::abs(crown[p]), 1.0f) ? (y - base) / span : 1.0f;
         const float c = std::clamp(x, 0.0f, 1.0f);
         w = c * c * (3.0f - 2.0f * c);
       }

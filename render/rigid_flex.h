@@ -3,8 +3,8 @@
 // wind"), found once per model. The paper draws trunks and branches as a still background; a real
 // tree carries branches inside its crown, and those must move with the leaves they hold while the
 // trunk's base stands. A rigid vertex of a plant follows fully from the crown's base up (the height
-// most of the plant's leaves grow above) and not at all at the plant's foot, with a smoothstep
-// between, so the trunk bends like a clamped beam: still and level at the ground, joining the
+// most of the plant's leaves grow above) and not at all in the plant's foot band (render/plants.h
+// kFootShare of its height), with a smoothstep between, so the trunk bends like a clamped beam: still and level at the ground, joining the
 // crown's motion smoothly. Rigid parts of no plant with leaves (the ground, a rock) stay still.
 //
 // Which foliage layer a rigid vertex follows is decided by its anchor's depth, not its own: the

@@ -212,7 +212,7 @@ TEST(RigidRefine, LongRigidEdgesAreSplitWithoutCracks) {
   }
 }
 
-// Each rigid vertex's share rises from 0 at the plant's foot to 1 at its crown's base, and its
+// Each rigid vertex's share rises from 0 in the plant's foot band to 1 at its crown's base, and its
 // anchor is the middle of the wood around it: the front and back of a trunk share it.
 TEST(RigidFlex, TheTrunkStandsAtItsFootAndItsSidesFollowOneLayer) {
   Builder b;
@@ -220,6 +220,10 @@ TEST(RigidFlex, TheTrunkStandsAtItsFootAndItsSidesFollowOneLayer) {
   b.m.materials[0].name = "leaf";
   b.m.materials[1].name = "bark";
   b.box({-0.05f, 0.0f, -0.05f}, {0.05f, 4.0f, 0.05f}, 1);
+  // A strip of bark on the trunk's face: a vertex in the foot band (5 % of 4.2 m), one between the
+  // band and the crown's base (2.5 m), one in the crown.
+  const uint32_t inBand = b.vertex({0.05f, 0.15f, 0.0f}), between = b.vertex({0.05f, 1.0f, 0.02f}), high = b.vertex({0.05f, 3.0f, 0.0f});
+  b.tri(inBand, between, high, 1);
   for (int k = 0; k < 8; ++k) {  // leaves from 2.5 up
     const float y = 2.5f + 0.2f * float(k);
     const uint32_t p = b.vertex({0.05f, y, 0}), q = b.vertex({0.5f, y, 0}), r = b.vertex({0.3f, y + 0.3f, 0});
@@ -227,7 +231,7 @@ TEST(RigidFlex, TheTrunkStandsAtItsFootAndItsSidesFollowOneLayer) {
   }
   b.finish();
   std::vector<uint8_t> foliage(b.m.triangleCount(), 1);
-  for (size_t t = 0; t < 12; ++t) foliage[t] = 0;
+  for (size_t t = 0; t < 13; ++t) foliage[t] = 0;
   LeafRoots roots;
   ASSERT_TRUE(computeLeafRoots(b.m, foliage, {}, &roots).ok());
   Plants plants;
@@ -240,6 +244,11 @@ TEST(RigidFlex, TheTrunkStandsAtItsFootAndItsSidesFollowOneLayer) {
     if (b.m.positions[v].y == 0.0f) EXPECT_EQ(share, 0.0f) << "the foot stands";
     else EXPECT_EQ(share, 1.0f) << "the top follows";
   }
+  EXPECT_EQ(gpu::layerRigidShare(anchors[inBand].leaf), 0.0f) << "the foot band stands";
+  const float mid = gpu::layerRigidShare(anchors[between].leaf);
+  EXPECT_GT(mid, 0.0f);
+  EXPECT_LT(mid, 0.5f) << "a smoothstep from the band's top (0.21 m) to the crown's base (2.5 m): 0.27 at 1 m";
+  EXPECT_EQ(gpu::layerRigidShare(anchors[high].leaf), 1.0f);
   // The box's four top corners: their anchors lie between them (front and back alike).
   for (uint32_t v : {2u, 3u, 6u, 7u}) {
     EXPECT_LT(std::abs(anchors[v].position.z), 0.03f) << "anchor of corner " << v;

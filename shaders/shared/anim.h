@@ -108,15 +108,14 @@ CANOPY_INLINE vec2 approximateLookup(AnimFrame f, vec2 a, float gamma, vec2 vs) 
 // GLSL passes a struct by value, and lavapipe copies a frame whose array the callee indexes
 // dynamically on every call (measured on the simulation's motors, docs/performance.md).
 
-// Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1]. With the
-// world wind (eq. 6 x h) to [0, ANIM_HEIGHT_RELATIVE_REACH]: d = R h x ... is then l x ... (r = 1)
-// up a plant's whole height, whichever row its box's projection puts the top at, and a trunk
-// drawn from its base to its top bends as the leaves along it do (docs/design.md "Rigid parts in wind").
-#define ANIM_HEIGHT_RELATIVE_REACH 2.0f
+// Eq. 7: R = 1, or (l / h)^r with l the height above the root line, clamped to [0, 1] (the paper's
+// range, with the world wind too: a reach of 2 let the top of a plant whose box's projection put h
+// low lean past its crown and cost the field's gale orbit 7 % of its foliage's coverage; h held to
+// the plant's span above its foot, render/layer_placement.cpp, puts its top leaves at R = 1).
 CANOPY_INLINE float rigidityFactor(AnimFrame f, AnimLayer layer, float pixelY) {
   if (f.everyPartMoves != 0u) return 1.0f;
   float l = layer.rootLineY - pixelY;
-  float x = clamp(l / max(layer.height, 1.0f), 0.0f, f.heightRelative != 0u ? ANIM_HEIGHT_RELATIVE_REACH : 1.0f);
+  float x = clamp(l / max(layer.height, 1.0f), 0.0f, 1.0f);
   return f.rigidity == 0.0f ? 1.0f : pow(x, f.rigidity);
 }
 

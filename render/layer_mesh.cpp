@@ -62,16 +62,26 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesPart
   const LeafRoots& roots = parts.roots;
   Device& d = b.d;
   const size_t nt = m.triangleCount();
-  // GPU triangle order: foliage grouped by material, then rigid by material (one draw each).
+  // GPU triangle order: foliage grouped by material, then rigid by material (one draw each): first
+  // the rigid triangles whose corners all follow the foliage fully (carried into the layers with
+  // it, MeshChunk::carried), then the others (drawn every frame or into the background).
   const size_t nm = m.materials.size();
-  std::vector<uint64_t> start(2 * nm + 1, 0);
-  for (size_t t = 0; t < nt; ++t) start[(foliage[t] ? 0 : nm) + m.triangleMaterial[t] + 1]++;
+  const std::vector<gpu::LayerLeafRoot>& anchors = parts.rigidAnchors;
+  auto classOf = [&](size_t t) -> size_t {
+    if (foliage[t]) return 0;
+    if (anchors.size() != m.positions.size()) return 2;
+    for (int k = 0; k < 3; ++k)
+      if (anchors[m.indices[3 * t + size_t(k)]].leaf != LAYER_RIGID_FULL) return 2;
+    return 1;
+  };
+  std::vector<uint64_t> start(3 * nm + 1, 0);
+  for (size_t t = 0; t < nt; ++t) start[classOf(t) * nm + m.triangleMaterial[t] + 1]++;
   for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
   // The GPU order as a permutation of the model's triangles (4 bytes a face, not a copy of the
   // indices); the id output keeps it, since its triangle ids are in GPU order.
   std::vector<uint32_t> order(nt);
   std::vector<uint64_t> cursor(start.begin(), start.end() - 1);
-  for (size_t t = 0; t < nt; ++t) order[cursor[(foliage[t] ? 0 : nm) + m.triangleMaterial[t]]++] = uint32_t(t);
+  for (size_t t = 0; t < nt; ++t) order[cursor[classOf(t) * nm + m.triangleMaterial[t]]++] = uint32_t(t);
   // With impostors the foliage of each material is laid out box by box, depth first
   // (render/impostors.h), so a box's subtree is one run per material.
   if (b.desc.impostors.enable) {
@@ -83,9 +93,9 @@ Status buildMesh(const MeshBuild& b, const VegetationModel& m, const SpeciesPart
   // leaf-root table per chunk, so no buffer is indexed past the device's storage range; one
   // triangle range per (foliage or rigid, material) run of the GPU order.
   std::vector<TriangleRange> ranges;
-  for (size_t k = 0; k < 2 * nm; ++k)
-    if (start[k + 1] > start[k]) ranges.push_back({uint32_t(k % nm), k < nm, start[k], start[k + 1] - start[k]});
-  b.mesh.hasRigid = start[2 * nm] > start[nm];
+  for (size_t k = 0; k < 3 * nm; ++k)
+    if (start[k + 1] > start[k]) ranges.push_back({uint32_t(k % nm), k < nm, start[k], start[k + 1] - start[k], k >= nm && k < 2 * nm});
+  b.mesh.hasRigid = start[3 * nm] > start[nm];
   CompactMeshOptions co;
   co.maxChunkVertices = b.desc.maxChunkVertices;
   co.bend = b.desc.keepBend && !m.bend.empty();
@@ -467,12 +477,12 @@ Status drawMaterials(const MeshDraw& md, VkCommandBuffer cmd, const GraphicsPipe
   };
   if (parts) {
     for (const ChunkPart& p : *parts)
-      if (mesh.chunks[p.chunk].foliage == foliage) CANOPY_TRY(draw(mesh.chunks[p.chunk], &p, p.firstTriangle, p.triangleCount));
+      if (drawnWithFoliage(mesh.chunks[p.chunk], o.carryWood) == foliage) CANOPY_TRY(draw(mesh.chunks[p.chunk], &p, p.firstTriangle, p.triangleCount));
     return Status();
   }
   if (mesh.streamed) return Status::error("layers: a streamed mesh is drawn in slices only");  // updateLayerView never asks
   for (const MeshChunk& c : mesh.chunks)
-    if (c.foliage == foliage) CANOPY_TRY(draw(c, nullptr, 0, c.triangleCount));
+    if (drawnWithFoliage(c, o.carryWood) == foliage) CANOPY_TRY(draw(c, nullptr, 0, c.triangleCount));
   return Status();
 }
 

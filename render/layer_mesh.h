@@ -140,6 +140,9 @@ struct MeshDrawOptions {
   const std::vector<InstanceRun>* runs = nullptr;
   // Bound after layers_common.glsl's six (the shadow caster's: render/shadow.cpp); empty: none.
   std::vector<Binding> extra;
+  // The carried rigid chunks (MeshChunk::carried) drawn with the foliage (true: a draw of foliage
+  // draws them, one of rigid chunks skips them; carriesWood) or with the rigid chunks (false).
+  bool carryWood = false;
 };
 
 // Splits the materials, computes (or reads from the cache) the leaf roots, builds the compact mesh
@@ -209,6 +212,16 @@ Status drawMaterials(const MeshDraw& draw, VkCommandBuffer cmd, const GraphicsPi
 inline bool drawsBackground(const LayerMesh& mesh, const LayerSettings& s) {
   return mesh.hasRigid && (mesh.streamed || s.rigidMotion == RigidMotion::Still);
 }
+// Whether the rigid chunks that follow the foliage fully (MeshChunk::carried) are drawn into the
+// layers with it, each triangle in the layer of its anchor, rather than every frame: when the rigid
+// parts follow the foliage, the leaves are sliced by their roots (a triangle goes to one layer) and
+// the layer set has no impostor cut (`cutActive`: its parts are the foliage's). Decided per layer
+// set: the set's draws and the frames that show it ask with the set's cut.
+inline bool carriesWood(const LayerMesh& mesh, const LayerSettings& s, bool cutActive) {
+  return mesh.hasRigid && !drawsBackground(mesh, s) && s.slice == SliceMode::LeafRoots && !cutActive;
+}
+// Whether chunk `c` is drawn with the foliage (MeshDrawOptions::carryWood).
+inline bool drawnWithFoliage(const MeshChunk& c, bool carryWood) { return c.foliage || (carryWood && c.carried); }
 
 struct MeshResources {
   rg::ResourceId vertices = rg::kInvalidResource, indices = rg::kInvalidResource, roots = rg::kInvalidResource;

@@ -96,6 +96,8 @@ Status recordFoliage(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTarge
     const LayerShadingPipelines::ShadeOnce& layeredOnce = half ? lv.pipelines.shaded.layeredHalfOnce : lv.pipelines.shaded.layeredOnce;
     MeshDrawOptions o;
     o.debugLevels = cut && lv.settings.impostors.debugView;
+    // The wood that follows the leaves fully is drawn with them (render/layer_mesh.h carriesWood).
+    o.carryWood = carriesWood(lv.mesh, lv.settings, cut);
     // With copies the cut's parts for every copy draw its whole copies (the rest are per copy).
     o.runs = cut && imp->cut.perCopy ? &imp->wholeRuns : t.runs;
     CANOPY_TRY(renderInto(*lv.device, cmd, lv, lv.pipelines.singlePass ? n : 1, colors, ids ? 2 : 1, depth, [&]() -> Status {
@@ -125,7 +127,8 @@ Status recordBackground(LayeredVegetation& lv, VkCommandBuffer cmd, const DrawTa
 // Whether a spread slice holds parts of foliage (rigid) chunks.
 bool sliceHas(const LayeredVegetation& lv, bool foliage) {
   for (const ChunkPart& p : lv.reslice.spread.slice)
-    if (lv.mesh.chunks[p.chunk].foliage == foliage) return true;
+    if (drawnWithFoliage(lv.mesh.chunks[p.chunk], carriesWood(lv.mesh, lv.settings, lv.reslice.spread.impostors.cut.active)) == foliage)
+      return true;
   return false;
 }
 

@@ -128,6 +128,7 @@ Status buildCompactMesh(const VegetationModel& m, const std::vector<uint32_t>& t
     cur = MeshChunk{};
     cur.material = r.material;
     cur.foliage = r.foliage;
+    cur.carried = !r.foliage && r.carried;
     cur.firstTriangle = firstTriangle;
     cur.firstIndex = out->indices.size();
     cur.firstVertex = out->vertices.size();

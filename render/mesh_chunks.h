@@ -32,6 +32,10 @@ struct MeshChunk {
   uint32_t material = 0;
   uint32_t species = 0;        // the material's species (render/species.h; materials never span species)
   bool foliage = true;
+  // A rigid chunk whose every vertex follows the foliage fully (share LAYER_RIGID_FULL,
+  // render/rigid_flex.h): drawn into the layers with the foliage, each triangle in the layer of its
+  // anchor, where the rigid parts move with the leaves (MeshDrawOptions::carryWood).
+  bool carried = false;
   uint64_t firstTriangle = 0;  // GPU-order triangle index of the chunk's first (the id output's base)
   uint32_t triangleCount = 0;
   uint64_t firstVertex = 0;    // into CompactMesh::vertices (the draw's vertexOffset)
@@ -78,6 +82,7 @@ struct TriangleRange {
   uint32_t material = 0;
   bool foliage = true;
   uint64_t first = 0, count = 0;
+  bool carried = false;  // rigid triangles that follow the foliage fully (MeshChunk::carried)
 };
 
 // Builds the compact mesh of model `m` whose triangles in GPU order are `triangleOrder` (GPU

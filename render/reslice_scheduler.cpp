@@ -177,10 +177,13 @@ void planSpreadItems(ResliceScheduler& r, const ResliceParts& p) {
   planImpostorCut(p.placement, sp.job.frame, sp.job.view, sp.job.runs, &sp.impostors, p.stats);
   const bool cut = sp.impostors.cut.active;
   sp.items = cut ? sp.impostors.parts : std::vector<ChunkPart>{};
+  const bool carry = carriesWood(p.mesh, p.settings, cut);
   for (uint32_t c = 0; c < p.mesh.chunks.size(); ++c) {
     const MeshChunk& mc = p.mesh.chunks[c];
-    // Rigid chunks only into a background (drawn every frame otherwise: render/rigid_follow.h).
-    if ((mc.foliage ? !cut : drawsBackground(p.mesh, p.settings)) && mc.triangleCount) sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
+    // Rigid chunks only into a background (drawn every frame otherwise: render/rigid_follow.h),
+    // or with the foliage where they are carried into the layers (render/layer_mesh.h carriesWood).
+    if ((drawnWithFoliage(mc, carry) ? !cut : drawsBackground(p.mesh, p.settings)) && mc.triangleCount)
+      sp.items.push_back(ChunkPart{c, 0, mc.triangleCount});
   }
 }
 

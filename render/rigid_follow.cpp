@@ -88,11 +88,17 @@ Status addRigidFollowPasses(RigidFollow& rf, LayeredVegetation& lv, rg::RenderGr
   LayeredVegetation* l = &lv;
   auto draw = g.addPass("rigid: draw", [r, l, d, t, motion](rg::PassContext& x) {
     if (r->runs.empty()) return Status();
+    // Nothing to draw when every rigid chunk is carried into the layers.
+    const bool carry = carriesWood(l->mesh, l->settings, l->visible.impostors.cut.active);
+    if (std::none_of(l->mesh.chunks.begin(), l->mesh.chunks.end(), [&](const MeshChunk& c) { return !drawnWithFoliage(c, carry); }))
+      return Status();
     beginHostRendering(x, t, r->desc.width, r->desc.height, motion);
     MeshDrawOptions o;
     o.frame = r->frame.buffer;
     o.keepViewport = true;
     o.runs = &r->runs;
+    // The wood carried into the layers is warped with them; this pass draws the rest.
+    o.carryWood = carry;
     o.extra = {bindBuffer(r->frame.buffer, r->rigidOffset, sizeof(gpu::RigidFrame)), bindBuffer(d->frame.buffer, 0, sizeof(gpu::AnimFrame)),
                bindBuffer(d->displacement.buffer)};
     if (motion) o.extra.push_back(bindBuffer(d->previous.buffer));

@@ -62,8 +62,15 @@ bool hasLeaf() { return layerFieldIsLeaf(inPositionLeaf.w); }
 // The layer of this vertex's triangle. Every vertex of a leaf reads the same root (a leaf split
 // over chunks has the same root in each chunk's table), so a leaf's triangles all agree and no leaf
 // is cut (the near/far test is made on the root only).
+// Wood carried into the layers (a rigid chunk drawn with the foliage, render/layer_mesh.h
+// carriesWood) goes to the layer of its anchor, the one its corners would follow (rigidLayer): the
+// anchors of one triangle's corners lie within a slab's thickness of each other, and the provoking
+// vertex decides.
 uint triangleLayer() {
-  vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && hasLeaf()) ? leafRoot[inPositionLeaf.w].position : vertexPosition();
+  uint rigid = layerRigidEntry(inPositionLeaf.w);
+  vec3 root = (f.sliceMode == LAYER_SLICE_LEAF_ROOT && hasLeaf()) ? leafRoot[inPositionLeaf.w].position
+              : (f.sliceMode == LAYER_SLICE_LEAF_ROOT && rigid != LAYER_CHUNK_NO_LEAF) ? leafRoot[rigid].position
+                                                                                        : vertexPosition();
   return layerOfDepth(f, viewDepth(placed(root)));
 }
 

@@ -263,6 +263,7 @@ Status createCanopy(Device& d, const std::vector<SpeciesModel>& species, const C
     ld.stagingRingBytes = desc.meshStagingRingBytes;
     // The layers' parts keep their own uploads (flushLayerWork); the baseline's go to the context's list.
     CANOPY_TRY(createLayeredVegetation(d, species, ld, &c->layers));
+    c->layers.mesh.woodApart = c->params.composite.debugView == CompositeDebugView::Layers;
     CANOPY_TRY(validateParams(*c, c->params));  // against the instances too (the per-vertex baseline)
     if (desc.allowPerVertex)
       CANOPY_TRY(createPerVertex(d, c->layers, c->layers.mesh.branches, c->compositor.desc, &c->perVertex, &c->perVertexUploads));
@@ -326,6 +327,13 @@ Status setCanopyParams(CanopyContext* c, const CanopyParams& p) {
     }
     // The rigid parts drawn every frame or into the background: another pass in the graphs.
     if (p.layers.rigidMotion != c->params.layers.rigidMotion) c->generation++;
+    // The Layers debug view keeps the wood out of the layers (LayerMesh::woodApart): re-slice at once.
+    const bool woodApart = p.composite.debugView == CompositeDebugView::Layers;
+    if (woodApart != c->layers.mesh.woodApart) {
+      c->layers.mesh.woodApart = woodApart;
+      c->generation++;
+      requestReslice(c->layers.reslice, "debug view", true);
+    }
     if (p.animation != c->params.animation) {
       c->generation++;  // other passes: graphs are rebuilt
       if (p.animation == AnimationMode::Layers2D) {

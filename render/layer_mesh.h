@@ -86,6 +86,10 @@ struct LayerMesh {
   std::vector<gpu::BendBranch> branches;
   std::vector<uint32_t> gpuToModelTriangle;  // with desc.writeIds only
   bool hasRigid = false;                  // the model has rigid triangles (a background to draw)
+  // The wood is never carried into the layers (carriesWood): the composite's Layers debug view shows
+  // each layer in false colour and the rigid parts apart in their own (paper Figure 3c), so the
+  // context keeps them out while it is on (render/canopy.cpp).
+  bool woodApart = false;
   std::vector<MeshChunk> chunks;          // the compact mesh's chunks, one draw each
   Buffer vertices, indexBuffer, leafRoots;
   Buffer bendVertices;                    // hostMesh.bend on the device (desc.keepBend and a hierarchy)
@@ -218,7 +222,7 @@ inline bool drawsBackground(const LayerMesh& mesh, const LayerSettings& s) {
 // the layer set has no impostor cut (`cutActive`: its parts are the foliage's). Decided per layer
 // set: the set's draws and the frames that show it ask with the set's cut.
 inline bool carriesWood(const LayerMesh& mesh, const LayerSettings& s, bool cutActive) {
-  return mesh.hasRigid && !drawsBackground(mesh, s) && s.slice == SliceMode::LeafRoots && !cutActive;
+  return mesh.hasRigid && !mesh.woodApart && !drawsBackground(mesh, s) && s.slice == SliceMode::LeafRoots && !cutActive;
 }
 // Whether chunk `c` is drawn with the foliage (MeshDrawOptions::carryWood).
 inline bool drawnWithFoliage(const MeshChunk& c, bool carryWood) { return c.foliage || (carryWood && c.carried); }

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "render/canopy.h"
 #include "render/gltf_loader.h"
+#include "render/layers.h"
 #include "tests/assets.h"
 #include "tests/gpu_test.h"
 #include "tests/test_host.h"
@@ -76,9 +78,11 @@ struct Frames {
 };
 
 // `frames` frames of `model` at 320x240 in the default world wind of `speed` m/s (after 60 frames of
-// warm-up), `rigid` motion.
+// warm-up), `rigid` motion; `woodApart`: no wood carried into the layers (LayerMesh::woodApart, as
+// the Layers debug view has it: every rigid triangle drawn every frame), `carried`: the carried
+// rigid triangles of the context.
 Frames render(Device& dev, uint64_t& frameNumber, const VegetationModel& model, float speed, int frames,
-           RigidMotion rigid = RigidMotion::FollowFoliage) {
+           RigidMotion rigid = RigidMotion::FollowFoliage, bool woodApart = false, uint64_t* carried = nullptr) {
   Frames out;
   Host host;
   host.w = 320;
@@ -94,6 +98,13 @@ Frames render(Device& dev, uint64_t& frameNumber, const VegetationModel& model, 
   const Status made = createCanopy(dev, model, d, &ctx);
   EXPECT_TRUE(made.ok()) << made.message();
   if (!made.ok()) return out;
+  LayeredVegetation& lv = canopyLayers(ctx);
+  lv.mesh.woodApart = woodApart;
+  if (carried) {
+    *carried = 0;
+    for (const MeshChunk& c : lv.mesh.chunks)
+      if (c.carried) *carried += c.triangleCount;
+  }
   const LayerView view = orbitView(model.boundsMin, model.boundsMax, 0.0f, 10.0f, 40.0f, 320.0f / 240.0f, 1.05f);
   for (int i = 0; i < 60 + frames; ++i) {
     EXPECT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
@@ -225,6 +236,37 @@ TEST_F(RealPlantsTest, TheTrunkBendsWithItsCrownAndItsFootStands) {
   EXPECT_GT(upperFollow * crownBend, 0.0) << "the same way";
   EXPECT_LT(std::abs(upperStill), 0.25) << "the paper's background stays";
   EXPECT_LE(footShift, 0.5) << "the trunk's foot stands";
+}
+
+// The wood that follows its leaves fully is drawn into the layers at each re-slice, each triangle in
+// its anchor's layer, and warped with them (render/layer_mesh.h carriesWood): it lands where the
+// frame-by-frame draw of the same triangles puts it, the shared/rigid.h fixed point of the same
+// displacement. Bark pixels' centroid per 8-row band, carried against drawn every frame, in a gale.
+TEST_F(RealPlantsTest, TheWoodCarriedInTheLayersLandsWhereTheFrameByFrameDrawPutsIt) {
+  const VegetationModel tree = makeLeafCloud(3000, 7, true);
+  auto bark = [](const glm::vec4& c) { return c.r > c.g; };
+  uint64_t carried = 0, apartCarried = 0;
+  const Frames layers = render(dev, frameNumber, tree, 9.0f, 20, RigidMotion::FollowFoliage, false, &carried),
+               apart = render(dev, frameNumber, tree, 9.0f, 20, RigidMotion::FollowFoliage, true, &apartCarried);
+  ASSERT_GT(carried, 0u) << "the crown's branches follow fully: carried";
+  ASSERT_EQ(layers.color.size(), apart.color.size());
+  int top = 0, bottom = 0;
+  coveredRows(apart.depth[0], &top, &bottom);
+  double worst = 0, sum = 0;
+  int bands = 0;
+  for (size_t f = 0; f < layers.color.size(); ++f)
+    for (int y = top; y + 8 <= bottom; y += 8) {
+      const double a = centroidX(layers.depth[f], layers.color[f], y, y + 8, bark), b = centroidX(apart.depth[f], apart.color[f], y, y + 8, bark);
+      if (std::isnan(a) || std::isnan(b)) continue;
+      worst = std::max(worst, std::abs(a - b));
+      sum += std::abs(a - b);
+      ++bands;
+    }
+  ASSERT_GT(bands, 0);
+  std::printf("carried %llu rigid triangles; bark centroid per band, carried against drawn every frame: mean %.3f px, max %.3f px (%d bands)\n",
+              (unsigned long long)carried, sum / bands, worst, bands);
+  EXPECT_LT(sum / bands, 0.25) << "the carried wood is where the frame-by-frame draw puts it (0.47 px with every carried triangle in the nearest layer)";
+  EXPECT_LT(worst, 3.0);
 }
 
 }  // namespace

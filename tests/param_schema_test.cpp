@@ -190,7 +190,7 @@ TEST(ParamSchema, EveryCheckedFieldRefusesAValueOutsideItsRange) {
   EXPECT_EQ(checkParams(d).message(), "SimulationDesc.gridSize = 48 is not a power of two in [4, 1024] (cells)");
   CompositeParams c;
   c.debugView = CompositeDebugView(7);
-  EXPECT_EQ(checkParams(c).message(), "CompositeParams.debugView = 7 is outside [0, 3]: one of None | Layers | Velocity | Grid");
+  EXPECT_EQ(checkParams(c).message(), "CompositeParams.debugView = 7 is outside [0, 3]: one of Off | Layers | Velocity | Grid");
   SimulationParams sp;
   sp.motors.resize(kMaxMotors + 1);
   EXPECT_EQ(checkParams(sp).message(), "SimulationParams.motors: 9 given, at most 8");

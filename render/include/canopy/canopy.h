@@ -11,7 +11,7 @@
 //   2. hands its instance, device and queue to adoptDevice() (one canopy::Device per VkDevice),
 //   3. loads or builds a Model and creates one CanopyContext per plant or field (createCanopy),
 //   4. every frame calls recordCanopy() into its own command buffer with its colour and depth.
-// Errors are returned as a Status (a Result code plus a message naming the parameter, file or
+// Errors are returned as a CanopyStatus (a Result code plus a message naming the parameter, file or
 // Vulkan call); nothing throws across this API and nothing is global. Threading: the functions on
 // one Device and its contexts must not run concurrently (the host serialises them); different
 // Devices are independent.
@@ -21,7 +21,7 @@
 #include <vector>
 #include <vulkan/vulkan.h>
 
-// The version, Result and Status, Float3 / Float4x4 / CanopyCamera, and the host's device.
+// The version, Result and CanopyStatus, Float3 / Float4x4 / CanopyCamera, and the host's device.
 #include <canopy/canopy_core.h>
 // The plain types: the model's input descriptions, every parameter struct, CanopyDesc, the statistics.
 #include <canopy/canopy_params.h>
@@ -34,10 +34,10 @@ namespace canopy {
 struct Model;  // one vegetation model in host memory (opaque); may be destroyed after createCanopy
 
 // Loads a .gltf or .glb (decided by the file's first bytes). Refusals name the file and element.
-Status loadModel(const std::string& path, const GltfLoadOptions& options, Model** out);
+CanopyStatus loadModel(const std::string& path, const GltfLoadOptions& options, Model** out);
 
 // Builds a model from the host's own arrays (MeshDesc; copied).
-Status createModel(const MeshDesc& desc, Model** out);
+CanopyStatus createModel(const MeshDesc& desc, Model** out);
 // Frees the model's host memory (null is ignored).
 void destroyModel(Model* model);
 // Triangles of the model (0 for null).
@@ -49,16 +49,16 @@ void modelBounds(const Model* model, Float3* min, Float3* max);
 // (expanded here, the same copies on every machine). Every key, type, range and cap is checked and
 // a refusal names the file and the JSON pointer ("/instances/3/scale: ..."); a species' glTF path
 // must name a regular file (it is loaded by loadModel, not here). Never throws.
-Status readCanopyScene(const std::string& path, CanopyScene* out);
+CanopyStatus readCanopyScene(const std::string& path, CanopyScene* out);
 // Parses a scene file's text with readCanopyScene's checks but one: the species' glTF paths are
 // resolved against `folder` (relative ones) and not checked to name a regular file (nothing is
 // opened; loadModel reports a missing one when the host loads the species). `name` is used in
 // messages. For the fuzz target and a host's embedded scenes.
-Status parseCanopyScene(const std::string& name, const std::string& text, const std::string& folder, CanopyScene* out);
+CanopyStatus parseCanopyScene(const std::string& name, const std::string& text, const std::string& folder, CanopyScene* out);
 // The scene's copies for createCanopy with the species' models loaded (`models[i]` for
 // scene.species[i], in the CanopySpecies list given to createCanopy in the same order): each copy's
 // species index set and its species' anchor applied.
-Status canopySceneInstances(const CanopyScene& scene, const std::vector<const Model*>& models, std::vector<CanopyInstance>* out);
+CanopyStatus canopySceneInstances(const CanopyScene& scene, const std::vector<const Model*>& models, std::vector<CanopyInstance>* out);
 
 // ---------------------------------------------------------------------------------------------
 // Contexts
@@ -66,16 +66,16 @@ Status canopySceneInstances(const CanopyScene& scene, const std::vector<const Mo
 // The user's cache folder for Canopy: $XDG_CACHE_HOME/canopy (when that is an absolute path),
 // else $HOME/.cache/canopy, created with mode 0700 when missing. An error when neither variable
 // is an absolute path, or the folder is a link or another user's.
-Status userCacheFolder(std::string* folder);
+CanopyStatus userCacheFolder(std::string* folder);
 // Removes Canopy's cache files from `folder` (leaf roots, impostor views, temporaries of
 // interrupted writes; a link or FIFO planted at such a name, never what a link points to). Other
 // files stay. The counts are optional.
-Status clearCacheFolder(const std::string& folder, uint64_t* removedFiles, uint64_t* removedBytes);
+CanopyStatus clearCacheFolder(const std::string& folder, uint64_t* removedFiles, uint64_t* removedBytes);
 
 // Creates a context: splits materials, finds leaf roots, creates the GPU state and stages the mesh
 // and textures. Submits nothing: the uploads are recorded at the start of the context's first
 // recordCanopy(). Refuses models with nothing to animate.
-Status createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out);
+CanopyStatus createCanopy(Device* device, const Model* model, const CanopyDesc& desc, CanopyContext** out);
 
 // One species of a vegetation of several (docs/design.md "Species"): its model (may be destroyed
 // after createCanopy) and its wind response, relative to the method's.
@@ -89,7 +89,7 @@ struct CanopySpecies {
 // and textures are stored once however many copies (with CanopyDesc.impostors, each species' views
 // are baked once). 1..256 species (kMaxSceneSpecies). With allowPerVertex, each species bends
 // through its own branch hierarchy, or about its own trunk when it has none.
-Status createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out);
+CanopyStatus createCanopy(Device* device, const std::vector<CanopySpecies>& species, const CanopyDesc& desc, CanopyContext** out);
 // Releases the context. Its GPU objects are freed framesInFlight host frames later (or at
 // releaseDevice), so the host may destroy it while frames that used it still execute.
 void destroyCanopy(CanopyContext* context);
@@ -98,12 +98,12 @@ void destroyCanopy(CanopyContext* context);
 // copies' CanopyInstance.species index): the next recorded frame re-slices at once; the simulation,
 // compositor and parameters are kept, the old mesh freed once no frame in flight reads it. Refused
 // (the context unchanged) for a context created with CanopyDesc.allowPerVertex.
-Status setCanopySpecies(CanopyContext* context, const std::vector<CanopySpecies>& species,
+CanopyStatus setCanopySpecies(CanopyContext* context, const std::vector<CanopySpecies>& species,
                         const std::vector<CanopyInstance>& instances);
 
 // Validates and applies parameters from the next frame on. A new layer count recreates the layer
 // images (the old ones are freed once no frame in flight uses them).
-Status setCanopyParams(CanopyContext* context, const CanopyParams& params);
+CanopyStatus setCanopyParams(CanopyContext* context, const CanopyParams& params);
 // The parameters in force (the last accepted by setCanopyParams, or CanopyDesc.params).
 const CanopyParams& canopyParams(const CanopyContext* context);
 
@@ -111,14 +111,14 @@ const CanopyParams& canopyParams(const CanopyContext* context);
 // warp grid); mesh, leaf roots, simulation and parameters are kept. Waits for nothing: the old
 // objects are freed once no frame in flight uses them. Width and height in [1, 16384]. After a
 // failure (out of memory) frames are refused until a resizeCanopy succeeds; the same size retries.
-Status resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
+CanopyStatus resizeCanopy(CanopyContext* context, uint32_t width, uint32_t height);
 
 // Replaces the placed copies (CanopyDesc.instances; at least one; CanopyInstance.species must name
 // one of the context's species): the next recorded frame re-slices
 // at once, and the default simulation plane (no CanopyParams.customPlane) is taken again from its
 // camera for the copies' bounds. A transform that is not a finite invertible affine matrix, or a
 // tint outside [0, 16], is refused naming the instance. Waits for nothing.
-Status setCanopyInstances(CanopyContext* context, const std::vector<CanopyInstance>& instances);
+CanopyStatus setCanopyInstances(CanopyContext* context, const std::vector<CanopyInstance>& instances);
 
 // What changes every frame.
 struct CanopyFrame {
@@ -171,7 +171,7 @@ struct CanopyFrameInputs {
 // the view moved, dynamics, warp and composite, with every barrier) into the host's `cmd`, which
 // the host submits. Nothing is submitted and nothing waits. The host's images are left in their
 // `final` states.
-Status recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
+CanopyStatus recordCanopy(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
 // The vegetation's shadow for one of the host's lights (docs/embedding.md "Shadows"; docs/design.md
 // "Shadows"): the foliage (alpha-tested) and the trunks drawn, depth only, into the host's depth
@@ -192,7 +192,7 @@ struct CanopyShadowInputs {
 };
 // Records the shadow into `cmd` after this frame's recordCanopy (the same command buffer or a later
 // one); *updated (optional): whether this call drew. Refused before the first recordCanopy.
-Status recordCanopyShadow(CanopyContext* context, VkCommandBuffer cmd, const CanopyShadowInputs& inputs, bool* updated = nullptr);
+CanopyStatus recordCanopyShadow(CanopyContext* context, VkCommandBuffer cmd, const CanopyShadowInputs& inputs, bool* updated = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 // One wind for the scene (docs/embedding.md "The wind and pushers"; docs/design.md "The wind a host reads",
@@ -220,33 +220,33 @@ struct CanopyWind {
 // The wind image and its mapping. The image lives as long as the context (the simulation's, with
 // CanopyDesc.shareSimulationWith); it is written by the recordCanopy that steps the simulation, and
 // may be sampled from the first recordCanopy (or recordCanopyLoad) on, which records its first clear.
-Status canopyWind(const CanopyContext* context, CanopyWind* out);
+CanopyStatus canopyWind(const CanopyContext* context, CanopyWind* out);
 // The wind at `count` world points (world units/s, as canopyWindAt) on the CPU, for gameplay code:
 // from a copy read back without a stall, framesInFlight host frames late (the newest step whose
 // frame has completed by CanopyFrame.frameNumber's promise), through the plane of the context that
 // stepped it. *fieldFrame (optional): the host frame whose step it is; 0 and zero vectors before any
 // has completed.
-Status sampleCanopyWind(const CanopyContext* context, const Float3* points, size_t count, Float3* out,
+CanopyStatus sampleCanopyWind(const CanopyContext* context, const Float3* points, size_t count, Float3* out,
                         uint64_t* fieldFrame = nullptr);
 // The spheres and capsules moving through the vegetation from the next recorded frame on (replacing
 // the last call's; empty: none): each mapped onto the simulation plane every frame, a local bend
 // of the foliage that springs back and a motor of the fluid (CanopyPusher). At most kMaxPushers;
 // more, or a field outside its range, is refused naming it (the pushers in force are kept). With a
 // shared simulation the context that steps it (the first recorded in a frame) maps its own.
-Status setCanopyPushers(CanopyContext* context, const std::vector<CanopyPusher>& pushers);
+CanopyStatus setCanopyPushers(CanopyContext* context, const std::vector<CanopyPusher>& pushers);
 
 // Loading without a hitch (a loading screen): records into the host's `cmd` the uploads createCanopy
 // staged (mesh, textures, the simulation's first clear) and the first re-slice of the layers for
 // `camera`, so the first recordCanopy at that camera (bit for bit) costs what any frame costs. The
 // host submits `cmd` before its first frame's. A mesh streamed under deviceMemoryBudget is sliced
 // over the first frames as before (its uploads only are recorded here). Optional.
-Status recordCanopyLoad(CanopyContext* context, VkCommandBuffer cmd, const CanopyCamera& camera);
+CanopyStatus recordCanopyLoad(CanopyContext* context, VkCommandBuffer cmd, const CanopyCamera& camera);
 
 // Re-slices the layers at the next recorded frame whatever the camera did: `immediate` draws the
 // new layers in that frame; otherwise the re-slice is spread over frames like a view change
 // (LayerSettings.rebuildBudgetMs; at once when that is 0). A spread re-slice already running is
 // restarted for the next frame's camera.
-Status requestCanopyRebuild(CanopyContext* context, bool immediate);
+CanopyStatus requestCanopyRebuild(CanopyContext* context, bool immediate);
 
 // Counters of the context (and of the device's release queue); CPU only, any time.
 CanopyStats canopyStats(const CanopyContext* context);

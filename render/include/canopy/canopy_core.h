@@ -1,6 +1,6 @@
 #pragma once
 // Canopy's core types, shared by the public API (<canopy/canopy.h>, which includes this header) and
-// Canopy's own engine: the version, Result and Status, the small math types and camera, and the
+// Canopy's own engine: the version, Result and CanopyStatus, the small math types and camera, and the
 // host's device (what Canopy needs of it and how it is adopted). C++17, Vulkan's headers only.
 #include <cstdint>
 #include <functional>
@@ -22,8 +22,11 @@ namespace canopy {
 // ---------------------------------------------------------------------------------------------
 // Results
 
+// Names that X11 (Xlib.h's Status, X.h's Success and None) defines as macros are not used by the
+// public headers, so they compile after <X11/Xlib.h> in either order; 0.8's names stay as aliases
+// where no such macro is defined (CHANGELOG: the migration).
 enum class Result : uint32_t {
-  Success = 0,
+  Ok = 0,
   InvalidArgument,    // a parameter out of range or inconsistent (the message names it and the range)
   InvalidModel,       // the model file or data is malformed (the message names file and element)
   FileError,          // a file could not be read or written
@@ -33,32 +36,38 @@ enum class Result : uint32_t {
   DeviceLost,
   VersionMismatch,    // header and library versions differ
   VulkanError,        // any other failing Vulkan call (named in the message)
+#ifndef Success
+  Success = Ok,  // 0.8's name of Ok
+#endif
 };
 // The code's name ("UnsupportedDevice"), for logs.
 const char* toString(Result result);
 
 // Empty on success; else a Result and a message ("CanopyDesc.width = 0 is outside [1, 16384]").
-class [[nodiscard]] Status {
+class [[nodiscard]] CanopyStatus {
  public:
-  Status() = default;
-  static Status error(std::string message) { return error(Result::InvalidArgument, std::move(message)); }
-  static Status error(Result code, std::string message) {
-    Status s;
-    s.code_ = code == Result::Success ? Result::InvalidArgument : code;
+  CanopyStatus() = default;
+  static CanopyStatus error(std::string message) { return error(Result::InvalidArgument, std::move(message)); }
+  static CanopyStatus error(Result code, std::string message) {
+    CanopyStatus s;
+    s.code_ = code == Result::Ok ? Result::InvalidArgument : code;
     s.message_ = std::move(message);
     return s;
   }
-  bool ok() const { return code_ == Result::Success; }
+  bool ok() const { return code_ == Result::Ok; }
   explicit operator bool() const { return ok(); }
   Result code() const { return code_; }
   const std::string& message() const { return message_; }
   // Prefixes context ("while creating X: ") so the message reads outermost first; keeps the code.
-  Status context(const std::string& what) const { return ok() ? *this : error(code_, what + ": " + message_); }
+  CanopyStatus context(const std::string& what) const { return ok() ? *this : error(code_, what + ": " + message_); }
 
  private:
-  Result code_ = Result::Success;
+  Result code_ = Result::Ok;
   std::string message_;
 };
+#ifndef Status
+using Status = CanopyStatus;  // 0.8's name of CanopyStatus
+#endif
 
 // Progress of long work (leaf roots, mesh upload): (stage, done, total), called on the calling
 // thread now and then, last with done == total.
@@ -126,7 +135,7 @@ struct DeviceRequirements {
 // cannot run Canopy; `out` is filled either way. `instanceApiVersion` is VkApplicationInfo.apiVersion
 // of the host's instance: on 1.3 (instance and device) synchronization2 and dynamic rendering are
 // core, below it they are extensions.
-Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
+CanopyStatus queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
                                uint32_t instanceApiVersion, VkPhysicalDevice physicalDevice, DeviceRequirements* out);
 // Switches Canopy's required features, and the optional ones the device supports, on in the host's
 // feature chain for a device of `deviceApiVersion` (the version the device will run: the lower of
@@ -136,7 +145,7 @@ Status queryDeviceRequirements(PFN_vkGetInstanceProcAddr getInstanceProcAddr, Vk
 // VkPhysicalDeviceDynamicRenderingFeatures, and no VkPhysicalDeviceVulkan13Features
 // (DeviceRequirements.featureStructs lists them). A missing or misplaced structure, or a version
 // below 1.2 or above the physical device's, is an error naming it; nothing is allocated.
-Status enableDeviceFeatures(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
+CanopyStatus enableDeviceFeatures(PFN_vkGetInstanceProcAddr getInstanceProcAddr, VkInstance instance,
                             VkPhysicalDevice physicalDevice, uint32_t deviceApiVersion, VkPhysicalDeviceFeatures2* chain);
 
 // A range of device memory handed out by a host allocator (e.g. VMA's vmaAllocateMemory).
@@ -182,7 +191,7 @@ struct AdoptDeviceDesc {
 };
 // Wraps the host's device. The VkDevice, instance and queue stay the host's; releaseDevice()
 // destroys only what Canopy created (after every context on it was destroyed).
-Status adoptDevice(const AdoptDeviceDesc& desc, Device** out);
+CanopyStatus adoptDevice(const AdoptDeviceDesc& desc, Device** out);
 // Waits for no device: the host calls it once its GPU work using Canopy has completed.
 void releaseDevice(Device* device);
 

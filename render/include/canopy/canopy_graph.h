@@ -33,13 +33,13 @@ struct CanopyTargetUse {
 // The host images the pass group touches (colour, depth, and motion when CanopyDesc.motionFormat
 // is set) and how. Fixed for the context's life: a host may cache the list. CPU only.
 // Errors: a null context or output.
-Status canopyPassGroupUses(const CanopyContext* context, std::vector<CanopyTargetUse>* uses);
+CanopyStatus canopyPassGroupUses(const CanopyContext* context, std::vector<CanopyTargetUse>* uses);
 
 // Records one whole frame as recordCanopy() does, for a host graph that has placed `inputs`'
 // images in the states of canopyPassGroupUses() (their `current` and `final` fields are ignored).
 // Records into `cmd` only; nothing is submitted and nothing waits. Same thread rules as
 // recordCanopy (<canopy/canopy.h>): no two calls on one Device or its contexts run concurrently,
 // whichever contexts they name (docs/embedding.md "Threads").
-Status recordCanopyPassGroup(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
+CanopyStatus recordCanopyPassGroup(CanopyContext* context, VkCommandBuffer cmd, const CanopyFrameInputs& inputs);
 
 }  // namespace canopy

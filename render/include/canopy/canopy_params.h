@@ -8,7 +8,7 @@
 #include <vector>
 #include <vulkan/vulkan.h>
 
-// The version, Result and Status, Float3 / Float4x4 / CanopyCamera, and the host's device.
+// The version, Result and CanopyStatus, Float3 / Float4x4 / CanopyCamera, and the host's device.
 #include <canopy/canopy_core.h>
 // The parameter schema the parameter structs are declared with.
 #include <canopy/canopy_schema.h>
@@ -176,7 +176,7 @@ enum WindSide : uint32_t { kWindFromLeft = 1, kWindFromRight = 2, kWindFromBotto
   X(float, gust, 0.3f, Closed, 0, 1, "", "relative gust amplitude")                                                    \
   X(float, gustScale, 0.25f, AboveMin, 0, 100, "domain units", "gust wavelength along a side")                         \
   X(float, gustSpeed, 0.3f, Closed, -1000, 1000, "domain units/s", "gust travel speed along a side")                   \
-  X(uint32_t, seed, 1, None, 0, 0, "", "gust noise seed")
+  X(uint32_t, seed, 1, Unchecked, 0, 0, "", "gust noise seed")
 CANOPY_PARAM_STRUCT(WindParams, CANOPY_WIND_PARAMS)
 
 // A point "motor" (a character, an explosion): a mass source in the fluid, so air flows outward
@@ -248,9 +248,9 @@ inline bool operator!=(const LayerLayout& a, const LayerLayout& b) { return !(a 
 // (0 <= nearEnd <= farStart <= 1), or with `absolute` view distances in world units (checked
 // together: "region split").
 #define CANOPY_REGION_SPLIT(X)                                                                                          \
-  X(float, nearEnd, 1.0f / 3.0f, None, 0, 1, "fraction (or world units)", "end of the near region")                    \
-  X(float, farStart, 2.0f / 3.0f, None, 0, 1, "fraction (or world units)", "start of the far region")                  \
-  X(bool, absolute, false, None, 0, 0, "", "the two are view distances in world units")
+  X(float, nearEnd, 1.0f / 3.0f, Unchecked, 0, 1, "fraction (or world units)", "end of the near region")                    \
+  X(float, farStart, 2.0f / 3.0f, Unchecked, 0, 1, "fraction (or world units)", "start of the far region")                  \
+  X(bool, absolute, false, Unchecked, 0, 0, "", "the two are view distances in world units")
 CANOPY_PARAM_STRUCT(RegionSplit, CANOPY_REGION_SPLIT)
 enum class SliceMode {
   LeafRoots,  // a leaf goes whole into the layer of its root (default)
@@ -283,7 +283,7 @@ enum class ImpostorShape { CrossedPolygons, FacingPolygon };
   X(ImpostorMode, mode, ImpostorMode::Off, Enum, 0, 2, "Off | FarRegion | ByProjectedSize", "which boxes are drawn as impostors") \
   X(float, switchPixels, 64.0f, Closed, 1, 4096, "pixels", "projected size at and below which a box is an impostor")   \
   X(float, band, 0.2f, Closed, 0, 4, "", "the fade's width above switchPixels, relative; 0: a hard switch")            \
-  X(bool, debugView, false, None, 0, 0, "", "colour leaves and impostors by their box's level (also with mode Off)") \
+  X(bool, debugView, false, Unchecked, 0, 0, "", "colour leaves and impostors by their box's level (also with mode Off)") \
   X(ImpostorShape, shape, ImpostorShape::CrossedPolygons, Enum, 0, 1, "CrossedPolygons | FacingPolygon", "how a box's views are drawn (FacingPolygon: before 0.7)")
 CANOPY_PARAM_STRUCT(ImpostorSettings, CANOPY_IMPOSTOR_SETTINGS)
 
@@ -298,7 +298,7 @@ enum class ImpostorViews { Diagonal6, FacesAndDiagonals12 };
 // axiom is not a level of its own). When not even the top level fits memoryBudget (RGBA8 colour
 // and 32-bit depth), the tiles are halved (down to 8 pixels) before the creation is refused.
 #define CANOPY_IMPOSTOR_DESC(X)                                                                                         \
-  X(bool, enable, false, None, 0, 0, "", "build the hierarchy and bake the views (ImpostorSettings.mode may then be on)") \
+  X(bool, enable, false, Unchecked, 0, 0, "", "build the hierarchy and bake the views (ImpostorSettings.mode may then be on)") \
   X(uint32_t, tilePixels, 64, PowerOfTwo, 8, 512, "pixels", "side of each view's image")                               \
   X(uint32_t, maxLevel, 2, Closed, 0, 64, "", "the deepest hierarchy level baked")                                     \
   X(uint64_t, maxBoxTriangles, 1'000'000, Closed, 1, 1099511627776.0, "triangles", "a larger box gets no views")      \
@@ -331,11 +331,11 @@ enum class TranslucencyModel { Habel, DiffuseBtdf };
 // composites the layers over (Still; before 0.8, and for a streamed mesh).
 enum class RigidMotion { FollowFoliage, Still };
 #define CANOPY_LAYER_SETTINGS(X)                                                                                        \
-  X(LayerLayout, layout, {}, None, 1, kMaxLayers, "layers", "default 5(3-1-1), at most CanopyDesc.maxLayers layers (checked as a whole)") \
+  X(LayerLayout, layout, {}, Unchecked, 1, kMaxLayers, "layers", "default 5(3-1-1), at most CanopyDesc.maxLayers layers (checked as a whole)") \
   X(RegionSplit, regions, {}, Nested, 0, 0, "", "where the depth regions meet")                                        \
   X(SliceMode, slice, SliceMode::LeafRoots, Enum, 0, 1, "LeafRoots | Geometry", "how leaves go into layers")          \
   X(LayerDrawMode, draw, LayerDrawMode::Auto, Enum, 0, 2, "Auto | SinglePass | PerLayer", "how the layers are drawn") \
-  X(bool, shadeOnce, false, None, 0, 0, "", "a depth pre-pass first, so leaf shading runs once per layer texel (slower on lavapipe: docs/design.md)") \
+  X(bool, shadeOnce, false, Unchecked, 0, 0, "", "a depth pre-pass first, so leaf shading runs once per layer texel (slower on lavapipe: docs/design.md)") \
   X(uint32_t, halfResolutionLayers, 0, Closed, 0, kMaxLayers, "layers", "the farthest this many layers are drawn at half resolution (a quarter of their fill); at most the layout's count") \
   X(ReslicePolicy, policy, ReslicePolicy::OnViewChange, Enum, 0, 1, "OnViewChange | EveryFrame", "when layers are re-sliced") \
   X(float, errorThresholdPixels, 0.5f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers; 0.5: the world-lock bar of docs/performance.md)") \
@@ -345,9 +345,9 @@ enum class RigidMotion { FollowFoliage, Still };
   X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \
   X(float, leafRefractiveIndex, 1.45f, Closed, 1.2, 1.7, "", "effective refractive index n of the lobe (Bousquet et al.'s measured range)") \
   X(float, leafRoughness, 0.25f, Closed, 0.078, 0.5, "", "Beckmann roughness sigma of the lobe (measured range) where the material gives none (a generated scene), or for every material with overrideLeafRoughness (canopy-demo: when given)") \
-  X(bool, overrideLeafRoughness, false, None, 0, 0, "", "leafRoughness for every material, the file's roughness ignored")    \
+  X(bool, overrideLeafRoughness, false, Unchecked, 0, 0, "", "leafRoughness for every material, the file's roughness ignored")    \
   X(float, leafTransmission, 0.35f, Closed, 0, 1, "", "diffuse transmission of foliage materials whose file gives none") \
-  X(bool, translucency, true, None, 0, 0, "", "false: unlit sides get the ambient term only")                          \
+  X(bool, translucency, true, Unchecked, 0, 0, "", "false: unlit sides get the ambient term only")                          \
   X(TranslucencyModel, translucencyModel, TranslucencyModel::Habel, Enum, 0, 1, "Habel | DiffuseBtdf", "the unlit side's light (DiffuseBtdf: before 0.7)") \
   X(float, leafOpticalDepth, 0.3f, Closed, 0, 100, "", "Habel: optical depth through a leaf whose file gives no KHR_materials_volume")       \
   X(RigidMotion, rigidMotion, RigidMotion::FollowFoliage, Enum, 0, 1, "FollowFoliage | Still", "trunks and branches move with the leaves they carry, drawn every frame (Still: a background drawn per re-slice, before 0.8)") \
@@ -382,7 +382,7 @@ enum class RootMode { PerPlant, Vegetation };
   X(float, propagationSpeed, 0.0f, Closed, 0, 1000, "domain units/s", "s of eq. 5; 0: the wave oscillator's speed c (WaveParams.speed)") \
   X(Float3, lambda, (Float3{18.75f, 18.75f, 9.375f}), Closed, 0, 1e6, "cells (lambdaUnits) per domain unit", "lambda_x,y,z of eq. 6") \
   X(float, rigidity, 1.0f, Closed, 0, 10, "", "r of eq. 7")                                                            \
-  X(bool, everyPartMoves, false, None, 0, 0, "", "eq. 7: R = 1 everywhere")                                            \
+  X(bool, everyPartMoves, false, Unchecked, 0, 0, "", "eq. 7: R = 1 everywhere")                                            \
   X(float, depthAttenuation, 0.3f, Closed, 0, 1, "", "m of eq. 6")                                                     \
   X(float, dt, 0.0f, Closed, 0, 10, "s", "Delta t of eq. 6; 0: the simulation's nominal step (SimulationDesc.nominalDt)") \
   X(uint32_t, cellSize, 16, Closed, 2, 256, "pixels", "warp-grid cell (at least CanopyDesc.minCellSize)")             \
@@ -390,7 +390,7 @@ enum class RootMode { PerPlant, Vegetation };
   X(DelayDistanceUnits, delayUnits, DelayDistanceUnits::Domain, Enum, 0, 1, "Domain | World", "units of L_i in eq. 4 (World: before 0.7)") \
   X(LambdaUnits, lambdaUnits, LambdaUnits::Cells, Enum, 0, 1, "Cells | Pixels", "units of lambda (Pixels: before 0.7)")  \
   X(float, vdJitter, 0.0f, Closed, 0, 1000, "domain units/s", "per-layer random part of V_D, uniform in [-vdJitter, vdJitter]") \
-  X(uint32_t, vdSeed, 1, None, 0, 0, "", "seed of the per-layer V_D")                                              \
+  X(uint32_t, vdSeed, 1, Unchecked, 0, 0, "", "seed of the per-layer V_D")                                              \
   X(ApproximateOffset, approximateOffset, ApproximateOffset::Direction, Enum, 0, 1, "Direction | Velocity", "eq. 5: gamma s V/|V|, or gamma s V (before 0.7)") \
   X(RootMode, roots, RootMode::PerPlant, Enum, 0, 1, "PerPlant | Vegetation", "eq. 7's root: each plant's, or the whole vegetation's (before 0.7)") \
   X(float, maxShrink, 0.05f, Closed, 0, 1e6, "of the height above the root", "eq. 6's lambda_z |V_z| shrink at most this share of a corner's height above its root (1e6: unbounded, before 0.8)")  \
@@ -398,7 +398,10 @@ enum class RootMode { PerPlant, Vegetation };
 CANOPY_PARAM_STRUCT(DynamicsParams, CANOPY_DYNAMICS_PARAMS)
 
 enum class CompositeDebugView : uint32_t {
-  None = 0,
+  Off = 0,
+#ifndef None
+  None = Off,  // 0.8's name of Off (X11 defines None)
+#endif
   Layers = 1,    // each layer in its own false colour (paper Figure 3c)
   Velocity = 2,  // the tiled simulation field over the simulation plane
   Grid = 3,      // the nearest layer's warp grid, displaced
@@ -414,14 +417,14 @@ enum class CompositePath : uint32_t {
 // (HDR hosts: scene-referred intensity).
 #define CANOPY_COMPOSITE_PARAMS(X)                                                                                      \
   X(CompositePath, path, CompositePath::Compute, Enum, 0, 1, "Compute | Fragment", "how the warp and composite run")   \
-  X(bool, earlyExit, true, None, 0, 0, "", "front to back, stop at accumulated alpha >= 1 - 1/1024")                   \
-  X(bool, skipEmptyTiles, true, None, 0, 0, "", "skip layers that cannot reach a pixel")                              \
-  X(bool, bilinear, true, None, 0, 0, "", "bilinear layer colour (false: nearest texel)")                              \
+  X(bool, earlyExit, true, Unchecked, 0, 0, "", "front to back, stop at accumulated alpha >= 1 - 1/1024")                   \
+  X(bool, skipEmptyTiles, true, Unchecked, 0, 0, "", "skip layers that cannot reach a pixel")                              \
+  X(bool, bilinear, true, Unchecked, 0, 0, "", "bilinear layer colour (false: nearest texel)")                              \
   X(float, sharpness, 3.0f, Closed, 1, 8, "", "the warp's filter: the bilinear ramp between texel centres steepened k times (1: bilinear; design.md, sharp resampling)") \
   X(uint32_t, depthSearchSteps, 16, Closed, 0, 64, "samples", "reprojection: at most this many samples of a layer's depth along a pixel's ray (two layer pixels apart; 0: the slab's plane alone)") \
   X(float, depthAlpha, 0.5f, AboveMin, 0, 1, "", "alpha at which a layer writes the depth output")                    \
   X(float, exposure, 1.0f, Closed, 0, 65504, "", "multiplies the vegetation's linear colour")                          \
-  X(CompositeDebugView, debugView, CompositeDebugView::None, Enum, 0, 3, "None | Layers | Velocity | Grid", "debug views") \
+  X(CompositeDebugView, debugView, CompositeDebugView::Off, Enum, 0, 3, "Off | Layers | Velocity | Grid", "debug views") \
   X(float, debugVelocityScale, 1.0f, AboveMin, 0, 1e30, "domain units/s", "velocity view: speed at full brightness")
 CANOPY_PARAM_STRUCT(CompositeParams, CANOPY_COMPOSITE_PARAMS)
 
@@ -483,7 +486,7 @@ enum class PerVertexWind {
   X(float, lateral, 0.4f, Closed, 0, 1, "", "sway across the wind relative to the sway along it")                      \
   X(float, maxAngle, 0.5f, AboveMin, 0, 1.5, "rad", "saturation of any one bend")                                      \
   X(float, taper, 1.5f, Closed, 0.5, 4, "", "the rotation at coordinate x along a branch is tip * x^taper")            \
-  X(uint32_t, seed, 1, None, 0, 0, "", "noise phases")                                                                   \
+  X(uint32_t, seed, 1, Unchecked, 0, 0, "", "noise phases")                                                                   \
   X(PerVertexWind, wind, PerVertexWind::KaimalField, Enum, 0, 1, "KaimalField | UniformNoise", "the wind model (UniformNoise: before 0.7)") \
   X(Float4, damping, (Float4{{0.15f, 0.2f, 0.25f, 0.3f}}), Closed, 0.01, 10, "", "KaimalField: damping ratio per level") \
   X(float, leafDamping, 0.4f, Closed, 0.01, 10, "", "KaimalField: a leaf's damping ratio")                            \
@@ -528,8 +531,8 @@ CANOPY_PARAM_STRUCT(WorldWind, CANOPY_WORLD_WIND)
   X(CompositeParams, composite, {}, Nested, 0, 0, "", "inverse warp and compositing")                                 \
   X(WindMode, windMode, WindMode::World, Enum, 0, 1, "World | PlaneSides", "how the wind is set (PlaneSides: before 0.8)") \
   X(WorldWind, wind, {}, Nested, 0, 0, "", "the wind in the world (windMode World)")                                   \
-  X(bool, customPlane, false, None, 0, 0, "", "PlaneSides: use `plane` instead of the one fixed from the first camera") \
-  X(SimulationPlane, plane, {}, None, 0, 0, "", "checked (as a SimulationPlane) with customPlane only")
+  X(bool, customPlane, false, Unchecked, 0, 0, "", "PlaneSides: use `plane` instead of the one fixed from the first camera") \
+  X(SimulationPlane, plane, {}, Unchecked, 0, 0, "", "checked (as a SimulationPlane) with customPlane only")
 CANOPY_PARAM_STRUCT(CanopyParams, CANOPY_PARAMS)
 
 // ---------------------------------------------------------------------------------------------
@@ -577,30 +580,30 @@ enum class DepthConvention : uint32_t {
 // per-vertex pipeline; the mesh must then be resident (createCanopy refuses a model whose mesh
 // would be streamed, naming the budget).
 #define CANOPY_DESC(X)                                                                                                  \
-  X(uint32_t, headerVersion, CANOPY_HEADER_VERSION, None, 0, 0, "", "leave as is: checked against the library")        \
+  X(uint32_t, headerVersion, CANOPY_HEADER_VERSION, Unchecked, 0, 0, "", "leave as is: checked against the library")        \
   X(uint32_t, width, 1024, Closed, 1, 16384, "pixels", "host targets' width")                                          \
   X(uint32_t, height, 768, Closed, 1, 16384, "pixels", "host targets' height")                                         \
-  X(VkFormat, colorFormat, VK_FORMAT_R8G8B8A8_UNORM, None, 0, 0, "", "host colour target (any blendable colour format)") \
-  X(VkFormat, depthFormat, VK_FORMAT_D32_SFLOAT, None, 0, 0, "", "host depth (D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT)") \
+  X(VkFormat, colorFormat, VK_FORMAT_R8G8B8A8_UNORM, Unchecked, 0, 0, "", "host colour target (any blendable colour format)") \
+  X(VkFormat, depthFormat, VK_FORMAT_D32_SFLOAT, Unchecked, 0, 0, "", "host depth (D32_SFLOAT, D16_UNORM, D24_UNORM_S8_UINT, D32_SFLOAT_S8_UINT)") \
   X(DepthConvention, depthConvention, DepthConvention::Standard, Enum, 0, 1, "Standard | Reverse", "how the host's depth is read and written") \
-  X(VkFormat, motionFormat, VK_FORMAT_UNDEFINED, None, 0, 0, "", "R16G16_SFLOAT / R32G32_SFLOAT; UNDEFINED: no motion output") \
-  X(VkFormat, layerFormat, VK_FORMAT_R16G16B16A16_SFLOAT, None, 0, 0, "", "Canopy's layer images (or R8G8B8A8_UNORM)") \
+  X(VkFormat, motionFormat, VK_FORMAT_UNDEFINED, Unchecked, 0, 0, "", "R16G16_SFLOAT / R32G32_SFLOAT; UNDEFINED: no motion output") \
+  X(VkFormat, layerFormat, VK_FORMAT_R16G16B16A16_SFLOAT, Unchecked, 0, 0, "", "Canopy's layer images (or R8G8B8A8_UNORM)") \
   X(uint32_t, maxLayers, 8, Closed, 1, 32, "layers", "the most layers CanopyParams may ask for")                      \
   X(uint32_t, minCellSize, 4, Closed, 2, 256, "pixels", "the smallest warp-grid cell CanopyParams may ask for")       \
-  X(std::vector<CanopyInstance>, instances, {}, None, 0, 0, "", "copies of the model placed in the world; empty: one at its origin") \
+  X(std::vector<CanopyInstance>, instances, {}, Unchecked, 0, 0, "", "copies of the model placed in the world; empty: one at its origin") \
   X(float, guardBand, 0.1f, Closed, 0, 0.5, "of width, height", "the layers reach this far beyond each edge of the targets (rounded to 16 px; 0: none)") \
   X(SimulationDesc, simulation, {}, Nested, 0, 0, "", "the simulation's grid and history")                             \
-  X(CanopyContext*, shareSimulationWith, nullptr, None, 0, 0, "", "follow this context's simulation")                  \
-  X(MaterialSplitOptions, split, {}, None, 0, 0, "", "rigid vs foliage materials")                                     \
-  X(LeafRootOptions, roots, {}, None, 0, 0, "", "how leaves are found")                                                \
-  X(std::string, rootCacheDir, {}, None, 0, 0, "", "the cache files' folder; empty: none read or written")             \
-  X(uint64_t, cacheMaxBytes, 2048ull << 20, None, 0, 0, "bytes", "cap on the cache files in rootCacheDir; 0: none")   \
-  X(Progress, progress, {}, None, 0, 0, "", "optional: called during createCanopy (\"leaf roots\", \"vertices\")")  \
-  X(CanopyParams, params, {}, None, 0, 0, "", "the initial parameters (checked as setCanopyParams checks them)")       \
-  X(uint64_t, deviceMemoryBudget, 1536ull << 20, None, 0, 0, "bytes", "device memory this context may allocate; 0: no limit") \
+  X(CanopyContext*, shareSimulationWith, nullptr, Unchecked, 0, 0, "", "follow this context's simulation")                  \
+  X(MaterialSplitOptions, split, {}, Unchecked, 0, 0, "", "rigid vs foliage materials")                                     \
+  X(LeafRootOptions, roots, {}, Unchecked, 0, 0, "", "how leaves are found")                                                \
+  X(std::string, rootCacheDir, {}, Unchecked, 0, 0, "", "the cache files' folder; empty: none read or written")             \
+  X(uint64_t, cacheMaxBytes, 2048ull << 20, Unchecked, 0, 0, "bytes", "cap on the cache files in rootCacheDir; 0: none")   \
+  X(Progress, progress, {}, Unchecked, 0, 0, "", "optional: called during createCanopy (\"leaf roots\", \"vertices\")")  \
+  X(CanopyParams, params, {}, Unchecked, 0, 0, "", "the initial parameters (checked as setCanopyParams checks them)")       \
+  X(uint64_t, deviceMemoryBudget, 1536ull << 20, Unchecked, 0, 0, "bytes", "device memory this context may allocate; 0: no limit") \
   X(uint64_t, meshStagingRingBytes, 64ull << 20, Closed, 1048576, 4294967296.0, "bytes", "a streamed mesh's staging ring (at least the largest chunk per frame in flight)") \
-  X(bool, allowPerVertex, false, None, 0, 0, "", "lets CanopyParams.animation be PerVertex")                           \
-  X(ImpostorDesc, impostors, {}, None, 0, 0, "", "the box hierarchy and its baked views (checked when enable is set)")
+  X(bool, allowPerVertex, false, Unchecked, 0, 0, "", "lets CanopyParams.animation be PerVertex")                           \
+  X(ImpostorDesc, impostors, {}, Unchecked, 0, 0, "", "the box hierarchy and its baked views (checked when enable is set)")
 struct CanopyDesc {
   CANOPY_DESC(CANOPY_PARAM_FIELD)
 };
@@ -611,25 +614,25 @@ struct CanopyDesc {
 // CanopyDesc.maxLayers, the region split's order, the simulation plane's axes, a warp cell against
 // minCellSize, PerVertex against allowPerVertex) are checked by createCanopy and setCanopyParams,
 // which run this on the values they are given.
-Status checkParams(const WindParams& params, const std::string& prefix = "WindParams.");
-Status checkParams(const Motor& params, const std::string& prefix = "Motor.");
-Status checkParams(const FluidParams& params, const std::string& prefix = "FluidParams.");
-Status checkParams(const WaveParams& params, const std::string& prefix = "WaveParams.");
-Status checkParams(const PushParams& params, const std::string& prefix = "PushParams.");
-Status checkParams(const SimulationParams& params, const std::string& prefix = "SimulationParams.");
-Status checkParams(const SimulationDesc& params, const std::string& prefix = "SimulationDesc.");
-Status checkParams(const RegionSplit& params, const std::string& prefix = "RegionSplit.");
-Status checkParams(const ImpostorSettings& params, const std::string& prefix = "ImpostorSettings.");
-Status checkParams(const ImpostorDesc& params, const std::string& prefix = "ImpostorDesc.");
-Status checkParams(const LayerSettings& params, const std::string& prefix = "LayerSettings.");
-Status checkParams(const DynamicsParams& params, const std::string& prefix = "DynamicsParams.");
-Status checkParams(const CompositeParams& params, const std::string& prefix = "CompositeParams.");
-Status checkParams(const SimulationPlane& params, const std::string& prefix = "SimulationPlane.");
-Status checkParams(const CanopyPusher& params, const std::string& prefix = "CanopyPusher.");
-Status checkParams(const PerVertexParams& params, const std::string& prefix = "PerVertexParams.");
-Status checkParams(const WorldWind& params, const std::string& prefix = "WorldWind.");
-Status checkParams(const CanopyParams& params, const std::string& prefix = "CanopyParams.");
-Status checkParams(const CanopyDesc& params, const std::string& prefix = "CanopyDesc.");
+CanopyStatus checkParams(const WindParams& params, const std::string& prefix = "WindParams.");
+CanopyStatus checkParams(const Motor& params, const std::string& prefix = "Motor.");
+CanopyStatus checkParams(const FluidParams& params, const std::string& prefix = "FluidParams.");
+CanopyStatus checkParams(const WaveParams& params, const std::string& prefix = "WaveParams.");
+CanopyStatus checkParams(const PushParams& params, const std::string& prefix = "PushParams.");
+CanopyStatus checkParams(const SimulationParams& params, const std::string& prefix = "SimulationParams.");
+CanopyStatus checkParams(const SimulationDesc& params, const std::string& prefix = "SimulationDesc.");
+CanopyStatus checkParams(const RegionSplit& params, const std::string& prefix = "RegionSplit.");
+CanopyStatus checkParams(const ImpostorSettings& params, const std::string& prefix = "ImpostorSettings.");
+CanopyStatus checkParams(const ImpostorDesc& params, const std::string& prefix = "ImpostorDesc.");
+CanopyStatus checkParams(const LayerSettings& params, const std::string& prefix = "LayerSettings.");
+CanopyStatus checkParams(const DynamicsParams& params, const std::string& prefix = "DynamicsParams.");
+CanopyStatus checkParams(const CompositeParams& params, const std::string& prefix = "CompositeParams.");
+CanopyStatus checkParams(const SimulationPlane& params, const std::string& prefix = "SimulationPlane.");
+CanopyStatus checkParams(const CanopyPusher& params, const std::string& prefix = "CanopyPusher.");
+CanopyStatus checkParams(const PerVertexParams& params, const std::string& prefix = "PerVertexParams.");
+CanopyStatus checkParams(const WorldWind& params, const std::string& prefix = "WorldWind.");
+CanopyStatus checkParams(const CanopyParams& params, const std::string& prefix = "CanopyParams.");
+CanopyStatus checkParams(const CanopyDesc& params, const std::string& prefix = "CanopyDesc.");
 
 // ---------------------------------------------------------------------------------------------
 // Statistics (canopyStats)

@@ -20,7 +20,7 @@ using Float4 = std::array<float, 4>;
 
 // How a field's value is checked against [min, max].
 enum class ParamCheck : uint32_t {
-  None = 0,          // not checked here (a flag, a seed, a handle, or checked with other fields)
+  Unchecked = 0,     // not checked here (a flag, a seed, a handle, or checked with other fields)
   Closed = 1,        // finite (integers: any), min <= v <= max; Float3/Float4: each component
   AboveMin = 2,      // finite, min < v <= max
   Enum = 3,          // an enumerator: min <= value <= max (the unit column names them)
@@ -29,6 +29,9 @@ enum class ParamCheck : uint32_t {
   Finite = 6,        // finite (Float3: each component)
   Nested = 7,        // a parameter struct of its own: its list checks it
   Each = 8,          // a vector of a parameter struct: at most `max` elements, each checked
+#ifndef None
+  None = Unchecked,  // 0.8's name of Unchecked (X11 defines None)
+#endif
 };
 
 // One field of the schema.

@@ -76,8 +76,10 @@ void destroyNow(CanopyContext* c) {
 
 // Canopy's passes in `g`, around the host's imported images (one declaration for recordCanopy, the
 // render-graph path and canopyPassGroupUses).
-Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTargets& targets) {
+Status declarePasses(CanopyContext& ctx, rg::RenderGraph& g, const CompositeTargets& hostTargets) {
   CanopyContext* c = &ctx;
+  CompositeTargets targets = hostTargets;
+  targets.scissor = &c->host.scissor;  // this frame's viewport, read as each pass records
   // The per-vertex baseline replaces every pass of the 2D method (a mode change bumps the
   // generation, so graphs are rebuilt).
   if (c->params.animation == AnimationMode::PerVertex) return addPerVertexPasses(c->perVertex, c->layers, g, targets);
@@ -398,12 +400,16 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     if (!std::isfinite(det) || std::abs(det) < 1e-30f)
       return Status::error(std::string("CanopyFrame.camera.") + name + " is singular (determinant " + std::to_string(det) + ")");
   }
+  // The viewport and a GL clip depth folded into the projection, the jitter kept apart.
+  HostCamera hc;
+  CANOPY_TRY(hostCamera(f.camera, c->desc.width, c->desc.height, &hc));
   Device& d = *c->device;
   // 0: the next frame (one context per host frame); otherwise the host's own counter.
   const uint64_t frameNumber = f.frameNumber ? f.frameNumber : (d.anyFrame ? d.frameNumber + 1 : 1);
   CANOPY_TRY(beginDeviceFrame(d, frameNumber));
   stepWorldWind(c->worldWind, c->params.wind, f.dt);
-  chooseSimulationPlane(*c, standardView(*c, f.camera));  // before the step: the pushers are mapped through it
+  c->host = hc;
+  chooseSimulationPlane(*c, standardView(*c, hc.inViewport));  // before the step: the pushers are mapped through it
   // The simulation's inflow: the world wind as it stands (World), or the host's sides (PlaneSides).
   CanopyParams stepParams = c->params;
   if (c->params.windMode == WindMode::World) {
@@ -414,14 +420,14 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   if (c->params.animation == AnimationMode::PerVertex) {
     // The baseline: no simulation step, no re-slice, no dynamics or composite; the wind's
     // direction comes from the simulation plane, as the 2D method's.
-    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, stepParams, c->plane, f.camera, f.dt, f.cameraCut));
+    CANOPY_TRY(preparePerVertex(c->perVertex, c->layers, stepParams, c->plane, hc.camera, hc.jitter, f.dt, f.cameraCut));
     c->layersRebuilt = false;
     c->frames++;
     return Status();
   }
   SharedSimulation& sh = *c->shared;
   Simulation& sim = sh.sim;
-  const LayerView view = standardView(*c, f.camera);
+  const LayerView view = standardView(*c, hc.camera);  // unjittered: the re-slice policy's camera
   // One step per host frame for a shared simulation, by the first context recorded in it.
   const bool stepHere = !sh.everStepped || sh.lastStepFrame != frameNumber;
   c->skipSimulationStep = !stepHere || f.dt == 0.0f;
@@ -477,7 +483,7 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
   CANOPY_TRY(prepareComposite(c->compositor, c->params.composite, a, drawsBackground(c->layers), c->layers.reslice.occupancyDirty,
                               motionValid, &footprint, c->layers.reslice.occupancyUniteNext));
   if (rigidFollows(c->layers) && c->rigid.device)
-    CANOPY_TRY(prepareRigidFollow(c->rigid, c->layers, f.camera, c->params.composite.exposure, motionValid));
+    CANOPY_TRY(prepareRigidFollow(c->rigid, c->layers, hc.camera, hc.jitter, c->params.composite.exposure, motionValid));
   const LayerView& previous = motionValid ? c->lastView : view;
   // The slice camera is the guard band's widening of the camera it was asked for: the same camera
   // as this frame's when that widening gives it bit for bit (layer pixel = pixel + guard).
@@ -499,10 +505,17 @@ Status beginCanopyFrame(CanopyContext* c, const CanopyFrame& f) {
     // The rigid background's plane: the vegetation's centre.
     const glm::vec3 centre = 0.5f * (c->layers.instances.boundsMin + c->layers.instances.boundsMax);
     const float backgroundDepth = glm::dot(centre - viewPosition(slice.view), viewForward(slice.view));
+    // Sampled at the jittered position; the previous camera jittered alike, so the motion
+    // vectors (current minus previous) carry no jitter.
+    const LayerView jittered{view.view, hc.jitter * view.proj}, previousJittered{previous.view, hc.jitter * previous.proj};
     const gpu::CompositeView cv =
-        compositeView(slice, view, previous, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
+        compositeView(slice, jittered, previousJittered, depths, backgroundDepth, glm::dvec2(c->desc.width, c->desc.height),
                       glm::dvec2(c->layers.desc.width, c->layers.desc.height), search, c->params.composite.depthSearchSteps, backgroundSearch);
     setCompositeReprojection(c->compositor, &cv);
+  } else {
+    // The slice camera's own pixels, read at the jittered position: layer pixel = p + guard - jitter.
+    c->compositor.push.originX -= hc.jitterPixels.x;
+    c->compositor.push.originY -= hc.jitterPixels.y;
   }
   c->lastView = view;
   c->previousAnimFrame = a;

@@ -9,6 +9,7 @@
 #include <canopy/canopy_graph.h>
 
 #include "render/canopy.h"
+#include "render/host_camera.h"
 #include "render/per_vertex.h"
 #include "render/pushers.h"
 #include "render/rigid_follow.h"
@@ -62,6 +63,7 @@ struct CanopyContext {
   bool layersRebuilt = false;
   gpu::AnimFrame previousAnimFrame{};  // the previous frame's dynamics constants (motion-vector validity)
   LayerView lastView;     // the previous frame's camera (motion vectors: the camera's motion)
+  HostCamera host;        // this frame's camera as the host gave it: the viewport's scissor, the jitter
   // recordCanopy(): one compiled graph per set of host images it has seen recently (a host that
   // renders into its swapchain images cycles through 2-4 of them), least recently used first out.
   std::vector<RecordGraph> recordGraphs;

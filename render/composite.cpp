@@ -128,13 +128,17 @@ void beginHostRendering(rg::PassContext& x, const CompositeTargets& t, uint32_t 
   depth.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
   depth.storeOp = VK_ATTACHMENT_STORE_OP_STORE;
   VkRenderingInfo ri{VK_STRUCTURE_TYPE_RENDERING_INFO};
-  ri.renderArea = {{0, 0}, {width, height}};
+  // The viewport's rectangle: the projection maps into it (render/host_camera.h), the scissor keeps
+  // the foliage reaching past it off the rest of the host's image.
+  const VkRect2D area = t.scissor ? *t.scissor : VkRect2D{{0, 0}, {width, height}};
+  ri.renderArea = area;
   ri.layerCount = 1;
   ri.colorAttachmentCount = motion ? 2 : 1;
   ri.pColorAttachments = colors;
   ri.pDepthAttachment = &depth;
   x.device->cmdBeginRendering(x.cmd, &ri);
   setViewportScissor(*x.device, x.cmd, width, height);
+  if (t.scissor) x.device->vk.CmdSetScissor(x.cmd, 0, 1, &area);
 }
 
 Status validateCompositeParams(const CompositeParams& p) {

@@ -110,6 +110,9 @@ struct CompositeTargets {
   rg::ResourceId color = rg::kInvalidResource;   // host colour (blended over)
   rg::ResourceId depth = rg::kInvalidResource;   // host depth (read, then written)
   rg::ResourceId motion = rg::kInvalidResource;  // optional
+  // The host's viewport as whole pixels (CanopyCamera.viewport), read when the pass records: drawn
+  // inside it only. Null: the whole targets.
+  const VkRect2D* scissor = nullptr;
 };
 // What the velocity debug view reads: the dynamics frame and the simulation's tiled field.
 struct CompositeDebugSources {
@@ -117,7 +120,7 @@ struct CompositeDebugSources {
   rg::ResourceId tiled = rg::kInvalidResource;
 };
 // Begins dynamic rendering into the host's targets with their contents kept (colour and motion
-// blended over, depth tested and written) and sets a full viewport: the composite's resolve and
+// blended over, depth tested and written), a full viewport and the host's scissor: the composite's resolve and
 // fragment path, and the per-vertex baseline's draw.
 void beginHostRendering(rg::PassContext& pass, const CompositeTargets& targets, uint32_t width, uint32_t height,
                         bool motion);

@@ -91,7 +91,7 @@ void compositeReference(const gpu::CompositePush& pc, const CompositeReferenceIn
         return false;
       };
       if ((pc.flags & COMPOSITE_BACKGROUND) && !in.backgroundColor.empty()) {
-        int bx = int(x) + int(origin.x), by = int(y) + int(origin.y);
+        int bx = int(std::floor(float(x) + 0.5f + origin.x)), by = int(std::floor(float(y) + 0.5f + origin.y));  // a jitter makes origin fractional
         bool inside = true;
         float searched = 1.0f;  // the search's depth (reprojected)
         if (reproject) {

@@ -202,14 +202,14 @@ void destroyPerVertex(PerVertexAnimation& pv) {
 }
 
 Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
-                        const SimulationPlane& plane, const CanopyCamera& camera, float dt, bool cut) {
+                        const SimulationPlane& plane, const CanopyCamera& camera, const glm::mat4& jitter, float dt, bool cut) {
   if (!pv.device) return Status::error("per-vertex baseline: not created (CanopyDesc.allowPerVertex)");
   const double before = pv.time;
   pv.time += dt;
   // The host's own projection (its depth convention: the pipeline compares accordingly).
   LayerView view;
   view.view = toGlm(camera.view);
-  view.proj = toGlm(camera.proj);
+  view.proj = jitter * toGlm(camera.proj);  // drawn at the jittered position
   pv.layerFrame = cameraFrame(params.layers, view);
   // The 2D method multiplies the composited colour by the exposure; here the light does.
   const float e = params.composite.exposure;
@@ -220,8 +220,9 @@ Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, con
   pv.current.targetSize = glm::vec2(float(pv.desc.width), float(pv.desc.height));
   pv.current.flags = (pv.hierarchy ? BEND_FLAG_HIERARCHY : 0u) |
                      (pv.desc.motionFormat != VK_FORMAT_UNDEFINED ? BEND_FLAG_PREVIOUS : 0u);
-  const glm::mat4 viewProj = view.proj * view.view;
-  pv.current.previousViewProj = pv.frames > 0 && !cut ? pv.lastViewProj : viewProj;
+  const glm::mat4 viewProj = toGlm(camera.proj) * view.view;  // unjittered
+  // The previous camera jittered as this frame's: the motion vectors carry no jitter.
+  pv.current.previousViewProj = jitter * (pv.frames > 0 && !cut ? pv.lastViewProj : viewProj);
   pv.lastViewProj = viewProj;
   pv.current.branchCount = pv.branchCount;
   pv.current.tipCount = pv.branchCount + pv.leafCount;

@@ -67,7 +67,7 @@ gpu::BendFrame makeBendFrame(const PerVertexParams& params, const WindParams& wi
 // Advances the clock by dt and fills this frame's constants (camera, light, bend frame); `cut`: the
 // camera jumped (CanopyFrame.cameraCut), so the motion vectors carry no camera motion this frame.
 Status preparePerVertex(PerVertexAnimation& pv, const LayeredVegetation& lv, const CanopyParams& params,
-                        const SimulationPlane& plane, const CanopyCamera& camera, float dt, bool cut);
+                        const SimulationPlane& plane, const CanopyCamera& camera, const glm::mat4& jitter, float dt, bool cut);
 // "per-vertex: constants", "per-vertex: branch motion" (the motion table) and "per-vertex: draw"
 // (into the host's colour and depth, and motion).
 Status addPerVertexPasses(PerVertexAnimation& pv, LayeredVegetation& lv, rg::RenderGraph& graph,

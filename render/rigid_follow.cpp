@@ -48,7 +48,8 @@ void destroyRigidFollow(RigidFollow& rf) {
   rf = RigidFollow{};
 }
 
-Status prepareRigidFollow(RigidFollow& rf, const LayeredVegetation& lv, const CanopyCamera& camera, float exposure, bool motionValid) {
+Status prepareRigidFollow(RigidFollow& rf, const LayeredVegetation& lv, const CanopyCamera& camera, const glm::mat4& jitter, float exposure,
+                          bool motionValid) {
   if (!rf.device) return Status::error("rigid parts: not created");
   // The slice camera's frame block: the layers' boundaries and the camera the warp grid is in.
   rf.layerFrame = lv.visible.frame;
@@ -57,9 +58,11 @@ Status prepareRigidFollow(RigidFollow& rf, const LayeredVegetation& lv, const Ca
   rf.layerFrame.lightDirection.w *= exposure;
   const glm::mat4 viewProj = toGlm(camera.proj) * toGlm(camera.view);  // the host's own depth convention
   rf.rigidFrame = gpu::RigidFrame{};
-  rf.rigidFrame.currentViewProj = viewProj;
+  // Drawn at the jittered position; the previous camera jittered alike, so the motion vectors
+  // (current minus previous pixel) carry no jitter.
+  rf.rigidFrame.currentViewProj = jitter * viewProj;
   const bool valid = motionValid && rf.frames > 0;
-  rf.rigidFrame.previousViewProj = valid ? rf.lastViewProj : viewProj;
+  rf.rigidFrame.previousViewProj = jitter * (valid ? rf.lastViewProj : viewProj);
   rf.rigidFrame.targetSize = glm::vec2(float(rf.desc.width), float(rf.desc.height));
   rf.rigidFrame.flags = (lv.visible.frame.layerCount > 0 ? RIGID_FLAG_DISPLACE : 0u) | (valid ? RIGID_FLAG_MOTION_VALID : 0u);
   rf.lastViewProj = viewProj;

@@ -36,7 +36,7 @@ void destroyRigidFollow(RigidFollow& rf);
 // This frame's constants: the visible placement's frame block with `exposure` in its light, the
 // host's camera (its own projection) and last frame's; `motionValid`: the previous displacement and
 // camera are last frame's (else no motion is written for the rigid parts).
-Status prepareRigidFollow(RigidFollow& rf, const LayeredVegetation& lv, const CanopyCamera& camera, float exposure,
+Status prepareRigidFollow(RigidFollow& rf, const LayeredVegetation& lv, const CanopyCamera& camera, const glm::mat4& jitter, float exposure,
                           bool motionValid);
 // What the rigid draw reads of the other passes' resources: the mesh as the layer passes imported
 // it, the dynamics' frame block and displacements (addDynamicsPasses).

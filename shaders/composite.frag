@@ -91,7 +91,7 @@ void main() {
   mat4 toCurrent = view.sliceToCurrent, toPrevious = view.sliceToPrevious, toSlice = view.currentToSlice;
   vec4 rayA = reproject ? compositeRayOrigin(toSlice, p, outSize) : vec4(0.0), rayB = toSlice[2];
   if ((pc.flags & COMPOSITE_BACKGROUND) != 0u) {
-    ivec2 is = ip + ivec2(origin);
+    ivec2 is = ivec2(floor(p + origin));  // origin is fractional under a jitter
     bool inside = true;
     float bgSearched = 1.0;  // the depth search's depth (reprojected)
     if (reproject) {

@@ -62,7 +62,7 @@ void compositeTile(uvec2 tileEntry, mat4 toCurrent, mat4 toPrevious, mat4 toSlic
         if (bg.a > 0.0) bgZ = compositeClipDepth(compositeClipOf(toCurrent, vec2(is) + 0.5, zs, size));
       }
     } else {
-      ivec2 is = ip + ivec2(origin);
+      ivec2 is = ivec2(floor(p + origin));  // origin is fractional under a jitter
       bg = texelFetch(backgroundColor, is, 0);
       bgZ = bg.a > 0.0 ? texelFetch(backgroundDepth, is, 0).r : 1.0;
     }

@@ -26,7 +26,8 @@ struct Host {
   uint32_t w = 96, h = 64;
   VkFormat colorFormat = VK_FORMAT_R16G16B16A16_SFLOAT, depthFormat = VK_FORMAT_D32_SFLOAT;
   bool reverse = false;
-  Image color, depth;
+  bool motion = false;  // a motion target (R16G16_SFLOAT, pixels) cleared to 0 each frame: CanopyDesc.motionFormat
+  Image color, depth, motionImage;
   VkImageView depthOnly = VK_NULL_HANDLE;  // the depth aspect of a depth-stencil target
   VkCommandPool pool = VK_NULL_HANDLE;
   std::vector<VkCommandBuffer> cmds;
@@ -41,6 +42,8 @@ struct Host {
   // The host's own passes on its targets before Canopy's (after the clear) and after them, in
   // graphs of their own (their barriers from the graph); null: none.
   std::function<void(rg::RenderGraph&, rg::ResourceId color, rg::ResourceId depth)> passesBefore, passesAfter;
+  // Changes each context's camera as the host gives it (a viewport, a jitter, a GL clip depth); null: none.
+  std::function<void(CanopyCamera&)> adjustCamera;
   // Recorded after the contexts, into the frame's command buffer (a shadow: recordCanopyShadow); null: none.
   std::function<Status(VkCommandBuffer)> recordAfter;
 
@@ -52,6 +55,10 @@ struct Host {
     c.height = h;
     c.usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT;
     CANOPY_TRY(createImage(d, c, &color, "host colour"));
+    if (motion) {
+      c.format = VK_FORMAT_R16G16_SFLOAT;
+      CANOPY_TRY(createImage(d, c, &motionImage, "host motion"));
+    }
     c.format = depthFormat;
     c.usage = VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
               VK_IMAGE_USAGE_TRANSFER_DST_BIT;
@@ -86,6 +93,7 @@ struct Host {
     if (depthOnly) vkDestroyImageView(dev->device, depthOnly, nullptr);
     destroyImage(*dev, color);
     destroyImage(*dev, depth);
+    if (motion) destroyImage(*dev, motionImage);
   }
   Status wait(size_t slot) {
     if (!pending[slot]) return Status();
@@ -131,11 +139,16 @@ struct Host {
                              i ? colorRW : dst, last ? src : colorRW);
       in.depth = canopyImage(depth.image, depthOnly, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
                              depthFormat, i ? depthW : dst, last ? src : depthW);
+      if (motion)
+        in.motion = canopyImage(motionImage.image, motionImage.view, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                VK_FORMAT_R16G16_SFLOAT, i ? colorRW : dst, last ? src : colorRW);
+      if (adjustCamera) adjustCamera(in.frame.camera);
       if (declare) declare(in);
     }
     const auto c = g.importImage("host colour", descOf(color), before, passGroup ? src : dst);
     const auto d = g.importImage("host depth", descOf(depth), before, passGroup ? src : dst);
-    g.addPass("host clear", [&](rg::PassContext& x) {
+    const auto m = motion ? g.importImage("host motion", descOf(motionImage), before, dst) : rg::kInvalidResource;
+    auto clear = g.addPass("host clear", [&](rg::PassContext& x) {
        VkClearColorValue cv{};
        std::memcpy(cv.float32, &kSky, sizeof kSky);
        const VkImageSubresourceRange cr{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
@@ -143,10 +156,18 @@ struct Host {
        vkCmdClearColorImage(x.cmd, x.image(c).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &cv, 1, &cr);
        VkClearDepthStencilValue dv{reverse ? 0.0f : 1.0f, kStencil};
        vkCmdClearDepthStencilImage(x.cmd, x.image(d).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &dv, 1, &dr);
+       if (motion) {
+         const VkClearColorValue zero{};
+         vkCmdClearColorImage(x.cmd, x.image(m).image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &cr);
+       }
        return Status();
      })
         .write(c, rg::Use::TransferDst)
         .write(d, rg::Use::TransferDst);
+    if (motion) {
+      if (passGroup) return Status::error("the test host's motion target is for recordCanopy");
+      clear.write(m, rg::Use::TransferDst);
+    }
     if (passesBefore) passesBefore(g, c, d);
     for (size_t i = 0; passGroup && i < contexts.size(); ++i) {
       // Each context one pass of the host's graph, declared with the uses Canopy reports.
@@ -162,6 +183,7 @@ struct Host {
     }
     CANOPY_TRY(g.bindImage(c, color));
     CANOPY_TRY(g.bindImage(d, depth));
+    if (motion) CANOPY_TRY(g.bindImage(m, motionImage));
     CANOPY_TRY(g.compile());
     CANOPY_TRY(g.realize(*dev));  // no transients: nothing to release
     CANOPY_TRY(g.record(cmd));
@@ -175,6 +197,7 @@ struct Host {
       const auto da = after.importImage("host depth", descOf(depth), dst, src);
       CANOPY_TRY(after.bindImage(ca, color));
       CANOPY_TRY(after.bindImage(da, depth));
+      if (motion) CANOPY_TRY(after.bindImage(after.importImage("host motion", descOf(motionImage), dst, src), motionImage));
       CANOPY_TRY(after.compile());
       CANOPY_TRY(after.realize(*dev));  // no transients
       CANOPY_TRY(after.record(cmd));
@@ -197,6 +220,15 @@ struct Host {
     si.pCommandBuffers = &cmd;
     CANOPY_VK(vkQueueSubmit(dev->queue, 1, &si, fences[slot]));
     pending[slot] = true;
+    return Status();
+  }
+  // After finish(): the motion target, pixels (current minus previous position).
+  Status readMotion(std::vector<glm::vec2>* out) {
+    CANOPY_TRY(finish());
+    std::vector<uint32_t> px(size_t(w) * h);
+    CANOPY_TRY(readbackImage(*dev, motionImage, 0, 4, px.data(), rg::stateOf(rg::Use::TransferSrc)));
+    out->clear();
+    for (uint32_t v : px) out->push_back(glm::unpackHalf2x16(v));
     return Status();
   }
   // After finish(): colour as linear float, depth as float, stencil bytes (depth-stencil formats).

@@ -87,10 +87,27 @@ struct Float4x4 {
   float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
 
-// A camera: the view and projection of a frame (CanopyFrame.camera).
+// What the projection's clip depth spans (docs/embedding.md "The camera as the host gives it").
+enum class ClipDepth : uint32_t {
+  ZeroToOne = 0,         // Vulkan's: depth = z_clip / w_clip (also a GL matrix drawn without depth clip control)
+  NegativeOneToOne = 1,  // OpenGL's, drawn with VK_EXT_depth_clip_control's negativeOneToOne: depth =
+                         // (z_clip / w_clip + 1) / 2; Canopy converts the matrix to that depth
+};
+
+// A camera: the view and projection of a frame (CanopyFrame.camera), as the host draws with them.
 struct CanopyCamera {
   Float4x4 view;  // world -> view (right-handed, looking down -Z)
-  Float4x4 proj;  // view -> Vulkan clip space (y down), following CanopyDesc.depthConvention
+  Float4x4 proj;  // view -> Vulkan clip space (y down), following CanopyDesc.depthConvention; unjittered
+  ClipDepth clipDepth = ClipDepth::ZeroToOne;
+  // The host's viewport, as it passes it to vkCmdSetViewport: a rectangle of the targets, pixels
+  // (a negative height flips y, as in Vulkan); depth 0..1 only. Width and height 0: the whole
+  // targets. Canopy draws inside it alone (a scissor of the rectangle, rounded to whole pixels).
+  VkViewport viewport{};
+  // The frame's sub-pixel jitter (TAA, upscalers), pixels of the targets in [-1, 1], x right, y
+  // down: the host's jittered projection moves every point by it, proj_jittered = T(2 jitter.x /
+  // width, 2 jitter.y / height) * proj (viewport included). Canopy draws at the jittered position;
+  // a jitter alone never re-slices the layers, and the motion vectors Canopy writes exclude it.
+  float jitter[2] = {0.0f, 0.0f};
 };
 
 // A resource's synchronization state: the stage and access of its last (or next) use and, for an

@@ -4,7 +4,7 @@
 // the jitter kept apart, so a jitter alone is no camera motion.
 #include <glm/glm.hpp>
 
-#include "canopy/canopy.h"
+#include <canopy/canopy_params.h>
 #include "engine/status.h"
 
 namespace canopy {

@@ -1,4 +1,4 @@
-// Hosts of the shapes that exist (issue 78; docs/embedding.md "Host shapes"): a classic VkRenderPass
+// Hosts of the shapes that exist (issue 78; docs/embedding.md "12. Host shapes"): a classic VkRenderPass
 // whose colour ends in PRESENT_SRC_KHR with its scene pass pre-recorded once per image and Canopy
 // recorded each frame into per-frame command buffers; a host drawing into a viewport (a
 // sub-rectangle of its targets, also flipped); a GL projection (clip depth -1..1); a jittered camera
@@ -306,7 +306,7 @@ TEST_F(HostShapesTest, MotionVectorsExcludeTheJitterAndTheImageMovesByIt) {
 namespace {
 
 // ---------------------------------------------------------------------------------------------
-// A classic VkRenderPass host that pre-records (vkcube's shape; docs/embedding.md "Host shapes")
+// A classic VkRenderPass host that pre-records (vkcube's shape; docs/embedding.md "12. Host shapes")
 
 // Two "swapchain" images (colour ends each scene pass in PRESENT_SRC_KHR), one depth image, the
 // scene pass pre-recorded once per image; Canopy recorded each frame into one of two per-frame

@@ -87,7 +87,7 @@ struct Float4x4 {
   float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
 };
 
-// What the projection's clip depth spans (docs/embedding.md "The camera as the host gives it").
+// What the projection's clip depth spans (docs/embedding.md "12. Host shapes").
 enum class ClipDepth : uint32_t {
   ZeroToOne = 0,         // Vulkan's: depth = z_clip / w_clip (also a GL matrix drawn without depth clip control)
   NegativeOneToOne = 1,  // OpenGL's, drawn with VK_EXT_depth_clip_control's negativeOneToOne: depth =

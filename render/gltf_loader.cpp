@@ -22,6 +22,7 @@
 #include "engine/files.h"
 #include "render/gltf_json_checks.h"
 #include "render/gltf_accessors.h"
+#include "render/gltf_compressed.h"
 #include "render/gltf_files.h"
 #include "render/gltf_prune.h"
 
@@ -87,7 +88,8 @@ struct Load {
 // replaced (render/gltf_prune.h), then tinygltf (external files through `fs`, images kept encoded
 // in `images`). A parse warning goes to `warnings`.
 Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const GltfLoadOptions& opt,
-                 tinygltf::Model* m, ImageContext* images, GltfReadParts* parts, std::vector<std::string>* warnings) {
+                 tinygltf::Model* m, ImageContext* images, GltfReadParts* parts, std::vector<MeshoptView>* meshopt,
+                 std::vector<std::string>* warnings) {
   Status s;
   if (bytes.size() > std::numeric_limits<uint32_t>::max())
     return Status::error(std::to_string(bytes.size()) + " bytes: glTF files are limited to 4 GiB");
@@ -132,6 +134,7 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
     std::memcpy(&n, bytes.data() + binAt, 4);
     binBytes = n;
   }
+  if (!(s = prepareMeshopt(doc, opt, meshopt)).ok()) return s;
   if (!(s = keepReadParts(doc, glb, binBytes, parts)).ok()) return s;
   // The document tinygltf parses: the rewritten JSON (in a .glb, its JSON chunk, the rest as it was).
   std::vector<unsigned char> file;
@@ -185,9 +188,10 @@ Status parseFile(const std::vector<unsigned char>& bytes, FsContext& fs, const G
 }
 
 // The extensions the loader reads (a file may require these and no others).
-constexpr const char* kImplementedExtensions[] = {"EXT_mesh_gpu_instancing", "KHR_materials_diffuse_transmission",
+constexpr const char* kImplementedExtensions[] = {"EXT_mesh_gpu_instancing", "EXT_meshopt_compression", "EXT_texture_webp",
+                                                  "KHR_draco_mesh_compression", "KHR_materials_diffuse_transmission",
                                                   "KHR_materials_specular", "KHR_materials_transmission", "KHR_materials_volume",
-                                                  "KHR_mesh_quantization"};
+                                                  "KHR_mesh_quantization", "KHR_texture_transform"};
 
 // The document as a whole: glTF 2.x, a node forest, the default scene, buffers that loaded, no
 // required extension the loader lacks.
@@ -236,6 +240,10 @@ Status checkDocument(const tinygltf::Model& m, const FsContext& fs) {
   if (m.defaultScene >= 0 && size_t(m.defaultScene) >= m.scenes.size())
     return Status::error("scene " + std::to_string(m.defaultScene) + " (the default scene) does not exist");
   // glTF 2.0 (3.12): a loader must refuse a file that requires an extension it does not implement.
+  for (const std::string& e : m.extensionsRequired)
+    if (e == "KHR_texture_basisu")
+      return Status::error("extensionsRequired names 'KHR_texture_basisu' (KTX2 / Basis Universal textures), which Canopy does not "
+                           "read: export the textures as PNG, JPEG or WebP (EXT_texture_webp)");
   for (const std::string& e : m.extensionsRequired)
     if (std::find(std::begin(kImplementedExtensions), std::end(kImplementedExtensions), e) == std::end(kImplementedExtensions)) {
       std::string known;
@@ -316,6 +324,22 @@ Status appendPrimitive(Load& L, int meshIndex, size_t pi, const glm::mat4& world
     CANOPY_TRY(reader.read(it->second, {TINYGLTF_TYPE_VEC2}, {kFloat, kByte, kUByte, kShort, kUShort}, vertexBudget, &T, &nc, &count)
                    .context(pw + ".TEXCOORD_0"));
     if (count != vcount) return Status::error(pw + ".TEXCOORD_0: " + std::to_string(count) + " values for " + std::to_string(vcount) + " positions");
+    // KHR_texture_transform of the base colour texture (quantized coordinates from gltfpack, atlases):
+    // applied here, so every texture of the material reads through it (Canopy keeps one UV set).
+    if (pr.material >= 0 && size_t(pr.material) < m.materials.size()) {
+      const tinygltf::TextureInfo& base = m.materials[size_t(pr.material)].pbrMetallicRoughness.baseColorTexture;
+      TextureTransform t;
+      CANOPY_TRY(textureTransform(base.extensions, "materials[" + std::to_string(pr.material) + "].pbrMetallicRoughness.baseColorTexture", &t));
+      if (t.texCoord > 0)
+        out->warnings.push_back("materials[" + std::to_string(pr.material) + "]: KHR_texture_transform.texCoord = " +
+                                std::to_string(t.texCoord) + "; TEXCOORD_0 is used");
+      if (!t.identity)
+        for (uint64_t v = 0; v < vcount; ++v) {
+          const double u = T[v * 2], w = T[v * 2 + 1];
+          T[v * 2] = t.m[0] * u + t.m[1] * w + t.m[2];
+          T[v * 2 + 1] = t.m[3] * u + t.m[4] * w + t.m[5];
+        }
+    }
   }
   std::vector<uint32_t> idx;
   int indices = pr.indices;
@@ -526,7 +550,7 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
   VegetationModel* out = L.out;
   if (tex < 0) return Status();
   if (size_t(tex) >= m.textures.size()) return Status::error(what + ": " + role + " texture " + std::to_string(tex) + " does not exist");
-  const int img = m.textures[size_t(tex)].source;
+  const int img = textureImage(m.textures[size_t(tex)]);  // EXT_texture_webp's source first
   if (img < 0) {  // glTF allows it (an extension may supply the image): drawn without this texture
     out->warnings.push_back(what + ": " + role + " textures[" + std::to_string(tex) + "] has no source image (not used)");
     return Status();
@@ -553,6 +577,21 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
       return Status::error(iw + " ('" + im.uri + "') could not be loaded" + (L.fs.lastError.empty() ? "" : ": " + L.fs.lastError));
     }
     int w = 0, h = 0, comp = 0;
+    if (isWebp(data, size)) {
+      ModelImage mi;
+      const Status s = decodeWebp(data, size, opt.maxImageDimension, &S.pixelsLeft, &mi.width, &mi.height, &mi.rgba);
+      if (!s.ok()) return Status::error(iw + " ('" + im.uri + im.mimeType + "') " + s.message());
+      mi.name = im.name.empty() ? im.uri : im.name;
+      mi.linear = linear;
+      if (only) {
+        *only = std::move(mi);
+        return Status();
+      }
+      slots[size_t(img)] = int32_t(out->images.size());
+      out->images.push_back(std::move(mi));
+      *slot = slots[size_t(img)];
+      return Status();
+    }
     if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
       return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
     if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
@@ -771,9 +810,13 @@ static Status loadBytes(const std::string& path, const std::vector<unsigned char
   ImageContext images;
   tinygltf::Model m;
   GltfReadParts parts;
-  Status s = parseFile(bytes, fs, opt, &m, &images, &parts, &out->warnings);
+  std::vector<MeshoptView> meshopt;
+  Status s = parseFile(bytes, fs, opt, &m, &images, &parts, &meshopt, &out->warnings);
   out->warnings.insert(out->warnings.end(), parts.warnings.begin(), parts.warnings.end());
   if (s.ok()) s = checkDocument(m, fs);
+  // Compressed data decoded into plain buffers: everything after reads them as any file's.
+  if (s.ok()) s = decodeMeshopt(m, meshopt);
+  if (s.ok()) s = decodeDraco(m, opt, parts.dracoIndices);
   std::vector<int> roots;
   if (s.ok()) s = sceneRoots(m, out, &roots);
   Load L{m, opt, fs, images, out, GltfReader(m), parts};

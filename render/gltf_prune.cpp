@@ -221,6 +221,7 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
     for (size_t i = 0; i < nodes; ++i)
       if (!isChild[i]) stack.push_back(i);
   }
+  std::vector<const json*> dracoViews;
   std::vector<bool> nodeSeen(nodes, false), meshUsed(meshes, false), accessorUsed(accessors, false), viewUsed(views, false),
       bufferUsed(buffers, false), materialUsed(materials, false);
   auto useAccessor = [&](const json* v) {
@@ -269,6 +270,11 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
         continue;
       }
       pr.erase("targets");  // morph targets: not read
+      // KHR_draco_mesh_compression: its accessors have no bufferView until the loader decodes the
+      // extension's (render/gltf_compressed.h), indices included.
+      const json* prExt = child(pr, "extensions");
+      const json* draco = prExt ? child(*prExt, "KHR_draco_mesh_compression") : nullptr;
+      if (draco) dracoViews.push_back(child(*draco, "bufferView"));
       if (const json* attrs = child(pr, "attributes"); attrs && attrs->is_object())
         for (const char* a : {"POSITION", "NORMAL", "TEXCOORD_0"}) useAccessor(child(*attrs, a));
       size_t mat;
@@ -276,7 +282,10 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
       size_t ia;
       if (indexIn(child(pr, "indices"), accessors, &ia)) {
         accessorUsed[ia] = true;
-        if (!child(doc["accessors"][ia], "bufferView")) {  // zeros (and a sparse part): read by the loader
+        if (draco && !child(doc["accessors"][ia], "bufferView")) {  // decoded by the loader
+          out->dracoIndices[{int(mi), int(pi)}] = int(ia);
+          pr.erase("indices");
+        } else if (!child(doc["accessors"][ia], "bufferView")) {  // zeros (and a sparse part): read by the loader
           out->indicesWithoutView[{int(mi), int(pi)}] = int(ia);
           pr.erase("indices");
         }
@@ -290,12 +299,16 @@ Status keepReadParts(json& doc, bool glb, uint64_t binBytes, GltfReadParts* out)
   for (size_t t : textureUsed) {
     size_t img;
     if (indexIn(child(doc["textures"][t], "source"), images, &img)) imageUsed.insert(img);
+    const json* ext = child(doc["textures"][t], "extensions");
+    if (const json* webp = ext ? child(*ext, "EXT_texture_webp") : nullptr; webp && indexIn(child(*webp, "source"), images, &img))
+      imageUsed.insert(img);
   }
   auto useView = [&](const json* v) {
     size_t b;
     if (indexIn(v, views, &b)) viewUsed[b] = true;
   };
   for (size_t img : imageUsed) useView(child(doc["images"][img], "bufferView"));
+  for (const json* v : dracoViews) useView(v);
   CANOPY_TRY(keepReadImages(doc, imageUsed));
   // Accessors -> bufferViews -> buffers; the others become a stub tinygltf parses and nothing reads.
   for (size_t a = 0; a < accessors; ++a) {

@@ -25,6 +25,9 @@ struct GltfReadParts {
   // them, so they are taken off their primitive here and read by the loader. (mesh, primitive) ->
   // accessor.
   std::map<std::pair<int, int>, int> indicesWithoutView;
+  // The indices of primitives with KHR_draco_mesh_compression, taken off them likewise (they have
+  // no bufferView until decodeDraco gives them one and puts them back).
+  std::map<std::pair<int, int>, int> dracoIndices;
 };
 
 // Rewrites `doc` as above. `glb`: the document is a GLB's JSON chunk, whose BIN chunk holds

@@ -6,7 +6,8 @@ set -euo pipefail
 packages=(cmake ninja-build g++ pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   glslang-tools glslang-dev libglm-dev libglfw3-dev libtinygltf-dev nlohmann-json3-dev libstb-dev
-  libgtest-dev xvfb xauth libx11-dev libxrandr-dev libxcb1-dev "$@")
+  libgtest-dev xvfb xauth libx11-dev libxrandr-dev libxcb1-dev
+  libdraco-dev libmeshoptimizer-dev libwebp-dev "$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

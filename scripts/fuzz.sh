@@ -37,9 +37,11 @@ if [ "$target" = scene ]; then
   cp demo/scenes/*.json tests/fuzz/scenes/* "$out/seeds/" 2>/dev/null || true
 elif [ -d ../shared/assets ]; then
   python3 scripts/fuzz_seeds.py ../shared/assets "$out/seeds" tests/fuzz/regressions
+  cp tests/data/compressed/*.glb "$out/seeds/"  # the compressed files (Draco, meshopt, WebP, texture transform)
 else
   echo "../shared/assets absent: seeding from tests/fuzz/regressions only"
   mkdir -p "$out/seeds"; cp tests/fuzz/regressions/* "$out/seeds/" 2>/dev/null || true
+  cp tests/data/compressed/*.glb "$out/seeds/"
 fi
 # One libFuzzer process per worker on a shared corpus (fork mode restarts its children every few
 # seconds and costs half the executions); each stops at the first report.

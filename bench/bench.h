@@ -89,6 +89,21 @@ struct CameraBenchOptions {
 };
 int runCameraBench(Device& dev, const CameraBenchOptions& options);
 
+// Pacing (issue 79; bench/bench_pacing.cpp): per path and face count, a long run's frame times
+// (median, p95, p99, max, stutter frames) beside the still frame, the work counted per frame, and
+// the world lock and the pop against re-slicing every frame.
+struct PacingOptions {
+  std::vector<uint64_t> faces = {80000, 1000000};
+  std::vector<std::string> paths = {"orbit", "dolly", "strafe", "turn", "walk"};  // walk: through the field
+  std::vector<float> degreesPerFrame = {0.25f, 0.5f};  // dolly, strafe, walk: 0.005 radii a frame per 0.25 degrees
+  int frames = 300;
+  uint32_t width = 1024, height = 768;
+  float budgetMs = -1.0f;  // LayerSettings.rebuildBudgetMs; < 0: the default
+  bool reference = true;   // the every-frame side (world lock, the pop); off: timing and counts only
+  std::string json;        // "" none
+};
+int runPacingBench(Device& dev, const PacingOptions& options);
+
 // The layer-count study (issue 36): each layout's animated frames against the same wind drawn with
 // `reference` layers, on a generated scene and optionally a glTF file (bench/bench_layer_count.cpp).
 struct LayerCountOptions {

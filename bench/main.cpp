@@ -49,6 +49,10 @@ static int usage(const char* why) {
                "  impostors      Lluch et al.'s impostors: re-slice time off / far region / by projected size and the\n"
                "                 far layers' image difference, per face count (default 10000000, --scene field,\n"
                "                 --rebuilds 5, --size 1024x768); --images DIR writes the far layers and the debug view\n"
+               "  pacing         issue 79: per path (--paths, default orbit,dolly,strafe,turn,walk) and face count, --frames\n"
+               "                 (300) of the default settings at --degrees-list (0.25,0.5): median, p95, p99, max, stutter\n"
+               "                 frames, the still frame, counted work, world lock and the pop (--no-reference: without);\n"
+               "                 --json FILE\n"
                "  camera         the moving camera: per path (--paths, default orbit,dolly,strafe,turn,zoom; also walk)\n"
                "                 the re-slicing policy (--budget MS spread, 0 at once) against re-slicing every frame,\n"
                "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"
@@ -167,7 +171,8 @@ struct Args {
   std::string layout = "5(3-1-1)";
   std::string scene;
   bool runSpecies = false, runShadows = false, runPushers = false, runCounters = false, jsonGiven = false;
-  bool runPicture = false, pathsGiven = false, runPlants = false;
+  bool runPicture = false, pathsGiven = false, runPlants = false, runPacing = false;
+  bench::PacingOptions pacing;
   bench::PictureOptions picture;
   bench::PlantsOptions plants;
   // A comma-separated list, each item through `each` (false: refused).
@@ -251,6 +256,18 @@ struct Args {
     else if (a == "shadows") runShadows = true;
     else if (a == "pushers") runPushers = true;
     else if (a == "counters") runCounters = true;
+    else if (a == "pacing") runPacing = true;
+    else if (a == "--no-reference") pacing.reference = false;
+    else if (a == "--degrees-list") {
+      pacing.degreesPerFrame.clear();
+      if (!forEachItem(next(), [&](const std::string& it) {
+            float v = 0;
+            if (!parseNumber(it.c_str(), 0.0f, 90.0f, &v)) return false;
+            pacing.degreesPerFrame.push_back(v);
+            return true;
+          }))
+        return usage("--degrees-list needs degrees a frame, each in [0, 90]");
+    }
     else return -1;
     return 0;
   }
@@ -463,7 +480,7 @@ struct Args {
   std::printf("Device: %s\n", dev.properties.deviceName);
   if (!runSim && !runLayers && !runAnim && !runSoak && !runTable1 && !runRebuild && !runPerVertex && !runImpostors && !runCamera &&
       !runLayerCount && !runLeafSheetSection && !runSpecies && !runShadows && !runPushers && !runCounters && !runPicture &&
-      !runPlants)
+      !runPlants && !runPacing)
     runSim = true;
   int rc = 0;
   if (runSim) rc = bench::runSimBench(dev, sizes, frames ? frames : 60, detail);
@@ -495,6 +512,21 @@ struct Args {
     if (budgetGiven) cam.budgetMs = budgetMs;
     cam.csvPath = csvPath;
     rc = bench::runCameraBench(dev, cam);
+  }
+  if (rc == 0 && runPacing) {
+    if (facesGiven) pacing.faces.assign(faces.begin(), faces.end());
+    if (pathsGiven) {
+      pacing.paths.clear();
+      for (CameraMotion m : cam.paths) pacing.paths.push_back(cameraMotionName(m));
+    }
+    if (frames) pacing.frames = frames;
+    if (sizeGiven) {
+      pacing.width = t1.width;
+      pacing.height = t1.height;
+    }
+    if (budgetGiven) pacing.budgetMs = budgetMs;
+    if (jsonGiven) pacing.json = t1.json;
+    rc = bench::runPacingBench(dev, pacing);
   }
   if (rc == 0 && runLayerCount) {
     if (facesGiven) layerCount.faces = faces.front();

@@ -120,7 +120,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
   std::printf("\nPacing (issue 79): %ux%u, CanopyParams' defaults%s, wind off, %d frames a path; frame times wall clock\n"
               "(submit to fence, with pipeline statistics queries), the still frame drawn alternately; world lock and the pop\n"
               "against the same path re-sliced every frame.\n",
-              o.width, o.height, o.budgetMs >= 0 ? (", rebuildBudgetMs " + std::to_string(o.budgetMs)).c_str() : "", o.frames);
+              o.width, o.height, o.budgetMs >= 0 ? (", rebuildBudgetMs " + std::to_string(int(o.budgetMs)) + " ms").c_str() : "", o.frames);
   std::printf("  %-7s %9s %5s %8s %8s %8s %8s %8s %7s %7s %8s %8s %8s %8s %8s %8s\n", "path", "faces", "deg", "med ms", "p95",
               "p99", "max", "still", "p99/med", "stutter", "reslices", "prim max", "frag max", "sil max", "IoU min", "pop/p95");
   std::vector<PacingRun> runs;

@@ -1,6 +1,8 @@
 #include "render/host_camera.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "engine/camera.h"

@@ -94,7 +94,10 @@ int runCameraBench(Device& dev, const CameraBenchOptions& options);
 // the world lock and the pop against re-slicing every frame.
 struct PacingOptions {
   std::vector<uint64_t> faces = {80000, 1000000};
-  std::vector<std::string> paths = {"orbit", "dolly", "strafe", "turn", "walk"};  // walk: through the field
+  // walk: through the field; species-walk and third-person: the scene file `sceneFile`, walked, and
+  // followed 2 m high behind a character walking and turning
+  std::vector<std::string> paths = {"orbit", "dolly", "strafe", "turn", "walk", "species-walk", "third-person"};
+  std::string sceneFile = "demo/scenes/six_species.json";
   std::vector<float> degreesPerFrame = {0.25f, 0.5f};  // dolly, strafe, walk: 0.005 radii a frame per 0.25 degrees
   int frames = 300;
   uint32_t width = 1024, height = 768;

@@ -10,8 +10,11 @@
 #include <cstdio>
 #include <fstream>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "bench/bench.h"
 #include "bench/bench_host.h"
+#include "demo/demo_app.h"
 #include "engine/device.h"
 #include "engine/pass_counters.h"
 #include "engine/transfer.h"
@@ -44,7 +47,8 @@ struct PacingSide {
     destroyHostTargets(d, host);
     destroyCanopy(ctx);
   }
-  Status init(const VegetationModel& model, uint32_t width, uint32_t height, bool everyFrame, float budgetMs, bool count) {
+  Status init(const VegetationModel& model, const demo::SceneCopies* copies, uint32_t width, uint32_t height, bool everyFrame,
+              float budgetMs, bool count) {
     w = width;
     h = height;
     CanopyDesc desc;
@@ -55,7 +59,8 @@ struct PacingSide {
     desc.params.simulation.wind.strength = 0.0f;
     if (everyFrame) desc.params.layers.policy = ReslicePolicy::EveryFrame;
     if (budgetMs >= 0.0f) desc.params.layers.rebuildBudgetMs = everyFrame ? 0.0f : budgetMs;
-    CANOPY_TRY(createCanopy(d, model, desc, &ctx));
+    if (copies) desc.instances = copies->instances;
+    CANOPY_TRY(copies ? createCanopy(d, copies->species, desc, &ctx) : createCanopy(d, model, desc, &ctx));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
     if (count) CANOPY_TRY(counters.init(d, 128));
     counted = count;
@@ -102,6 +107,20 @@ double popError(const std::vector<uint8_t>& a, const std::vector<uint8_t>& aPrev
   return n ? sum / double(n) : 0.0;
 }
 
+// The third-person path: a character walking (1.4 m/s at 30 frames a second, times `pace`) into the
+// scene from z = 2 m towards -Z and back (12 m), turning ±30 degrees over 8 s; the camera 3 m behind
+// it and 2 m high, looking at its head (1.6 m). Metres are world units (the scene files' convention).
+LayerView thirdPersonView(uint32_t frame, float pace, float aspect) {
+  const float t = float(frame), walked = std::fabs(pingPong(t, 1.4f / 30.0f * pace, 12.0f));
+  const float heading = glm::radians(30.0f * std::sin(6.2831853f * t / 240.0f));
+  const glm::vec3 forward(std::sin(heading), 0.0f, -std::cos(heading));
+  const glm::vec3 character = glm::vec3(0.0f, 0.0f, 2.0f) + glm::vec3(0.0f, 0.0f, -walked);
+  LayerView v;
+  v.view = glm::lookAtRH(character - 3.0f * forward + glm::vec3(0.0f, 2.0f, 0.0f), character + glm::vec3(0.0f, 1.6f, 0.0f), glm::vec3(0, 1, 0));
+  v.proj = perspectiveVulkan(glm::radians(60.0f), aspect, 0.05f, 60.0f);
+  return v;
+}
+
 struct PacingRun {
   std::string path;
   uint64_t faces = 0;
@@ -132,20 +151,38 @@ int runPacingBench(Device& d, const PacingOptions& o) {
         r.faces = faces;
         r.degreesPerFrame = deg;
         CameraPath path;
-        Status s = parseCameraMotion(pathName, &path.motion);
+        // The six-species scene (a scene file: its own faces), walked or followed in the third person.
+        const bool species = pathName == "species-walk" || pathName == "third-person", thirdPerson = pathName == "third-person";
+        Status s = species ? Status() : parseCameraMotion(pathName, &path.motion);
+        if (species) path.motion = CameraMotion::Walk;
         SceneDesc sd;
         sd.faces = faces;
         sd.kind = path.motion == CameraMotion::Walk ? SceneKind::Field : SceneKind::Shrub;  // a walk goes through the field
         path.degreesPerFrame = deg;
         path.radiiPerFrame = 0.005f * deg / 0.25f;  // dolly, strafe and walk at the same pace
         VegetationModel model;
-        if (s.ok()) s = generateScene(sd, &model);
+        demo::SceneCopies copies;
+        if (s.ok() && species) {
+          demo::Options so;
+          so.sceneFile = o.sceneFile;
+          std::string label;
+          s = demo::loadScene(so, &model, &label, &copies);
+          uint64_t placed = 0;
+          for (const CanopyInstance& in : copies.instances) placed += copies.models[in.species].triangleCount();
+          r.faces = placed;
+        } else if (s.ok()) {
+          s = generateScene(sd, &model);
+        }
+        const demo::SceneCopies* scene = species ? &copies : nullptr;
         const float aspect = float(o.width) / float(o.height);
+        auto viewAt = [&](uint32_t i) {
+          return thirdPerson ? thirdPersonView(i, deg / 0.25f, aspect) : cameraPathView(path, model.boundsMin, model.boundsMax, aspect, i);
+        };
         PacingSide policy(d), every(d), still(d);
-        if (s.ok()) s = policy.init(model, o.width, o.height, false, o.budgetMs, true);
-        if (s.ok() && o.reference) s = every.init(model, o.width, o.height, true, 0.0f, false);
-        if (s.ok()) s = still.init(model, o.width, o.height, false, o.budgetMs, false);
-        const LayerView first = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, 0);
+        if (s.ok()) s = policy.init(model, scene, o.width, o.height, false, o.budgetMs, true);
+        if (s.ok() && o.reference) s = every.init(model, scene, o.width, o.height, true, 0.0f, false);
+        if (s.ok()) s = still.init(model, scene, o.width, o.height, false, o.budgetMs, false);
+        const LayerView first = viewAt(0);
         double ms = 0;
         for (int k = 0; k < 3 && s.ok(); ++k) {  // settled on the first view (the first frame slices)
           s = policy.frame(first, &ms);
@@ -155,7 +192,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
         const uint64_t before = s.ok() ? canopyStats(policy.ctx).layers.rebuilds : 0;
         std::vector<uint8_t> a, b, aPrev, bPrev;
         for (int i = 1; i <= o.frames && s.ok(); ++i) {
-          const LayerView v = cameraPathView(path, model.boundsMin, model.boundsMax, aspect, uint32_t(i));
+          const LayerView v = viewAt(uint32_t(i));
           double ma = 0, mb = 0, m0 = 0;
           uint64_t prim = 0, frag = 0;
           if (o.reference) s = every.frame(v, &mb, &b);
@@ -190,7 +227,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
         const double primMed = std::max(quantileOf(r.primitives, 0.5), 1.0), fragMed = std::max(quantileOf(r.fragments, 0.5), 1.0);
         const double popAt = r.popAt.empty() ? 0.0 : *std::max_element(r.popAt.begin(), r.popAt.end());
         std::printf("  %-7s %9llu %5.2f %8.2f %8.2f %8.2f %8.2f %8.2f %7.2f %7u %8u %8.2f %8.2f %8.3f %8.4f %8.2f\n", r.path.c_str(),
-                    (unsigned long long)faces, double(deg), med, quantileOf(r.ms, 0.95), quantileOf(r.ms, 0.99),
+                    (unsigned long long)r.faces, double(deg), med, quantileOf(r.ms, 0.95), quantileOf(r.ms, 0.99),
                     *std::max_element(r.ms.begin(), r.ms.end()), quantileOf(r.stillMs, 0.5), quantileOf(r.ms, 0.99) / med, stutter,
                     r.reslices, *std::max_element(r.primitives.begin(), r.primitives.end()) / primMed,
                     *std::max_element(r.fragments.begin(), r.fragments.end()) / fragMed,

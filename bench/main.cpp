@@ -49,7 +49,8 @@ static int usage(const char* why) {
                "  impostors      Lluch et al.'s impostors: re-slice time off / far region / by projected size and the\n"
                "                 far layers' image difference, per face count (default 10000000, --scene field,\n"
                "                 --rebuilds 5, --size 1024x768); --images DIR writes the far layers and the debug view\n"
-               "  pacing         issue 79: per path (--paths, default orbit,dolly,strafe,turn,walk) and face count, --frames\n"
+               "  pacing         issue 79: per path (--paths, default orbit,dolly,strafe,turn,walk,species-walk,third-person;\n"
+               "                 the last two: demo/scenes/six_species.json) and face count, --frames\n"
                "                 (300) of the default settings at --degrees-list (0.25,0.5): median, p95, p99, max, stutter\n"
                "                 frames, the still frame, counted work, world lock and the pop (--no-reference: without);\n"
                "                 --json FILE\n"
@@ -173,6 +174,7 @@ struct Args {
   bool runSpecies = false, runShadows = false, runPushers = false, runCounters = false, jsonGiven = false;
   bool runPicture = false, pathsGiven = false, runPlants = false, runPacing = false;
   bench::PacingOptions pacing;
+  std::vector<std::string> pacingPaths;  // --paths as given (pacing also takes species-walk, third-person)
   bench::PictureOptions picture;
   bench::PlantsOptions plants;
   // A comma-separated list, each item through `each` (false: refused).
@@ -294,9 +296,12 @@ struct Args {
       const char* v = next();
       if (!v) return usage("--paths needs a list: orbit,dolly,strafe,turn,zoom,walk");
       cam.paths.clear();
+      pacingPaths.clear();
       std::stringstream ss(v);
       std::string item;
       while (std::getline(ss, item, ',')) {
+        pacingPaths.push_back(item);
+        if (item == "species-walk" || item == "third-person") continue;  // pacing's scene-file paths
         CameraMotion m;
         const Status ps = parseCameraMotion(item, &m);
         if (!ps.ok()) return usage(("--paths: " + ps.message()).c_str());
@@ -515,10 +520,7 @@ struct Args {
   }
   if (rc == 0 && runPacing) {
     if (facesGiven) pacing.faces.assign(faces.begin(), faces.end());
-    if (pathsGiven) {
-      pacing.paths.clear();
-      for (CameraMotion m : cam.paths) pacing.paths.push_back(cameraMotionName(m));
-    }
+    if (pathsGiven) pacing.paths = pacingPaths;
     if (frames) pacing.frames = frames;
     if (sizeGiven) {
       pacing.width = t1.width;

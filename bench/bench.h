@@ -102,6 +102,7 @@ struct PacingOptions {
   int frames = 300;
   uint32_t width = 1024, height = 768;
   float budgetMs = -1.0f;  // LayerSettings.rebuildBudgetMs; < 0: the default
+  uint32_t predictFrames = LayerSettings{}.predictFrames;  // LayerSettings.predictFrames of the policy side
   bool reference = true;   // the every-frame side (world lock, the pop); off: timing and counts only
   std::string json;        // "" none
 };

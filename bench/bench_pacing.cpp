@@ -48,7 +48,7 @@ struct PacingSide {
     destroyCanopy(ctx);
   }
   Status init(const VegetationModel& model, const demo::SceneCopies* copies, uint32_t width, uint32_t height, bool everyFrame,
-              float budgetMs, bool count) {
+              float budgetMs, bool count, uint32_t predictFrames = 0) {
     w = width;
     h = height;
     CanopyDesc desc;
@@ -59,6 +59,7 @@ struct PacingSide {
     desc.params.simulation.wind.strength = 0.0f;
     if (everyFrame) desc.params.layers.policy = ReslicePolicy::EveryFrame;
     if (budgetMs >= 0.0f) desc.params.layers.rebuildBudgetMs = everyFrame ? 0.0f : budgetMs;
+    desc.params.layers.predictFrames = predictFrames;
     if (copies) desc.instances = copies->instances;
     CANOPY_TRY(copies ? createCanopy(d, copies->species, desc, &ctx) : createCanopy(d, model, desc, &ctx));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
@@ -136,6 +137,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
     std::fprintf(stderr, "canopy-bench pacing: the device has no pipelineStatisticsQuery feature\n");
     return 1;
   }
+  if (o.predictFrames) std::printf("\nLayerSettings.predictFrames %u on the policy side", o.predictFrames);
   std::printf("\nPacing (issue 79): %ux%u, CanopyParams' defaults%s, wind off, %d frames a path; frame times wall clock\n"
               "(submit to fence, with pipeline statistics queries), the still frame drawn alternately; world lock and the pop\n"
               "against the same path re-sliced every frame.\n",
@@ -179,7 +181,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
           return thirdPerson ? thirdPersonView(i, deg / 0.25f, aspect) : cameraPathView(path, model.boundsMin, model.boundsMax, aspect, i);
         };
         PacingSide policy(d), every(d), still(d);
-        if (s.ok()) s = policy.init(model, scene, o.width, o.height, false, o.budgetMs, true);
+        if (s.ok()) s = policy.init(model, scene, o.width, o.height, false, o.budgetMs, true, o.predictFrames);
         if (s.ok() && o.reference) s = every.init(model, scene, o.width, o.height, true, 0.0f, false);
         if (s.ok()) s = still.init(model, scene, o.width, o.height, false, o.budgetMs, false);
         const LayerView first = viewAt(0);

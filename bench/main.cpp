@@ -260,6 +260,9 @@ struct Args {
     else if (a == "counters") runCounters = true;
     else if (a == "pacing") runPacing = true;
     else if (a == "--no-reference") pacing.reference = false;
+    else if (a == "--predict") {
+      if (!cli::parseUint(next(), 0, 16, &pacing.predictFrames)) return usage("--predict needs frames in [0, 16]");
+    }
     else if (a == "--degrees-list") {
       pacing.degreesPerFrame.clear();
       if (!forEachItem(next(), [&](const std::string& it) {

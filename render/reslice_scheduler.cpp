@@ -334,6 +334,7 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
   const bool stillFrame = !r.haveView || sameCamera(view, r.lastFrameView);  // the first view counts as still
   r.movingFrames = stillFrame ? 0 : r.movingFrames + 1;
   if (stillFrame) r.outrun = false;
+  r.previousFrameView = r.lastFrameView;
   r.lastFrameView = view;
   if (!r.haveView) {
     reason = "first view";
@@ -384,6 +385,7 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
   d.atOnce = wantAtOnce && !p.mesh.streamed;
   d.immediate = wantAtOnce;
   d.outrun = outrun;
+  d.byCamera = byCamera && r.movingFrames >= 2;
   // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
   // re-slice or new settings restart it).
   const bool spreading = r.spread.phase != SpreadPhase::Idle;
@@ -409,12 +411,20 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
   const ResliceDecision d = decideReslice(r, p, view, slice);
   if (!d.reason.empty()) {
     if (d.outrun) p.stats.outrunSpreads++;
-    acceptReslice(r, slice);
+    // A moving camera's re-slice at once, sliced for where the camera will be predictFrames frames
+    // on (its last frame's motion D repeated: view' = D^k view), so the error starts below zero's
+    // side and the next re-slice comes later (issue 79; docs/lab/performance-notebook.md "Pacing: a moving camera's frames (issue 79)").
+    LayerView predicted = slice;
+    if (d.atOnce && d.byCamera && p.settings.predictFrames > 0) {
+      const glm::mat4 step = r.lastFrameView.view * glm::inverse(r.previousFrameView.view);
+      for (uint32_t k = 0; k < p.settings.predictFrames; ++k) predicted.view = step * predicted.view;
+    }
+    acceptReslice(r, predicted);
     p.stats.rebuilds++;
     p.stats.lastRebuildReason = d.reason;
     r.spread = SpreadRebuild{};
     if (d.atOnce) {
-      CANOPY_TRY(placeForView(p.placement, slice, p.visible, p.stats));
+      CANOPY_TRY(placeForView(p.placement, predicted, p.visible, p.stats));
       r.rebuildPending = true;
       r.rate.lastWork = SliceRateControl::Work::Other;
       p.stats.crossFade = 1.0f;
@@ -422,7 +432,7 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
       r.spread.phase = SpreadPhase::Placing;
       r.spread.immediate = d.immediate;
       p.stats.maxSliceTriangles = 0;
-      beginPlacement(p.placement, slice, r.spread.job);
+      beginPlacement(p.placement, predicted, r.spread.job);
       p.stats.crossFade = 0.0f;
     }
   }

@@ -86,6 +86,7 @@ struct ResliceScheduler {
   // (a frame at the previous frame's camera).
   bool outrun = false;
   LayerView lastFrameView;
+  LayerView previousFrameView;  // the view update's before lastFrameView (the camera's last motion)
   uint32_t movingFrames = 0;  // consecutive view updates whose camera differs from the previous one's
   double lastErrorRatio = 0;  // the last frame's estimated error over its threshold (its growth a frame)
 };
@@ -131,6 +132,7 @@ struct ResliceDecision {
   bool atOnce = false;     // placed and drawn in this frame; else a spread re-slice starts
   bool immediate = false;  // asked at once: a spread re-slice (streamed mesh) then draws slices as large as the ring, no fade
   bool outrun = false;     // a spread re-slice fell, or would fall, behind the camera
+  bool byCamera = false;   // caused by a camera that has moved for two frames or more (its motion is known)
 };
 ResliceDecision decideReslice(ResliceScheduler& scheduler, const ResliceParts& parts, const LayerView& view, const LayerView& slice);
 // A re-slice for the slice camera `slice` starts (a decision's): the requests and changes it

@@ -609,3 +609,41 @@ TEST_F(LayersTest, ASteadilyMovingCameraIsNotOutrunByASpreadReslice) {
   std::printf("re-sliced at once after %d frames of 0.2 degrees: %s\n", frame, lv.stats.lastRebuildReason.c_str());
   destroyLayeredVegetation(lv);
 }
+
+// LayerSettings.predictFrames (issue 79): a moving camera's re-slice at once slices for its view a
+// frame on (the last frame's motion repeated), so an orbit re-slices less often; off, the slice
+// camera is the current view.
+TEST_F(LayersTest, APredictedResliceSlicesAheadAndComesLessOften) {
+  const VegetationModel m = straddlingLeaves(6, 4, false);
+  uint64_t rebuilds[2] = {0, 0};
+  for (uint32_t predict = 0; predict < 2; ++predict) {
+    LayeredVegetationDesc d = smallDesc();
+    d.writeIds = false;
+    d.settings.predictFrames = predict;
+    LayeredVegetation lv;
+    ASSERT_TRUE(createLayeredVegetation(dev, m, d, &lv).ok());
+    bool changed = false;
+    LayerView v = frontView();
+    ASSERT_TRUE(updateLayerView(lv, v, &changed).ok());
+    const glm::mat4 step = glm::rotate(glm::mat4(1.0f), glm::radians(0.5f), glm::vec3(0, 1, 0));
+    bool checked = false;
+    for (int frame = 0; frame < 240; ++frame) {
+      const uint64_t before = lv.stats.rebuilds;
+      v.view = v.view * step;  // an orbit
+      ASSERT_TRUE(updateLayerView(lv, v, &changed).ok());
+      if (lv.stats.rebuilds == before || checked) continue;
+      // The slice camera of this re-slice: the current view, or one step of the orbit on.
+      const glm::mat4 expected = predict ? v.view * step : v.view;
+      float off = 0.0f;
+      for (int c = 0; c < 4; ++c) off = std::max(off, glm::length(lv.visible.view.view[c] - expected[c]));
+      EXPECT_LT(off, 1e-4f) << "predictFrames " << predict;
+      checked = true;
+    }
+    EXPECT_TRUE(checked) << "the orbit re-slices";
+    rebuilds[predict] = lv.stats.rebuilds;
+    destroyLayeredVegetation(lv);
+  }
+  std::printf("re-slices over 240 frames of a 0.5-degree orbit: %llu at the current view, %llu a frame ahead\n",
+              (unsigned long long)rebuilds[0], (unsigned long long)rebuilds[1]);
+  EXPECT_LT(rebuilds[1], rebuilds[0]);
+}

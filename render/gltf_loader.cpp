@@ -576,39 +576,29 @@ Status decodeTexture(Load& L, ImageSlots& S, const std::string& what, int tex, i
     } else {
       return Status::error(iw + " ('" + im.uri + "') could not be loaded" + (L.fs.lastError.empty() ? "" : ": " + L.fs.lastError));
     }
-    int w = 0, h = 0, comp = 0;
-    if (isWebp(data, size)) {
-      ModelImage mi;
+    ModelImage mi;
+    if (isWebp(data, size)) {  // EXT_texture_webp: libwebp, after the same size and budget checks
       const Status s = decodeWebp(data, size, opt.maxImageDimension, &S.pixelsLeft, &mi.width, &mi.height, &mi.rgba);
       if (!s.ok()) return Status::error(iw + " ('" + im.uri + im.mimeType + "') " + s.message());
-      mi.name = im.name.empty() ? im.uri : im.name;
-      mi.linear = linear;
-      if (only) {
-        *only = std::move(mi);
-        return Status();
-      }
-      slots[size_t(img)] = int32_t(out->images.size());
-      out->images.push_back(std::move(mi));
-      *slot = slots[size_t(img)];
-      return Status();
+    } else {
+      int w = 0, h = 0, comp = 0;
+      if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
+        return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+      if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
+        return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
+      const uint64_t pixels = uint64_t(w) * uint64_t(h);
+      if (pixels > S.pixelsLeft)
+        return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
+                    std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
+      S.pixelsLeft -= pixels;
+      unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
+      if (!px) return Status::error(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+      mi.width = uint32_t(w);
+      mi.height = uint32_t(h);
+      mi.rgba.assign(px, px + size_t(w) * h * 4);
+      stbi_image_free(px);
     }
-    if (size > uint64_t(std::numeric_limits<int>::max()) || !stbi_info_from_memory(data, int(size), &w, &h, &comp))
-      return Status::error(iw + " ('" + im.uri + im.mimeType + "') does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
-    if (w <= 0 || h <= 0 || uint32_t(w) > opt.maxImageDimension || uint32_t(h) > opt.maxImageDimension)
-      return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds " + std::to_string(opt.maxImageDimension) + " per side");
-    const uint64_t pixels = uint64_t(w) * uint64_t(h);
-    if (pixels > S.pixelsLeft)
-      return Status::error(iw + ": " + std::to_string(w) + "x" + std::to_string(h) + " exceeds what is left of the " +
-                  std::to_string(opt.maxImagePixels) + "-pixel budget of all images (GltfLoadOptions.maxImagePixels)");
-    S.pixelsLeft -= pixels;
-    unsigned char* px = stbi_load_from_memory(data, int(size), &w, &h, &comp, 4);
-    if (!px) return Status::error(iw + " does not decode: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
-    ModelImage mi;
     mi.name = im.name.empty() ? im.uri : im.name;
-    mi.width = uint32_t(w);
-    mi.height = uint32_t(h);
-    mi.rgba.assign(px, px + size_t(w) * h * 4);
-    stbi_image_free(px);
     mi.linear = linear;
     if (only) {
       *only = std::move(mi);

@@ -412,8 +412,9 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
   if (!d.reason.empty()) {
     if (d.outrun) p.stats.outrunSpreads++;
     // A moving camera's re-slice at once, sliced for where the camera will be predictFrames frames
-    // on (its last frame's motion D repeated: view' = D^k view), so the error starts below zero's
-    // side and the next re-slice comes later (issue 79; docs/lab/performance-notebook.md "Pacing: a moving camera's frames (issue 79)").
+    // on (its last frame's motion D repeated: view' = D^k view): the error falls to zero as the
+    // camera arrives there before it grows again, so the next re-slice comes later (issue 79;
+    // docs/lab/performance-notebook.md "Pacing: a moving camera's frames (issue 79)").
     LayerView predicted = slice;
     if (d.atOnce && d.byCamera && p.settings.predictFrames > 0) {
       const glm::mat4 step = r.lastFrameView.view * glm::inverse(r.previousFrameView.view);

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -98,6 +99,15 @@ glm::vec2 halton23(uint32_t k) {
     return r;
   };
   return glm::vec2(h(k + 1, 2), h(k + 1, 3)) - 0.5f;
+}
+
+// A host's TAA jitter: each call the next frame's Halton (2, 3) point of 8 (*frame counts them).
+std::function<void(CanopyCamera&)> haltonJitter(uint32_t* frame) {
+  return [frame](CanopyCamera& c) {
+    const glm::vec2 j = halton23((*frame)++ % 8);
+    c.jitter[0] = j.x;
+    c.jitter[1] = j.y;
+  };
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -235,11 +245,7 @@ TEST_F(HostShapesTest, AJitterAloneNeverReslices) {
   ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
   const uint64_t rebuilds = canopyStats(ctx).layers.rebuilds;
   uint32_t k = 0;
-  host.adjustCamera = [&k](CanopyCamera& c) {
-    const glm::vec2 j = halton23(k++ % 8);
-    c.jitter[0] = j.x;
-    c.jitter[1] = j.y;
-  };
+  host.adjustCamera = haltonJitter(&k);
   for (int i = 0; i < 64; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, view, 1.0f / 30.0f).ok());
   EXPECT_EQ(canopyStats(ctx).layers.rebuilds, rebuilds) << "a jitter alone re-sliced: " << canopyStats(ctx).layers.lastRebuildReason;
   ASSERT_TRUE(host.finish().ok());
@@ -261,12 +267,7 @@ TEST_F(HostShapesTest, MotionVectorsExcludeTheJitterAndTheImageMovesByIt) {
       CanopyContext* ctx = make(host, 2.0f, VK_FORMAT_R16G16_SFLOAT);
       ASSERT_NE(ctx, nullptr);
       uint32_t k = 0;
-      if (jittered)
-        host.adjustCamera = [&k](CanopyCamera& c) {
-          const glm::vec2 j = halton23(k++ % 8);
-          c.jitter[0] = j.x;
-          c.jitter[1] = j.y;
-        };
+      if (jittered) host.adjustCamera = haltonJitter(&k);
       for (int i = 0; i < 12; ++i) ASSERT_TRUE(host.frame(++frameNumber, {ctx}, orbit(20.0f + turn * float(i), 1.5f), 1.0f / 30.0f).ok());
       std::vector<float> z;
       ASSERT_TRUE(host.read(&color[jittered], &z).ok());

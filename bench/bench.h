@@ -103,6 +103,7 @@ struct PacingOptions {
   uint32_t width = 1024, height = 768;
   float budgetMs = -1.0f;  // LayerSettings.rebuildBudgetMs; < 0: the default
   uint32_t predictFrames = LayerSettings{}.predictFrames;  // LayerSettings.predictFrames of the policy side
+  bool paced = LayerSettings{}.pacedReslices;  // LayerSettings.pacedReslices of the policy side (--paced on|off)
   bool reference = true;   // the every-frame side (world lock, the pop); off: timing and counts only
   std::string json;        // "" none
 };

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -48,7 +49,7 @@ struct PacingSide {
     destroyCanopy(ctx);
   }
   Status init(const VegetationModel& model, const demo::SceneCopies* copies, uint32_t width, uint32_t height, bool everyFrame,
-              float budgetMs, bool count, uint32_t predictFrames = 0) {
+              float budgetMs, bool count, uint32_t predictFrames = 0, bool paced = false) {
     w = width;
     h = height;
     CanopyDesc desc;
@@ -60,6 +61,7 @@ struct PacingSide {
     if (everyFrame) desc.params.layers.policy = ReslicePolicy::EveryFrame;
     if (budgetMs >= 0.0f) desc.params.layers.rebuildBudgetMs = everyFrame ? 0.0f : budgetMs;
     desc.params.layers.predictFrames = predictFrames;
+    if (!everyFrame) desc.params.layers.pacedReslices = paced;
     if (copies) desc.instances = copies->instances;
     CANOPY_TRY(copies ? createCanopy(d, copies->species, desc, &ctx) : createCanopy(d, model, desc, &ctx));
     CANOPY_TRY(createHostTargets(d, w, h, VK_FORMAT_R8G8B8A8_UNORM, &host));
@@ -138,6 +140,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
     return 1;
   }
   if (o.predictFrames) std::printf("\nLayerSettings.predictFrames %u on the policy side", o.predictFrames);
+  std::printf("\nLayerSettings.pacedReslices %s on the policy side", o.paced ? "on" : "off");
   std::printf("\nPacing (issue 79): %ux%u, CanopyParams' defaults%s, wind off, %d frames a path; frame times wall clock\n"
               "(submit to fence, with pipeline statistics queries), the still frame drawn alternately; world lock and the pop\n"
               "against the same path re-sliced every frame.\n",
@@ -145,6 +148,7 @@ int runPacingBench(Device& d, const PacingOptions& o) {
   std::printf("  %-7s %9s %5s %8s %8s %8s %8s %8s %7s %7s %8s %8s %8s %8s %8s %8s\n", "path", "faces", "deg", "med ms", "p95",
               "p99", "max", "still", "p99/med", "stutter", "reslices", "prim max", "frag max", "sil max", "IoU min", "pop/p95");
   std::vector<PacingRun> runs;
+  const bool trace = std::getenv("CANOPY_BENCH_TRACE") != nullptr;  // a line per frame
   for (uint64_t faces : o.faces)
     for (const std::string& pathName : o.paths)
       for (float deg : o.degreesPerFrame) {
@@ -181,9 +185,9 @@ int runPacingBench(Device& d, const PacingOptions& o) {
           return thirdPerson ? thirdPersonView(i, deg / 0.25f, aspect) : cameraPathView(path, model.boundsMin, model.boundsMax, aspect, i);
         };
         PacingSide policy(d), every(d), still(d);
-        if (s.ok()) s = policy.init(model, scene, o.width, o.height, false, o.budgetMs, true, o.predictFrames);
+        if (s.ok()) s = policy.init(model, scene, o.width, o.height, false, o.budgetMs, true, o.predictFrames, o.paced);
         if (s.ok() && o.reference) s = every.init(model, scene, o.width, o.height, true, 0.0f, false);
-        if (s.ok()) s = still.init(model, scene, o.width, o.height, false, o.budgetMs, false);
+        if (s.ok()) s = still.init(model, scene, o.width, o.height, false, o.budgetMs, false, 0, o.paced);
         const LayerView first = viewAt(0);
         double ms = 0;
         for (int k = 0; k < 3 && s.ok(); ++k) {  // settled on the first view (the first frame slices)
@@ -202,6 +206,9 @@ int runPacingBench(Device& d, const PacingOptions& o) {
           if (s.ok()) s = policy.frame(v, &ma, o.reference ? &a : nullptr, &prim, &frag);
           if (!s.ok()) break;
           const CanopyStats st = canopyStats(policy.ctx);
+          if (trace)
+            std::printf("    frame %3d: %8.2f ms (still %6.2f) primitives %8llu fragments %9llu phase %u rebuilt %d\n", i, ma, m0,
+                        (unsigned long long)prim, (unsigned long long)frag, st.layers.spreadPhase, int(st.layersRebuilt));
           r.ms.push_back(ma);
           r.stillMs.push_back(m0);
           r.primitives.push_back(double(prim));

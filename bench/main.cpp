@@ -260,6 +260,11 @@ struct Args {
     else if (a == "counters") runCounters = true;
     else if (a == "pacing") runPacing = true;
     else if (a == "--no-reference") pacing.reference = false;
+    else if (a == "--paced") {
+      const char* v = next();
+      if (!v || (std::string(v) != "on" && std::string(v) != "off")) return usage("--paced needs on or off");
+      pacing.paced = std::string(v) == "on";
+    }
     else if (a == "--predict") {
       if (!cli::parseUint(next(), 0, 16, &pacing.predictFrames)) return usage("--predict needs frames in [0, 16]");
     }

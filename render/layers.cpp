@@ -108,7 +108,7 @@ struct ReslicePartsOf {
   explicit ReslicePartsOf(LayeredVegetation& lv)
       : placement(placementInputs(lv)),
         parts{placement, lv.settings, lv.mesh, lv.visible, lv.stats, lv.device, layerOutputSize(lv),
-              spreadEnabled(lv.settings, lv.desc.writeIds), lv.desc.fixedSliceTriangles} {}
+              spreadEnabled(lv.settings, lv.desc.writeIds), lv.desc.fixedSliceTriangles, pacedEnabled(lv.settings, lv.desc.writeIds)} {}
 };
 
 // Shading once's pair for a draw path (docs/design.md "Layers: shading once"); `p`: the path's
@@ -374,6 +374,8 @@ Status setLayerSettings(LayeredVegetation& lv, const LayerSettings& s, bool* tar
   LayerSettings content = s;
   content.rebuildBudgetMs = lv.settings.rebuildBudgetMs;
   content.crossFadeFrames = lv.settings.crossFadeFrames;
+  content.predictFrames = lv.settings.predictFrames;
+  content.pacedReslices = lv.settings.pacedReslices;
   const bool contentChanged = !(content == lv.settings);
   const bool budgetChanged = s.rebuildBudgetMs != lv.settings.rebuildBudgetMs;
   lv.settings = s;
@@ -436,7 +438,9 @@ Status updateLayerView(LayeredVegetation& lv, const LayerView& view, bool* chang
   return advanceReslice(lv.reslice, of.parts, view, sliceCameraFor(lv, view), changed);
 }
 
-bool usesNextSet(const LayeredVegetation& lv) { return spreadEnabled(lv.settings, lv.desc.writeIds) || lv.mesh.streamed; }
+bool usesNextSet(const LayeredVegetation& lv) {
+  return spreadEnabled(lv.settings, lv.desc.writeIds) || pacedEnabled(lv.settings, lv.desc.writeIds) || lv.mesh.streamed;
+}
 
 MeshDraw meshDraw(const LayeredVegetation& lv) {
   MeshDraw md;

@@ -79,6 +79,13 @@ void updateSliceRate(ResliceScheduler& rs, const LayerSettings& settings) {
       const double still = r.lastWork == SliceRateControl::Work::None ? ms : std::max(ms - r.lastPlacementMs, 0.0);
       if (r.stillMs.size() < kStill) r.stillMs.push_back(still);
       else r.stillMs[r.stillNext++ % kStill] = still;
+    } else if (r.lastWork == SliceRateControl::Work::Paced && r.stillMs.size() >= 3 && r.lastShare > 0) {
+      // A paced frame: its time above the still baseline is its share of the drawing (and, in the
+      // last, the copy); followed smoothly, a frame's noise being large on a CPU driver.
+      const double above = std::max(ms - median(r.stillMs), 0.0);
+      auto follow = [](double& v, double x) { v = v > 0 ? 0.7 * v + 0.3 * x : x; };
+      if (!r.lastWasCopy) follow(r.pacedDrawMs, above / r.lastShare);
+      else if (r.pacedDrawMs > 0) follow(r.pacedCopyMs, std::max(above - r.lastShare * r.pacedDrawMs, 0.0));
     } else if (r.lastWork == SliceRateControl::Work::Slice && r.stillMs.size() >= 3 && r.lastTriangles > 0) {
       // Cautious up, quick down: a slice is never believed to cost under a quarter of the budget
       // (a lucky fast frame would otherwise ask for a huge next slice), the estimate follows the
@@ -100,14 +107,72 @@ void updateSliceRate(ResliceScheduler& rs, const LayerSettings& settings) {
   r.lastTriangles = 0;
 }
 
+// The shares of a paced re-slice's D slices, as cumulative bounds (D + 1, from 0 to 1): even, less
+// the first frame's placement (its last measured CPU time) and the last frame's copy and occupancy
+// (measured from earlier paced re-slices; before any, even shares), so that every frame costs
+// about the same: with x the cost of a middle frame's share,
+// the first draws 1 - P / x of it and the last 1 - C / x (x = R / (D - 2 + w0 + wL), solved by a few
+// fixed-point steps; each share at least 0, the first and last together at least one middle one's).
+std::vector<double> pacedShares(const SliceRateControl& rate, double placementMs, uint32_t slices) {
+  const uint32_t n = std::max<uint32_t>(slices, 1);
+  const double draw = rate.pacedDrawMs, copy = rate.pacedCopyMs;
+  double w0 = 1.0, wl = 1.0;
+  for (int it = 0; it < 4 && n >= 2 && draw > 0; ++it) {
+    const double x = draw / std::max(double(n) - 2.0 + w0 + wl, 1e-3);
+    w0 = std::clamp(1.0 - placementMs / x, 0.0, 1.0);
+    wl = std::clamp(1.0 - copy / x, 0.0, 1.0);
+    if (w0 + wl < 1.0 && n == 2) w0 = 1.0 - wl;  // two slices draw it all between them
+  }
+  if (n < 2) w0 = wl = 1.0;
+  if (n >= 2 && w0 + wl <= 0.0) w0 = 1.0;
+  std::vector<double> w(n, 1.0), bounds(n + 1, 0.0);
+  w.front() = w0;
+  w.back() = wl;
+  double total = 0.0;
+  for (double v : w) total += v;
+  for (uint32_t i = 0; i < n; ++i) bounds[i + 1] = bounds[i] + w[i] / total;
+  bounds[n] = 1.0;
+  return bounds;
+}
+
 // The next frame's draws of a spread re-slice: triangles from the cursor, as many as the budget
 // and the measured rate allow (at least 1024, so it always ends); a streamed mesh also stops at
 // what this frame's ring segment holds, and its parts are copied there now (the frame that reads
 // them is the one being recorded: docs/design.md "Layers: mesh budget and staging ring").
 void planSlice(ResliceScheduler& r, const ResliceParts& p) {
   SpreadRebuild& sp = r.spread;
-  const uint64_t want = sp.immediate ? UINT64_MAX : sliceTriangles(r, p);
   sp.slice.clear();
+  if (sp.paced) {
+    // Slice k of D draws the k-th D-th of every item (not D runs of the item list in turn), so each
+    // slice holds the same share of leaves and wood: the slices' fragments, not only their
+    // triangles, are even (in turn, the leaves' and the trunk's slices differed 3x in fragments).
+    // The shares were set at the start (pacedShares): the first and last frames draw less.
+    const uint32_t k = sp.pacedSlice, n = std::max<uint32_t>(sp.pacedSlices, 1);
+    auto bound = [&](uint32_t count, uint32_t j) {
+      return j >= n ? count : uint32_t(std::floor(double(count) * (j < sp.pacedBounds.size() ? sp.pacedBounds[j] : double(j) / n)));
+    };
+    uint64_t drawn = 0;
+    for (const ChunkPart& item : sp.items) {
+      const uint32_t from = bound(item.triangleCount, k), to = bound(item.triangleCount, k + 1);
+      if (to <= from) continue;
+      ChunkPart part = item;
+      part.firstTriangle = item.firstTriangle + from;
+      part.triangleCount = to - from;
+      sp.slice.push_back(part);
+      drawn += to - from;
+    }
+    sp.sliceClears = k == 0;
+    sp.sliceLast = k + 1 >= n;
+    r.rate.lastShare = k + 1 < sp.pacedBounds.size() ? sp.pacedBounds[k + 1] - sp.pacedBounds[k] : 0.0;
+    r.rate.lastWasCopy = sp.sliceLast;
+    sp.pacedSlice++;
+    r.slicePending = true;
+    r.rate.lastWork = k == 0 ? SliceRateControl::Work::Other : SliceRateControl::Work::Paced;  // the first has the placement
+    p.stats.lastSliceTriangles = drawn;
+    p.stats.maxSliceTriangles = std::max(p.stats.maxSliceTriangles, drawn);
+    return;
+  }
+  const uint64_t want = sp.immediate ? UINT64_MAX : sliceTriangles(r, p);
   sp.sliceClears = sp.cursorItem == 0 && sp.cursorTriangle == 0;
   MeshRing& ring = p.mesh.ring;
   uint64_t segment = 0, usedV = 0, usedI = 0, usedR = 0;
@@ -216,7 +281,7 @@ Status advanceSpread(ResliceScheduler& r, const ResliceParts& p) {
       const auto deadlineTp = std::chrono::time_point_cast<Clock::duration>(deadline);
       bool done = false;
       const double before = sp.job.ms;
-      CANOPY_TRY(advancePlacement(p.placement, sp.job, sp.immediate ? nullptr : &deadlineTp, &done));
+      CANOPY_TRY(advancePlacement(p.placement, sp.job, sp.immediate || sp.paced ? nullptr : &deadlineTp, &done));
       r.rate.lastWork = SliceRateControl::Work::Placement;
       r.rate.lastPlacementMs = sp.job.ms - before;
       if (done) {
@@ -233,18 +298,20 @@ Status advanceSpread(ResliceScheduler& r, const ResliceParts& p) {
           p.visible.frame = sp.job.frame;
         }
       }
-      if (!done || !sp.immediate) break;
-      [[fallthrough]];  // asked at once: the first slice in the placement's frame
+      if (!done || !(sp.immediate || sp.paced)) break;
+      [[fallthrough]];  // asked at once or paced: the first slice in the placement's frame
     }
     case SpreadPhase::Drawing:
       planSlice(r, p);
       if (!sp.sliceLast) break;
-      if (!sp.immediate) {
+      if (!sp.immediate && !sp.paced) {
         sp.phase = SpreadPhase::CrossFading;  // from the next frame
         break;
       }
-      // Asked at once: the next set is copied in behind the last slice (the copy pass follows the
-      // slice pass), without a fade, and the occupancy recomputed in this frame.
+      // Asked at once, or paced (sliced for this frame's view): the next set is copied in behind the
+      // last slice (the copy pass follows the slice pass), without a fade, and the occupancy
+      // recomputed in this frame.
+      if (sp.paced) p.stats.pacedRebuilds++;
       sp.fadeCopy = true;
       r.fadePending = true;
       r.occupancyRecomputeNow = true;
@@ -325,6 +392,7 @@ void requestReslice(ResliceScheduler& r, const std::string& reason, bool immedia
 }
 
 bool spreadEnabled(const LayerSettings& settings, bool writeIds) { return settings.rebuildBudgetMs > 0 && !writeIds; }
+bool pacedEnabled(const LayerSettings& settings, bool writeIds) { return settings.pacedReslices && !writeIds; }
 
 ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const LayerView& view, const LayerView& slice) {
   ResliceDecision d;
@@ -357,8 +425,26 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
     // thresholds), would it pass kSpreadBehind before the new set is in?
     // (An unbounded error, a camera inside the vegetation's bounds, is outrun at once.)
     const double perFrame = std::isfinite(ratio) && std::isfinite(r.lastErrorRatio) ? std::max(ratio - r.lastErrorRatio, 0.0) : 0.0;
+    // Paced (LayerSettings.pacedReslices; issue 79): a moving camera (its last motion known) starts the
+    // next set D frames before its error would pass the thresholds (at this frame's pace, in
+    // thresholds a frame: the change since the last frame, either way, as a set sliced ahead is
+    // approached), drawn in D even slices and shown in the D-th frame, sliced for the view predicted
+    // there. Every frame of a steady move then draws a D-th of a re-slice instead of one frame in D
+    // drawing all of it. D = 1 (the error over the thresholds already) is a re-slice at once.
+    const double pace = std::isfinite(ratio) && std::isfinite(r.lastErrorRatio) ? std::fabs(ratio - r.lastErrorRatio) : 0.0;
     r.lastErrorRatio = ratio;
-    if (byCamera && p.spreadEnabled && r.spread.phase == SpreadPhase::Idle && r.movingFrames >= 2) {
+    if (p.pacedEnabled && !p.mesh.streamed && r.movingFrames >= 1 && r.spread.phase == SpreadPhase::Idle && std::isfinite(ratio) &&
+        pace > 1e-6) {
+      const double left = (1.0 - ratio) / pace;  // frames until the visible set's error passes the thresholds
+      // The visible set is shown up to the frame before the new one's (D - 2 frames on from this
+      // one), so D - 2 <= left; past the thresholds already: the policy's re-slice at once.
+      if (left >= 0.0 && left + 2.0 < double(kPacedMaxFrames)) {
+        d.pacedFrames = uint32_t(std::clamp(std::floor(left) + 2.0, 2.0, double(kPacedMaxFrames)));
+        if (reason.empty()) reason = "paced: the error passes the thresholds in " + std::to_string(d.pacedFrames) + " frames";
+        byCamera = true;
+      }
+    }
+    if (d.pacedFrames == 0 && byCamera && p.spreadEnabled && r.spread.phase == SpreadPhase::Idle && r.movingFrames >= 2) {
       if (!std::isfinite(ratio) || ratio + perFrame * spreadFrames(r, p) > kSpreadBehind) {
         reason = "a spread re-slice would fall behind the camera: " + reason;
         outrun = true;
@@ -378,14 +464,15 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
   // Once outrun, the camera's re-slices are at once while it keeps moving (a spread one would be
   // outrun again: each frame of a steady move adds to the error its slices take frames to remove).
   if (outrun) r.outrun = true;
-  const bool wantAtOnce = !r.haveView || r.forceImmediate || !p.spreadEnabled || s.policy == ReslicePolicy::EveryFrame || outrun ||
-                          (byCamera && r.outrun);
+  const bool wantAtOnce = d.pacedFrames == 1 ||
+                          (d.pacedFrames == 0 && (!r.haveView || r.forceImmediate || !p.spreadEnabled ||
+                                                  s.policy == ReslicePolicy::EveryFrame || outrun || (byCamera && r.outrun)));
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
   // allows, copied in without a fade (SpreadRebuild.immediate).
   d.atOnce = wantAtOnce && !p.mesh.streamed;
   d.immediate = wantAtOnce;
   d.outrun = outrun;
-  d.byCamera = byCamera && r.movingFrames >= 2;
+  d.byCamera = byCamera && (r.movingFrames >= 2 || d.pacedFrames > 0);
   // A spread re-slice runs to its end for its own view; the policy looks again afterwards (a forced
   // re-slice or new settings restart it).
   const bool spreading = r.spread.phase != SpreadPhase::Idle;
@@ -411,14 +498,17 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
   const ResliceDecision d = decideReslice(r, p, view, slice);
   if (!d.reason.empty()) {
     if (d.outrun) p.stats.outrunSpreads++;
+    if (getenv("CANOPY_TRACE_PACED")) fprintf(stderr, "reslice %llu: %s paced %u atOnce %d ratio %.3f\n", (unsigned long long)p.stats.viewUpdates, d.reason.c_str(), d.pacedFrames, int(d.atOnce), r.lastErrorRatio);
     // A moving camera's re-slice at once, sliced for where the camera will be predictFrames frames
     // on (its last frame's motion D repeated: view' = D^k view): the error falls to zero as the
     // camera arrives there before it grows again, so the next re-slice comes later (issue 79;
     // docs/lab/performance-notebook.md "Pacing: a moving camera's frames (issue 79)").
+    // A paced re-slice is sliced for the view of the frame it is shown in, pacedFrames - 1 on.
     LayerView predicted = slice;
-    if (d.atOnce && d.byCamera && p.settings.predictFrames > 0) {
+    const uint32_t ahead = d.pacedFrames > 1 ? d.pacedFrames - 1 : d.atOnce && d.byCamera ? p.settings.predictFrames : 0;
+    if (ahead > 0 && d.byCamera) {
       const glm::mat4 step = r.lastFrameView.view * glm::inverse(r.previousFrameView.view);
-      for (uint32_t k = 0; k < p.settings.predictFrames; ++k) predicted.view = step * predicted.view;
+      for (uint32_t k = 0; k < ahead; ++k) predicted.view = step * predicted.view;
     }
     acceptReslice(r, predicted);
     p.stats.rebuilds++;
@@ -432,6 +522,9 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
     } else {
       r.spread.phase = SpreadPhase::Placing;
       r.spread.immediate = d.immediate;
+      r.spread.paced = d.pacedFrames > 1;
+      r.spread.pacedSlices = d.pacedFrames;
+      if (r.spread.paced) r.spread.pacedBounds = pacedShares(r.rate, p.stats.lastPlacementMs, d.pacedFrames);
       p.stats.maxSliceTriangles = 0;
       beginPlacement(p.placement, predicted, r.spread.job);
       p.stats.crossFade = 0.0f;

@@ -22,6 +22,10 @@ enum class SpreadPhase : uint32_t { Idle = 0, Placing = 1, Drawing = 2, CrossFad
 // A spread re-slice whose visible set's estimated error passes this many times the thresholds
 // (errorThresholdPixels, turnThresholdDegrees) is dropped for a re-slice at once.
 constexpr float kSpreadBehind = 2.0f;
+// A paced re-slice (LayerSettings.pacedReslices) is drawn over at most this many frames (its camera
+// predicted that far: about half a second at 30 frames a second).
+constexpr uint32_t kPacedMaxFrames = 16;
+
 
 struct SpreadRebuild {
   SpreadPhase phase = SpreadPhase::Idle;
@@ -41,6 +45,11 @@ struct SpreadRebuild {
   // Asked at once but the mesh is streamed: placement in one frame, slices as large as the ring
   // segment allows, and the copy without a fade in the frame of the last slice.
   bool immediate = false;
+  // A moving camera's paced re-slice (LayerSettings.pacedReslices): placement and the first slice in
+  // its first frame, pacedSlices even slices (one a frame), the copy without a fade in the last.
+  bool paced = false;
+  uint32_t pacedSlices = 0, pacedSlice = 0;  // slices in all; the next one's index
+  std::vector<double> pacedBounds;     // slice k draws the share [bounds[k], bounds[k + 1]) of every item
   std::vector<float> fadeWeights;      // this frame's LayerFadePush.weight per layer, then the
                                        // background; 0: not blended this frame
   std::vector<uint8_t> fadeMergeDepth; // per layer: its first blend, which takes the nearer depth
@@ -54,7 +63,7 @@ struct SpreadRebuild {
 struct SliceRateControl {
   std::chrono::steady_clock::time_point lastUpdate{};
   bool haveLast = false;
-  enum class Work { None, Placement, Slice, Other } lastWork = Work::Other;
+  enum class Work { None, Placement, Slice, Paced, Other } lastWork = Work::Other;
   uint64_t lastTriangles = 0;
   double lastPlacementMs = 0;          // CPU placement time of a Placement frame (taken off its interval)
   std::vector<double> stillMs;         // the last few still intervals (ring)
@@ -62,6 +71,12 @@ struct SliceRateControl {
   std::vector<double> rateSamples;     // the last few slices' triangles / cost (ring)
   uint32_t rateNext = 0;
   double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~2000-4000/ms)
+  // Paced re-slices (pacedShares): the share of the whole re-slice the last frame drew, whether it
+  // was the last (with the copy), and the costs measured from paced frames (ms; 0: none yet).
+  double lastShare = 0;
+  bool lastWasCopy = false;
+  double pacedDrawMs = 0;              // drawing a whole re-slice, over the paced slices
+  double pacedCopyMs = 0;              // the last frame's copy and occupancy
 };
 
 struct ResliceScheduler {
@@ -107,11 +122,15 @@ struct ResliceParts {
   glm::uvec2 outputSize;
   bool spreadEnabled;
   uint32_t fixedSliceTriangles;
+  bool pacedEnabled = false;  // a moving camera's re-slices may be paced (pacedEnabled())
 };
 
 // Whether re-slices may be spread over frames: a rebuild budget, and not with the id output
 // (whose triangle ids need every draw whole).
 bool spreadEnabled(const LayerSettings& settings, bool writeIds);
+// Whether a moving camera's re-slices may be paced (LayerSettings.pacedReslices): not with the id
+// output either. Either needs the second layer set.
+bool pacedEnabled(const LayerSettings& settings, bool writeIds);
 
 // Asks for a re-slice at the next view update, for `reason` (LayerStats.lastRebuildReason);
 // `immediate`: at once rather than spread (an earlier request at once stays at once).
@@ -133,6 +152,9 @@ struct ResliceDecision {
   bool immediate = false;  // asked at once: a spread re-slice (streamed mesh) then draws slices as large as the ring, no fade
   bool outrun = false;     // a spread re-slice fell, or would fall, behind the camera
   bool byCamera = false;   // caused by a camera that has moved for two frames or more (its motion is known)
+  // A paced re-slice (LayerSettings.pacedReslices): drawn over this many frames, sliced for the view
+  // the camera is predicted to have in the last, where it is shown; 0: not paced.
+  uint32_t pacedFrames = 0;
 };
 ResliceDecision decideReslice(ResliceScheduler& scheduler, const ResliceParts& parts, const LayerView& view, const LayerView& slice);
 // A re-slice for the slice camera `slice` starts (a decision's): the requests and changes it

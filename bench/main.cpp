@@ -53,7 +53,7 @@ static int usage(const char* why) {
                "                 the last two: demo/scenes/six_species.json) and face count, --frames\n"
                "                 (300) of the default settings at --degrees-list (0.25,0.5): median, p95, p99, max, stutter\n"
                "                 frames, the still frame, counted work, world lock and the pop (--no-reference: without);\n"
-               "                 --json FILE\n"
+               "                 --paced on|off: LayerSettings.pacedReslices; --predict N: predictFrames; --json FILE\n"
                "  camera         the moving camera: per path (--paths, default orbit,dolly,strafe,turn,zoom; also walk)\n"
                "                 the re-slicing policy (--budget MS spread, 0 at once) against re-slicing every frame,\n"
                "                 wind off: world-lock error frame by frame and frame times beside the still camera\n"

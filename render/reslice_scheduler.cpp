@@ -79,13 +79,6 @@ void updateSliceRate(ResliceScheduler& rs, const LayerSettings& settings) {
       const double still = r.lastWork == SliceRateControl::Work::None ? ms : std::max(ms - r.lastPlacementMs, 0.0);
       if (r.stillMs.size() < kStill) r.stillMs.push_back(still);
       else r.stillMs[r.stillNext++ % kStill] = still;
-    } else if (r.lastWork == SliceRateControl::Work::Paced && r.stillMs.size() >= 3 && r.lastShare > 0) {
-      // A paced frame: its time above the still baseline is its share of the drawing (and, in the
-      // last, the copy); followed smoothly, a frame's noise being large on a CPU driver.
-      const double above = std::max(ms - median(r.stillMs), 0.0);
-      auto follow = [](double& v, double x) { v = v > 0 ? 0.7 * v + 0.3 * x : x; };
-      if (!r.lastWasCopy) follow(r.pacedDrawMs, above / r.lastShare);
-      else if (r.pacedDrawMs > 0) follow(r.pacedCopyMs, std::max(above - r.lastShare * r.pacedDrawMs, 0.0));
     } else if (r.lastWork == SliceRateControl::Work::Slice && r.stillMs.size() >= 3 && r.lastTriangles > 0) {
       // Cautious up, quick down: a slice is never believed to cost under a quarter of the budget
       // (a lucky fast frame would otherwise ask for a huge next slice), the estimate follows the
@@ -107,30 +100,16 @@ void updateSliceRate(ResliceScheduler& rs, const LayerSettings& settings) {
   r.lastTriangles = 0;
 }
 
-// The shares of a paced re-slice's D slices, as cumulative bounds (D + 1, from 0 to 1): even, less
-// the first frame's placement (its last measured CPU time) and the last frame's copy and occupancy
-// (measured from earlier paced re-slices; before any, even shares), so that every frame costs
-// about the same: with x the cost of a middle frame's share,
-// the first draws 1 - P / x of it and the last 1 - C / x (x = R / (D - 2 + w0 + wL), solved by a few
-// fixed-point steps; each share at least 0, the first and last together at least one middle one's).
-std::vector<double> pacedShares(const SliceRateControl& rate, double placementMs, uint32_t slices) {
+// The shares of a paced re-slice's D slices, as cumulative bounds (D + 1, from 0 to 1): even, but
+// the last frame, which also copies the set in and recomputes the occupancy, draws w of a share,
+// with w chosen so that it costs what the others do: (1 - c(D - 1)) / (1 + c), c the copy's cost
+// against a whole re-slice's drawing (kPacedCopyCost), at least 0.
+std::vector<double> pacedShares(uint32_t slices) {
   const uint32_t n = std::max<uint32_t>(slices, 1);
-  const double draw = rate.pacedDrawMs, copy = rate.pacedCopyMs;
-  double w0 = 1.0, wl = 1.0;
-  for (int it = 0; it < 4 && n >= 2 && draw > 0; ++it) {
-    const double x = draw / std::max(double(n) - 2.0 + w0 + wl, 1e-3);
-    w0 = std::clamp(1.0 - placementMs / x, 0.0, 1.0);
-    wl = std::clamp(1.0 - copy / x, 0.0, 1.0);
-    if (w0 + wl < 1.0 && n == 2) w0 = 1.0 - wl;  // two slices draw it all between them
-  }
-  if (n < 2) w0 = wl = 1.0;
-  if (n >= 2 && w0 + wl <= 0.0) w0 = 1.0;
-  std::vector<double> w(n, 1.0), bounds(n + 1, 0.0);
-  w.front() = w0;
-  w.back() = wl;
-  double total = 0.0;
-  for (double v : w) total += v;
-  for (uint32_t i = 0; i < n; ++i) bounds[i + 1] = bounds[i] + w[i] / total;
+  const double c = kPacedCopyCost, last = n < 2 ? 1.0 : std::clamp((1.0 - c * double(n - 1)) / (1.0 + c), 0.0, 1.0);
+  std::vector<double> bounds(n + 1, 0.0);
+  const double total = double(n - 1) + last;
+  for (uint32_t i = 0; i < n; ++i) bounds[i + 1] = bounds[i] + (i + 1 < n ? 1.0 : last) / total;
   bounds[n] = 1.0;
   return bounds;
 }
@@ -146,7 +125,7 @@ void planSlice(ResliceScheduler& r, const ResliceParts& p) {
     // Slice k of D draws the k-th D-th of every item (not D runs of the item list in turn), so each
     // slice holds the same share of leaves and wood: the slices' fragments, not only their
     // triangles, are even (in turn, the leaves' and the trunk's slices differed 3x in fragments).
-    // The shares were set at the start (pacedShares): the first and last frames draw less.
+    // The shares were set at the start (pacedShares): the last frame draws less.
     const uint32_t k = sp.pacedSlice, n = std::max<uint32_t>(sp.pacedSlices, 1);
     auto bound = [&](uint32_t count, uint32_t j) {
       return j >= n ? count : uint32_t(std::floor(double(count) * (j < sp.pacedBounds.size() ? sp.pacedBounds[j] : double(j) / n)));
@@ -163,11 +142,9 @@ void planSlice(ResliceScheduler& r, const ResliceParts& p) {
     }
     sp.sliceClears = k == 0;
     sp.sliceLast = k + 1 >= n;
-    r.rate.lastShare = k + 1 < sp.pacedBounds.size() ? sp.pacedBounds[k + 1] - sp.pacedBounds[k] : 0.0;
-    r.rate.lastWasCopy = sp.sliceLast;
     sp.pacedSlice++;
     r.slicePending = true;
-    r.rate.lastWork = k == 0 ? SliceRateControl::Work::Other : SliceRateControl::Work::Paced;  // the first has the placement
+    r.rate.lastWork = SliceRateControl::Work::Other;  // sized by the camera's pace, not the budget
     p.stats.lastSliceTriangles = drawn;
     p.stats.maxSliceTriangles = std::max(p.stats.maxSliceTriangles, drawn);
     return;
@@ -498,7 +475,6 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
   const ResliceDecision d = decideReslice(r, p, view, slice);
   if (!d.reason.empty()) {
     if (d.outrun) p.stats.outrunSpreads++;
-    if (getenv("CANOPY_TRACE_PACED")) fprintf(stderr, "reslice %llu: %s paced %u atOnce %d ratio %.3f\n", (unsigned long long)p.stats.viewUpdates, d.reason.c_str(), d.pacedFrames, int(d.atOnce), r.lastErrorRatio);
     // A moving camera's re-slice at once, sliced for where the camera will be predictFrames frames
     // on (its last frame's motion D repeated: view' = D^k view): the error falls to zero as the
     // camera arrives there before it grows again, so the next re-slice comes later (issue 79;
@@ -524,7 +500,7 @@ Status advanceReslice(ResliceScheduler& r, const ResliceParts& p, const LayerVie
       r.spread.immediate = d.immediate;
       r.spread.paced = d.pacedFrames > 1;
       r.spread.pacedSlices = d.pacedFrames;
-      if (r.spread.paced) r.spread.pacedBounds = pacedShares(r.rate, p.stats.lastPlacementMs, d.pacedFrames);
+      if (r.spread.paced) r.spread.pacedBounds = pacedShares(d.pacedFrames);
       p.stats.maxSliceTriangles = 0;
       beginPlacement(p.placement, predicted, r.spread.job);
       p.stats.crossFade = 0.0f;

@@ -25,6 +25,12 @@ constexpr float kSpreadBehind = 2.0f;
 // A paced re-slice (LayerSettings.pacedReslices) is drawn over at most this many frames (its camera
 // predicted that far: about half a second at 30 frames a second).
 constexpr uint32_t kPacedMaxFrames = 16;
+// A paced re-slice's last frame copies the new set in and recomputes the occupancy: on lavapipe at
+// 1024x768 about a quarter of what drawing the 80K shrub's whole re-slice costs (35 of 140 ms;
+// docs/lab/performance-notebook.md "Pacing: a moving camera's frames (issue 79)"). Frame intervals
+// cannot measure it where the host does other work between frames (the benchmark's alternated
+// contexts), and GPU timestamps read near zero on lavapipe: a constant.
+constexpr double kPacedCopyCost = 0.25;
 
 
 struct SpreadRebuild {
@@ -63,7 +69,7 @@ struct SpreadRebuild {
 struct SliceRateControl {
   std::chrono::steady_clock::time_point lastUpdate{};
   bool haveLast = false;
-  enum class Work { None, Placement, Slice, Paced, Other } lastWork = Work::Other;
+  enum class Work { None, Placement, Slice, Other } lastWork = Work::Other;
   uint64_t lastTriangles = 0;
   double lastPlacementMs = 0;          // CPU placement time of a Placement frame (taken off its interval)
   std::vector<double> stillMs;         // the last few still intervals (ring)
@@ -71,12 +77,6 @@ struct SliceRateControl {
   std::vector<double> rateSamples;     // the last few slices' triangles / cost (ring)
   uint32_t rateNext = 0;
   double trianglesPerMs = 2000.0;      // start: a slow CPU device's rate (lavapipe draws ~2000-4000/ms)
-  // Paced re-slices (pacedShares): the share of the whole re-slice the last frame drew, whether it
-  // was the last (with the copy), and the costs measured from paced frames (ms; 0: none yet).
-  double lastShare = 0;
-  bool lastWasCopy = false;
-  double pacedDrawMs = 0;              // drawing a whole re-slice, over the paced slices
-  double pacedCopyMs = 0;              // the last frame's copy and occupancy
 };
 
 struct ResliceScheduler {

@@ -29,8 +29,8 @@ uint64_t trianglesDrawn(const LayeredVegetation& lv) {
 // An orbit of 0.4 degrees a frame around the model, 80 frames: every re-slice after the first view
 // is paced (none at once), each is shown in the frame whose view it was sliced for (the orbit's
 // motion predicted exactly), its layers are those a re-slice at once draws for that view, and no
-// frame draws more than 1.5x the triangles of the median frame (the first and last slices, whose
-// frames also place and copy, draw less than the others by their measured costs: pacedShares).
+// frame draws more than 1.5x the triangles of the median frame (the last slice, whose frame also
+// copies the set in, draws less: pacedShares).
 TEST_F(PacingTest, AnOrbitsReslicesArePacedEvenlyAndEqualOnesAtOnce) {
   const VegetationModel m = straddlingLeaves(12, 8, true);
   LayeredVegetationDesc d = smallDesc();

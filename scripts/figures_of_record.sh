@@ -3,7 +3,8 @@
 # "The figures of record on any device"): the device (canopy-smoke: name, driver, subgroup size),
 # the correctness subset that matters on a new driver (the simulation and the composite against
 # their CPU references, the dynamics, the goldens, reprojection), the paper's Table 1 (still, orbit
-# and every-frame re-slices), the moving-camera bench and the work counted per frame kind, written
+# and every-frame re-slices), the moving-camera bench, the work counted per frame kind and the
+# pacing of a moving camera (re-slices at once and paced), written
 # to OUT as JSON and CSV with a one-page summary (OUT/summary.md).
 #   scripts/figures_of_record.sh [--device NAME] [--build DIR] [--reduced] OUT
 # --build: a configured build tree with the tests (default build/figures, configured Release and
@@ -47,9 +48,10 @@ grep -E '^\[  (PASSED|FAILED) ' "$out/correctness.log" | tee "$out/correctness.t
 
 if [ $reduced = 1 ]; then
   t1=(--faces 80000 --frames 4 --pair-frames 3 --size 320x240) cam=(--faces 80000 --frames 6 --size 320x240 --paths orbit,dolly)
-  cnt=(--faces 80000 --size 320x240)
+  cnt=(--faces 80000 --size 320x240) pace=(--faces 80000 --paths orbit --degrees-list 0.25 --frames 6 --size 320x240 --no-reference)
 else
   t1=(--faces 80000,1000000) cam=(--faces 80000 --size 1024x768 --paths orbit,dolly) cnt=()
+  pace=(--faces 80000 --paths orbit,dolly,strafe,turn --frames 120)
 fi
 echo "== Table 1"
 "$build/canopy-bench" table1 "${t1[@]}" "${dev[@]}" --json "$out/table1.json" >"$out/table1.txt" 2>&1
@@ -57,6 +59,10 @@ echo "== camera"
 "$build/canopy-bench" camera "${cam[@]}" "${dev[@]}" --csv "$out/camera.csv" >"$out/camera.txt" 2>&1
 echo "== counters"
 "$build/canopy-bench" counters "${cnt[@]}" "${dev[@]}" --json "$out/counters.json" >"$out/counters.txt" 2>&1
+echo "== pacing (re-slices at once, then paced)"
+for mode in off on; do
+  "$build/canopy-bench" pacing "${pace[@]}" --paced $mode "${dev[@]}" --json "$out/pacing_$mode.json" >"$out/pacing_$mode.txt" 2>&1
+done
 
 {
   echo "# Figures of record"
@@ -67,7 +73,10 @@ echo "== counters"
   echo '## Correctness subset'; echo; sed 's/^/    /' "$out/correctness.txt"; echo
   echo '## Table 1 (canopy-bench table1)'; echo; grep -E '^ *[0-9]+(K|M)? ' "$out/table1.txt" | head -20 | sed 's/^/    /'; echo
   echo '## Moving camera (canopy-bench camera)'; echo; grep -E 'still camera|^  path|^  Reprojected frames|^  (orbit|dolly|strafe|turn|zoom|walk) ' "$out/camera.txt" | sed 's/^/    /'; echo
-  echo '## Work per frame, counted (canopy-bench counters)'; echo; grep -E '^  [0-9]' "$out/counters.txt" | sed 's/^/    /'
+  echo '## Work per frame, counted (canopy-bench counters)'; echo; grep -E '^  [0-9]' "$out/counters.txt" | sed 's/^/    /'; echo
+  for mode in off on; do
+    echo "## Pacing, --paced $mode (canopy-bench pacing)"; echo; grep -E '^  (path|orbit|dolly|strafe|turn) ' "$out/pacing_$mode.txt" | sed 's/^/    /'; echo
+  done
 } >"$out/summary.md"
 echo "wrote $out/summary.md ($(( $(date +%s) - start )) s)"
 exit $tests_rc

@@ -341,7 +341,7 @@ enum class RigidMotion { FollowFoliage, Still };
   X(float, errorThresholdPixels, 0.5f, Closed, 0, 1000, "pixels", "estimated reprojection error that re-slices (parallax, content beyond the layers; 0.5: the world-lock bar of docs/performance.md)") \
   X(float, turnThresholdDegrees, 2.0f, Closed, 0, 180, "degrees", "change of the view direction to the vegetation that re-slices (baked shading)") \
   X(uint32_t, predictFrames, 0, Closed, 0, 16, "frames", "a moving camera's re-slice at once slices for its view this many frames ahead (its last frame's motion repeated; 0: the current view)") \
-  X(bool, pacedReslices, false, Unchecked, 0, 0, "", "a moving camera's re-slices drawn in even slices over the frames until its error would pass the thresholds, each sliced for the view it is shown at (issue 79)") \
+  X(bool, pacedReslices, false, Unchecked, 0, 0, "", "a moving camera's re-slices drawn in even slices over the frames until its error would pass the thresholds, each sliced for the view it is shown at (docs/design.md: spread re-slicing)") \
   X(Float3, lightDirection, (Float3{0.35f, 0.8f, 0.5f}), Finite, 0, 0, "world space", "towards the light (normalised; zero: straight up)") \
   X(Float3, lightColor, (Float3{1.0f, 1.0f, 1.0f}), Closed, 0, 1000, "linear RGB", "the light's colour")              \
   X(float, ambient, 0.35f, Closed, 0, 1, "", "ambient share of the light")                                             \

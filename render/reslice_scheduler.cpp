@@ -407,7 +407,7 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
     // thresholds a frame: the change since the last frame, either way, as a set sliced ahead is
     // approached), drawn in D even slices and shown in the D-th frame, sliced for the view predicted
     // there. Every frame of a steady move then draws a D-th of a re-slice instead of one frame in D
-    // drawing all of it. D = 1 (the error over the thresholds already) is a re-slice at once.
+    // drawing all of it. An error over the thresholds already is the policy's re-slice at once.
     const double pace = std::isfinite(ratio) && std::isfinite(r.lastErrorRatio) ? std::fabs(ratio - r.lastErrorRatio) : 0.0;
     r.lastErrorRatio = ratio;
     if (p.pacedEnabled && !p.mesh.streamed && r.movingFrames >= 1 && r.spread.phase == SpreadPhase::Idle && std::isfinite(ratio) &&
@@ -441,9 +441,8 @@ ResliceDecision decideReslice(ResliceScheduler& r, const ResliceParts& p, const 
   // Once outrun, the camera's re-slices are at once while it keeps moving (a spread one would be
   // outrun again: each frame of a steady move adds to the error its slices take frames to remove).
   if (outrun) r.outrun = true;
-  const bool wantAtOnce = d.pacedFrames == 1 ||
-                          (d.pacedFrames == 0 && (!r.haveView || r.forceImmediate || !p.spreadEnabled ||
-                                                  s.policy == ReslicePolicy::EveryFrame || outrun || (byCamera && r.outrun)));
+  const bool wantAtOnce = d.pacedFrames == 0 && (!r.haveView || r.forceImmediate || !p.spreadEnabled ||
+                                                 s.policy == ReslicePolicy::EveryFrame || outrun || (byCamera && r.outrun));
   // A streamed mesh cannot be drawn in one frame: "at once" becomes slices as large as the ring
   // allows, copied in without a fade (SpreadRebuild.immediate).
   d.atOnce = wantAtOnce && !p.mesh.streamed;

@@ -32,7 +32,6 @@ constexpr uint32_t kPacedMaxFrames = 16;
 // contexts), and GPU timestamps read near zero on lavapipe: a constant.
 constexpr double kPacedCopyCost = 0.25;
 
-
 struct SpreadRebuild {
   SpreadPhase phase = SpreadPhase::Idle;
   PlacementJob job;
@@ -152,8 +151,8 @@ struct ResliceDecision {
   bool immediate = false;  // asked at once: a spread re-slice (streamed mesh) then draws slices as large as the ring, no fade
   bool outrun = false;     // a spread re-slice fell, or would fall, behind the camera
   bool byCamera = false;   // caused by a camera that has moved for two frames or more (its motion is known)
-  // A paced re-slice (LayerSettings.pacedReslices): drawn over this many frames, sliced for the view
-  // the camera is predicted to have in the last, where it is shown; 0: not paced.
+  // A paced re-slice (LayerSettings.pacedReslices): drawn over this many frames (at least 2), sliced
+  // for the view the camera is predicted to have in the last, where it is shown; 0: not paced.
   uint32_t pacedFrames = 0;
 };
 ResliceDecision decideReslice(ResliceScheduler& scheduler, const ResliceParts& parts, const LayerView& view, const LayerView& slice);

@@ -150,7 +150,7 @@ struct ResliceDecision {
   bool atOnce = false;     // placed and drawn in this frame; else a spread re-slice starts
   bool immediate = false;  // asked at once: a spread re-slice (streamed mesh) then draws slices as large as the ring, no fade
   bool outrun = false;     // a spread re-slice fell, or would fall, behind the camera
-  bool byCamera = false;   // caused by a camera that has moved for two frames or more (its motion is known)
+  bool byCamera = false;   // caused by a moving camera whose motion is known (two frames or more; paced: one)
   // A paced re-slice (LayerSettings.pacedReslices): drawn over this many frames (at least 2), sliced
   // for the view the camera is predicted to have in the last, where it is shown; 0: not paced.
   uint32_t pacedFrames = 0;
